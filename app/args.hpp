@@ -1,0 +1,60 @@
+// app/args.hpp — a small, strict command-line parser for canhil's subcommands.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace canhil::app {
+
+/// A command-line mistake; main prints it with the usage and exits 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Args {
+ public:
+  Args(std::vector<std::string> words) : words_(std::move(words)) {}
+
+  /// Removes `--name VALUE` (or `--name=VALUE`) and returns VALUE.
+  std::optional<std::string> option(const std::string& name) {
+    for (std::size_t i = 0; i < words_.size(); ++i) {
+      if (words_[i] == name) {
+        if (i + 1 >= words_.size()) throw UsageError(name + " needs a value");
+        std::string v = words_[i + 1];
+        words_.erase(words_.begin() + static_cast<long>(i), words_.begin() + static_cast<long>(i) + 2);
+        return v;
+      }
+      if (words_[i].rfind(name + "=", 0) == 0) {
+        std::string v = words_[i].substr(name.size() + 1);
+        words_.erase(words_.begin() + static_cast<long>(i));
+        return v;
+      }
+    }
+    return std::nullopt;
+  }
+  /// Removes `--name` and says whether it was there.
+  bool flag(const std::string& name) {
+    for (std::size_t i = 0; i < words_.size(); ++i) {
+      if (words_[i] == name) {
+        words_.erase(words_.begin() + static_cast<long>(i));
+        return true;
+      }
+    }
+    return false;
+  }
+  /// What is left, after options were taken; unknown `--x` words are an error.
+  std::vector<std::string> positionals() const {
+    for (const auto& w : words_) {
+      if (w.size() > 1 && w[0] == '-' && w != "-") throw UsageError("unknown option " + w);
+    }
+    return words_;
+  }
+
+ private:
+  std::vector<std::string> words_;
+};
+
+}  // namespace canhil::app

@@ -1,0 +1,16 @@
+// app/commands.hpp — canhil's subcommands. Each returns the process exit status.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "args.hpp"
+
+namespace canhil::app {
+
+/// `canhil frames list|encode|decode ...`; args still hold the leading "frames".
+int run_frames(Args& args, const std::optional<std::string>& dbc);
+/// `canhil dump IFACE` or `canhil dump --log FILE`.
+int run_dump(Args& args, const std::optional<std::string>& dbc);
+
+}  // namespace canhil::app

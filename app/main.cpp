@@ -1,0 +1,62 @@
+// canhil — command-line entry point. The only place that reads the wall clock.
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "canhil/can_nodes/socketcan_bus.hpp"
+#include "canhil/frames/dbc.hpp"
+
+namespace {
+
+constexpr const char* kUsage = R"(canhil — hardware-in-the-loop emulator for a CAMBADA-style robot's CAN network
+
+usage:
+  canhil frames list [--json]                 messages, ids, periods, kinds
+  canhil frames encode MESSAGE SIGNAL=VALUE...  print the frame (candump compact form)
+  canhil frames decode FRAME... [--json]      decode frames like 131#F401000000000000
+  canhil dump IFACE [--count N] [--seconds S] [--json]
+                                              live, decoded, with kernel timestamps
+  canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
+
+common options:
+  --dbc FILE    use another message set (default: the shipped canhil.dbc; CANHIL_DBC also works)
+  --help        this text
+  --version     canhil's version
+
+exit status: 0 ok, 1 the input had problems (unknown ids, bad lengths), 2 usage or set-up error.
+)";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> words(argv + 1, argv + argc);
+  canhil::app::Args args(words);
+  try {
+    if (words.empty() || args.flag("--help") || args.flag("-h")) {
+      std::fputs(kUsage, words.empty() ? stderr : stdout);
+      return words.empty() ? 2 : 0;
+    }
+    if (args.flag("--version")) {
+      std::puts("canhil " CANHIL_VERSION);
+      return 0;
+    }
+    const auto dbc = args.option("--dbc");
+    const std::string command = words.front();
+    if (command == "frames") return canhil::app::run_frames(args, dbc);
+    if (command == "dump") return canhil::app::run_dump(args, dbc);
+    throw canhil::app::UsageError("unknown command \"" + command + "\"");
+  } catch (const canhil::app::UsageError& e) {
+    std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);
+    return 2;
+  } catch (const canhil::frames::DbcError& e) {
+    std::fprintf(stderr, "canhil: %s\n", e.what());
+    return 2;
+  } catch (const canhil::can_nodes::SetupError& e) {
+    std::fprintf(stderr, "canhil: %s\n", e.what());
+    return 2;
+  }
+}

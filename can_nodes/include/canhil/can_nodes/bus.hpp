@@ -1,0 +1,98 @@
+// canhil/can_nodes/bus.hpp — the narrow bus interface every node talks through.
+//
+// Two backends: SocketCanBus (CAN_RAW on vcan or a real interface) and the
+// endpoints of a MemoryBus (in-process, deterministic). Both are non-blocking:
+// send() never waits for the wire, receive() returns nothing when nothing is
+// there. A Bus is used from one thread at a time.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "canhil/frames/frame.hpp"
+
+namespace canhil::can_nodes {
+
+using frames::CanFrame;
+using frames::TimedFrame;
+using frames::Nanos;
+
+/// SocketCAN's receive filter: a frame passes when (frame.id & mask) == (id & mask),
+/// with `extended` and `remote` compared when their *_mask flags are set
+/// (CAN_EFF_FLAG / CAN_RTR_FLAG in the mask). `invert` passes the complement.
+struct Filter {
+  std::uint32_t id = 0;
+  std::uint32_t mask = 0;
+  bool extended = false;
+  bool match_extended = false;  ///< compare the extended flag
+  bool remote = false;
+  bool match_remote = false;  ///< compare the remote flag
+  bool invert = false;
+
+  static Filter exact(std::uint32_t standard_id) {
+    return Filter{standard_id, frames::kStandardIdMask, false, true, false, true, false};
+  }
+  static Filter all() { return Filter{}; }
+  bool matches(const CanFrame& frame) const noexcept;
+};
+
+/// SocketCAN's CAN_ERR_* classes (linux/can/error.h), for the error mask.
+inline constexpr std::uint32_t kErrTxTimeout = 0x001;
+inline constexpr std::uint32_t kErrLostArbitration = 0x002;
+inline constexpr std::uint32_t kErrController = 0x004;
+inline constexpr std::uint32_t kErrProtocol = 0x008;
+inline constexpr std::uint32_t kErrTransceiver = 0x010;
+inline constexpr std::uint32_t kErrNoAck = 0x020;
+inline constexpr std::uint32_t kErrBusOff = 0x040;
+inline constexpr std::uint32_t kErrBusError = 0x080;
+inline constexpr std::uint32_t kErrRestarted = 0x100;
+inline constexpr std::uint32_t kErrAll = 0x1FFF'FFFF;
+
+enum class SendStatus : std::uint8_t {
+  kOk,         ///< handed to the bus
+  kDropped,    ///< the transmit queue stayed full through every retry; counted in stats
+  kDown,       ///< the interface is down or gone; see Bus::state()
+};
+
+enum class BusState : std::uint8_t {
+  kUp,
+  kDown,  ///< interface administratively down or carrier lost; may come back
+  kGone,  ///< interface removed; reopen it
+};
+
+struct BusStats {
+  std::uint64_t sent = 0;
+  std::uint64_t received = 0;
+  std::uint64_t send_retries = 0;   ///< ENOBUFS/EAGAIN retries that later succeeded or not
+  std::uint64_t send_dropped = 0;   ///< frames given up on after the last retry
+  std::uint64_t rx_overflow = 0;    ///< frames the receive queue dropped (SO_RXQ_OVFL or memory queue)
+  std::uint64_t errors = 0;         ///< error frames received
+  std::uint64_t state_changes = 0;  ///< up/down transitions seen
+};
+
+class Bus {
+ public:
+  virtual ~Bus() = default;
+  Bus(const Bus&) = delete;
+  Bus& operator=(const Bus&) = delete;
+
+  /// Sends one frame. Never blocks longer than the backend's bounded retry.
+  virtual SendStatus send(const CanFrame& frame) = 0;
+  /// The next received frame with its receive time, or nullopt when none waits.
+  virtual std::optional<TimedFrame> receive() = 0;
+  /// Replaces the receive filters; an empty list receives no data frames.
+  virtual void set_filters(std::span<const Filter> filters) = 0;
+  /// Which error-frame classes to receive (kErr*); 0, the default, receives none.
+  virtual void set_error_mask(std::uint32_t mask) = 0;
+  virtual BusState state() const = 0;
+  virtual BusStats stats() const = 0;
+  /// Name for logs and traces (the interface name, or the memory endpoint's name).
+  virtual const std::string& name() const = 0;
+
+ protected:
+  Bus() = default;
+};
+
+}  // namespace canhil::can_nodes

@@ -1,0 +1,76 @@
+// canhil/can_nodes/socketcan_bus.hpp — the Bus on a SocketCAN interface.
+//
+// CAN_RAW, non-blocking. Received frames carry the kernel's receive timestamp
+// (SO_TIMESTAMPNS, CLOCK_REALTIME). Receive-queue overflow is counted from
+// SO_RXQ_OVFL. A full transmit queue (ENOBUFS/EAGAIN) is retried a bounded
+// number of times with a short wait, then the frame is dropped and counted.
+// An interface that goes down or vanishes is reported through state(), never
+// by hanging or throwing on the hot path.
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "canhil/can_nodes/bus.hpp"
+
+namespace canhil::can_nodes {
+
+/// A set-up mistake (no CAN in the kernel, no such interface, no permission).
+/// The message says what to do.
+class SetupError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SocketCanOptions {
+  /// Receive own frames too (CAN_RAW_RECV_OWN_MSGS); off like SocketCAN's default.
+  bool receive_own = false;
+  /// Receive buffer size in bytes (SO_RCVBUF); 0 keeps the kernel default.
+  int receive_buffer_bytes = 0;
+  /// Attempts after a full transmit queue before a frame is dropped.
+  int send_retries = 50;
+  /// Longest wait for the queue to drain per retry.
+  std::chrono::microseconds retry_wait{200};
+};
+
+/// True when this kernel can open a CAN_RAW socket at all.
+bool kernel_has_can();
+
+class SocketCanBus final : public Bus {
+ public:
+  /// Opens `iface`. Throws SetupError with what to do when it cannot.
+  static std::unique_ptr<SocketCanBus> open(const std::string& iface, const SocketCanOptions& options = {});
+  ~SocketCanBus() override;
+
+  SendStatus send(const CanFrame& frame) override;
+  std::optional<TimedFrame> receive() override;
+  void set_filters(std::span<const Filter> filters) override;
+  void set_error_mask(std::uint32_t mask) override;
+  BusState state() const override { return state_; }
+  BusStats stats() const override { return stats_; }
+  const std::string& name() const override { return iface_; }
+
+  /// The socket, for poll()/epoll in a real-time loop. Owned by this object.
+  int fd() const { return fd_; }
+  /// Waits up to `timeout` for a frame to be readable; true if one is.
+  bool wait_readable(std::chrono::microseconds timeout) const;
+  /// Re-reads the interface's state from the kernel (call when idle).
+  BusState refresh_state();
+
+ private:
+  SocketCanBus(int fd, std::string iface, int ifindex, const SocketCanOptions& options);
+  void note_errno(int err);
+
+  int fd_;
+  std::string iface_;
+  int ifindex_;
+  SocketCanOptions options_;
+  BusState state_ = BusState::kUp;
+  BusStats stats_;
+  std::uint32_t last_drop_count_ = 0;
+  bool have_drop_count_ = false;
+};
+
+}  // namespace canhil::can_nodes

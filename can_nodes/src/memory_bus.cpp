@@ -1,0 +1,92 @@
+#include "canhil/can_nodes/memory_bus.hpp"
+
+#include <algorithm>
+
+#include "canhil/frames/demand.hpp"
+
+namespace canhil::can_nodes {
+
+MemoryEndpoint::MemoryEndpoint(MemoryBus* bus, std::string name, std::size_t capacity)
+    : bus_(bus), name_(std::move(name)), capacity_(capacity) {}
+
+MemoryEndpoint::~MemoryEndpoint() {
+  if (bus_ != nullptr) bus_->detach(this);
+}
+
+SendStatus MemoryEndpoint::send(const CanFrame& frame) {
+  if (!bus_->up()) return SendStatus::kDown;
+  ++stats_.sent;
+  bus_->transmit(this, frame);
+  return SendStatus::kOk;
+}
+
+std::optional<TimedFrame> MemoryEndpoint::receive() {
+  if (queue_.empty()) return std::nullopt;
+  TimedFrame f = queue_.front();
+  queue_.pop_front();
+  return f;
+}
+
+void MemoryEndpoint::set_filters(std::span<const Filter> filters) { filters_.assign(filters.begin(), filters.end()); }
+
+BusState MemoryEndpoint::state() const { return bus_->up() ? BusState::kUp : BusState::kDown; }
+
+void MemoryEndpoint::deliver(const TimedFrame& frame) {
+  if (frame.frame.kind == frames::FrameKind::kError) {
+    if ((frame.frame.id & error_mask_) == 0) return;
+  } else if (std::none_of(filters_.begin(), filters_.end(), [&](const Filter& f) { return f.matches(frame.frame); })) {
+    return;
+  }
+  if (queue_.size() >= capacity_) {
+    ++stats_.rx_overflow;
+    return;
+  }
+  if (frame.frame.kind == frames::FrameKind::kError) {
+    ++stats_.errors;
+  } else {
+    ++stats_.received;
+  }
+  queue_.push_back(frame);
+}
+
+MemoryBus::MemoryBus(const Clock& clock, std::string name) : clock_(clock), name_(std::move(name)) {}
+
+MemoryBus::~MemoryBus() {
+  for (MemoryEndpoint* e : endpoints_) e->bus_ = nullptr;
+}
+
+std::unique_ptr<MemoryEndpoint> MemoryBus::attach(std::string endpoint_name, std::size_t queue_capacity) {
+  auto endpoint = std::unique_ptr<MemoryEndpoint>(new MemoryEndpoint(this, std::move(endpoint_name), queue_capacity));
+  endpoints_.push_back(endpoint.get());
+  return endpoint;
+}
+
+void MemoryBus::detach(MemoryEndpoint* endpoint) {
+  endpoints_.erase(std::remove(endpoints_.begin(), endpoints_.end(), endpoint), endpoints_.end());
+}
+
+void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
+  ++carried_;
+  const TimedFrame timed{frame, clock_.now()};
+  for (MemoryEndpoint* e : endpoints_) {
+    if (e != from || e->receive_own_) e->deliver(timed);
+  }
+}
+
+void MemoryBus::inject_error(std::uint32_t error_class) {
+  if (!up_) return;
+  CanFrame f;
+  f.kind = frames::FrameKind::kError;
+  f.id = error_class & frames::kErrorClassMask;
+  f.len = frames::kMaxDataBytes;
+  const TimedFrame timed{f, clock_.now()};
+  for (MemoryEndpoint* e : endpoints_) e->deliver(timed);
+}
+
+void MemoryBus::set_up(bool up) {
+  if (up == up_) return;
+  up_ = up;
+  for (MemoryEndpoint* e : endpoints_) ++e->stats_.state_changes;
+}
+
+}  // namespace canhil::can_nodes

@@ -1,0 +1,257 @@
+#include "canhil/can_nodes/socketcan_bus.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <vector>
+
+namespace canhil::can_nodes {
+namespace {
+
+std::string errno_text(int err) { return std::string(std::strerror(err)); }
+
+can_frame to_kernel(const CanFrame& f) {
+  can_frame k{};
+  switch (f.kind) {
+    case frames::FrameKind::kError:
+      k.can_id = (f.id & CAN_ERR_MASK) | CAN_ERR_FLAG;
+      break;
+    case frames::FrameKind::kRemote:
+      k.can_id = f.extended ? ((f.id & CAN_EFF_MASK) | CAN_EFF_FLAG) : (f.id & CAN_SFF_MASK);
+      k.can_id |= CAN_RTR_FLAG;
+      break;
+    case frames::FrameKind::kData:
+      k.can_id = f.extended ? ((f.id & CAN_EFF_MASK) | CAN_EFF_FLAG) : (f.id & CAN_SFF_MASK);
+      break;
+  }
+  k.len = f.len > CAN_MAX_DLEN ? CAN_MAX_DLEN : f.len;
+  k.len8_dlc = f.len8_dlc;
+  std::memcpy(k.data, f.data.data(), CAN_MAX_DLEN);
+  return k;
+}
+
+CanFrame from_kernel(const can_frame& k) {
+  CanFrame f;
+  if ((k.can_id & CAN_ERR_FLAG) != 0u) {
+    f.kind = frames::FrameKind::kError;
+    f.id = k.can_id & CAN_ERR_MASK;
+  } else {
+    f.extended = (k.can_id & CAN_EFF_FLAG) != 0u;
+    f.id = k.can_id & (f.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+    if ((k.can_id & CAN_RTR_FLAG) != 0u) f.kind = frames::FrameKind::kRemote;
+  }
+  f.len = k.len > CAN_MAX_DLEN ? static_cast<std::uint8_t>(CAN_MAX_DLEN) : k.len;
+  f.len8_dlc = k.len8_dlc;
+  if (f.kind != frames::FrameKind::kRemote) std::memcpy(f.data.data(), k.data, f.len);
+  return f;
+}
+
+int open_raw_socket() { return ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW); }
+
+}  // namespace
+
+bool kernel_has_can() {
+  const int fd = open_raw_socket();
+  if (fd < 0) return false;
+  ::close(fd);
+  return true;
+}
+
+std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const SocketCanOptions& options) {
+  if (iface.empty() || iface.size() >= IFNAMSIZ) {
+    throw SetupError("\"" + iface + "\" is not a valid interface name (1 to " + std::to_string(IFNAMSIZ - 1) +
+                     " characters)");
+  }
+  const int fd = open_raw_socket();
+  if (fd < 0) {
+    const int err = errno;
+    throw SetupError("cannot open a CAN socket (" + errno_text(err) +
+                     "): this kernel has no SocketCAN. Load the modules (modprobe can-raw vcan) or, where the "
+                     "kernel has no CAN at all, run inside the VM runner: vcan_setup/vm-run.sh -- COMMAND");
+  }
+  const unsigned ifindex = if_nametoindex(iface.c_str());
+  if (ifindex == 0) {
+    ::close(fd);
+    throw SetupError("no network interface named " + iface + ": create it with `vcan_setup/vcan-up.sh " + iface +
+                     "` (virtual CAN) or bring up a real one with `ip link set " + iface +
+                     " up type can bitrate 1000000`");
+  }
+  auto fail = [&](const char* what) {
+    const int err = errno;
+    ::close(fd);
+    throw SetupError("cannot set up CAN socket on " + iface + ": " + what + ": " + errno_text(err));
+  };
+  const int one = 1;
+  if (::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof one) < 0) fail("SO_TIMESTAMPNS");
+  if (::setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one) < 0) fail("SO_RXQ_OVFL");
+  if (options.receive_own) {
+    if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &one, sizeof one) < 0) fail("CAN_RAW_RECV_OWN_MSGS");
+  }
+  if (options.receive_buffer_bytes > 0) {
+    // SO_RCVBUFFORCE (root) ignores rmem_max; fall back to SO_RCVBUF.
+    if (::setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &options.receive_buffer_bytes, sizeof(int)) < 0 &&
+        ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &options.receive_buffer_bytes, sizeof(int)) < 0) {
+      fail("SO_RCVBUF");
+    }
+  }
+  const can_err_mask_t no_errors = 0;
+  if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &no_errors, sizeof no_errors) < 0) fail("CAN_RAW_ERR_FILTER");
+  sockaddr_can addr{};
+  addr.can_family = AF_CAN;
+  addr.can_ifindex = static_cast<int>(ifindex);
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) < 0) fail("bind");
+  auto bus = std::unique_ptr<SocketCanBus>(new SocketCanBus(fd, iface, static_cast<int>(ifindex), options));
+  bus->refresh_state();
+  bus->stats_.state_changes = 0;
+  return bus;
+}
+
+SocketCanBus::SocketCanBus(int fd, std::string iface, int ifindex, const SocketCanOptions& options)
+    : fd_(fd), iface_(std::move(iface)), ifindex_(ifindex), options_(options) {}
+
+SocketCanBus::~SocketCanBus() { ::close(fd_); }
+
+void SocketCanBus::note_errno(int err) {
+  BusState s = state_;
+  if (err == ENETDOWN) s = BusState::kDown;
+  if (err == ENODEV || err == ENXIO) s = BusState::kGone;
+  if (s != state_) {
+    state_ = s;
+    ++stats_.state_changes;
+  }
+}
+
+SendStatus SocketCanBus::send(const CanFrame& frame) {
+  const can_frame k = to_kernel(frame);
+  for (int attempt = 0;; ++attempt) {
+    const ssize_t n = ::write(fd_, &k, sizeof k);
+    if (n == static_cast<ssize_t>(sizeof k)) {
+      ++stats_.sent;
+      if (state_ != BusState::kUp) {
+        state_ = BusState::kUp;
+        ++stats_.state_changes;
+      }
+      return SendStatus::kOk;
+    }
+    const int err = n < 0 ? errno : EIO;
+    if ((err == ENOBUFS || err == EAGAIN) && attempt < options_.send_retries) {
+      ++stats_.send_retries;
+      // Wait for room in the queue; ENOBUFS is not always signalled by POLLOUT,
+      // so the bounded timeout doubles as a short back-off.
+      pollfd p{fd_, POLLOUT, 0};
+      const auto us = options_.retry_wait.count();
+      const timespec wait{static_cast<time_t>(us / 1'000'000), static_cast<long>((us % 1'000'000) * 1000)};
+      ::ppoll(&p, 1, &wait, nullptr);
+      continue;
+    }
+    if (err == EINTR) continue;
+    note_errno(err);
+    if (state_ != BusState::kUp) return SendStatus::kDown;
+    ++stats_.send_dropped;
+    return SendStatus::kDropped;
+  }
+}
+
+std::optional<TimedFrame> SocketCanBus::receive() {
+  can_frame k{};
+  iovec iov{&k, sizeof k};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t))];
+  msghdr msg{};
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof control;
+  ssize_t n = 0;
+  do {
+    n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
+  } while (n < 0 && errno == EINTR);
+  if (n < 0) {
+    const int err = errno;
+    if (err != EAGAIN && err != EWOULDBLOCK) note_errno(err);
+    return std::nullopt;
+  }
+  if (n != static_cast<ssize_t>(sizeof k)) return std::nullopt;  // CAN FD on this socket is not enabled
+  TimedFrame out{from_kernel(k), Nanos{0}};
+  for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+    if (c->cmsg_level != SOL_SOCKET) continue;
+    if (c->cmsg_type == SO_TIMESTAMPNS) {
+      timespec ts{};
+      std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+      out.time = std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
+    } else if (c->cmsg_type == SO_RXQ_OVFL) {
+      std::uint32_t drops = 0;
+      std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
+      if (have_drop_count_) {
+        stats_.rx_overflow += static_cast<std::uint32_t>(drops - last_drop_count_);
+      } else {
+        stats_.rx_overflow += drops;
+        have_drop_count_ = true;
+      }
+      last_drop_count_ = drops;
+    }
+  }
+  if (out.frame.kind == frames::FrameKind::kError) {
+    ++stats_.errors;
+  } else {
+    ++stats_.received;
+  }
+  if (state_ != BusState::kUp) {
+    state_ = BusState::kUp;
+    ++stats_.state_changes;
+  }
+  return out;
+}
+
+void SocketCanBus::set_filters(std::span<const Filter> filters) {
+  std::vector<can_filter> k;
+  k.reserve(filters.size());
+  for (const Filter& f : filters) {
+    can_filter c{};
+    c.can_id = f.id | (f.extended ? CAN_EFF_FLAG : 0u) | (f.remote ? CAN_RTR_FLAG : 0u);
+    if (f.invert) c.can_id |= CAN_INV_FILTER;
+    c.can_mask = f.mask | (f.match_extended ? CAN_EFF_FLAG : 0u) | (f.match_remote ? CAN_RTR_FLAG : 0u);
+    k.push_back(c);
+  }
+  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, k.empty() ? nullptr : k.data(),
+               static_cast<socklen_t>(k.size() * sizeof(can_filter)));
+}
+
+void SocketCanBus::set_error_mask(std::uint32_t mask) {
+  const can_err_mask_t m = mask & CAN_ERR_MASK;
+  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &m, sizeof m);
+}
+
+bool SocketCanBus::wait_readable(std::chrono::microseconds timeout) const {
+  pollfd p{fd_, POLLIN, 0};
+  const auto us = timeout.count();
+  const timespec wait{static_cast<time_t>(us / 1'000'000), static_cast<long>((us % 1'000'000) * 1000)};
+  return ::ppoll(&p, 1, &wait, nullptr) > 0 && (p.revents & POLLIN) != 0;
+}
+
+BusState SocketCanBus::refresh_state() {
+  ifreq req{};
+  std::strncpy(req.ifr_name, iface_.c_str(), IFNAMSIZ - 1);
+  BusState s = BusState::kUp;
+  if (::ioctl(fd_, SIOCGIFFLAGS, &req) < 0) {
+    s = BusState::kGone;
+  } else if ((req.ifr_flags & IFF_UP) == 0 || (req.ifr_flags & IFF_RUNNING) == 0) {
+    s = BusState::kDown;
+  } else if (if_nametoindex(iface_.c_str()) != static_cast<unsigned>(ifindex_)) {
+    s = BusState::kGone;  // removed and created again: this socket is bound to the old one
+  }
+  if (s != state_) {
+    state_ = s;
+    ++stats_.state_changes;
+  }
+  return state_;
+}
+
+}  // namespace canhil::can_nodes

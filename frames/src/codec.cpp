@@ -1,0 +1,238 @@
+#include "canhil/frames/codec.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace canhil::frames {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "canhil's codec assumes a little-endian host");
+
+std::uint64_t load_le(const CanFrame& f) noexcept {
+  std::uint64_t w = 0;
+  std::memcpy(&w, f.data.data(), sizeof w);  // bytes past len are zero in frames canhil builds
+  if (f.len < 8) w &= f.len == 0 ? 0 : (~std::uint64_t{0} >> (64 - 8 * f.len));
+  return w;
+}
+
+std::int64_t sign_extend(std::uint64_t raw, unsigned length) noexcept {
+  if (length >= 64) return static_cast<std::int64_t>(raw);
+  const std::uint64_t sign = std::uint64_t{1} << (length - 1);
+  return static_cast<std::int64_t>((raw ^ sign) - sign);
+}
+
+std::int64_t read_start_value(const SignalDef& s) {
+  const auto it = s.attributes.find("GenSigStartValue");
+  if (it == s.attributes.end()) return 0;
+  if (const auto* i = std::get_if<std::int64_t>(&it->second)) return *i;
+  if (const auto* d = std::get_if<double>(&it->second)) return static_cast<std::int64_t>(*d);
+  return 0;
+}
+
+}  // namespace
+
+MessageCodec::MessageCodec(const MessageDef& def) : def_(&def) {
+  layouts_.reserve(def.signals.size());
+  for (const SignalDef& s : def.signals) {
+    SignalLayout l;
+    l.length = static_cast<std::uint8_t>(s.length);
+    l.mask = s.length >= 64 ? ~std::uint64_t{0} : ((std::uint64_t{1} << s.length) - 1);
+    l.motorola = s.byte_order == ByteOrder::kMotorola;
+    if (l.motorola) {
+      const int msb = (7 - s.start_bit / 8) * 8 + s.start_bit % 8;
+      l.shift = static_cast<std::uint8_t>(msb - (s.length - 1));
+    } else {
+      l.shift = static_cast<std::uint8_t>(s.start_bit);
+    }
+    l.type = s.value_type;
+    l.factor = s.factor;
+    l.offset = s.offset;
+    if (l.type == ValueType::kFloat32 || l.type == ValueType::kFloat64) {
+      l.phys_min = s.minimum;
+      l.phys_max = s.maximum;
+    } else {
+      // Representable raw range, then narrowed by the declared physical range.
+      double lo = 0;
+      double hi = 0;
+      if (l.type == ValueType::kSigned) {
+        lo = -std::ldexp(1.0, s.length - 1);
+        hi = std::ldexp(1.0, s.length - 1) - 1;
+      } else {
+        hi = std::ldexp(1.0, s.length) - 1;
+      }
+      if (s.has_range()) {
+        double a = (s.minimum - s.offset) / s.factor;
+        double b = (s.maximum - s.offset) / s.factor;
+        if (a > b) std::swap(a, b);
+        const double eps_a = 1e-6 * std::max(1.0, std::fabs(a));
+        const double eps_b = 1e-6 * std::max(1.0, std::fabs(b));
+        lo = std::max(lo, std::ceil(a - eps_a));
+        hi = std::min(hi, std::floor(b + eps_b));
+      }
+      // 64-bit extremes are not exact in double; clamp conversions.
+      l.raw_min = lo <= -9.2e18 ? std::numeric_limits<std::int64_t>::min() : static_cast<std::int64_t>(lo);
+      l.raw_max = hi >= 9.2e18 ? std::numeric_limits<std::int64_t>::max() : static_cast<std::int64_t>(hi);
+      if (l.type == ValueType::kUnsigned && s.length == 64) l.raw_max = std::numeric_limits<std::int64_t>::max();
+    }
+    l.initial = static_cast<double>(read_start_value(s)) * s.factor + s.offset;
+    layouts_.push_back(l);
+    initial_.push_back(l.initial);
+  }
+}
+
+std::optional<std::size_t> MessageCodec::index_of(std::string_view signal) const noexcept {
+  for (std::size_t i = 0; i < def_->signals.size(); ++i) {
+    if (def_->signals[i].name == signal) return i;
+  }
+  return std::nullopt;
+}
+
+std::uint64_t MessageCodec::raw_bits(const CanFrame& frame, std::size_t i) const noexcept {
+  const SignalLayout& l = layouts_[i];
+  std::uint64_t w = load_le(frame);
+  if (l.motorola) w = __builtin_bswap64(w);
+  return (w >> l.shift) & l.mask;
+}
+
+DecodeResult MessageCodec::decode(const CanFrame& frame, std::span<double> out) const noexcept {
+  DecodeResult r;
+  if (frame.kind != FrameKind::kData) {
+    r.status = DecodeStatus::kNotData;
+    return r;
+  }
+  if (frame.len != def_->length) {
+    r.status = DecodeStatus::kWrongLength;
+    return r;
+  }
+  const std::uint64_t le = load_le(frame);
+  const std::uint64_t be = __builtin_bswap64(le);
+  const std::size_t n = layouts_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const SignalLayout& l = layouts_[i];
+    const std::uint64_t raw = ((l.motorola ? be : le) >> l.shift) & l.mask;
+    double value = 0;
+    switch (l.type) {
+      case ValueType::kUnsigned: {
+        const auto v = static_cast<std::int64_t>(raw);
+        if (raw > static_cast<std::uint64_t>(l.raw_max) || v < l.raw_min) r.out_of_range |= std::uint64_t{1} << i;
+        value = static_cast<double>(raw);
+        break;
+      }
+      case ValueType::kSigned: {
+        const std::int64_t v = sign_extend(raw, l.length);
+        if (v < l.raw_min || v > l.raw_max) r.out_of_range |= std::uint64_t{1} << i;
+        value = static_cast<double>(v);
+        break;
+      }
+      case ValueType::kFloat32:
+        value = static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(raw)));
+        break;
+      case ValueType::kFloat64:
+        value = std::bit_cast<double>(raw);
+        break;
+    }
+    value = value * l.factor + l.offset;
+    if (l.type == ValueType::kFloat32 || l.type == ValueType::kFloat64) {
+      if (!std::isfinite(value) || ((l.phys_min != 0.0 || l.phys_max != 0.0) && (value < l.phys_min || value > l.phys_max))) {
+        r.out_of_range |= std::uint64_t{1} << i;
+      }
+    }
+    out[i] = value;
+  }
+  return r;
+}
+
+EncodeResult MessageCodec::encode(std::span<const double> values, CanFrame& out) const noexcept {
+  EncodeResult r;
+  std::uint64_t le = 0;
+  std::uint64_t be = 0;
+  const std::size_t n = layouts_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const SignalLayout& l = layouts_[i];
+    double phys = values[i];
+    if (!std::isfinite(phys)) {
+      r.saturated |= std::uint64_t{1} << i;
+      phys = l.initial;
+    }
+    std::uint64_t raw = 0;
+    if (l.type == ValueType::kFloat32 || l.type == ValueType::kFloat64) {
+      if ((l.phys_min != 0.0 || l.phys_max != 0.0) && (phys < l.phys_min || phys > l.phys_max)) {
+        r.saturated |= std::uint64_t{1} << i;
+        phys = std::clamp(phys, l.phys_min, l.phys_max);
+      }
+      const double scaled = (phys - l.offset) / l.factor;
+      raw = l.type == ValueType::kFloat32 ? std::bit_cast<std::uint32_t>(static_cast<float>(scaled))
+                                          : std::bit_cast<std::uint64_t>(scaled);
+    } else {
+      const double scaled = std::nearbyint((phys - l.offset) / l.factor);
+      std::int64_t v = 0;
+      if (scaled < static_cast<double>(l.raw_min)) {
+        v = l.raw_min;
+        r.saturated |= std::uint64_t{1} << i;
+      } else if (scaled > static_cast<double>(l.raw_max)) {
+        v = l.raw_max;
+        r.saturated |= std::uint64_t{1} << i;
+      } else {
+        v = static_cast<std::int64_t>(scaled);
+      }
+      raw = static_cast<std::uint64_t>(v);
+    }
+    raw = (raw & l.mask) << l.shift;
+    if (l.motorola) {
+      be |= raw;
+    } else {
+      le |= raw;
+    }
+  }
+  le |= __builtin_bswap64(be);
+  out = CanFrame{};
+  out.id = def_->id;
+  out.extended = def_->extended;
+  out.len = def_->length;
+  std::memcpy(out.data.data(), &le, sizeof le);
+  // Bytes past the length stay zero (the parser guarantees no signal reaches them).
+  return r;
+}
+
+Codec::Codec(Database db) : db_(std::make_unique<Database>(std::move(db))), standard_index_(2048, -1) {
+  messages_.reserve(db_->messages.size());
+  for (const MessageDef& m : db_->messages) {
+    if (!m.extended) standard_index_[m.id] = static_cast<std::int16_t>(messages_.size());
+    messages_.emplace_back(m);
+  }
+}
+
+const MessageCodec* Codec::find(std::uint32_t id, bool extended) const noexcept {
+  if (!extended) {
+    if (id >= standard_index_.size()) return nullptr;
+    const std::int16_t i = standard_index_[id];
+    return i < 0 ? nullptr : &messages_[static_cast<std::size_t>(i)];
+  }
+  for (const auto& m : messages_) {
+    if (m.def().extended && m.id() == id) return &m;
+  }
+  return nullptr;
+}
+
+const MessageCodec* Codec::find(std::string_view name) const noexcept {
+  for (const auto& m : messages_) {
+    if (m.name() == name) return &m;
+  }
+  return nullptr;
+}
+
+DecodeResult Codec::decode(const CanFrame& frame, std::span<double> out, const MessageCodec** message) const noexcept {
+  const MessageCodec* m = frame.kind == FrameKind::kError ? nullptr : find(frame.id, frame.extended);
+  if (message != nullptr) *message = m;
+  if (m == nullptr) {
+    DecodeResult r;
+    r.status = frame.kind == FrameKind::kError ? DecodeStatus::kNotData : DecodeStatus::kUnknownId;
+    return r;
+  }
+  return m->decode(frame, out);
+}
+
+}  // namespace canhil::frames
