@@ -4,7 +4,7 @@
 add_library(canhil_options INTERFACE)
 target_compile_options(canhil_options INTERFACE
   -Wall -Wextra -Wconversion -Wsign-conversion -Wshadow -Wpedantic
-  -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Wnull-dereference)
+  -Wnon-virtual-dtor -Wold-style-cast -Wcast-align)
 if(CANHIL_WERROR)
   target_compile_options(canhil_options INTERFACE -Werror)
 endif()

@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
+#include <linux/sock_diag.h>
 #include <net/if.h>
 #include <poll.h>
 #include <sys/ioctl.h>
@@ -176,6 +177,9 @@ std::optional<TimedFrame> SocketCanBus::receive() {
   if (n < 0) {
     const int err = errno;
     if (err != EAGAIN && err != EWOULDBLOCK) note_errno(err);
+    // Queue empty: drops after the last received frame are reported with no
+    // later frame's SO_RXQ_OVFL, so read the socket's drop counter directly.
+    read_drop_counter();
     return std::nullopt;
   }
   if (n != static_cast<ssize_t>(sizeof k)) return std::nullopt;  // CAN FD on this socket is not enabled
@@ -189,13 +193,7 @@ std::optional<TimedFrame> SocketCanBus::receive() {
     } else if (c->cmsg_type == SO_RXQ_OVFL) {
       std::uint32_t drops = 0;
       std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
-      if (have_drop_count_) {
-        stats_.rx_overflow += static_cast<std::uint32_t>(drops - last_drop_count_);
-      } else {
-        stats_.rx_overflow += drops;
-        have_drop_count_ = true;
-      }
-      last_drop_count_ = drops;
+      note_drops(drops);
     }
   }
   if (out.frame.kind == frames::FrameKind::kError) {
@@ -208,6 +206,25 @@ std::optional<TimedFrame> SocketCanBus::receive() {
     ++stats_.state_changes;
   }
   return out;
+}
+
+void SocketCanBus::note_drops(std::uint32_t absolute) const {
+  // The kernel's per-socket drop counter (sk_drops) only grows, modulo 2^32.
+  stats_.rx_overflow += static_cast<std::uint32_t>(absolute - last_drop_count_);
+  last_drop_count_ = absolute;
+}
+
+void SocketCanBus::read_drop_counter() const {
+  std::uint32_t info[SK_MEMINFO_VARS] = {};
+  socklen_t len = sizeof info;
+  if (::getsockopt(fd_, SOL_SOCKET, SO_MEMINFO, info, &len) == 0 && len > SK_MEMINFO_DROPS * sizeof(std::uint32_t)) {
+    note_drops(info[SK_MEMINFO_DROPS]);
+  }
+}
+
+BusStats SocketCanBus::stats() const {
+  read_drop_counter();
+  return stats_;
 }
 
 void SocketCanBus::set_filters(std::span<const Filter> filters) {

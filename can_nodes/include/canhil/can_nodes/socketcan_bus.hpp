@@ -49,7 +49,8 @@ class SocketCanBus final : public Bus {
   void set_filters(std::span<const Filter> filters) override;
   void set_error_mask(std::uint32_t mask) override;
   BusState state() const override { return state_; }
-  BusStats stats() const override { return stats_; }
+  /// Also reads the kernel's drop counter, so rx_overflow is current.
+  BusStats stats() const override;
   const std::string& name() const override { return iface_; }
 
   /// The socket, for poll()/epoll in a real-time loop. Owned by this object.
@@ -62,15 +63,16 @@ class SocketCanBus final : public Bus {
  private:
   SocketCanBus(int fd, std::string iface, int ifindex, const SocketCanOptions& options);
   void note_errno(int err);
+  void note_drops(std::uint32_t absolute) const;
+  void read_drop_counter() const;
 
   int fd_;
   std::string iface_;
   int ifindex_;
   SocketCanOptions options_;
   BusState state_ = BusState::kUp;
-  BusStats stats_;
-  std::uint32_t last_drop_count_ = 0;
-  bool have_drop_count_ = false;
+  mutable BusStats stats_;  // rx_overflow is refreshed from the kernel in const stats()
+  mutable std::uint32_t last_drop_count_ = 0;
 };
 
 }  // namespace canhil::can_nodes

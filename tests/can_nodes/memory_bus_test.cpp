@@ -1,0 +1,150 @@
+#include "canhil/can_nodes/memory_bus.hpp"
+
+#include <gtest/gtest.h>
+
+namespace canhil::can_nodes {
+namespace {
+
+using frames::make_data_frame;
+using namespace std::chrono_literals;
+
+TEST(MemoryBus, DeliversToEveryOtherEndpointStampedWithTheClock) {
+  SimulatedClock clock(5ms);
+  MemoryBus bus(clock);
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto c = bus.attach("c");
+  ASSERT_EQ(a->send(make_data_frame(0x131, {1, 2})), SendStatus::kOk);
+  EXPECT_FALSE(a->receive()) << "no own frames by default, like SocketCAN";
+  for (auto* e : {b.get(), c.get()}) {
+    const auto f = e->receive();
+    ASSERT_TRUE(f);
+    EXPECT_EQ(f->frame, make_data_frame(0x131, {1, 2}));
+    EXPECT_EQ(f->time, 5ms);
+    EXPECT_FALSE(e->receive());
+  }
+  EXPECT_EQ(bus.frames_carried(), 1u);
+  EXPECT_EQ(a->stats().sent, 1u);
+  EXPECT_EQ(b->stats().received, 1u);
+}
+
+TEST(MemoryBus, KeepsSendOrderAndTimestampsAsTheClockMoves) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto tx = bus.attach("tx");
+  auto rx = bus.attach("rx");
+  for (std::uint8_t i = 0; i < 10; ++i) {
+    tx->send(make_data_frame(0x100 + i, {i}));
+    clock.advance(1ms);
+  }
+  for (std::uint8_t i = 0; i < 10; ++i) {
+    const auto f = rx->receive();
+    ASSERT_TRUE(f);
+    EXPECT_EQ(f->frame.id, 0x100u + i);
+    EXPECT_EQ(f->time, std::chrono::milliseconds(i));
+  }
+}
+
+TEST(MemoryBus, ReceiveOwnWhenAsked) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto a = bus.attach("a");
+  a->set_receive_own(true);
+  a->send(make_data_frame(0x10, {}));
+  EXPECT_TRUE(a->receive());
+}
+
+TEST(MemoryBus, FiltersLikeSocketCan) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto tx = bus.attach("tx");
+  auto rx = bus.attach("rx");
+  const Filter filters[] = {Filter::exact(0x131), Filter{0x110, 0x7F0, false, false, false, false, false}};
+  rx->set_filters(filters);
+  for (std::uint32_t id : {0x100u, 0x111u, 0x112u, 0x131u, 0x132u}) tx->send(make_data_frame(id, {}));
+  std::vector<std::uint32_t> got;
+  while (auto f = rx->receive()) got.push_back(f->frame.id);
+  EXPECT_EQ(got, (std::vector<std::uint32_t>{0x111, 0x112, 0x131}));
+
+  rx->set_filters({});
+  tx->send(make_data_frame(0x131, {}));
+  EXPECT_FALSE(rx->receive()) << "an empty filter list receives nothing";
+
+  const Filter inverted[] = {Filter{0x131, 0x7FF, false, false, false, false, true}};
+  rx->set_filters(inverted);
+  tx->send(make_data_frame(0x131, {}));
+  tx->send(make_data_frame(0x132, {}));
+  const auto f = rx->receive();
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->frame.id, 0x132u);
+  EXPECT_FALSE(rx->receive());
+}
+
+TEST(MemoryBus, ErrorFramesOnlyWhereTheMaskAsks) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto quiet = bus.attach("quiet");
+  auto watcher = bus.attach("watcher");
+  watcher->set_error_mask(kErrBusOff | kErrController);
+  bus.inject_error(kErrBusOff);
+  bus.inject_error(kErrNoAck);
+  EXPECT_FALSE(quiet->receive());
+  const auto f = watcher->receive();
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->frame.kind, frames::FrameKind::kError);
+  EXPECT_EQ(f->frame.id, kErrBusOff);
+  EXPECT_FALSE(watcher->receive());
+  EXPECT_EQ(watcher->stats().errors, 1u);
+}
+
+TEST(MemoryBus, OverflowIsDroppedAndCounted) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto tx = bus.attach("tx");
+  auto rx = bus.attach("rx", 3);
+  for (int i = 0; i < 5; ++i) tx->send(make_data_frame(0x10, {}));
+  EXPECT_EQ(rx->pending(), 3u);
+  EXPECT_EQ(rx->stats().rx_overflow, 2u);
+  EXPECT_EQ(rx->stats().received + rx->stats().rx_overflow, 5u) << "every frame received or counted";
+}
+
+TEST(MemoryBus, DownBusRefusesSendsAndReportsState) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  bus.set_up(false);
+  EXPECT_EQ(a->state(), BusState::kDown);
+  EXPECT_EQ(a->send(make_data_frame(0x10, {})), SendStatus::kDown);
+  EXPECT_FALSE(b->receive());
+  bus.set_up(true);
+  EXPECT_EQ(a->state(), BusState::kUp);
+  EXPECT_EQ(a->stats().state_changes, 2u);
+  EXPECT_EQ(a->send(make_data_frame(0x10, {})), SendStatus::kOk);
+  EXPECT_TRUE(b->receive());
+}
+
+TEST(MemoryBus, DetachedEndpointGetsNothingAndBusOutlivingIsSafe) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto a = bus.attach("a");
+  {
+    auto b = bus.attach("b");
+  }
+  EXPECT_EQ(a->send(make_data_frame(0x10, {})), SendStatus::kOk);
+  EXPECT_EQ(bus.frames_carried(), 1u);
+}
+
+TEST(Filter, MatchesExtendedAndRemoteFlagsWhenAsked) {
+  frames::CanFrame ext = make_data_frame(0x131, {});
+  ext.extended = true;
+  EXPECT_FALSE(Filter::exact(0x131).matches(ext)) << "exact() compares the extended flag";
+  EXPECT_TRUE(Filter::all().matches(ext));
+  frames::CanFrame rtr = make_data_frame(0x131, {});
+  rtr.kind = frames::FrameKind::kRemote;
+  EXPECT_FALSE(Filter::exact(0x131).matches(rtr));
+  EXPECT_TRUE(Filter::exact(0x131).matches(make_data_frame(0x131, {})));
+}
+
+}  // namespace
+}  // namespace canhil::can_nodes
