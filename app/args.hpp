@@ -45,6 +45,13 @@ class Args {
     }
     return false;
   }
+  /// The first word that is not an option (the subcommand), or "".
+  std::string command() const {
+    for (const auto& w : words_) {
+      if (w.empty() || w[0] != '-') return w;
+    }
+    return "";
+  }
   /// What is left, after options were taken; unknown `--x` words are an error.
   std::vector<std::string> positionals() const {
     for (const auto& w : words_) {

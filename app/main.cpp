@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     const auto dbc = args.option("--dbc");
-    const std::string command = words.front();
+    const std::string command = args.command();
+    if (command.empty()) throw canhil::app::UsageError("no command given");
     if (command == "frames") return canhil::app::run_frames(args, dbc);
     if (command == "dump") return canhil::app::run_dump(args, dbc);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");

@@ -50,6 +50,10 @@ MessageCodec::MessageCodec(const MessageDef& def) : def_(&def) {
     l.type = s.value_type;
     l.factor = s.factor;
     l.offset = s.offset;
+    if (std::fabs(s.factor) < 1.0) {
+      const double inverse = std::round(1.0 / s.factor);
+      if (std::fabs(inverse * s.factor - 1.0) < 1e-12) l.divisor = inverse;
+    }
     if (l.type == ValueType::kFloat32 || l.type == ValueType::kFloat64) {
       l.phys_min = s.minimum;
       l.phys_max = s.maximum;
@@ -134,7 +138,7 @@ DecodeResult MessageCodec::decode(const CanFrame& frame, std::span<double> out) 
         value = std::bit_cast<double>(raw);
         break;
     }
-    value = value * l.factor + l.offset;
+    value = (l.divisor != 0.0 ? value / l.divisor : value * l.factor) + l.offset;
     if (l.type == ValueType::kFloat32 || l.type == ValueType::kFloat64) {
       if (!std::isfinite(value) || ((l.phys_min != 0.0 || l.phys_max != 0.0) && (value < l.phys_min || value > l.phys_max))) {
         r.out_of_range |= std::uint64_t{1} << i;
@@ -167,7 +171,8 @@ EncodeResult MessageCodec::encode(std::span<const double> values, CanFrame& out)
       raw = l.type == ValueType::kFloat32 ? std::bit_cast<std::uint32_t>(static_cast<float>(scaled))
                                           : std::bit_cast<std::uint64_t>(scaled);
     } else {
-      const double scaled = std::nearbyint((phys - l.offset) / l.factor);
+      const double unscaled = l.divisor != 0.0 ? (phys - l.offset) * l.divisor : (phys - l.offset) / l.factor;
+      const double scaled = std::nearbyint(unscaled);
       std::int64_t v = 0;
       if (scaled < static_cast<double>(l.raw_min)) {
         v = l.raw_min;

@@ -1,5 +1,6 @@
 #include "canhil/frames/describe.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 
@@ -117,7 +118,8 @@ std::string describe_json(const Codec& codec, const CanFrame& frame, const Descr
     for (std::size_t i = 0; i < m.signals.size(); ++i) {
       const SignalDef& s = m.signals[i];
       char num[64];
-      std::snprintf(num, sizeof num, "%.17g", d.values[i]);
+      const auto end = std::to_chars(num, num + sizeof num - 1, d.values[i]).ptr;  // shortest round-trip form
+      *end = '\0';
       if (i > 0) out += ',';
       out += json_quote(s.name) + ":{\"value\":" + num + ",\"unit\":" + json_quote(s.unit) +
              ",\"raw\":" + std::to_string(d.message->raw_bits(frame, i)) + ",\"out_of_range\":" +

@@ -51,6 +51,10 @@ struct SignalLayout {
   bool motorola = false;
   ValueType type = ValueType::kUnsigned;
   double factor = 1.0;
+  /// 1/factor when that is a whole number (decimal factors such as 0.001): then
+  /// value = raw / divisor, which rounds correctly (314159 / 1e5 = 3.14159),
+  /// where raw * 1e-5 would not. 0 otherwise.
+  double divisor = 0.0;
   double offset = 0.0;
   std::int64_t raw_min = 0;  ///< integer signals: allowed raw range (declared range ∩ representable)
   std::int64_t raw_max = 0;

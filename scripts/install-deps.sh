@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# install-deps.sh — every system package canhil needs to build, test and run,
+# from Debian's archive. Idempotent and quick when everything is there.
+# Needs root (apt-get); CI and the developers' machines run as root.
+set -euo pipefail
+
+packages=(
+  # build
+  cmake ninja-build g++ clang libclang-rt-14-dev pkg-config
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # SocketCAN tools and interface set-up
+  can-utils iproute2 kmod
+  # the VM runner for kernels without CAN (vcan_setup/vm-run.sh)
+  qemu-system-x86 linux-image-amd64 busybox-static cpio
+  # independent DBC decoder for the cross-check tests
+  python3 python3-canmatrix
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+  exit 0
+fi
+if [[ $(id -u) -ne 0 ]]; then
+  echo "install-deps: missing ${missing[*]}; run as root: apt-get update && apt-get install ${missing[*]}" >&2
+  exit 2
+fi
+echo "install-deps: installing ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# main.sh — the main job of the README: set everything up, build canhil and
+# show it working on the shipped message set and a sample trace of one robot's
+# bus (the full emulator demo grows here as the project does).
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+bash scripts/install-deps.sh
+bash scripts/build.sh plain >/dev/null
+canhil=build/plain/app/canhil
+echo "== the message set (frames/canhil.dbc)"
+"$canhil" frames list
+echo
+echo "== a shipped trace of one robot's bus, decoded (frames/samples/one_robot.log)"
+"$canhil" dump --log frames/samples/one_robot.log

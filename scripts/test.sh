@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# test.sh — the test command of the README: installs what is missing, then
+# builds and runs the whole suite twice, plainly and with ASan + UBSan.
+# SocketCAN tests run on this machine's vcan or, where the kernel has no CAN,
+# inside the VM runner; they never skip.
+#   scripts/test.sh            both flavours
+#   scripts/test.sh plain      one flavour (also: sanitize)
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+bash scripts/install-deps.sh
+flavours=("$@")
+[[ ${#flavours[@]} -gt 0 ]] || flavours=(plain sanitize)
+for flavour in "${flavours[@]}"; do
+  echo "== canhil tests: $flavour build"
+  bash scripts/build.sh "$flavour"
+  ctest --test-dir "build/$flavour" --output-on-failure -j2
+done

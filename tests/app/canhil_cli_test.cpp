@@ -1,0 +1,130 @@
+// The canhil command end to end (no CAN needed): frames list/encode/decode and
+// dump --log, their exit statuses and error messages.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <sys/wait.h>
+
+#include "support/test_paths.hpp"
+
+namespace {
+
+struct CliRun {
+  int status;
+  std::string out;  // stdout and stderr together
+};
+
+CliRun canhil(const std::string& args) {
+  const std::string cmd = "cd " + canhil::test::source_dir() + " && " + canhil::test::canhil_binary() + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  CliRun r{-1, ""};
+  if (p == nullptr) return r;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p) != nullptr) r.out += buf;
+  const int raw = pclose(p);
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return r;
+}
+
+bool has(const CliRun& r, const std::string& text) { return r.out.find(text) != std::string::npos; }
+
+TEST(CanhilFrames, EncodeGivesTheContractExample) {
+  const CliRun r = canhil("frames encode M6_1 vx=0.5 vy=0");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out, "131#F401000000000000\n");
+}
+
+TEST(CanhilFrames, EncodeAcceptsValueNamesAndWarnsOnSaturation) {
+  EXPECT_EQ(canhil("frames encode M5_2 theta=0 command=reset").out, "0A2#0000000001000000\n");
+  const CliRun r = canhil("frames encode M1 setpoint_1=1000");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(has(r, "100#8403000000000000"));
+  EXPECT_TRUE(has(r, "setpoint_1=1000 is outside [-900, 900]"));
+}
+
+TEST(CanhilFrames, EncodeNamesWhatIsWrong) {
+  CliRun r = canhil("frames encode M6_1 vz=1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "M6_1 has no signal vz; its signals are vx, vy"));
+  r = canhil("frames encode M99");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "no message named M99"));
+}
+
+TEST(CanhilFrames, DecodeShowsNamesValuesUnits) {
+  const CliRun r = canhil("frames decode 131#F401000000000000");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out, "131#F401000000000000  M6_1  vx=0.500 m/s  vy=0.000 m/s\n");
+}
+
+TEST(CanhilFrames, DecodeFlagsUnknownIdsAndWrongLengthsAndExitsOne) {
+  const CliRun r = canhil("frames decode 7FF#00 131#F401");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(has(r, "7FF#00  [unknown id]"));
+  EXPECT_TRUE(has(r, "131#F401  [wrong length 2, M6_1 has 8]"));
+  EXPECT_FALSE(has(r, "vx=")) << "a frame that does not fit is never decoded";
+}
+
+TEST(CanhilFrames, DecodeJson) {
+  const CliRun r = canhil("frames decode --json 122#2FCB040001020000");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_TRUE(has(r, "\"name\":\"M4_2\""));
+  EXPECT_TRUE(has(r, "\"theta\":{\"value\":3.14159,\"unit\":\"rad\",\"raw\":314159"));
+}
+
+TEST(CanhilFrames, ListShowsEveryMessageWithPeriodAndKind) {
+  const CliRun r = canhil("frames list");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_TRUE(has(r, "M6_1    0x131  8    sync     30 ms     6    Laptop -> Pic_base"));
+  EXPECT_TRUE(has(r, "M7      0x0B0  8    async    >=1000 ms -    Laptop -> Pic_base"));
+  EXPECT_TRUE(has(r, "TM      0x010  8    trigger  10 ms"));
+  EXPECT_TRUE(has(r, "16 messages from"));
+}
+
+TEST(CanhilFrames, AnotherDbcIsUsedWithDbcOption) {
+  const CliRun r = canhil("--dbc tests/frames/data/mixed_orders.dbc frames decode 400#ABCFB00000000000");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_TRUE(has(r, "MOTO  be12=2748  be_signed=-12.5 deg"));
+}
+
+TEST(CanhilFrames, BadDbcGivesFileLineAndWhatToDo) {
+  const CliRun r = canhil("--dbc /nonexistent.dbc frames list");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "/nonexistent.dbc: cannot read the DBC file"));
+}
+
+TEST(CanhilDump, DecodesTheShippedSampleCleanly) {
+  const CliRun r = canhil("dump --log frames/samples/one_robot.log");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "(1700000000.009410) vcan0 131#0000F40100000000 M6_1  vx=0.000 m/s  vy=0.500 m/s"));
+  EXPECT_TRUE(has(r, "183 frames from frames/samples/one_robot.log"));
+  EXPECT_TRUE(has(r, "0 unknown ids, 0 wrong lengths, 0 out of range, 0 error frames"));
+}
+
+TEST(CanhilDump, CountsAndFlagsEveryProblemInALog) {
+  const CliRun r = canhil("dump --log tests/frames/data/faulty.log");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(has(r, "7FF#DEADBEEF"));
+  EXPECT_TRUE(has(r, "[unknown id]"));
+  EXPECT_TRUE(has(r, "[wrong length 2, M6_1 has 8]"));
+  EXPECT_TRUE(has(r, "setpoint_1=1000 counts/tick !out-of-range"));
+  EXPECT_TRUE(has(r, "[error frame: controller]"));
+  EXPECT_TRUE(has(r, "faulty.log:6: log line must start with '(' timestamp"));
+  EXPECT_TRUE(has(r, "1 unknown ids, 1 wrong lengths, 1 out of range, 1 error frames"));
+  EXPECT_TRUE(has(r, "M6_1  vx=0.500 m/s") ) << "reading goes on after bad lines";
+}
+
+TEST(CanhilDump, JsonLinesCarryTimeAndInterface) {
+  const CliRun r = canhil("dump --json --log tests/frames/data/faulty.log");
+  EXPECT_TRUE(has(r, "{\"time\":1700000000.001000,\"iface\":\"vcan0\",\"frame\":\"7FF#DEADBEEF\",\"id\":\"0x7FF\",\"status\":\"unknown_id\"}"));
+}
+
+TEST(Canhil, UsageErrorsExitTwo) {
+  EXPECT_EQ(canhil("").status, 2);
+  EXPECT_EQ(canhil("fly").status, 2);
+  EXPECT_EQ(canhil("frames decode --bogus 131#00").status, 2);
+  EXPECT_EQ(canhil("--help").status, 0);
+}
+
+}  // namespace
