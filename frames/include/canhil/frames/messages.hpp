@@ -183,7 +183,7 @@ class TypedCodec {
 
   /// Encodes `value`; signals without a field keep their initial value.
   CanFrame encode(const T& value, EncodeResult* result = nullptr) const noexcept {
-    std::array<double, kMaxSignals> values{};
+    std::array<double, kMaxSignals> values;  // only the first signal_count() are used; no zero fill
     const auto init = message_->initial_values();
     std::copy(init.begin(), init.end(), values.begin());
     std::size_t k = 0;
@@ -197,7 +197,7 @@ class TypedCodec {
 
   /// Decodes `frame` into `out`; `out` is untouched unless the status is kOk.
   DecodeResult decode(const CanFrame& frame, T& out) const noexcept {
-    std::array<double, kMaxSignals> values{};
+    std::array<double, kMaxSignals> values;  // decode fills the first signal_count()
     const DecodeResult r = message_->decode(frame, values);
     if (r.status != DecodeStatus::kOk) return r;
     std::size_t k = 0;
