@@ -23,6 +23,7 @@ bool fail(std::string* error, const char* what, std::string_view text) {
 }
 
 constexpr char kHexUpper[] = "0123456789ABCDEF";
+constexpr std::int64_t kMaxLogSeconds = 9'000'000'000;
 
 }  // namespace
 
@@ -154,8 +155,9 @@ bool parse_log_line(std::string_view line, LogEntry& out, std::string* error) {
     const char c = stamp[i];
     if (c < '0' || c > '9') return fail(error, "timestamp is not a decimal number", line);
     if (i < dot) {
-      if (seconds > 9'000'000'000) return fail(error, "timestamp too large", line);
       seconds = seconds * 10 + (c - '0');
+      // Nanoseconds in int64 reach about 9.2e9 s (year 2262).
+      if (seconds > kMaxLogSeconds) return fail(error, "timestamp too large (beyond the year 2262)", line);
     } else {
       micros = micros * 10 + (c - '0');
     }

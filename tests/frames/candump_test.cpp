@@ -94,7 +94,8 @@ TEST(Log, ReadsAndWritesCandumpLogLines) {
 TEST(Log, RejectsMalformedLines) {
   const char* bad[] = {"1700000000.000100 vcan0 131#00", "(1700000000.0001) vcan0 131#00",
                        "(1700000000.000100) vcan0", "(17000x0000.000100) vcan0 131#00",
-                       "(1700000000.000100) vcan0 131#00 extra words", "(1700000000.000100 vcan0 131#00"};
+                       "(1700000000.000100) vcan0 131#00 extra words", "(1700000000.000100 vcan0 131#00",
+                       "(17000000000.000100) vcan0 131#00" /* found by fuzz.decode: ns overflow */};
   for (const char* line : bad) {
     LogEntry e;
     std::string error;
