@@ -55,7 +55,9 @@ class Printer {
 
   void summary(const char* source) const {
     std::fprintf(stderr, "canhil dump: %llu frames from %s", static_cast<unsigned long long>(frames_), source);
-    for (const auto& [name, n] : per_message_) std::fprintf(stderr, "%s %s %llu", name == per_message_.begin()->first ? ";" : ",", name.c_str(), static_cast<unsigned long long>(n));
+    for (const auto& [name, n] : per_message_)
+      std::fprintf(stderr, "%s %s %llu", name == per_message_.begin()->first ? ";" : ",", name.c_str(),
+                   static_cast<unsigned long long>(n));
     std::fprintf(stderr, "\ncanhil dump: %llu unknown ids, %llu wrong lengths, %llu out of range, %llu error frames\n",
                  static_cast<unsigned long long>(unknown_), static_cast<unsigned long long>(wrong_length_),
                  static_cast<unsigned long long>(out_of_range_), static_cast<unsigned long long>(error_frames_));
@@ -99,15 +101,19 @@ int dump_log(const Codec& codec, const std::string& path, bool json) {
     printer.print(entry.time, entry.iface, entry.frame);
   }
   printer.summary(path.c_str());
-  if (bad_lines > 0) std::fprintf(stderr, "canhil dump: %llu lines could not be read\n", static_cast<unsigned long long>(bad_lines));
+  if (bad_lines > 0)
+    std::fprintf(stderr, "canhil dump: %llu lines could not be read\n", static_cast<unsigned long long>(bad_lines));
   return printer.clean() && bad_lines == 0 ? 0 : 1;
 }
 
 const char* state_name(can_nodes::BusState s) {
   switch (s) {
-    case can_nodes::BusState::kUp: return "up";
-    case can_nodes::BusState::kDown: return "down";
-    case can_nodes::BusState::kGone: return "gone";
+    case can_nodes::BusState::kUp:
+      return "up";
+    case can_nodes::BusState::kDown:
+      return "down";
+    case can_nodes::BusState::kGone:
+      return "gone";
   }
   return "?";
 }
@@ -118,10 +124,13 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   const can_nodes::WallClock clock;
-  const Nanos deadline = seconds > 0 ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds)) : Nanos::max();
+  const Nanos deadline = seconds > 0
+                             ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds))
+                             : Nanos::max();
   Printer printer(codec, json);
   can_nodes::BusState last = bus->state();
-  if (last != can_nodes::BusState::kUp) std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), state_name(last));
+  if (last != can_nodes::BusState::kUp)
+    std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), state_name(last));
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   while (!g_stop && (count < 0 || static_cast<long long>(printer.frames()) < count) && clock.now() < deadline) {
     if (!bus->wait_readable(std::chrono::milliseconds(100))) {
@@ -140,7 +149,8 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   printer.summary(iface.c_str());
   const auto stats = bus->stats();
   if (stats.rx_overflow > 0) {
-    std::fprintf(stderr, "canhil dump: %llu frames lost to receive-queue overflow\n", static_cast<unsigned long long>(stats.rx_overflow));
+    std::fprintf(stderr, "canhil dump: %llu frames lost to receive-queue overflow\n",
+                 static_cast<unsigned long long>(stats.rx_overflow));
   }
   return last == can_nodes::BusState::kGone ? 2 : (printer.clean() ? 0 : 1);
 }

@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "args.hpp"
-#include "commands.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/frames/dbc.hpp"
+#include "commands.hpp"
 
 namespace {
 

@@ -39,7 +39,8 @@ int main(int argc, char** argv) {
     for (std::uint32_t e = 0; e < edits; ++e) {
       const auto op = rng() % 3;
       if (op == 0 && !m.empty()) m[rng() % m.size()] = static_cast<std::uint8_t>(rng());
-      if (op == 1) m.insert(m.begin() + static_cast<long>(m.empty() ? 0 : rng() % m.size()), static_cast<std::uint8_t>(rng()));
+      if (op == 1)
+        m.insert(m.begin() + static_cast<long>(m.empty() ? 0 : rng() % m.size()), static_cast<std::uint8_t>(rng()));
       if (op == 2 && !m.empty()) m.erase(m.begin() + static_cast<long>(rng() % m.size()));
     }
     LLVMFuzzerTestOneInput(m.data(), m.size());

@@ -1,7 +1,5 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 
-#include <cerrno>
-#include <cstring>
 #include <fcntl.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
@@ -11,6 +9,8 @@
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
+#include <cerrno>
+#include <cstring>
 
 #include <vector>
 
@@ -237,13 +237,20 @@ void SocketCanBus::set_filters(std::span<const Filter> filters) {
     c.can_mask = f.mask | (f.match_extended ? CAN_EFF_FLAG : 0u) | (f.match_remote ? CAN_RTR_FLAG : 0u);
     k.push_back(c);
   }
-  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, k.empty() ? nullptr : k.data(),
-               static_cast<socklen_t>(k.size() * sizeof(can_filter)));
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, k.empty() ? nullptr : k.data(),
+                   static_cast<socklen_t>(k.size() * sizeof(can_filter))) < 0) {
+    const int err = errno;
+    throw SetupError("cannot set " + std::to_string(k.size()) + " receive filters on " + iface_ + ": " +
+                     errno_text(err) + " (the kernel limits the count to CAN_RAW_FILTER_MAX, 512)");
+  }
 }
 
 void SocketCanBus::set_error_mask(std::uint32_t mask) {
   const can_err_mask_t m = mask & CAN_ERR_MASK;
-  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &m, sizeof m);
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &m, sizeof m) < 0) {
+    const int err = errno;
+    throw SetupError("cannot set the error-frame mask on " + iface_ + ": " + errno_text(err));
+  }
 }
 
 bool SocketCanBus::wait_readable(std::chrono::microseconds timeout) const {

@@ -136,8 +136,7 @@ std::string format_compact(const CanFrame& frame) {
 }
 
 bool parse_log_line(std::string_view line, LogEntry& out, std::string* error) {
-  while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ' ||
-                           line.back() == '\t')) {
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) {
     line.remove_suffix(1);
   }
   if (line.empty() || line.front() != '(') return fail(error, "log line must start with '(' timestamp", line);

@@ -140,7 +140,8 @@ DecodeResult MessageCodec::decode(const CanFrame& frame, std::span<double> out) 
     }
     value = (l.divisor != 0.0 ? value / l.divisor : value * l.factor) + l.offset;
     if (l.type == ValueType::kFloat32 || l.type == ValueType::kFloat64) {
-      if (!std::isfinite(value) || ((l.phys_min != 0.0 || l.phys_max != 0.0) && (value < l.phys_min || value > l.phys_max))) {
+      if (!std::isfinite(value) ||
+          ((l.phys_min != 0.0 || l.phys_max != 0.0) && (value < l.phys_min || value > l.phys_max))) {
         r.out_of_range |= std::uint64_t{1} << i;
       }
     }

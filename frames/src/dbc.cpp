@@ -1,11 +1,11 @@
 #include "canhil/frames/dbc.hpp"
 
+#include <unistd.h>
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 namespace canhil::frames {
 namespace {
@@ -112,7 +112,9 @@ class Parser {
     double v = 0;
     const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (t.empty() || ec != std::errc() || p != t.data() + t.size() || !std::isfinite(v)) {
-      error(std::string("expected a number for ") + what + (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""), line);
+      error(std::string("expected a number for ") + what +
+                (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""),
+            line);
     }
     return v;
   }
@@ -122,7 +124,9 @@ class Parser {
     std::uint64_t v = 0;
     const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (t.empty() || ec != std::errc() || p != t.data() + t.size()) {
-      error(std::string("expected a whole number for ") + what + (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""), line);
+      error(std::string("expected a whole number for ") + what +
+                (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""),
+            line);
     }
     return v;
   }
@@ -133,7 +137,9 @@ class Parser {
     std::int64_t v = 0;
     const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (t.empty() || ec != std::errc() || p != t.data() + t.size()) {
-      error(std::string("expected a whole number for ") + what + (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""), line);
+      error(std::string("expected a whole number for ") + what +
+                (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""),
+            line);
     }
     return v;
   }
@@ -202,8 +208,7 @@ class Parser {
     for (auto& s : m->signals) {
       if (s.name == name) return &s;
     }
-    error("message " + m->name + " has no signal " + std::string(name) + "; fix the name or add the signal",
-          line);
+    error("message " + m->name + " has no signal " + std::string(name) + "; fix the name or add the signal", line);
   }
   AttributeValue attribute_value(const AttributeDef& def, int line);
   void check_database();
@@ -257,11 +262,11 @@ Database Parser::parse() {
       parse_sig_valtype();
     } else if (kw == "BO_TX_BU_") {
       parse_bo_tx_bu();
-    } else if (kw == "VAL_TABLE_" || kw == "EV_" || kw == "ENVVAR_DATA_" || kw == "SGTYPE_" ||
-               kw == "SGTYPE_VAL_" || kw == "BA_DEF_SGTYPE_" || kw == "BA_SGTYPE_" || kw == "SIG_TYPE_REF_" ||
-               kw == "SIG_GROUP_" || kw == "BA_DEF_REL_" || kw == "BA_REL_" || kw == "BA_DEF_DEF_REL_" ||
-               kw == "BU_SG_REL_" || kw == "BU_EV_REL_" || kw == "BU_BO_REL_" || kw == "CAT_DEF_" ||
-               kw == "CAT_" || kw == "FILTER" || kw == "EV_DATA_" || kw == "SG_MUL_VAL_" || kw == "SIGTYPE_VALTYPE_") {
+    } else if (kw == "VAL_TABLE_" || kw == "EV_" || kw == "ENVVAR_DATA_" || kw == "SGTYPE_" || kw == "SGTYPE_VAL_" ||
+               kw == "BA_DEF_SGTYPE_" || kw == "BA_SGTYPE_" || kw == "SIG_TYPE_REF_" || kw == "SIG_GROUP_" ||
+               kw == "BA_DEF_REL_" || kw == "BA_REL_" || kw == "BA_DEF_DEF_REL_" || kw == "BU_SG_REL_" ||
+               kw == "BU_EV_REL_" || kw == "BU_BO_REL_" || kw == "CAT_DEF_" || kw == "CAT_" || kw == "FILTER" ||
+               kw == "EV_DATA_" || kw == "SG_MUL_VAL_" || kw == "SIGTYPE_VALTYPE_") {
       if (kw == "SG_MUL_VAL_") error("extended multiplexing (SG_MUL_VAL_) is not supported; remove it", line);
       skip_statement();
     } else {
@@ -378,8 +383,7 @@ void Parser::parse_sg() {
   advance();
   const char sign = peek();
   if (sign != '+' && sign != '-') {
-    error("signal " + s.name + " needs '+' (unsigned) or '-' (signed) right after the byte order" +
-          describe_here());
+    error("signal " + s.name + " needs '+' (unsigned) or '-' (signed) right after the byte order" + describe_here());
   }
   advance();
   expect('(', "before factor,offset");
@@ -540,8 +544,8 @@ AttributeValue Parser::attribute_value(const AttributeDef& def, int line) {
     case AttributeType::kFloat: {
       const double v = number("the attribute value");
       if ((def.minimum != 0 || def.maximum != 0) && (v < def.minimum || v > def.maximum)) {
-        error("value of attribute \"" + def.name + "\" is outside its range [" + std::to_string(def.minimum) +
-                  ", " + std::to_string(def.maximum) + "]",
+        error("value of attribute \"" + def.name + "\" is outside its range [" + std::to_string(def.minimum) + ", " +
+                  std::to_string(def.maximum) + "]",
               line);
       }
       return v;
@@ -853,8 +857,8 @@ std::filesystem::path default_dbc_path() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
-    for (const fs::path& candidate : {exe.parent_path() / "canhil.dbc",
-                                      exe.parent_path().parent_path() / "share" / "canhil" / "canhil.dbc"}) {
+    for (const fs::path& candidate :
+         {exe.parent_path() / "canhil.dbc", exe.parent_path().parent_path() / "share" / "canhil" / "canhil.dbc"}) {
       if (fs::exists(candidate, ec)) return candidate;
     }
   }

@@ -42,9 +42,8 @@ std::string format_value(const SignalDef& signal, double value) {
 }
 
 std::string error_classes(std::uint32_t error_id) {
-  static constexpr const char* kNames[] = {"tx-timeout",  "lost-arbitration", "controller", "protocol",
-                                           "transceiver", "no-ack",           "bus-off",    "bus-error",
-                                           "restarted",   "counters"};
+  static constexpr const char* kNames[] = {"tx-timeout", "lost-arbitration", "controller", "protocol",  "transceiver",
+                                           "no-ack",     "bus-off",          "bus-error",  "restarted", "counters"};
   std::string out;
   for (unsigned i = 0; i < std::size(kNames); ++i) {
     if ((error_id & (1u << i)) != 0u) {
@@ -80,10 +79,18 @@ std::string json_quote(std::string_view text) {
   std::string out = "\"";
   for (char c : text) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -122,8 +129,8 @@ std::string describe_json(const Codec& codec, const CanFrame& frame, const Descr
       *end = '\0';
       if (i > 0) out += ',';
       out += json_quote(s.name) + ":{\"value\":" + num + ",\"unit\":" + json_quote(s.unit) +
-             ",\"raw\":" + std::to_string(d.message->raw_bits(frame, i)) + ",\"out_of_range\":" +
-             (((d.result.out_of_range >> i) & 1u) != 0u ? "true" : "false") + "}";
+             ",\"raw\":" + std::to_string(d.message->raw_bits(frame, i)) +
+             ",\"out_of_range\":" + (((d.result.out_of_range >> i) & 1u) != 0u ? "true" : "false") + "}";
     }
     out += "}";
   }

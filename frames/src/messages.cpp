@@ -6,7 +6,9 @@ namespace canhil::frames {
 namespace {
 
 FttInfo read_ftt(const MessageDef& m, const std::string& file) {
-  auto fail = [&](const std::string& what) -> DbcError { return DbcError(file, m.line, "message " + m.name + " " + what); };
+  auto fail = [&](const std::string& what) -> DbcError {
+    return DbcError(file, m.line, "message " + m.name + " " + what);
+  };
   FttInfo info;
   const auto kind = m.attribute_text("FttKind");
   if (!kind) {
@@ -88,9 +90,7 @@ std::shared_ptr<const MessageSet> MessageSet::create(Database db) {
   return std::shared_ptr<const MessageSet>(new MessageSet(std::move(db)));
 }
 
-std::shared_ptr<const MessageSet> MessageSet::load(const std::filesystem::path& path) {
-  return create(load_dbc(path));
-}
+std::shared_ptr<const MessageSet> MessageSet::load(const std::filesystem::path& path) { return create(load_dbc(path)); }
 
 const FttInfo& MessageSet::ftt(const MessageCodec& m) const noexcept {
   const auto i = static_cast<std::size_t>(&m - codec_.messages().data());

@@ -2,9 +2,9 @@
 // dump --log, their exit statuses and error messages.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <cstdio>
 #include <string>
-#include <sys/wait.h>
 
 #include "support/test_paths.hpp"
 
@@ -16,7 +16,8 @@ struct CliRun {
 };
 
 CliRun canhil(const std::string& args) {
-  const std::string cmd = "cd " + canhil::test::source_dir() + " && " + canhil::test::canhil_binary() + " " + args + " 2>&1";
+  const std::string cmd =
+      "cd " + canhil::test::source_dir() + " && " + canhil::test::canhil_binary() + " " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   CliRun r{-1, ""};
   if (p == nullptr) return r;
@@ -112,12 +113,14 @@ TEST(CanhilDump, CountsAndFlagsEveryProblemInALog) {
   EXPECT_TRUE(has(r, "[error frame: controller]"));
   EXPECT_TRUE(has(r, "faulty.log:6: log line must start with '(' timestamp"));
   EXPECT_TRUE(has(r, "1 unknown ids, 1 wrong lengths, 1 out of range, 1 error frames"));
-  EXPECT_TRUE(has(r, "M6_1  vx=0.500 m/s") ) << "reading goes on after bad lines";
+  EXPECT_TRUE(has(r, "M6_1  vx=0.500 m/s")) << "reading goes on after bad lines";
 }
 
 TEST(CanhilDump, JsonLinesCarryTimeAndInterface) {
   const CliRun r = canhil("dump --json --log tests/frames/data/faulty.log");
-  EXPECT_TRUE(has(r, "{\"time\":1700000000.001000,\"iface\":\"vcan0\",\"frame\":\"7FF#DEADBEEF\",\"id\":\"0x7FF\",\"status\":\"unknown_id\"}"));
+  EXPECT_TRUE(has(r,
+                  "{\"time\":1700000000.001000,\"iface\":\"vcan0\",\"frame\":\"7FF#DEADBEEF\",\"id\":\"0x7FF\","
+                  "\"status\":\"unknown_id\"}"));
 }
 
 TEST(Canhil, UsageErrorsExitTwo) {

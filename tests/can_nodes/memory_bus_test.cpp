@@ -128,9 +128,7 @@ TEST(MemoryBus, DetachedEndpointGetsNothingAndBusOutlivingIsSafe) {
   SimulatedClock clock;
   MemoryBus bus(clock);
   auto a = bus.attach("a");
-  {
-    auto b = bus.attach("b");
-  }
+  { auto b = bus.attach("b"); }
   EXPECT_EQ(a->send(make_data_frame(0x10, {})), SendStatus::kOk);
   EXPECT_EQ(bus.frames_carried(), 1u);
 }

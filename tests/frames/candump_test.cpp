@@ -36,7 +36,8 @@ TEST(Compact, ParsesAndWritesCanUtilsRows) {
   dlc_frame.len8_dlc = 0xC;
   const CompactRow rows[] = {
       {"131#F401000000000000", data(0x131, false, {0xF4, 0x01, 0, 0, 0, 0, 0, 0}), "131#F401000000000000"},
-      {"5A1#11.2233.44556677.88", data(0x5A1, false, {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88}), "5A1#1122334455667788"},
+      {"5A1#11.2233.44556677.88", data(0x5A1, false, {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88}),
+       "5A1#1122334455667788"},
       {"123#", data(0x123, false, {}), "123#"},
       {"1F334455#1122", data(0x1F334455, true, {0x11, 0x22}), "1F334455#1122"},
       {"00000123#ab", data(0x123, true, {0xAB}), "00000123#AB"},
@@ -92,9 +93,12 @@ TEST(Log, ReadsAndWritesCandumpLogLines) {
 }
 
 TEST(Log, RejectsMalformedLines) {
-  const char* bad[] = {"1700000000.000100 vcan0 131#00", "(1700000000.0001) vcan0 131#00",
-                       "(1700000000.000100) vcan0", "(17000x0000.000100) vcan0 131#00",
-                       "(1700000000.000100) vcan0 131#00 extra words", "(1700000000.000100 vcan0 131#00",
+  const char* bad[] = {"1700000000.000100 vcan0 131#00",
+                       "(1700000000.0001) vcan0 131#00",
+                       "(1700000000.000100) vcan0",
+                       "(17000x0000.000100) vcan0 131#00",
+                       "(1700000000.000100) vcan0 131#00 extra words",
+                       "(1700000000.000100 vcan0 131#00",
                        "(17000000000.000100) vcan0 131#00" /* found by fuzz.decode: ns overflow */};
   for (const char* line : bad) {
     LogEntry e;

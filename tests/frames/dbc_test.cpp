@@ -55,7 +55,8 @@ CM_ SG_ 100 s "two
 lines";
 // a comment line
 BO_TX_BU_ 100 : A,B;
-)", "ok.dbc");
+)",
+                                "ok.dbc");
   ASSERT_EQ(db.messages.size(), 1u);
   const SignalDef& s = db.messages[0].signals[0];
   EXPECT_EQ(s.comment, "two\nlines");
@@ -91,12 +92,17 @@ TEST_P(MalformedDbc, IsRejectedWithFileLineAndReason) {
 INSTANTIATE_TEST_SUITE_P(
     EachKindOfMistake, MalformedDbc,
     ::testing::Values(
-        BadCase{"SignalOutsideMessage", "BO_ 1 M: 2 A\n SG_ s : 8|16@1+ (1,0) [0|0] \"\" B\n", 4, "runs past the 2-byte"},
+        BadCase{"SignalOutsideMessage", "BO_ 1 M: 2 A\n SG_ s : 8|16@1+ (1,0) [0|0] \"\" B\n", 4,
+                "runs past the 2-byte"},
         BadCase{"SignalBeforeMessage", " SG_ s : 0|8@1+ (1,0) [0|0] \"\" B\n", 3, "outside a message"},
         BadCase{"DuplicateId", "BO_ 1 M: 8 A\nBO_ 1 N: 8 A\n", 4, "reuses id"},
         BadCase{"DuplicateMessageName", "BO_ 1 M: 8 A\nBO_ 2 M: 8 A\n", 4, "used twice"},
-        BadCase{"DuplicateSignal", "BO_ 1 M: 8 A\n SG_ s : 0|8@1+ (1,0) [0|0] \"\" B\n SG_ s : 8|8@1+ (1,0) [0|0] \"\" B\n", 5, "appears twice"},
-        BadCase{"OverlappingSignals", "BO_ 1 M: 8 A\n SG_ a : 0|8@1+ (1,0) [0|0] \"\" B\n SG_ b : 4|8@1+ (1,0) [0|0] \"\" B\n", 5, "overlap at bit 4"},
+        BadCase{"DuplicateSignal",
+                "BO_ 1 M: 8 A\n SG_ s : 0|8@1+ (1,0) [0|0] \"\" B\n SG_ s : 8|8@1+ (1,0) [0|0] \"\" B\n", 5,
+                "appears twice"},
+        BadCase{"OverlappingSignals",
+                "BO_ 1 M: 8 A\n SG_ a : 0|8@1+ (1,0) [0|0] \"\" B\n SG_ b : 4|8@1+ (1,0) [0|0] \"\" B\n", 5,
+                "overlap at bit 4"},
         BadCase{"ZeroLength", "BO_ 1 M: 8 A\n SG_ s : 0|0@1+ (1,0) [0|0] \"\" B\n", 4, "use 1 to 64 bits"},
         BadCase{"TooLong", "BO_ 1 M: 8 A\n SG_ s : 0|65@1+ (1,0) [0|0] \"\" B\n", 4, "use 1 to 64 bits"},
         BadCase{"CanFdLength", "BO_ 1 M: 64 A\n", 3, "at most 8"},
@@ -112,11 +118,16 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"CommentOnUnknownMessage", "CM_ BO_ 7 \"x\";\n", 3, "no message with id 7"},
         BadCase{"ValueTableOnUnknownSignal", "BO_ 1 M: 8 A\nVAL_ 1 nope 0 \"x\" ;\n", 4, "has no signal nope"},
         BadCase{"UndefinedAttribute", "BO_ 1 M: 8 A\nBA_ \"Nope\" BO_ 1 3;\n", 4, "never defined"},
-        BadCase{"AttributeOutOfRange", "BO_ 1 M: 8 A\nBA_DEF_ BO_ \"P\" INT 0 100;\nBA_ \"P\" BO_ 1 300;\n", 5, "outside its range"},
-        BadCase{"UnknownEnumValue", "BO_ 1 M: 8 A\nBA_DEF_ BO_ \"K\" ENUM \"a\",\"b\";\nBA_ \"K\" BO_ 1 \"c\";\n", 5, "use one of: a, b"},
-        BadCase{"AttributeOnWrongObject", "BO_ 1 M: 8 A\nBA_DEF_ SG_ \"S\" INT 0 9;\nBA_ \"S\" BO_ 1 3;\n", 5, "another kind of object"},
-        BadCase{"FloatOfWrongLength", "BO_ 1 M: 8 A\n SG_ s : 0|16@1- (1,0) [0|0] \"\" B\nSIG_VALTYPE_ 1 s : 1;\n", 5, "make it 32 bits"},
-        BadCase{"MissingSemicolon", "BO_ 1 M: 8 A\nBA_DEF_ BO_ \"P\" INT 0 100\nBA_ \"P\" BO_ 1 3;\n", 5, "expected ';'"},
+        BadCase{"AttributeOutOfRange", "BO_ 1 M: 8 A\nBA_DEF_ BO_ \"P\" INT 0 100;\nBA_ \"P\" BO_ 1 300;\n", 5,
+                "outside its range"},
+        BadCase{"UnknownEnumValue", "BO_ 1 M: 8 A\nBA_DEF_ BO_ \"K\" ENUM \"a\",\"b\";\nBA_ \"K\" BO_ 1 \"c\";\n", 5,
+                "use one of: a, b"},
+        BadCase{"AttributeOnWrongObject", "BO_ 1 M: 8 A\nBA_DEF_ SG_ \"S\" INT 0 9;\nBA_ \"S\" BO_ 1 3;\n", 5,
+                "another kind of object"},
+        BadCase{"FloatOfWrongLength", "BO_ 1 M: 8 A\n SG_ s : 0|16@1- (1,0) [0|0] \"\" B\nSIG_VALTYPE_ 1 s : 1;\n", 5,
+                "make it 32 bits"},
+        BadCase{"MissingSemicolon", "BO_ 1 M: 8 A\nBA_DEF_ BO_ \"P\" INT 0 100\nBA_ \"P\" BO_ 1 3;\n", 5,
+                "expected ';'"},
         BadCase{"UnknownKeyword", "BOO_ 1 M: 8 A\n", 3, "unknown section keyword"}),
     [](const ::testing::TestParamInfo<BadCase>& p) { return std::string(p.param.name); });
 

@@ -16,8 +16,8 @@
 namespace canhil::can_nodes {
 
 using frames::CanFrame;
-using frames::TimedFrame;
 using frames::Nanos;
+using frames::TimedFrame;
 
 /// SocketCAN's receive filter: a frame passes when (frame.id & mask) == (id & mask),
 /// with `extended` and `remote` compared when their *_mask flags are set
@@ -51,9 +51,9 @@ inline constexpr std::uint32_t kErrRestarted = 0x100;
 inline constexpr std::uint32_t kErrAll = 0x1FFF'FFFF;
 
 enum class SendStatus : std::uint8_t {
-  kOk,         ///< handed to the bus
-  kDropped,    ///< the transmit queue stayed full through every retry; counted in stats
-  kDown,       ///< the interface is down or gone; see Bus::state()
+  kOk,       ///< handed to the bus
+  kDropped,  ///< the transmit queue stayed full through every retry; counted in stats
+  kDown,     ///< the interface is down or gone; see Bus::state()
 };
 
 enum class BusState : std::uint8_t {

@@ -46,7 +46,9 @@ class SocketCanBus final : public Bus {
 
   SendStatus send(const CanFrame& frame) override;
   std::optional<TimedFrame> receive() override;
+  /// Throws SetupError when the kernel refuses (more than 512 filters).
   void set_filters(std::span<const Filter> filters) override;
+  /// Throws SetupError when the kernel refuses.
   void set_error_mask(std::uint32_t mask) override;
   BusState state() const override { return state_; }
   /// Also reads the kernel's drop counter, so rx_overflow is current.

@@ -109,7 +109,8 @@ class Codec {
   const MessageCodec* find(std::string_view name) const noexcept;
 
   /// Looks the frame's message up and decodes it; kUnknownId when none matches.
-  DecodeResult decode(const CanFrame& frame, std::span<double> out, const MessageCodec** message = nullptr) const noexcept;
+  DecodeResult decode(const CanFrame& frame, std::span<double> out,
+                      const MessageCodec** message = nullptr) const noexcept;
 
  private:
   std::unique_ptr<Database> db_;  // heap-held so MessageDef pointers survive moves

@@ -8,11 +8,10 @@
 #include <cstdio>
 #include <cstdlib>
 
-#define CANHIL_DEMAND(cond, message)                                                          \
-  do {                                                                                        \
-    if (!(cond)) {                                                                            \
-      std::fprintf(stderr, "%s:%d: canhil invariant broken: %s (%s)\n", __FILE__, __LINE__, \
-                   message, #cond);                                                           \
-      std::abort();                                                                           \
-    }                                                                                         \
+#define CANHIL_DEMAND(cond, message)                                                                         \
+  do {                                                                                                       \
+    if (!(cond)) {                                                                                           \
+      std::fprintf(stderr, "%s:%d: canhil invariant broken: %s (%s)\n", __FILE__, __LINE__, message, #cond); \
+      std::abort();                                                                                          \
+    }                                                                                                        \
   } while (false)

@@ -27,14 +27,14 @@ struct Tm {  // 0x010 FTT trigger message, every EC
   std::uint32_t sync_bitmap = 0;  ///< bit i: synchronous message with FTT index i is due in this EC
   std::uint16_t sync_window_us = 0;
 };
-struct M1 {  // 0x100 Pic_base -> Motor1..3: wheel set points
+struct M1 {                     // 0x100 Pic_base -> Motor1..3: wheel set points
   std::int16_t setpoint_1 = 0;  ///< encoder counts per 5 ms motor tick, ±900
   std::int16_t setpoint_2 = 0;
   std::int16_t setpoint_3 = 0;
   std::uint8_t enable = 0;  ///< 0 = brake
   std::uint8_t seq = 0;
 };
-struct M3 {  // 0x111..0x113 Motor n -> Pic_odom: encoder
+struct M3 {                  // 0x111..0x113 Motor n -> Pic_odom: encoder
   std::int32_t encoder = 0;  ///< absolute count, wraps
   std::int16_t delta = 0;    ///< counts since the previous M3
   std::uint8_t status = 0;   ///< kStatusStalled | kStatusOverCurrent
@@ -42,35 +42,35 @@ struct M3 {  // 0x111..0x113 Motor n -> Pic_odom: encoder
   static constexpr std::uint8_t kStatusStalled = 0x01;
   static constexpr std::uint8_t kStatusOverCurrent = 0x02;
 };
-struct M4_1 {  // 0x121 Pic_odom -> Laptop: position
+struct M4_1 {    // 0x121 Pic_odom -> Laptop: position
   double x = 0;  ///< m
   double y = 0;  ///< m
 };
-struct M4_2 {  // 0x122 Pic_odom -> Laptop: heading
+struct M4_2 {        // 0x122 Pic_odom -> Laptop: heading
   double theta = 0;  ///< rad, (-pi, pi]
   std::uint16_t seq = 0;
 };
-struct M5_1 {  // 0x0A1 Laptop -> Pic_odom: set position
+struct M5_1 {    // 0x0A1 Laptop -> Pic_odom: set position
   double x = 0;  ///< m
   double y = 0;  ///< m
 };
-struct M5_2 {  // 0x0A2 Laptop -> Pic_odom: set heading / reset
-  double theta = 0;  ///< rad
+struct M5_2 {                // 0x0A2 Laptop -> Pic_odom: set heading / reset
+  double theta = 0;          ///< rad
   std::uint8_t command = 0;  ///< kSetPose or kReset
   static constexpr std::uint8_t kSetPose = 0;
   static constexpr std::uint8_t kReset = 1;
 };
-struct M6_1 {  // 0x131 Laptop -> Pic_base: linear velocity, robot frame (y forward)
+struct M6_1 {     // 0x131 Laptop -> Pic_base: linear velocity, robot frame (y forward)
   double vx = 0;  ///< m/s
   double vy = 0;  ///< m/s
 };
-struct M6_2 {  // 0x132 Laptop -> Pic_base: angular velocity
+struct M6_2 {     // 0x132 Laptop -> Pic_base: angular velocity
   double va = 0;  ///< rad/s
   std::uint8_t small_adjustment = 0;
   std::uint8_t seq = 0;
 };
-struct M7 {  // 0x0B0 Laptop -> Pic_base: kick and grabber
-  std::uint8_t kick = 0;  ///< bit7 = 1 low (direct) kick, 0 high (lob); bits 0-6 power (capped to 50)
+struct M7 {                       // 0x0B0 Laptop -> Pic_base: kick and grabber
+  std::uint8_t kick = 0;          ///< bit7 = 1 low (direct) kick, 0 high (lob); bits 0-6 power (capped to 50)
   std::uint8_t grabber_mode = 0;  ///< 0..100
   std::uint8_t eng_lvl_high = 0;
   std::uint8_t eng_lvl_low = 0;
@@ -87,13 +87,13 @@ struct M7 {  // 0x0B0 Laptop -> Pic_base: kick and grabber
     return static_cast<std::uint8_t>((low ? kLowKickBit : 0) | (power & 0x7F));
   }
 };
-struct M2 {  // 0x200 Pic_base -> Laptop: battery
+struct M2 {            // 0x200 Pic_base -> Laptop: battery
   double v_logic = 0;  ///< V
   double v_power12 = 0;
   double v_power24 = 0;
   double v_kicker = 0;
 };
-struct M8 {  // 0x141 Compass -> Laptop
+struct M8 {            // 0x141 Compass -> Laptop
   double heading = 0;  ///< deg from magnetic north, [0, 360)
   std::int16_t raw = 0;
 };
@@ -103,7 +103,7 @@ struct M9 {  // 0x151 Pic_base -> Laptop: kick system status
   double kicker_voltage = 0;  ///< V
   std::uint8_t grabber = 0;
 };
-struct M10 {  // 0x210 System monitor -> Laptop: node health
+struct M10 {               // 0x210 System monitor -> Laptop: node health
   std::uint8_t alive = 0;  ///< bit0 Pic_base, bit1..3 Motor1..3, bit4 Pic_odom, bit5 Compass
   std::uint16_t errors = 0;
   std::uint8_t node_state = 0;
@@ -125,10 +125,10 @@ constexpr FieldRef<Struct, Member> field(std::string_view signal, Member Struct:
 template <class T>
 struct MessageTraits;
 
-#define CANHIL_MESSAGE_TRAITS(Type, Name, ...)                  \
-  template <>                                                    \
-  struct MessageTraits<Type> {                                   \
-    static constexpr std::string_view kName = Name;              \
+#define CANHIL_MESSAGE_TRAITS(Type, Name, ...)                    \
+  template <>                                                     \
+  struct MessageTraits<Type> {                                    \
+    static constexpr std::string_view kName = Name;               \
     static constexpr auto kFields = std::make_tuple(__VA_ARGS__); \
   }
 
@@ -136,8 +136,8 @@ CANHIL_MESSAGE_TRAITS(Tm, "TM", field("ec_counter", &Tm::ec_counter), field("syn
                       field("sync_window_us", &Tm::sync_window_us));
 CANHIL_MESSAGE_TRAITS(M1, "M1", field("setpoint_1", &M1::setpoint_1), field("setpoint_2", &M1::setpoint_2),
                       field("setpoint_3", &M1::setpoint_3), field("enable", &M1::enable), field("seq", &M1::seq));
-CANHIL_MESSAGE_TRAITS(M3, "", field("encoder", &M3::encoder), field("delta", &M3::delta),
-                      field("status", &M3::status), field("seq", &M3::seq));
+CANHIL_MESSAGE_TRAITS(M3, "", field("encoder", &M3::encoder), field("delta", &M3::delta), field("status", &M3::status),
+                      field("seq", &M3::seq));
 CANHIL_MESSAGE_TRAITS(M4_1, "M4_1", field("x", &M4_1::x), field("y", &M4_1::y));
 CANHIL_MESSAGE_TRAITS(M4_2, "M4_2", field("theta", &M4_2::theta), field("seq", &M4_2::seq));
 CANHIL_MESSAGE_TRAITS(M5_1, "M5_1", field("x", &M5_1::x), field("y", &M5_1::y));
@@ -172,11 +172,8 @@ class TypedCodec {
                          "; canhil needs it (see docs/message-set.md)");
     }
     std::size_t k = 0;
-    std::apply(
-        [&](const auto&... f) {
-          ((index_[k++] = bind(codec.database().file, f.signal)), ...);
-        },
-        MessageTraits<T>::kFields);
+    std::apply([&](const auto&... f) { ((index_[k++] = bind(codec.database().file, f.signal)), ...); },
+               MessageTraits<T>::kFields);
   }
 
   const MessageCodec& message() const noexcept { return *message_; }
@@ -235,9 +232,9 @@ enum class FttKind : std::uint8_t { kTrigger, kSync, kAsync };
 /// FttIndex, GenMsgCycleTime (period) and GenMsgDelayTime (minimum gap).
 struct FttInfo {
   FttKind kind = FttKind::kAsync;
-  int index = -1;      ///< bit in TM.sync_bitmap (synchronous messages), else -1
-  Nanos period{0};     ///< trigger and synchronous messages
-  Nanos min_gap{0};    ///< asynchronous messages
+  int index = -1;    ///< bit in TM.sync_bitmap (synchronous messages), else -1
+  Nanos period{0};   ///< trigger and synchronous messages
+  Nanos min_gap{0};  ///< asynchronous messages
 };
 
 /// The whole contract: a Codec plus typed bindings and FTT information for
