@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   # build
-  cmake ninja-build g++ clang libclang-rt-14-dev pkg-config
+  cmake ninja-build g++ clang libclang-rt-14-dev pkg-config clang-format clang-tidy
   libgtest-dev libgmock-dev libbenchmark-dev
   # SocketCAN tools and interface set-up
   can-utils iproute2 kmod

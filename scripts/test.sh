@@ -3,14 +3,19 @@
 # builds and runs the whole suite twice, plainly and with ASan + UBSan.
 # SocketCAN tests run on this machine's vcan or, where the kernel has no CAN,
 # inside the VM runner; they never skip.
-#   scripts/test.sh            both flavours
-#   scripts/test.sh plain      one flavour (also: sanitize)
+#   scripts/test.sh            both flavours, then the lint step
+#   scripts/test.sh plain      one flavour (also: sanitize, lint)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
 flavours=("$@")
-[[ ${#flavours[@]} -gt 0 ]] || flavours=(plain sanitize)
+[[ ${#flavours[@]} -gt 0 ]] || flavours=(plain sanitize lint)
 for flavour in "${flavours[@]}"; do
+  if [[ "$flavour" == lint ]]; then
+    echo "== canhil lint: clang-format, clang-tidy"
+    bash scripts/lint.sh
+    continue
+  fi
   echo "== canhil tests: $flavour build"
   bash scripts/build.sh "$flavour"
   ctest --test-dir "build/$flavour" --output-on-failure -j2

@@ -263,13 +263,15 @@ bool SocketCanBus::wait_readable(std::chrono::microseconds timeout) const {
 BusState SocketCanBus::refresh_state() {
   ifreq req{};
   std::strncpy(req.ifr_name, iface_.c_str(), IFNAMSIZ - 1);
+  // Gone: no such interface any more, or removed and created again (this
+  // socket stays bound to the old index).
+  const bool gone =
+      ::ioctl(fd_, SIOCGIFFLAGS, &req) < 0 || if_nametoindex(iface_.c_str()) != static_cast<unsigned>(ifindex_);
   BusState s = BusState::kUp;
-  if (::ioctl(fd_, SIOCGIFFLAGS, &req) < 0) {
+  if (gone) {
     s = BusState::kGone;
   } else if ((req.ifr_flags & IFF_UP) == 0 || (req.ifr_flags & IFF_RUNNING) == 0) {
     s = BusState::kDown;
-  } else if (if_nametoindex(iface_.c_str()) != static_cast<unsigned>(ifindex_)) {
-    s = BusState::kGone;  // removed and created again: this socket is bound to the old one
   }
   if (s != state_) {
     state_ = s;

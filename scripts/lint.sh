@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# lint.sh — clang-format check and clang-tidy (.clang-tidy) over canhil's own
+# sources, using build/plain's compile database. Fails on any finding.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+[[ -f build/plain/compile_commands.json ]] || bash scripts/build.sh plain >/dev/null
+git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror
+# run-clang-tidy prints findings and exits non-zero on any (WarningsAsErrors).
+run-clang-tidy -p build/plain -quiet 'frames/src|can_nodes/src|app/' > build/plain/clang-tidy.log 2>&1 || {
+  grep -E "error:|warning:" build/plain/clang-tidy.log | sort -u >&2
+  echo "lint: clang-tidy found problems (full log: build/plain/clang-tidy.log)" >&2
+  exit 1
+}
+echo "lint: clang-format and clang-tidy clean"
