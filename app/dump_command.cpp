@@ -39,7 +39,7 @@ class Printer {
       if (d.result.status == DecodeStatus::kOk && d.result.out_of_range != 0u) ++out_of_range_;
     }
     if (json_) {
-      std::string obj = describe_json(codec_, frame, d);
+      std::string obj = describe_json(frame, d);
       char stamp[48];
       const auto us = std::chrono::duration_cast<std::chrono::microseconds>(time).count();
       std::snprintf(stamp, sizeof stamp, "%lld.%06lld", static_cast<long long>(us / 1'000'000),
@@ -49,7 +49,7 @@ class Printer {
       std::fputc('\n', stdout);
     } else {
       const std::string line = format_log_line(time, iface, frame);
-      std::printf("%-44s %s\n", line.c_str(), describe_text(codec_, frame, d).c_str());
+      std::printf("%-44s %s\n", line.c_str(), describe_text(frame, d).c_str());
     }
   }
 

@@ -129,9 +129,9 @@ int decode(const Codec& codec, const std::vector<std::string>& words, bool json)
     }
     const Described d = describe(codec, frame);
     if (json) {
-      std::printf("%s\n", describe_json(codec, frame, d).c_str());
+      std::printf("%s\n", describe_json(frame, d).c_str());
     } else {
-      std::printf("%s  %s\n", format_compact(frame).c_str(), describe_text(codec, frame, d).c_str());
+      std::printf("%s  %s\n", format_compact(frame).c_str(), describe_text(frame, d).c_str());
     }
     if (frame.kind == FrameKind::kData && !d.result.ok()) status = 1;
   }

@@ -29,8 +29,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::memcpy(f.data.data(), data + 3, n);
     if (n < f.len) f.len = static_cast<std::uint8_t>(n);
     const Described d = describe(codec, f);
-    (void)describe_text(codec, f, d);
-    (void)describe_json(codec, f, d);
+    (void)describe_text(f, d);
+    (void)describe_json(f, d);
   }
   const std::string text(reinterpret_cast<const char*>(data), size);
   CanFrame parsed;

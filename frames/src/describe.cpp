@@ -54,8 +54,7 @@ std::string error_classes(std::uint32_t error_id) {
   return out.empty() ? "unspecified" : out;
 }
 
-std::string describe_text(const Codec& codec, const CanFrame& frame, const Described& d) {
-  (void)codec;
+std::string describe_text(const CanFrame& frame, const Described& d) {
   if (frame.kind == FrameKind::kError) return "[error frame: " + error_classes(frame.id) + "]";
   if (d.message == nullptr) return "[unknown id]";
   const MessageDef& m = d.message->def();
@@ -104,8 +103,7 @@ std::string json_quote(std::string_view text) {
   return out + "\"";
 }
 
-std::string describe_json(const Codec& codec, const CanFrame& frame, const Described& d) {
-  (void)codec;
+std::string describe_json(const CanFrame& frame, const Described& d) {
   char idbuf[16];
   std::snprintf(idbuf, sizeof idbuf, frame.extended ? "0x%08X" : "0x%03X", frame.id);
   std::string out = "{\"frame\":" + json_quote(format_compact(frame)) + ",\"id\":" + json_quote(idbuf);

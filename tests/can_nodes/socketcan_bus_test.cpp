@@ -87,6 +87,32 @@ TEST(SocketCan, KernelFiltersPassOnlyWhatWasAskedFor) {
   EXPECT_EQ(got, (std::vector<std::uint32_t>{0x111, 0x112, 0x131, 0x131}));
 }
 
+TEST(SocketCan, ErrorFramesReachOnlySocketsWhoseMaskAsks) {
+  auto tx = SocketCanBus::open("vcan0");
+  auto none = SocketCanBus::open("vcan0");
+  auto controller = SocketCanBus::open("vcan0");
+  auto bus_off_only = SocketCanBus::open("vcan0");
+  controller->set_error_mask(kErrController | kErrBusOff);
+  bus_off_only->set_error_mask(kErrBusOff);
+  frames::CanFrame err;
+  err.kind = frames::FrameKind::kError;
+  err.id = kErrController;
+  err.len = 8;
+  ASSERT_EQ(tx->send(err), SendStatus::kOk);
+  ASSERT_EQ(tx->send(make_data_frame(0x131, {})), SendStatus::kOk);  // marks the end
+  const auto got = receive_n(*controller, 2);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].frame.kind, frames::FrameKind::kError);
+  EXPECT_EQ(got[0].frame.id, kErrController);
+  EXPECT_EQ(controller->stats().errors, 1u);
+  for (auto* other : {none.get(), bus_off_only.get()}) {
+    const auto only = receive_n(*other, 1);
+    ASSERT_EQ(only.size(), 1u);
+    EXPECT_EQ(only[0].frame.id, 0x131u) << "the error frame must not pass this mask";
+    EXPECT_EQ(other->stats().errors, 0u);
+  }
+}
+
 TEST(SocketCan, TimestampsAreMonotonic) {
   auto tx = SocketCanBus::open("vcan0");
   auto rx = SocketCanBus::open("vcan0");

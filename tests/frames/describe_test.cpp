@@ -11,7 +11,7 @@ namespace {
 std::string text_of(const Codec& c, const char* compact) {
   CanFrame f;
   EXPECT_TRUE(parse_compact(compact, f));
-  return describe_text(c, f, describe(c, f));
+  return describe_text(f, describe(c, f));
 }
 
 TEST(Describe, TextShowsNamesValuesUnitsAndProblems) {
@@ -29,12 +29,12 @@ TEST(Describe, JsonCarriesValuesRawAndStatus) {
   const Codec c(load_dbc(test::shipped_dbc()));
   CanFrame f;
   ASSERT_TRUE(parse_compact("131#F401000000000000", f));
-  EXPECT_EQ(describe_json(c, f, describe(c, f)),
+  EXPECT_EQ(describe_json(f, describe(c, f)),
             "{\"frame\":\"131#F401000000000000\",\"id\":\"0x131\",\"name\":\"M6_1\",\"status\":\"ok\",\"signals\":{"
             "\"vx\":{\"value\":0.5,\"unit\":\"m/s\",\"raw\":500,\"out_of_range\":false},"
             "\"vy\":{\"value\":0,\"unit\":\"m/s\",\"raw\":0,\"out_of_range\":false}}}");
   ASSERT_TRUE(parse_compact("131#F4", f));
-  EXPECT_NE(describe_json(c, f, describe(c, f)).find("\"status\":\"wrong_length\""), std::string::npos);
+  EXPECT_NE(describe_json(f, describe(c, f)).find("\"status\":\"wrong_length\""), std::string::npos);
 }
 
 TEST(Describe, JsonQuoteEscapes) { EXPECT_EQ(json_quote("a\"b\\c\n"), "\"a\\\"b\\\\c\\n\""); }

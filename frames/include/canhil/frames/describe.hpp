@@ -26,10 +26,10 @@ std::string format_value(const SignalDef& signal, double value);
 /// `M6_1  vx=0.500 m/s  vy=0.000 m/s`, or `[unknown id]`, `[wrong length 4, M6_1 has 8]`,
 /// `[error frame: controller]`, `[remote request for M6_1]`; out-of-range
 /// signals are marked `!`.
-std::string describe_text(const Codec& codec, const CanFrame& frame, const Described& d);
+std::string describe_text(const CanFrame& frame, const Described& d);
 
 /// One JSON object (no newline): id, name, status, signals {name: {value, unit, raw, out_of_range}}.
-std::string describe_json(const Codec& codec, const CanFrame& frame, const Described& d);
+std::string describe_json(const CanFrame& frame, const Described& d);
 
 /// Names of the error classes set in an error frame's id (e.g. "controller,bus-off").
 std::string error_classes(std::uint32_t error_id);
