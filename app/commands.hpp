@@ -12,5 +12,7 @@ namespace canhil::app {
 int run_frames(Args& args, const std::optional<std::string>& dbc);
 /// `canhil dump IFACE` or `canhil dump --log FILE`.
 int run_dump(Args& args, const std::optional<std::string>& dbc);
+/// `canhil experiment NAME [options]`: a physics calibration experiment.
+int run_experiment(Args& args);
 
 }  // namespace canhil::app

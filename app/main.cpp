@@ -8,6 +8,7 @@
 #include "args.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/frames/dbc.hpp"
+#include "canhil/physics/config.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -21,6 +22,10 @@ usage:
   canhil dump IFACE [--count N] [--seconds S] [--json]
                                               live, decoded, with kernel timestamps
   canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
+  canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
+                                              physics calibration: ball-drop [--height M],
+                                              ball-roll [--speed MPS], kick [--low|--high] [--power P],
+                                              drive [--vx --vy --va], tour; exit 1 if a target is missed
 
 common options:
   --dbc FILE    use another message set (default: the shipped canhil.dbc; CANHIL_DBC also works)
@@ -49,11 +54,15 @@ int main(int argc, char** argv) {
     if (command.empty()) throw canhil::app::UsageError("no command given");
     if (command == "frames") return canhil::app::run_frames(args, dbc);
     if (command == "dump") return canhil::app::run_dump(args, dbc);
+    if (command == "experiment") return canhil::app::run_experiment(args);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");
   } catch (const canhil::app::UsageError& e) {
     std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);
     return 2;
   } catch (const canhil::frames::DbcError& e) {
+    std::fprintf(stderr, "canhil: %s\n", e.what());
+    return 2;
+  } catch (const canhil::physics::ConfigError& e) {
     std::fprintf(stderr, "canhil: %s\n", e.what());
     return 2;
   } catch (const canhil::can_nodes::SetupError& e) {

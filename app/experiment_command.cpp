@@ -1,0 +1,114 @@
+#include <charconv>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include "canhil/frames/describe.hpp"
+#include "canhil/physics/config.hpp"
+#include "canhil/physics/experiments.hpp"
+#include "commands.hpp"
+#include "svg_plot.hpp"
+
+namespace canhil::app {
+namespace {
+
+double to_number(const std::string& option, const std::string& text) {
+  double v = 0;
+  const auto [p, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || ec != std::errc() || p != text.data() + text.size()) {
+    throw UsageError(option + " takes a number, got \"" + text + "\"");
+  }
+  return v;
+}
+
+std::string number_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", v);
+  return buf;
+}
+
+void print_table(const physics::ExperimentResult& r) {
+  std::printf("%s: %s\n\n", r.name.c_str(), r.description.c_str());
+  for (const auto& c : r.columns) std::printf("%18s", c.c_str());
+  std::printf("\n");
+  for (const auto& row : r.rows) {
+    for (double v : row) std::printf("%18s", number_text(v).c_str());
+    std::printf("\n");
+  }
+  std::printf("\n");
+  for (const auto& f : r.figures) {
+    std::printf("  %-32s %12s   target %-22s %s\n", f.name.c_str(), number_text(f.value).c_str(),
+                f.target.empty() ? "-" : f.target.c_str(), f.target.empty() ? "" : (f.met ? "met" : "MISSED"));
+  }
+}
+
+void print_json(const physics::ExperimentResult& r) {
+  using frames::json_quote;
+  std::string out = "{\"experiment\":" + json_quote(r.name) + ",\"description\":" + json_quote(r.description) + ",\"columns\":[";
+  for (std::size_t i = 0; i < r.columns.size(); ++i) out += (i ? "," : "") + json_quote(r.columns[i]);
+  out += "],\"rows\":[";
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    out += i ? ",[" : "[";
+    for (std::size_t j = 0; j < r.rows[i].size(); ++j) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.9g", r.rows[i][j]);
+      out += (j ? "," : "") + std::string(buf);
+    }
+    out += "]";
+  }
+  out += "],\"figures\":[";
+  for (std::size_t i = 0; i < r.figures.size(); ++i) {
+    const auto& f = r.figures[i];
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", f.value);
+    out += std::string(i ? "," : "") + "{\"name\":" + json_quote(f.name) + ",\"value\":" + buf +
+           ",\"target\":" + json_quote(f.target) + ",\"met\":" + (f.met ? "true" : "false") + "}";
+  }
+  out += "],\"all_met\":" + std::string(r.all_met() ? "true" : "false") + "}";
+  std::printf("%s\n", out.c_str());
+}
+
+}  // namespace
+
+int run_experiment(Args& args) {
+  const bool json = args.flag("--json");
+  const auto svg = args.option("--svg");
+  const auto config = args.option("--config");
+  physics::ExperimentOptions options;
+  if (const auto v = args.option("--height")) options.height_m = to_number("--height", *v);
+  if (const auto v = args.option("--speed")) options.speed_mps = to_number("--speed", *v);
+  if (const auto v = args.option("--power")) options.power = static_cast<int>(to_number("--power", *v));
+  if (const auto v = args.option("--vx")) options.vx_mps = to_number("--vx", *v);
+  if (const auto v = args.option("--vy")) options.vy_mps = to_number("--vy", *v);
+  if (const auto v = args.option("--va")) options.va_radps = to_number("--va", *v);
+  if (const auto v = args.option("--duration")) options.duration_s = to_number("--duration", *v);
+  if (args.flag("--low")) options.low = true;
+  if (args.flag("--high")) options.low = false;
+  const std::vector<std::string> words = args.positionals();
+  if (words.size() != 2) {
+    std::string names;
+    for (const auto& n : physics::experiment_names()) names += (names.empty() ? "" : ", ") + n;
+    throw UsageError("experiment needs one name: " + names);
+  }
+  const physics::WorldParams params = config ? physics::load_world_params(*config) : physics::WorldParams{};
+  physics::ExperimentResult result;
+  try {
+    result = physics::run_experiment(words[1], params, options);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  if (json) {
+    print_json(result);
+  } else {
+    print_table(result);
+  }
+  if (svg) {
+    std::ofstream out(*svg);
+    out << svg_plots(result.plots);
+    if (!out) throw UsageError("cannot write " + *svg);
+    if (!json) std::printf("\nplot written to %s\n", svg->c_str());
+  }
+  return result.all_met() ? 0 : 1;
+}
+
+}  // namespace canhil::app

@@ -1,0 +1,38 @@
+// canhil/physics/config.hpp — the world's parameters from a TOML file.
+//
+// Every value is optional: what a file leaves out keeps its default (the
+// reference figures). A mistake is a ConfigError whose text is
+// `FILE:LINE: FIELD: what is wrong; what to do`, e.g.
+// `world.toml:12: ball.mass_kg: must be greater than 0, got -1`.
+// Unknown fields are mistakes too (with the nearest known name suggested),
+// so a misspelt key never silently keeps a default. The shipped
+// physics/config/world.toml lists every field with its default.
+#pragma once
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "canhil/physics/params.hpp"
+
+namespace canhil::physics {
+
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(std::string file, int line, std::string field, const std::string& message);
+  const std::string& file() const noexcept { return file_; }
+  int line() const noexcept { return line_; }
+  const std::string& field() const noexcept { return field_; }
+
+ private:
+  std::string file_;
+  int line_;
+  std::string field_;
+};
+
+WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name);
+/// Throws ConfigError (also when the file cannot be read).
+WorldParams load_world_params(const std::filesystem::path& path);
+
+}  // namespace canhil::physics

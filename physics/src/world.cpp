@@ -1,0 +1,743 @@
+#include "canhil/physics/world.hpp"
+
+#include <ode/ode.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <numbers>
+#include <stdexcept>
+
+#include "canhil/frames/demand.hpp"
+#include "convex.hpp"
+
+namespace canhil::physics {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr int kMaxContacts = 8;
+
+void init_ode_once() {
+  static std::once_flag once;
+  std::call_once(once, [] { dInitODE2(0); });
+}
+
+enum class Kind : std::uint8_t { kGround, kStatic, kBall, kChassis, kWheel, kObstacle };
+
+/// What a geom is; stored as the geom's data pointer.
+struct Tag {
+  Kind kind;
+  int owner = -1;  // robot or obstacle index
+  int wheel = -1;
+};
+
+BodyState read_body(dBodyID b) {
+  BodyState s;
+  const dReal* p = dBodyGetPosition(b);
+  const dReal* q = dBodyGetQuaternion(b);
+  const dReal* v = dBodyGetLinearVel(b);
+  const dReal* w = dBodyGetAngularVel(b);
+  for (std::size_t i = 0; i < 3; ++i) {
+    s.position[i] = p[i];
+    s.linear_velocity[i] = v[i];
+    s.angular_velocity[i] = w[i];
+  }
+  for (std::size_t i = 0; i < 4; ++i) s.quaternion[i] = q[i];
+  return s;
+}
+
+void write_body(dBodyID b, const BodyState& s) {
+  dBodySetPosition(b, s.position[0], s.position[1], s.position[2]);
+  const dQuaternion q = {s.quaternion[0], s.quaternion[1], s.quaternion[2], s.quaternion[3]};
+  dBodySetQuaternion(b, q);
+  dBodySetLinearVel(b, s.linear_velocity[0], s.linear_velocity[1], s.linear_velocity[2]);
+  dBodySetAngularVel(b, s.angular_velocity[0], s.angular_velocity[1], s.angular_velocity[2]);
+  dBodySetForce(b, 0, 0, 0);
+  dBodySetTorque(b, 0, 0, 0);
+}
+
+Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
+
+double yaw_of(dBodyID b) {
+  const dReal* r = dBodyGetRotation(b);  // row-major 3x4
+  return std::atan2(r[4], r[0]);         // angle of the body's +x axis
+}
+
+}  // namespace
+
+struct RobotImpl {
+  World::Impl* world = nullptr;
+  int index = 0;
+  const RobotParams* params = nullptr;
+  kinematics::OmniKinematics kinematics;
+  dBodyID chassis = nullptr;
+  std::array<dBodyID, 3> wheel{};
+  std::array<dJointID, 3> hinge{};
+  std::array<dJointFeedback, 3> feedback{};
+  std::array<Eigen::Vector3d, 3> axle_body{};  // hinge axis in chassis coordinates
+  dSpaceID space = nullptr;                    // this robot's geoms (no self-collision)
+  std::vector<std::unique_ptr<Tag>> tags;
+  std::vector<ConvexShape> shapes;
+  RobotState state;
+  double z_body = 0;  // height of the chassis body origin
+
+  explicit RobotImpl(const RobotParams& p) : params(&p), kinematics(p.geometry) {}
+  Eigen::Vector3d front() const {
+    const double h = yaw_of(chassis) + kPi / 2;
+    return {std::cos(h), std::sin(h), 0};
+  }
+  double supply_v() const;
+};
+
+struct RobotAccess {
+  static RobotImpl& impl(const Robot& r) { return *r.impl_; }
+  static std::unique_ptr<Robot> make(std::unique_ptr<RobotImpl> impl) {
+    return std::unique_ptr<Robot>(new Robot(std::move(impl)));
+  }
+};
+
+struct World::Impl {
+  WorldParams params;
+  FieldMarkings markings;
+  dWorldID world = nullptr;
+  dSpaceID statics = nullptr;  // ground, goals, boundary, static obstacles
+  dSpaceID dynamics = nullptr; // ball, robots (as sub-spaces), movable obstacles
+  dJointGroupID contacts = nullptr;
+  dBodyID ball = nullptr;
+  std::vector<std::unique_ptr<Robot>> robots;
+  std::vector<dBodyID> obstacle_bodies;  // nullptr for static obstacles
+  std::vector<dGeomID> obstacle_geoms;
+  std::vector<ConvexShape> shapes;
+  std::vector<std::unique_ptr<Tag>> tags;
+  double time = 0;
+  unsigned long seed = 1;
+  bool ball_on_ground = false;
+
+  explicit Impl(WorldParams p);
+  ~Impl();
+  Tag* tag(Kind k, int owner = -1, int wheel = -1) {
+    tags.push_back(std::make_unique<Tag>(Tag{k, owner, wheel}));
+    return tags.back().get();
+  }
+  void add_static_box(double cx, double cy, double cz, double lx, double ly, double lz) {
+    dGeomID g = dCreateBox(statics, lx, ly, lz);
+    dGeomSetPosition(g, cx, cy, cz);
+    dGeomSetData(g, tag(Kind::kStatic));
+  }
+  void build_field();
+  void build_ball();
+  void build_robot(int index, const Placement& at);
+  void build_obstacle(int index, const ObstaclePlacement& o);
+  void substep(double h);
+  void collide(dGeomID a, dGeomID b);
+  void apply_robot_inputs(RobotImpl& r, double h);
+  void update_robot_after(RobotImpl& r, double h);
+  void apply_grabber(RobotImpl& r);
+  RobotImpl& robot(std::size_t i) { return RobotAccess::impl(*robots[i]); }
+  const RobotImpl& robot(std::size_t i) const { return RobotAccess::impl(*robots[i]); }
+};
+
+// ---------------------------------------------------------------------------
+// Construction
+
+World::Impl::Impl(WorldParams p) : params(std::move(p)), markings(field_markings(params.field)) {
+  init_ode_once();
+  const SimulationParams& s = params.simulation;
+  if (!(s.step_s > 0) || s.substeps < 1) throw std::invalid_argument("simulation step and substeps must be positive");
+  seed = s.seed;
+  world = dWorldCreate();
+  dWorldSetGravity(world, 0, 0, -s.gravity_mps2);
+  dWorldSetCFM(world, s.cfm);
+  dWorldSetERP(world, s.erp);
+  dWorldSetQuickStepNumIterations(world, s.solver_iterations);
+  dWorldSetContactSurfaceLayer(world, 0.0005);
+  // Penetration is corrected gently so that it never adds energy to a bounce.
+  dWorldSetContactMaxCorrectingVel(world, 0.2);
+  dWorldSetAutoDisableFlag(world, 0);
+  statics = dHashSpaceCreate(nullptr);
+  dynamics = dHashSpaceCreate(nullptr);
+  dHashSpaceSetLevels(dynamics, -4, 2);
+  contacts = dJointGroupCreate(0);
+  build_field();
+  build_ball();
+  for (std::size_t i = 0; i < params.robots.size(); ++i) build_robot(static_cast<int>(i), params.robots[i]);
+  for (std::size_t i = 0; i < params.obstacles.size(); ++i) build_obstacle(static_cast<int>(i), params.obstacles[i]);
+}
+
+World::Impl::~Impl() {
+  robots.clear();
+  dJointGroupDestroy(contacts);
+  dSpaceDestroy(dynamics);  // destroys contained geoms and sub-spaces (cleanup mode on)
+  dSpaceDestroy(statics);
+  dWorldDestroy(world);
+}
+
+void World::Impl::build_field() {
+  const FieldParams& f = params.field;
+  dGeomID ground = dCreatePlane(statics, 0, 0, 1, 0);
+  dGeomSetData(ground, tag(Kind::kGround));
+  const GoalParams& g = f.goal;
+  const double hx = f.length_m / 2;
+  const double t = g.post_thickness_m;
+  const double net = 0.02;  // net thickness
+  for (const double side : {-1.0, 1.0}) {
+    const double x_post = side * (hx + t / 2);
+    for (const double ys : {-1.0, 1.0}) add_static_box(x_post, ys * (g.width_m / 2 + t / 2), g.height_m / 2, t, t, g.height_m);
+    add_static_box(x_post, 0, g.height_m + t / 2, t, g.width_m + 2 * t, t);  // bar
+    const double x_back = side * (hx + g.depth_m + net / 2);
+    add_static_box(x_back, 0, g.height_m / 2, net, g.width_m + 2 * t, g.height_m);  // back net
+    const double x_mid = side * (hx + g.depth_m / 2);
+    for (const double ys : {-1.0, 1.0}) {
+      add_static_box(x_mid, ys * (g.width_m / 2 + net / 2), g.height_m / 2, g.depth_m, net, g.height_m);  // side nets
+    }
+    add_static_box(x_mid, 0, g.height_m + net / 2, g.depth_m, g.width_m, net);  // roof net
+  }
+  if (f.boundary) {
+    const double bx = hx + f.margin_m;
+    const double by = f.width_m / 2 + f.margin_m;
+    const double w = 0.1;
+    const double h = f.boundary_height_m;
+    add_static_box(bx + w / 2, 0, h / 2, w, 2 * by + 2 * w, h);
+    add_static_box(-bx - w / 2, 0, h / 2, w, 2 * by + 2 * w, h);
+    add_static_box(0, by + w / 2, h / 2, 2 * bx, w, h);
+    add_static_box(0, -by - w / 2, h / 2, 2 * bx, w, h);
+  }
+}
+
+void World::Impl::build_ball() {
+  const BallParams& b = params.ball;
+  ball = dBodyCreate(world);
+  dMass m;
+  // A football is a shell: I = 2/3 m r^2.
+  const double inertia = 2.0 / 3.0 * b.mass_kg * b.radius_m * b.radius_m;
+  dMassSetParameters(&m, b.mass_kg, 0, 0, 0, inertia, inertia, inertia, 0, 0, 0);
+  dBodySetMass(ball, &m);
+  dGeomID g = dCreateSphere(dynamics, b.radius_m);
+  dGeomSetBody(g, ball);
+  dGeomSetData(g, tag(Kind::kBall));
+  dBodySetPosition(ball, params.ball_start.x_m, params.ball_start.y_m, params.ball_start.z_m);
+}
+
+void World::Impl::build_robot(int index, const Placement& at) {
+  const RobotParams& p = params.robot;
+  auto impl = std::make_unique<RobotImpl>(p);
+  RobotImpl& r = *impl;
+  r.world = this;
+  r.index = index;
+  r.space = dSimpleSpaceCreate(dynamics);
+  dSpaceSetCleanup(r.space, 1);
+
+  // Chassis: the notched cylinder as three convex prisms, the camera cone as a frustum.
+  r.chassis = dBodyCreate(world);
+  dMass m;
+  dMassSetCylinderTotal(&m, p.mass_kg, 3, p.body_radius_m, p.body_height_m);
+  dBodySetMass(r.chassis, &m);
+  r.z_body = p.body_clearance_m + p.body_height_m / 2;
+  const double z0 = -p.body_height_m / 2;
+  const double z1 = p.body_height_m / 2;
+  for (auto& outline : notched_disc(p.body_radius_m, p.mouth_width_m, p.mouth_depth_m)) {
+    r.shapes.push_back(make_prism(outline, z0, z1));
+  }
+  // The cone collides with a base radius that leaves the mouth free above the
+  // ball, so a lob can leave; vision uses the full cone_radius_m.
+  const double cone_base = std::min(p.cone_radius_m, p.body_radius_m - p.mouth_depth_m - 0.01);
+  r.shapes.push_back(make_frustum(cone_base, std::min(p.cone_top_radius_m, cone_base), z1, z1 + p.cone_height_m, 16));
+  for (auto& shape : r.shapes) {
+    dGeomID g = shape.create(r.space, r.chassis);
+    r.tags.push_back(std::make_unique<Tag>(Tag{Kind::kChassis, index, -1}));
+    dGeomSetData(g, r.tags.back().get());
+  }
+
+  // Wheels: spheres on motorised hinges; the axle points at the centre so that
+  // a positive hinge rate drives the base along F_n.
+  const double wr = p.geometry.wheel_radius_m;
+  for (std::size_t n = 0; n < 3; ++n) {
+    const double phi = p.geometry.wheel_angles_deg[n] * kPi / 180.0;
+    const Eigen::Vector3d u(std::cos(phi), std::sin(phi), 0);
+    r.axle_body[n] = -u;
+    dBodyID w = dBodyCreate(world);
+    dMass wm;
+    const double iw = 2.0 / 5.0 * p.wheel_mass_kg * wr * wr;
+    // The motor's rotor turns gear_ratio times faster: it adds J * gear^2 about the axle.
+    const double ir = p.motor.rotor_inertia_kgm2 * p.encoder.gear_ratio * p.encoder.gear_ratio;
+    const Eigen::Vector3d a = -u;
+    dMassSetParameters(&wm, p.wheel_mass_kg, 0, 0, 0, iw + ir * a.x() * a.x(), iw + ir * a.y() * a.y(),
+                       iw + ir * a.z() * a.z(), ir * a.x() * a.y(), ir * a.x() * a.z(), ir * a.y() * a.z());
+    dBodySetMass(w, &wm);
+    dGeomID g = dCreateSphere(r.space, wr);
+    dGeomSetBody(g, w);
+    r.tags.push_back(std::make_unique<Tag>(Tag{Kind::kWheel, index, static_cast<int>(n)}));
+    dGeomSetData(g, r.tags.back().get());
+    r.wheel[n] = w;
+    dJointID j = dJointCreateHinge(world, nullptr);
+    r.hinge[n] = j;
+    dJointSetFeedback(j, &r.feedback[n]);
+  }
+  robots.push_back(RobotAccess::make(std::move(impl)));
+  robots.back()->place(at);
+  RobotImpl& ri = RobotAccess::impl(*robots.back());
+  ri.state.kicker_voltage_v = p.kicker.full_voltage_v;
+  ri.state.charge.fill(p.battery.initial_charge);
+}
+
+void World::Impl::build_obstacle(int index, const ObstaclePlacement& o) {
+  shapes.push_back(make_frustum(o.params.radius_m, o.params.radius_m, -o.params.height_m / 2, o.params.height_m / 2, 16));
+  dBodyID body = nullptr;
+  dGeomID g = nullptr;
+  if (o.params.movable) {
+    body = dBodyCreate(world);
+    dMass m;
+    dMassSetCylinderTotal(&m, o.params.mass_kg, 3, o.params.radius_m, o.params.height_m);
+    dBodySetMass(body, &m);
+    g = shapes.back().create(dynamics, body);
+    dBodySetPosition(body, o.at.x_m, o.at.y_m, o.params.height_m / 2);
+    dMatrix3 rot;
+    dRFromAxisAndAngle(rot, 0, 0, 1, o.at.heading_deg * kPi / 180.0);
+    dBodySetRotation(body, rot);
+  } else {
+    g = shapes.back().create(statics);
+    dGeomSetPosition(g, o.at.x_m, o.at.y_m, o.params.height_m / 2);
+  }
+  dGeomSetData(g, tag(Kind::kObstacle, index));
+  obstacle_bodies.push_back(body);
+  obstacle_geoms.push_back(g);
+}
+
+// ---------------------------------------------------------------------------
+// Stepping
+
+double RobotImpl::supply_v() const {
+  const RailParams& rail = params->battery.power24;
+  return rail.empty_v + (rail.full_v - rail.empty_v) * state.charge[2];
+}
+
+void World::Impl::apply_robot_inputs(RobotImpl& r, double h) {
+  (void)h;
+  const MotorParams& mp = r.params->motor;
+  const double gear = r.params->encoder.gear_ratio;
+  const double k = mp.torque_constant_nm_per_a;  // = back-EMF constant in SI
+  const double v_supply = r.supply_v();
+  for (std::size_t n = 0; n < 3; ++n) {
+    const double w = dJointGetHingeAngleRate(r.hinge[n]);
+    const double w_motor = w * gear;
+    if (r.state.wheel_mode[n] == WheelMode::kSpeed) {
+      // The controller reaches the target within what the motor can give:
+      // current limit, and the supply minus back-EMF when driving.
+      const double target = r.state.wheel_command[n];
+      const bool driving = (target - w) * w > 0;
+      double i_max = mp.current_limit_a;
+      if (driving) i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
+      dJointSetHingeParam(r.hinge[n], dParamVel, target);
+      dJointSetHingeParam(r.hinge[n], dParamFMax, i_max * k * gear * mp.gear_efficiency);
+    } else {
+      const double volts = std::clamp(r.state.wheel_command[n], -v_supply, v_supply);
+      const double i = std::clamp((volts - k * w_motor) / mp.terminal_resistance_ohm, -mp.current_limit_a, mp.current_limit_a);
+      dJointSetHingeParam(r.hinge[n], dParamFMax, 0);
+      dJointAddHingeTorque(r.hinge[n], i * k * gear * mp.gear_efficiency);
+      r.state.motor_current_a[n] = i;
+    }
+  }
+  apply_grabber(r);
+}
+
+void World::Impl::apply_grabber(RobotImpl& r) {
+  const GrabberParams& g = r.params->grabber;
+  if (r.state.grabber_mode <= 0 || r.state.grabber_release_left_s > 0) return;
+  const Eigen::Vector3d centre = vec(dBodyGetPosition(r.chassis));
+  const Eigen::Vector3d ball_pos = vec(dBodyGetPosition(ball));
+  Eigen::Vector3d d = ball_pos - centre;
+  d.z() = 0;
+  const double dist = d.norm();
+  if (dist > g.range_m || dist < 1e-9) return;
+  const Eigen::Vector3d front = r.front();
+  const double bearing = std::acos(std::clamp(d.dot(front) / dist, -1.0, 1.0));
+  if (bearing > g.half_angle_deg * kPi / 180.0) return;
+  if (ball_pos.z() > r.params->barrier.max_height_m + params.ball.radius_m) return;
+  // Pull towards the back of the mouth.
+  const double hold = r.params->body_radius_m - r.params->mouth_depth_m + params.ball.radius_m;
+  Eigen::Vector3d target = centre + front * hold;
+  Eigen::Vector3d pull = target - ball_pos;
+  pull.z() = 0;
+  const double len = pull.norm();
+  if (len < 1e-4) return;
+  const double force = g.max_force_n * r.state.grabber_mode / 100.0;
+  const Eigen::Vector3d f = pull / len * force;
+  dBodyAddForce(ball, f.x(), f.y(), 0);
+  dBodyAddForce(r.chassis, -f.x(), -f.y(), 0);
+}
+
+void World::Impl::update_robot_after(RobotImpl& r, double h) {
+  const MotorParams& mp = r.params->motor;
+  const double gear = r.params->encoder.gear_ratio;
+  const double k = mp.torque_constant_nm_per_a;
+  double motor_current = 0;
+  for (std::size_t n = 0; n < 3; ++n) {
+    const double angle = dJointGetHingeAngle(r.hinge[n]);
+    r.state.wheel_angle_rad[n] += kinematics::wrap_pi(angle - r.state.hinge_angle_rad[n]);
+    r.state.hinge_angle_rad[n] = angle;
+    if (r.state.wheel_mode[n] == WheelMode::kSpeed) {
+      // Motor torque from the hinge's feedback, about the axle (in world coordinates).
+      const dReal* rot = dBodyGetRotation(r.chassis);
+      const Eigen::Vector3d& a = r.axle_body[n];
+      const Eigen::Vector3d axle(rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z(),
+                                 rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z(),
+                                 rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z());
+      const Eigen::Vector3d t1(r.feedback[n].t1[0], r.feedback[n].t1[1], r.feedback[n].t1[2]);
+      r.state.motor_current_a[n] = t1.dot(axle) / (k * gear * mp.gear_efficiency);
+    }
+    motor_current += std::fabs(r.state.motor_current_a[n]);
+  }
+  // Kicker recharge and the grabber's release after a kick.
+  const KickerParams& kp = r.params->kicker;
+  r.state.kicker_voltage_v += (kp.full_voltage_v - r.state.kicker_voltage_v) * (1.0 - std::exp(-h / kp.recharge_time_constant_s));
+  r.state.grabber_release_left_s = std::max(0.0, r.state.grabber_release_left_s - h);
+  // Battery drain (ampere-hours).
+  const BatteryParams& bp = r.params->battery;
+  const std::array<const RailParams*, 3> rails = {&bp.logic, &bp.power12, &bp.power24};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double current = rails[i]->base_current_a + (i == 2 ? motor_current : 0.0);
+    r.state.charge[i] = std::max(0.0, r.state.charge[i] - current * h / 3600.0 / rails[i]->capacity_ah);
+  }
+}
+
+void World::Impl::collide(dGeomID a, dGeomID b) {
+  const Tag* ta = static_cast<const Tag*>(dGeomGetData(a));
+  const Tag* tb = static_cast<const Tag*>(dGeomGetData(b));
+  if (ta == nullptr || tb == nullptr) return;
+  dBodyID ba = dGeomGetBody(a);
+  dBodyID bb = dGeomGetBody(b);
+  if (ba == nullptr && bb == nullptr) return;
+  if (ba != nullptr && bb != nullptr && dAreConnectedExcluding(ba, bb, dJointTypeContact)) return;
+  // Order so that `ta` is the lower kind (ground < static < ball < chassis < wheel < obstacle).
+  if (tb->kind < ta->kind) {
+    std::swap(a, b);
+    std::swap(ta, tb);
+    std::swap(ba, bb);
+  }
+  dContact c[kMaxContacts];
+  const int n = dCollide(a, b, kMaxContacts, &c[0].geom, sizeof(dContact));
+  if (n == 0) return;
+  const BallParams& bp = params.ball;
+  const RobotParams& rp = params.robot;
+  for (int i = 0; i < n; ++i) {
+    dSurfaceParameters& s = c[i].surface;
+    s.mode = dContactSoftCFM | dContactSoftERP | dContactApprox1;
+    s.soft_cfm = 1e-5;
+    s.soft_erp = 0.4;
+    s.mu = params.field.ground_friction;
+    if (tb->kind == Kind::kBall || ta->kind == Kind::kBall) {
+      s.mode |= dContactBounce;
+      s.bounce = ta->kind == Kind::kGround ? bp.restitution : 0.5;
+      s.bounce_vel = bp.bounce_min_speed_mps;
+      s.mu = bp.friction;
+      if (ta->kind == Kind::kGround) {
+        ball_on_ground = true;
+        // Rolling resistance as a contact constraint: it acts only while the ball
+        // touches the carpet (never in flight) and brings it fully to rest.
+        // Torque limit rho * N with rho chosen so the rolling deceleration is
+        // rolling_resistance * g for a shell (I = 2/3 m r^2).
+        s.mode |= dContactRolling;
+        s.rho = bp.rolling_resistance * bp.radius_m * (1.0 + 2.0 / 3.0);
+        s.rho2 = s.rho;
+        s.rhoN = bp.spin_damping * 1e-3;
+      }
+    } else if (tb->kind == Kind::kWheel) {
+      // Omni wheel: grips along its drive direction, rolls freely across it.
+      const RobotImpl& r = robot(static_cast<std::size_t>(tb->owner));
+      const dReal* rot = dBodyGetRotation(r.chassis);
+      const Eigen::Vector3d& ab = r.axle_body[static_cast<std::size_t>(tb->wheel)];
+      const Eigen::Vector3d axle(rot[0] * ab.x() + rot[1] * ab.y() + rot[2] * ab.z(),
+                                 rot[4] * ab.x() + rot[5] * ab.y() + rot[6] * ab.z(),
+                                 rot[8] * ab.x() + rot[9] * ab.y() + rot[10] * ab.z());
+      const Eigen::Vector3d normal(c[i].geom.normal[0], c[i].geom.normal[1], c[i].geom.normal[2]);
+      Eigen::Vector3d roll = axle.cross(normal);
+      if (roll.norm() < 1e-6) continue;
+      roll.normalize();
+      s.mode |= dContactMu2 | dContactFDir1;
+      s.mu = rp.wheel_friction;
+      s.mu2 = rp.wheel_cross_friction;
+      c[i].fdir1[0] = roll.x();
+      c[i].fdir1[1] = roll.y();
+      c[i].fdir1[2] = roll.z();
+      s.soft_erp = 0.6;
+    } else if (ta->kind == Kind::kChassis || ta->kind == Kind::kObstacle) {
+      s.mu = 0.4;  // bodies sliding along each other
+    }
+    dJointID j = dJointCreateContact(world, contacts, &c[i]);
+    dJointAttach(j, ba, bb);
+  }
+}
+
+namespace {
+void near_callback(void* data, dGeomID a, dGeomID b) {
+  auto* impl = static_cast<World::Impl*>(data);
+  if (dGeomIsSpace(a) != 0 || dGeomIsSpace(b) != 0) {
+    // A robot's own space against something else: its parts never touch each other.
+    dSpaceCollide2(a, b, data, &near_callback);
+    return;
+  }
+  impl->collide(a, b);
+}
+}  // namespace
+
+void World::Impl::substep(double h) {
+  for (std::size_t i = 0; i < robots.size(); ++i) apply_robot_inputs(robot(i), h);
+  ball_on_ground = false;
+  dSpaceCollide(dynamics, this, &near_callback);
+  dSpaceCollide2(reinterpret_cast<dGeomID>(dynamics), reinterpret_cast<dGeomID>(statics), this, &near_callback);
+  // ODE shuffles constraint order with a global seed: keep this world's own.
+  dRandSetSeed(seed);
+  dWorldQuickStep(world, h);
+  seed = dRandGetSeed();
+  dJointGroupEmpty(contacts);
+  for (std::size_t i = 0; i < robots.size(); ++i) update_robot_after(robot(i), h);
+  time += h;
+}
+
+// ---------------------------------------------------------------------------
+// World
+
+World::World(WorldParams params) : impl_(std::make_unique<Impl>(std::move(params))) {}
+World::~World() = default;
+const WorldParams& World::params() const noexcept { return impl_->params; }
+const FieldMarkings& World::markings() const noexcept { return impl_->markings; }
+double World::time_s() const noexcept { return impl_->time; }
+std::size_t World::robot_count() const noexcept { return impl_->robots.size(); }
+Robot& World::robot(std::size_t i) { return *impl_->robots.at(i); }
+const Robot& World::robot(std::size_t i) const { return *impl_->robots.at(i); }
+Eigen::Vector3d World::ball_position() const { return vec(dBodyGetPosition(impl_->ball)); }
+Eigen::Vector3d World::ball_velocity() const { return vec(dBodyGetLinearVel(impl_->ball)); }
+Eigen::Vector3d World::ball_spin() const { return vec(dBodyGetAngularVel(impl_->ball)); }
+bool World::ball_on_ground() const noexcept { return impl_->ball_on_ground; }
+std::size_t World::obstacle_count() const noexcept { return impl_->obstacle_geoms.size(); }
+const ObstacleParams& World::obstacle_params(std::size_t i) const { return impl_->params.obstacles.at(i).params; }
+
+Eigen::Vector3d World::obstacle_position(std::size_t i) const { return vec(dGeomGetPosition(impl_->obstacle_geoms.at(i))); }
+
+void World::step() {
+  const SimulationParams& s = impl_->params.simulation;
+  const double h = s.step_s / s.substeps;
+  for (int k = 0; k < s.substeps; ++k) impl_->substep(h);
+}
+
+void World::place_ball(const Eigen::Vector3d& p, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+  dBodySetPosition(impl_->ball, p.x(), p.y(), p.z());
+  dBodySetLinearVel(impl_->ball, v.x(), v.y(), v.z());
+  dBodySetAngularVel(impl_->ball, w.x(), w.y(), w.z());
+  dBodySetForce(impl_->ball, 0, 0, 0);
+  dBodySetTorque(impl_->ball, 0, 0, 0);
+}
+
+WorldState World::save() const {
+  WorldState s;
+  s.time_s = impl_->time;
+  s.seed = impl_->seed;
+  s.ball = read_body(impl_->ball);
+  for (std::size_t i = 0; i < impl_->robots.size(); ++i) {
+    const RobotImpl& r = impl_->robot(i);
+    RobotState rs = r.state;
+    rs.chassis = read_body(r.chassis);
+    for (std::size_t n = 0; n < 3; ++n) rs.wheels[n] = read_body(r.wheel[n]);
+    s.robots.push_back(rs);
+  }
+  for (std::size_t i = 0; i < impl_->obstacle_geoms.size(); ++i) {
+    if (dBodyID b = impl_->obstacle_bodies[i]) {
+      s.obstacles.push_back(read_body(b));
+    } else {
+      BodyState st;
+      const dReal* p = dGeomGetPosition(impl_->obstacle_geoms[i]);
+      st.position = {p[0], p[1], p[2]};
+      s.obstacles.push_back(st);
+    }
+  }
+  return s;
+}
+
+void World::restore(const WorldState& s) {
+  if (s.robots.size() != impl_->robots.size() || s.obstacles.size() != impl_->obstacle_geoms.size()) {
+    throw std::invalid_argument("the saved state has " + std::to_string(s.robots.size()) + " robots and " +
+                                std::to_string(s.obstacles.size()) + " obstacles; this world has " +
+                                std::to_string(impl_->robots.size()) + " and " +
+                                std::to_string(impl_->obstacle_geoms.size()));
+  }
+  impl_->time = s.time_s;
+  impl_->seed = s.seed;
+  write_body(impl_->ball, s.ball);
+  for (std::size_t i = 0; i < s.robots.size(); ++i) {
+    RobotImpl& r = impl_->robot(i);
+    r.state = s.robots[i];
+    write_body(r.chassis, s.robots[i].chassis);
+    for (std::size_t n = 0; n < 3; ++n) write_body(r.wheel[n], s.robots[i].wheels[n]);
+  }
+  for (std::size_t i = 0; i < s.obstacles.size(); ++i) {
+    if (dBodyID b = impl_->obstacle_bodies[i]) write_body(b, s.obstacles[i]);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Robot
+
+Robot::Robot(std::unique_ptr<RobotImpl> impl) : impl_(std::move(impl)) {}
+Robot::~Robot() = default;
+const RobotParams& Robot::params() const { return *impl_->params; }
+
+namespace {
+std::size_t wheel_index(int wheel) {
+  CANHIL_DEMAND(wheel >= 0 && wheel < 3, "wheel index must be 0, 1 or 2");
+  return static_cast<std::size_t>(wheel);
+}
+}  // namespace
+
+void Robot::set_wheel_speed(int wheel, double radps) {
+  const std::size_t n = wheel_index(wheel);
+  impl_->state.wheel_mode[n] = WheelMode::kSpeed;
+  impl_->state.wheel_command[n] = std::isfinite(radps) ? radps : 0.0;
+}
+void Robot::set_wheel_voltage(int wheel, double volts) {
+  const std::size_t n = wheel_index(wheel);
+  impl_->state.wheel_mode[n] = WheelMode::kVoltage;
+  impl_->state.wheel_command[n] = std::isfinite(volts) ? volts : 0.0;
+}
+void Robot::brake() {
+  for (int n = 0; n < 3; ++n) set_wheel_speed(n, 0.0);
+}
+double Robot::wheel_angle_rad(int wheel) const { return impl_->state.wheel_angle_rad[wheel_index(wheel)]; }
+double Robot::wheel_speed_radps(int wheel) const { return dJointGetHingeAngleRate(impl_->hinge[wheel_index(wheel)]); }
+std::int64_t Robot::encoder_count(int wheel) const {
+  return static_cast<std::int64_t>(std::floor(impl_->params->encoder.counts(wheel_angle_rad(wheel))));
+}
+double Robot::motor_current_a(int wheel) const { return impl_->state.motor_current_a[wheel_index(wheel)]; }
+bool Robot::over_current(int wheel) const {
+  return std::fabs(motor_current_a(wheel)) >= 0.98 * impl_->params->motor.current_limit_a;
+}
+bool Robot::wheel_stalled(int wheel) const {
+  const std::size_t n = wheel_index(wheel);
+  const double stall = impl_->params->motor.stall_speed_radps;
+  const bool commanded = impl_->state.wheel_mode[n] == WheelMode::kSpeed ? std::fabs(impl_->state.wheel_command[n]) > stall
+                                                                         : std::fabs(impl_->state.wheel_command[n]) > 0.5;
+  return commanded && std::fabs(wheel_speed_radps(wheel)) < stall && over_current(wheel);
+}
+
+bool Robot::ball_engaged() const {
+  const BarrierParams& b = impl_->params->barrier;
+  const Eigen::Vector3d centre = vec(dBodyGetPosition(impl_->chassis));
+  const Eigen::Vector3d ball = vec(dBodyGetPosition(impl_->world->ball));
+  Eigen::Vector3d d = ball - centre;
+  d.z() = 0;
+  const double dist = d.norm();
+  if (dist > b.max_distance_m || ball.z() > b.max_height_m) return false;
+  if (dist < 1e-9) return true;
+  const double bearing = std::acos(std::clamp(d.dot(impl_->front()) / dist, -1.0, 1.0));
+  return bearing <= b.half_angle_deg * kPi / 180.0;
+}
+
+KickResult Robot::kick(bool low, int power) {
+  const KickerParams& k = impl_->params->kicker;
+  KickResult result;
+  const int p = std::clamp(power, 0, k.max_power);
+  if (p == 0) return result;
+  if (!ball_engaged()) {
+    result.outcome = KickResult::Outcome::kNotEngaged;
+    return result;
+  }
+  RobotState& st = impl_->state;
+  if (st.kicker_voltage_v < k.min_fire_voltage_v) {
+    result.outcome = KickResult::Outcome::kLowVoltage;
+    return result;
+  }
+  const double g = impl_->world->params.simulation.gravity_mps2;
+  const double theta = k.lob_angle_deg * kPi / 180.0;
+  const double v_max = std::sqrt(k.max_lob_range_m * g / std::sin(2.0 * theta));
+  const double speed = v_max * p / k.max_power * (st.kicker_voltage_v / k.full_voltage_v);
+  const Eigen::Vector3d front = impl_->front();
+  Eigen::Vector3d launch = low ? Eigen::Vector3d(front * speed)
+                               : Eigen::Vector3d(front.x() * std::cos(theta) * speed, front.y() * std::cos(theta) * speed,
+                                                 std::sin(theta) * speed);
+  // The kick adds to the robot's own motion at the ball.
+  const Eigen::Vector3d ball = vec(dBodyGetPosition(impl_->world->ball));
+  dVector3 v_at_ball;
+  dBodyGetPointVel(impl_->chassis, ball.x(), ball.y(), ball.z(), v_at_ball);
+  launch += Eigen::Vector3d(v_at_ball[0], v_at_ball[1], 0);
+  dBodySetLinearVel(impl_->world->ball, launch.x(), launch.y(), launch.z());
+  dBodySetAngularVel(impl_->world->ball, 0, 0, 0);
+  st.kicker_voltage_v *= std::sqrt(std::max(0.0, 1.0 - k.energy_per_full_kick * p / k.max_power));
+  st.grabber_release_left_s = k.grabber_release_s;
+  st.last_kick_time_s = impl_->world->time;
+  result.outcome = KickResult::Outcome::kFired;
+  result.speed_mps = speed;
+  return result;
+}
+
+void Robot::set_grabber(int mode) { impl_->state.grabber_mode = std::clamp(mode, 0, 100); }
+int Robot::grabber_mode() const { return impl_->state.grabber_mode; }
+double Robot::kicker_voltage_v() const { return impl_->state.kicker_voltage_v; }
+double Robot::last_kick_time_s() const { return impl_->state.last_kick_time_s; }
+
+double Robot::compass_heading_deg() const {
+  const double front_yaw_deg = (yaw_of(impl_->chassis) + kPi / 2) * 180.0 / kPi;
+  double h = std::fmod(impl_->params->compass.north_offset_deg - front_yaw_deg, 360.0);
+  if (h < 0) h += 360.0;
+  return h >= 360.0 ? 0.0 : h;
+}
+
+BatteryReading Robot::battery() const {
+  const BatteryParams& bp = impl_->params->battery;
+  const RobotState& st = impl_->state;
+  double motors = 0;
+  for (double i : st.motor_current_a) motors += std::fabs(i);
+  auto volts = [&](const RailParams& r, double charge, double current) {
+    return std::max(0.0, r.empty_v + (r.full_v - r.empty_v) * charge - current * r.internal_resistance_ohm);
+  };
+  return BatteryReading{volts(bp.logic, st.charge[0], bp.logic.base_current_a),
+                        volts(bp.power12, st.charge[1], bp.power12.base_current_a),
+                        volts(bp.power24, st.charge[2], bp.power24.base_current_a + motors)};
+}
+
+kinematics::Pose Robot::pose() const {
+  const dReal* p = dBodyGetPosition(impl_->chassis);
+  return kinematics::Pose{p[0], p[1], yaw_of(impl_->chassis)};
+}
+
+kinematics::Twist Robot::twist() const {
+  const dReal* v = dBodyGetLinearVel(impl_->chassis);
+  const dReal* w = dBodyGetAngularVel(impl_->chassis);
+  const double yaw = yaw_of(impl_->chassis);
+  const double c = std::cos(yaw);
+  const double s = std::sin(yaw);
+  return kinematics::Twist{c * v[0] + s * v[1], -s * v[0] + c * v[1], w[2]};
+}
+
+void Robot::place(const Placement& at) {
+  RobotImpl& r = *impl_;
+  const double yaw = at.heading_deg * kPi / 180.0;
+  dMatrix3 rot;
+  dRFromAxisAndAngle(rot, 0, 0, 1, yaw);
+  dBodySetPosition(r.chassis, at.x_m, at.y_m, r.z_body);
+  dBodySetRotation(r.chassis, rot);
+  dBodySetLinearVel(r.chassis, 0, 0, 0);
+  dBodySetAngularVel(r.chassis, 0, 0, 0);
+  const double c = std::cos(yaw);
+  const double s = std::sin(yaw);
+  const RobotParams& p = *r.params;
+  for (std::size_t n = 0; n < 3; ++n) {
+    const double phi = p.geometry.wheel_angles_deg[n] * kPi / 180.0;
+    const double lx = p.geometry.wheel_distance_m * std::cos(phi);
+    const double ly = p.geometry.wheel_distance_m * std::sin(phi);
+    const double wz = p.geometry.wheel_radius_m;
+    dBodySetPosition(r.wheel[n], at.x_m + c * lx - s * ly, at.y_m + s * lx + c * ly, wz);
+    dBodySetRotation(r.wheel[n], rot);
+    dBodySetLinearVel(r.wheel[n], 0, 0, 0);
+    dBodySetAngularVel(r.wheel[n], 0, 0, 0);
+    // Re-attach so the hinge's reference angle is this pose.
+    dJointAttach(r.hinge[n], r.wheel[n], r.chassis);
+    dJointSetHingeAnchor(r.hinge[n], at.x_m + c * lx - s * ly, at.y_m + s * lx + c * ly, wz);
+    const Eigen::Vector3d& a = r.axle_body[n];
+    dJointSetHingeAxis(r.hinge[n], c * a.x() - s * a.y(), s * a.x() + c * a.y(), a.z());
+    dJointSetHingeParam(r.hinge[n], dParamFMax, 0);
+    r.state.hinge_angle_rad[n] = dJointGetHingeAngle(r.hinge[n]);
+  }
+}
+
+}  // namespace canhil::physics
