@@ -27,7 +27,7 @@ void put_body(std::ostream& os, const char* key, const BodyState& b) {
   for (double v : b.quaternion) put(os, v);
   for (double v : b.linear_velocity) put(os, v);
   for (double v : b.angular_velocity) put(os, v);
-  os << '\n';
+  os << ' ' << (b.enabled ? 1 : 0) << '\n';
 }
 
 class LineReader {
@@ -64,6 +64,9 @@ class LineReader {
     for (double& v : b.quaternion) v = number(is);
     for (double& v : b.linear_velocity) v = number(is);
     for (double& v : b.angular_velocity) v = number(is);
+    const long long enabled = integer(is);
+    if (enabled != 0 && enabled != 1) fail("has an enabled flag that is not 0 or 1");
+    b.enabled = enabled == 1;
     return b;
   }
   [[noreturn]] void fail(const std::string& what) const {
@@ -107,7 +110,10 @@ void save_state(const WorldState& s, const std::filesystem::path& path) {
     os << '\n';
   }
   os << "obstacles " << s.obstacles.size() << '\n';
-  for (const BodyState& o : s.obstacles) put_body(os, "obstacle", o);
+  for (std::size_t i = 0; i < s.obstacles.size(); ++i) {
+    put_body(os, "obstacle", s.obstacles[i]);
+    os << "idle " << (i < s.obstacle_idle_steps.size() ? s.obstacle_idle_steps[i] : 0) << '\n';
+  }
   if (!os) throw std::runtime_error("cannot write world state to " + path.string());
 }
 
@@ -157,7 +163,11 @@ WorldState load_state(const std::filesystem::path& path) {
   auto obstacles_line = r.expect("obstacles");
   const long long obstacles = r.integer(obstacles_line);
   if (obstacles < 0 || obstacles > 10000) r.fail("has an impossible obstacle count");
-  for (long long i = 0; i < obstacles; ++i) s.obstacles.push_back(r.body("obstacle"));
+  for (long long i = 0; i < obstacles; ++i) {
+    s.obstacles.push_back(r.body("obstacle"));
+    auto idle = r.expect("idle");
+    s.obstacle_idle_steps.push_back(static_cast<int>(r.integer(idle)));
+  }
   return s;
 }
 

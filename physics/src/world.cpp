@@ -45,6 +45,7 @@ BodyState read_body(dBodyID b) {
     s.angular_velocity[i] = w[i];
   }
   for (std::size_t i = 0; i < 4; ++i) s.quaternion[i] = q[i];
+  s.enabled = dBodyIsEnabled(b) != 0;
   return s;
 }
 
@@ -56,6 +57,11 @@ void write_body(dBodyID b, const BodyState& s) {
   dBodySetAngularVel(b, s.angular_velocity[0], s.angular_velocity[1], s.angular_velocity[2]);
   dBodySetForce(b, 0, 0, 0);
   dBodySetTorque(b, 0, 0, 0);
+  if (s.enabled) {
+    dBodyEnable(b);
+  } else {
+    dBodyDisable(b);
+  }
 }
 
 Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
@@ -109,6 +115,7 @@ struct World::Impl {
   std::vector<std::unique_ptr<Robot>> robots;
   std::vector<dBodyID> obstacle_bodies;  // nullptr for static obstacles
   std::vector<dGeomID> obstacle_geoms;
+  std::vector<int> obstacle_idle;        // steps still, per obstacle
   std::vector<ConvexShape> shapes;
   std::vector<std::unique_ptr<Tag>> tags;
   double time = 0;
@@ -303,6 +310,7 @@ void World::Impl::build_obstacle(int index, const ObstaclePlacement& o) {
   dGeomSetData(g, tag(Kind::kObstacle, index));
   obstacle_bodies.push_back(body);
   obstacle_geoms.push_back(g);
+  obstacle_idle.push_back(0);
 }
 
 // ---------------------------------------------------------------------------
@@ -416,8 +424,15 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
     std::swap(ta, tb);
     std::swap(ba, bb);
   }
+  // A sleeping body against the static world needs no contacts; ODE wakes it
+  // when an awake body's contact joint reaches it.
+  const bool a_awake = ba != nullptr && dBodyIsEnabled(ba) != 0;
+  const bool b_awake = bb != nullptr && dBodyIsEnabled(bb) != 0;
+  if (!a_awake && !b_awake) return;
   dContact c[kMaxContacts];
-  const int n = dCollide(a, b, kMaxContacts, &c[0].geom, sizeof(dContact));
+  // Four points hold a body resting on the carpet; more only cost solver rows.
+  const int cap = (ta->kind == Kind::kGround && tb->kind == Kind::kObstacle) ? 4 : kMaxContacts;
+  const int n = dCollide(a, b, cap, &c[0].geom, sizeof(dContact));
   if (n == 0) return;
   const BallParams& bp = params.ball;
   const RobotParams& rp = params.robot;
@@ -520,6 +535,24 @@ void World::step() {
   const SimulationParams& s = impl_->params.simulation;
   const double h = s.step_s / s.substeps;
   for (int k = 0; k < s.substeps; ++k) impl_->substep(h);
+  // Movable obstacles at rest leave the solver until touched.
+  if (s.sleep_after_steps <= 0) return;
+  for (std::size_t i = 0; i < impl_->obstacle_bodies.size(); ++i) {
+    dBodyID b = impl_->obstacle_bodies[i];
+    if (b == nullptr || dBodyIsEnabled(b) == 0) {
+      impl_->obstacle_idle[i] = 0;
+      continue;
+    }
+    const Eigen::Vector3d v = vec(dBodyGetLinearVel(b));
+    const Eigen::Vector3d w = vec(dBodyGetAngularVel(b));
+    impl_->obstacle_idle[i] = (v.norm() < 0.01 && w.norm() < 0.05) ? impl_->obstacle_idle[i] + 1 : 0;
+    if (impl_->obstacle_idle[i] >= s.sleep_after_steps) {
+      dBodySetLinearVel(b, 0, 0, 0);
+      dBodySetAngularVel(b, 0, 0, 0);
+      dBodyDisable(b);
+      impl_->obstacle_idle[i] = 0;
+    }
+  }
 }
 
 void World::place_ball(const Eigen::Vector3d& p, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
@@ -552,11 +585,13 @@ WorldState World::save() const {
       s.obstacles.push_back(st);
     }
   }
+  s.obstacle_idle_steps = impl_->obstacle_idle;
   return s;
 }
 
 void World::restore(const WorldState& s) {
-  if (s.robots.size() != impl_->robots.size() || s.obstacles.size() != impl_->obstacle_geoms.size()) {
+  if (s.robots.size() != impl_->robots.size() || s.obstacles.size() != impl_->obstacle_geoms.size() ||
+      s.obstacle_idle_steps.size() != impl_->obstacle_geoms.size()) {
     throw std::invalid_argument("the saved state has " + std::to_string(s.robots.size()) + " robots and " +
                                 std::to_string(s.obstacles.size()) + " obstacles; this world has " +
                                 std::to_string(impl_->robots.size()) + " and " +
@@ -574,6 +609,7 @@ void World::restore(const WorldState& s) {
   for (std::size_t i = 0; i < s.obstacles.size(); ++i) {
     if (dBodyID b = impl_->obstacle_bodies[i]) write_body(b, s.obstacles[i]);
   }
+  impl_->obstacle_idle = s.obstacle_idle_steps;
 }
 
 // ---------------------------------------------------------------------------

@@ -17,11 +17,14 @@ namespace canhil::physics {
 
 struct SimulationParams {
   double step_s = 0.010;     ///< one world step (the nodes' and vision's clock ticks at this)
-  int substeps = 5;          ///< ODE steps per world step (2 ms each by default)
+  int substeps = 2;          ///< ODE steps per world step (5 ms each by default; see docs/physics.md)
   double gravity_mps2 = 9.81;
   double cfm = 1e-5;         ///< global constraint force mixing
   double erp = 0.8;          ///< global error reduction
-  int solver_iterations = 20;
+  int solver_iterations = 10;
+  /// A movable obstacle still for this many steps sleeps (leaves the solver)
+  /// until something touches it; 0 never sleeps.
+  int sleep_after_steps = 20;
   unsigned long seed = 1;    ///< ODE's constraint-order shuffling; part of the saved state
 };
 

@@ -31,6 +31,7 @@ struct BodyState {
   std::array<double, 4> quaternion{1, 0, 0, 0};
   std::array<double, 3> linear_velocity{};
   std::array<double, 3> angular_velocity{};
+  bool enabled = true;  ///< false while asleep (movable obstacles at rest)
   friend bool operator==(const BodyState&, const BodyState&) = default;
 };
 
@@ -61,6 +62,7 @@ struct WorldState {
   BodyState ball;
   std::vector<RobotState> robots;
   std::vector<BodyState> obstacles;  ///< movable and static alike (static ones never change)
+  std::vector<int> obstacle_idle_steps;  ///< steps each movable obstacle has been still
   friend bool operator==(const WorldState&, const WorldState&) = default;
 };
 
