@@ -206,6 +206,7 @@ void read_all(Reader& root, WorldParams& w) {
     r.number("gravity_mps2", s.gravity_mps2, kNonNegative);
     r.number("cfm", s.cfm, between(0, 1));
     r.number("erp", s.erp, between(0, 1));
+    r.boolean("exact_solver", s.exact_solver);
     r.integer("solver_iterations", s.solver_iterations, 1, 1000);
     r.integer("sleep_after_steps", s.sleep_after_steps, 0, 1'000'000);
     r.unsigned_long("seed", s.seed);
@@ -323,6 +324,7 @@ void read_all(Reader& root, WorldParams& w) {
     r.number("radius_m", o.params.radius_m, kPositive);
     r.number("height_m", o.params.height_m, kPositive);
     r.number("mass_kg", o.params.mass_kg, kPositive);
+    r.number("friction", o.params.friction, kNonNegative);
     r.boolean("movable", o.params.movable);
     w.obstacles.push_back(o);
   });

@@ -26,17 +26,42 @@ void init_ode_once() {
 
 enum class Kind : std::uint8_t { kGround, kStatic, kBall, kChassis, kWheel, kObstacle };
 
-/// What a geom is; stored as the geom's data pointer.
+/// What a geom is; stored as the geom's data pointer. `id` is the creation
+/// order, used to process collision pairs in an order that does not depend on
+/// the spaces' internal history.
 struct Tag {
   Kind kind;
   int owner = -1;  // robot or obstacle index
   int wheel = -1;
+  int id = 0;
 };
 
-BodyState read_body(dBodyID b) {
+// Quaternions: dBodySetQuaternion renormalises, which can change the last bit
+// of a quaternion ODE itself produced (and of the rotation matrix made from
+// it), and renormalising is not always idempotent. So every body's quaternion
+// is, after each step, fed once through dBodySetQuaternion and that input is
+// kept (Canon::q_in). Saving records the input and restoring feeds the same
+// input again, so ODE's internal q and R come back bit for bit.
+struct Canon {
+  dBodyID body = nullptr;
+  std::array<double, 4> q_in{1, 0, 0, 0};
+
+  void capture() {
+    const dReal* q = dBodyGetQuaternion(body);
+    q_in = {q[0], q[1], q[2], q[3]};
+    apply();
+  }
+  void apply() const {
+    const dQuaternion q = {q_in[0], q_in[1], q_in[2], q_in[3]};
+    dBodySetQuaternion(body, q);
+  }
+};
+
+BodyState read_body(const Canon& c) {
+  dBodyID b = c.body;
   BodyState s;
   const dReal* p = dBodyGetPosition(b);
-  const dReal* q = dBodyGetQuaternion(b);
+  const std::array<double, 4>& q = c.q_in;
   const dReal* v = dBodyGetLinearVel(b);
   const dReal* w = dBodyGetAngularVel(b);
   for (std::size_t i = 0; i < 3; ++i) {
@@ -49,10 +74,11 @@ BodyState read_body(dBodyID b) {
   return s;
 }
 
-void write_body(dBodyID b, const BodyState& s) {
+void write_body(Canon& c, const BodyState& s) {
+  dBodyID b = c.body;
   dBodySetPosition(b, s.position[0], s.position[1], s.position[2]);
-  const dQuaternion q = {s.quaternion[0], s.quaternion[1], s.quaternion[2], s.quaternion[3]};
-  dBodySetQuaternion(b, q);
+  c.q_in = s.quaternion;
+  c.apply();
   dBodySetLinearVel(b, s.linear_velocity[0], s.linear_velocity[1], s.linear_velocity[2]);
   dBodySetAngularVel(b, s.angular_velocity[0], s.angular_velocity[1], s.angular_velocity[2]);
   dBodySetForce(b, 0, 0, 0);
@@ -65,6 +91,7 @@ void write_body(dBodyID b, const BodyState& s) {
 }
 
 Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
+
 
 double yaw_of(dBodyID b) {
   const dReal* r = dBodyGetRotation(b);  // row-major 3x4
@@ -106,6 +133,14 @@ struct RobotAccess {
 
 struct World::Impl {
   WorldParams params;
+  std::vector<Canon> canon;  // every dynamic body, in creation order
+  Canon& canon_of(dBodyID b) {
+    for (Canon& c : canon) {
+      if (c.body == b) return c;
+    }
+    canon.push_back(Canon{b, {1, 0, 0, 0}});
+    return canon.back();
+  }
   FieldMarkings markings;
   dWorldID world = nullptr;
   dSpaceID statics = nullptr;  // ground, goals, boundary, static obstacles
@@ -125,9 +160,11 @@ struct World::Impl {
   explicit Impl(WorldParams p);
   ~Impl();
   Tag* tag(Kind k, int owner = -1, int wheel = -1) {
-    tags.push_back(std::make_unique<Tag>(Tag{k, owner, wheel}));
+    tags.push_back(std::make_unique<Tag>(Tag{k, owner, wheel, next_tag_id++}));
     return tags.back().get();
   }
+  int next_tag_id = 0;
+  std::vector<std::pair<dGeomID, dGeomID>> pairs;  // candidate pairs of the current substep
   void add_static_box(double cx, double cy, double cz, double lx, double ly, double lz) {
     dGeomID g = dCreateBox(statics, lx, ly, lz);
     dGeomSetPosition(g, cx, cy, cz);
@@ -225,6 +262,7 @@ void World::Impl::build_ball() {
   dGeomSetBody(g, ball);
   dGeomSetData(g, tag(Kind::kBall));
   dBodySetPosition(ball, params.ball_start.x_m, params.ball_start.y_m, params.ball_start.z_m);
+  canon_of(ball).capture();
 }
 
 void World::Impl::build_robot(int index, const Placement& at) {
@@ -253,7 +291,7 @@ void World::Impl::build_robot(int index, const Placement& at) {
   r.shapes.push_back(make_frustum(cone_base, std::min(p.cone_top_radius_m, cone_base), z1, z1 + p.cone_height_m, 16));
   for (auto& shape : r.shapes) {
     dGeomID g = shape.create(r.space, r.chassis);
-    r.tags.push_back(std::make_unique<Tag>(Tag{Kind::kChassis, index, -1}));
+    r.tags.push_back(std::make_unique<Tag>(Tag{Kind::kChassis, index, -1, next_tag_id++}));
     dGeomSetData(g, r.tags.back().get());
   }
 
@@ -275,7 +313,7 @@ void World::Impl::build_robot(int index, const Placement& at) {
     dBodySetMass(w, &wm);
     dGeomID g = dCreateSphere(r.space, wr);
     dGeomSetBody(g, w);
-    r.tags.push_back(std::make_unique<Tag>(Tag{Kind::kWheel, index, static_cast<int>(n)}));
+    r.tags.push_back(std::make_unique<Tag>(Tag{Kind::kWheel, index, static_cast<int>(n), next_tag_id++}));
     dGeomSetData(g, r.tags.back().get());
     r.wheel[n] = w;
     dJointID j = dJointCreateHinge(world, nullptr);
@@ -303,6 +341,7 @@ void World::Impl::build_obstacle(int index, const ObstaclePlacement& o) {
     dMatrix3 rot;
     dRFromAxisAndAngle(rot, 0, 0, 1, o.at.heading_deg * kPi / 180.0);
     dBodySetRotation(body, rot);
+    canon_of(body).capture();
   } else {
     g = shapes.back().create(statics);
     dGeomSetPosition(g, o.at.x_m, o.at.y_m, o.params.height_m / 2);
@@ -477,6 +516,8 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
       c[i].fdir1[1] = roll.y();
       c[i].fdir1[2] = roll.z();
       s.soft_erp = 0.6;
+    } else if (ta->kind == Kind::kGround && tb->kind == Kind::kObstacle) {
+      s.mu = params.obstacles[static_cast<std::size_t>(tb->owner)].params.friction;
     } else if (ta->kind == Kind::kChassis || ta->kind == Kind::kObstacle) {
       s.mu = 0.4;  // bodies sliding along each other
     }
@@ -493,18 +534,34 @@ void near_callback(void* data, dGeomID a, dGeomID b) {
     dSpaceCollide2(a, b, data, &near_callback);
     return;
   }
-  impl->collide(a, b);
+  impl->pairs.emplace_back(a, b);
 }
+
+int tag_id(dGeomID g) { return static_cast<const Tag*>(dGeomGetData(g))->id; }
 }  // namespace
 
 void World::Impl::substep(double h) {
   for (std::size_t i = 0; i < robots.size(); ++i) apply_robot_inputs(robot(i), h);
   ball_on_ground = false;
+  pairs.clear();
   dSpaceCollide(dynamics, this, &near_callback);
   dSpaceCollide2(reinterpret_cast<dGeomID>(dynamics), reinterpret_cast<dGeomID>(statics), this, &near_callback);
+  // ODE's spaces reorder geoms as they move; contacts are made in creation-id
+  // order so that the solver sees the same rows whatever the history.
+  for (auto& [a, b] : pairs) {
+    if (tag_id(b) < tag_id(a)) std::swap(a, b);
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) {
+    return std::pair(tag_id(x.first), tag_id(x.second)) < std::pair(tag_id(y.first), tag_id(y.second));
+  });
+  for (const auto& [a, b] : pairs) collide(a, b);
   // ODE shuffles constraint order with a global seed: keep this world's own.
   dRandSetSeed(seed);
-  dWorldQuickStep(world, h);
+  if (params.simulation.exact_solver) {
+    dWorldStep(world, h);
+  } else {
+    dWorldQuickStep(world, h);
+  }
   seed = dRandGetSeed();
   dJointGroupEmpty(contacts);
   for (std::size_t i = 0; i < robots.size(); ++i) update_robot_after(robot(i), h);
@@ -535,6 +592,7 @@ void World::step() {
   const SimulationParams& s = impl_->params.simulation;
   const double h = s.step_s / s.substeps;
   for (int k = 0; k < s.substeps; ++k) impl_->substep(h);
+  for (Canon& c : impl_->canon) c.capture();
   // Movable obstacles at rest leave the solver until touched.
   if (s.sleep_after_steps <= 0) return;
   for (std::size_t i = 0; i < impl_->obstacle_bodies.size(); ++i) {
@@ -567,17 +625,17 @@ WorldState World::save() const {
   WorldState s;
   s.time_s = impl_->time;
   s.seed = impl_->seed;
-  s.ball = read_body(impl_->ball);
+  s.ball = read_body(impl_->canon_of(impl_->ball));
   for (std::size_t i = 0; i < impl_->robots.size(); ++i) {
     const RobotImpl& r = impl_->robot(i);
     RobotState rs = r.state;
-    rs.chassis = read_body(r.chassis);
-    for (std::size_t n = 0; n < 3; ++n) rs.wheels[n] = read_body(r.wheel[n]);
+    rs.chassis = read_body(impl_->canon_of(r.chassis));
+    for (std::size_t n = 0; n < 3; ++n) rs.wheels[n] = read_body(impl_->canon_of(r.wheel[n]));
     s.robots.push_back(rs);
   }
   for (std::size_t i = 0; i < impl_->obstacle_geoms.size(); ++i) {
     if (dBodyID b = impl_->obstacle_bodies[i]) {
-      s.obstacles.push_back(read_body(b));
+      s.obstacles.push_back(read_body(impl_->canon_of(b)));
     } else {
       BodyState st;
       const dReal* p = dGeomGetPosition(impl_->obstacle_geoms[i]);
@@ -599,15 +657,15 @@ void World::restore(const WorldState& s) {
   }
   impl_->time = s.time_s;
   impl_->seed = s.seed;
-  write_body(impl_->ball, s.ball);
+  write_body(impl_->canon_of(impl_->ball), s.ball);
   for (std::size_t i = 0; i < s.robots.size(); ++i) {
     RobotImpl& r = impl_->robot(i);
     r.state = s.robots[i];
-    write_body(r.chassis, s.robots[i].chassis);
-    for (std::size_t n = 0; n < 3; ++n) write_body(r.wheel[n], s.robots[i].wheels[n]);
+    write_body(impl_->canon_of(r.chassis), s.robots[i].chassis);
+    for (std::size_t n = 0; n < 3; ++n) write_body(impl_->canon_of(r.wheel[n]), s.robots[i].wheels[n]);
   }
   for (std::size_t i = 0; i < s.obstacles.size(); ++i) {
-    if (dBodyID b = impl_->obstacle_bodies[i]) write_body(b, s.obstacles[i]);
+    if (dBodyID b = impl_->obstacle_bodies[i]) write_body(impl_->canon_of(b), s.obstacles[i]);
   }
   impl_->obstacle_idle = s.obstacle_idle_steps;
 }
@@ -774,6 +832,8 @@ void Robot::place(const Placement& at) {
     dJointSetHingeParam(r.hinge[n], dParamFMax, 0);
     r.state.hinge_angle_rad[n] = dJointGetHingeAngle(r.hinge[n]);
   }
+  r.world->canon_of(r.chassis).capture();
+  for (dBodyID w : r.wheel) r.world->canon_of(w).capture();
 }
 
 }  // namespace canhil::physics

@@ -21,7 +21,10 @@ struct SimulationParams {
   double gravity_mps2 = 9.81;
   double cfm = 1e-5;         ///< global constraint force mixing
   double erp = 0.8;          ///< global error reduction
-  int solver_iterations = 10;
+  /// ODE's exact (Dantzig LCP) solver instead of the iterative QuickStep; the
+  /// islands here are small (one robot is about 27 constraint rows).
+  bool exact_solver = true;
+  int solver_iterations = 10;  ///< QuickStep only
   /// A movable obstacle still for this many steps sleeps (leaves the solver)
   /// until something touches it; 0 never sleeps.
   int sleep_after_steps = 20;
@@ -141,6 +144,7 @@ struct ObstacleParams {
   double radius_m = 0.25;
   double height_m = 0.7;
   double mass_kg = 30.0;   ///< movable obstacles only
+  double friction = 0.3;   ///< against the carpet (movable only): a robot can push it
   bool movable = false;
 };
 
