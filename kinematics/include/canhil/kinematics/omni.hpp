@@ -28,6 +28,8 @@ struct OmniGeometry {
   double wheel_radius_m = 0.0573;
   double wheel_distance_m = 0.19;  ///< b, centre to wheel contact
   std::array<double, 3> wheel_angles_deg = {30.0, 150.0, 270.0};
+
+  friend bool operator==(const OmniGeometry&, const OmniGeometry&) = default;
 };
 
 /// The base's inverse and forward kinematics; immutable once built.
@@ -64,6 +66,8 @@ struct EncoderSpec {
   /// Wheel angle (rad) to encoder counts, unrounded.
   double counts(double wheel_angle_rad) const noexcept;
   double wheel_angle_rad(double counts) const noexcept;
+
+  friend bool operator==(const EncoderSpec&, const EncoderSpec&) = default;
 };
 
 /// A planar pose, world frame: heading is the angle of the robot's +x axis

@@ -29,6 +29,8 @@ struct SimulationParams {
   /// until something touches it; 0 never sleeps.
   int sleep_after_steps = 20;
   unsigned long seed = 1;    ///< ODE's constraint-order shuffling; part of the saved state
+
+  friend bool operator==(const SimulationParams&, const SimulationParams&) = default;
 };
 
 struct GoalParams {
@@ -36,6 +38,8 @@ struct GoalParams {
   double height_m = 1.0;       ///< inside, ground to bar
   double depth_m = 0.6;        ///< back of the net behind the goal line
   double post_thickness_m = 0.125;
+
+  friend bool operator==(const GoalParams&, const GoalParams&) = default;
 };
 
 struct FieldParams {
@@ -54,6 +58,8 @@ struct FieldParams {
   double boundary_height_m = 0.5;
   double ground_friction = 1.0;  ///< Coulomb friction of the carpet against bodies (not wheels, not ball)
   GoalParams goal;
+
+  friend bool operator==(const FieldParams&, const FieldParams&) = default;
 };
 
 struct BallParams {
@@ -64,6 +70,8 @@ struct BallParams {
   double friction = 0.8;               ///< ball against carpet and bodies
   double rolling_resistance = 0.035;   ///< deceleration / g while rolling on the carpet; 0 in flight
   double spin_damping = 0.5;           ///< 1/s, damps spin about the vertical while on the carpet
+
+  friend bool operator==(const BallParams&, const BallParams&) = default;
 };
 
 struct MotorParams {
@@ -73,6 +81,8 @@ struct MotorParams {
   double current_limit_a = 10.0;   ///< the motor driver's limit
   double rotor_inertia_kgm2 = 1.4e-5;
   double stall_speed_radps = 0.5;  ///< wheel slower than this under load counts as stalled
+
+  friend bool operator==(const MotorParams&, const MotorParams&) = default;
 };
 
 struct KickerParams {
@@ -84,22 +94,30 @@ struct KickerParams {
   double energy_per_full_kick = 0.7;  ///< fraction of the stored energy a full-power kick uses
   double recharge_time_constant_s = 1.5;
   double grabber_release_s = 0.25;    ///< the grabber lets go this long when the kicker fires
+
+  friend bool operator==(const KickerParams&, const KickerParams&) = default;
 };
 
 struct BarrierParams {
   double half_angle_deg = 25.0;   ///< ball bearing within +- this of the front
   double max_distance_m = 0.30;   ///< robot centre to ball centre, horizontal
   double max_height_m = 0.16;     ///< ball centre above the carpet
+
+  friend bool operator==(const BarrierParams&, const BarrierParams&) = default;
 };
 
 struct GrabberParams {
   double range_m = 0.45;          ///< robot centre to ball centre where the wheel reaches
   double half_angle_deg = 35.0;
   double max_force_n = 6.0;       ///< pull at mode 100
+
+  friend bool operator==(const GrabberParams&, const GrabberParams&) = default;
 };
 
 struct CompassParams {
   double north_offset_deg = 0.0;  ///< world yaw (CCW from +x) of magnetic north
+
+  friend bool operator==(const CompassParams&, const CompassParams&) = default;
 };
 
 struct RailParams {
@@ -108,6 +126,8 @@ struct RailParams {
   double capacity_ah = 0;
   double internal_resistance_ohm = 0;
   double base_current_a = 0;  ///< electronics always drawing
+
+  friend bool operator==(const RailParams&, const RailParams&) = default;
 };
 
 struct BatteryParams {
@@ -115,6 +135,8 @@ struct BatteryParams {
   RailParams power12{12.6, 10.5, 10.0, 0.05, 1.0};
   RailParams power24{25.2, 21.0, 10.0, 0.08, 0.3};  ///< feeds the three motors
   double initial_charge = 1.0;                      ///< state of charge at start, 0..1
+
+  friend bool operator==(const BatteryParams&, const BatteryParams&) = default;
 };
 
 struct RobotParams {
@@ -138,6 +160,8 @@ struct RobotParams {
   GrabberParams grabber;
   CompassParams compass;
   BatteryParams battery;
+
+  friend bool operator==(const RobotParams&, const RobotParams&) = default;
 };
 
 struct ObstacleParams {
@@ -146,6 +170,8 @@ struct ObstacleParams {
   double mass_kg = 30.0;   ///< movable obstacles only
   double friction = 0.3;   ///< against the carpet (movable only): a robot can push it
   bool movable = false;
+
+  friend bool operator==(const ObstacleParams&, const ObstacleParams&) = default;
 };
 
 /// Where things start.
@@ -153,17 +179,23 @@ struct Placement {
   double x_m = 0;
   double y_m = 0;
   double heading_deg = 0;  ///< robots: CCW from +x of the robot's +x axis (front is +y)
+
+  friend bool operator==(const Placement&, const Placement&) = default;
 };
 
 struct ObstaclePlacement {
   Placement at;
   ObstacleParams params;
+
+  friend bool operator==(const ObstaclePlacement&, const ObstaclePlacement&) = default;
 };
 
 struct BallStart {
   double x_m = 0;
   double y_m = 0;
   double z_m = 0.11;  ///< centre height; resting on the carpet by default
+
+  friend bool operator==(const BallStart&, const BallStart&) = default;
 };
 
 struct WorldParams {
@@ -174,6 +206,8 @@ struct WorldParams {
   std::vector<Placement> robots;
   std::vector<ObstaclePlacement> obstacles;
   BallStart ball_start;
+
+  friend bool operator==(const WorldParams&, const WorldParams&) = default;
 };
 
 }  // namespace canhil::physics
