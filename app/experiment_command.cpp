@@ -44,7 +44,8 @@ void print_table(const physics::ExperimentResult& r) {
 
 void print_json(const physics::ExperimentResult& r) {
   using frames::json_quote;
-  std::string out = "{\"experiment\":" + json_quote(r.name) + ",\"description\":" + json_quote(r.description) + ",\"columns\":[";
+  std::string out =
+      "{\"experiment\":" + json_quote(r.name) + ",\"description\":" + json_quote(r.description) + ",\"columns\":[";
   for (std::size_t i = 0; i < r.columns.size(); ++i) out += (i ? "," : "") + json_quote(r.columns[i]);
   out += "],\"rows\":[";
   for (std::size_t i = 0; i < r.rows.size(); ++i) {

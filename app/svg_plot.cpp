@@ -15,16 +15,20 @@ constexpr double kLeft = 70;
 constexpr double kRight = 20;
 constexpr double kTop = 40;
 constexpr double kBottom = 50;
-const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-                                "#7f7f7f", "#bcbd22"};
+const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
+                                "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22"};
 
 std::string escape(const std::string& s) {
   std::string out;
   for (char c : s) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else out += c;
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else
+      out += c;
   }
   return out;
 }
@@ -78,13 +82,17 @@ void plot_one(std::ostringstream& os, const physics::Plot& p, double y0) {
   os << "<rect x='" << kLeft << "' y='" << y0 + kTop << "' width='" << pw << "' height='" << ph
      << "' fill='none' stroke='#444'/>\n";
   const double xs = nice_step(xmax - xmin);
-  for (double t = std::ceil(xmin / xs) * xs; t <= xmax + 1e-9; t += xs) {
+  const auto x_last = static_cast<long>(std::floor((xmax + 1e-9) / xs));
+  for (auto i = static_cast<long>(std::ceil(xmin / xs)); i <= x_last; ++i) {
+    const double t = static_cast<double>(i) * xs;
     os << "<line x1='" << X(t) << "' y1='" << y0 + kTop << "' x2='" << X(t) << "' y2='" << y0 + kTop + ph
        << "' stroke='#eee'/><text x='" << X(t) << "' y='" << y0 + kTop + ph + 16
        << "' text-anchor='middle' font-size='11'>" << num(t) << "</text>\n";
   }
   const double ys = nice_step(ymax - ymin);
-  for (double t = std::ceil(ymin / ys) * ys; t <= ymax + 1e-9; t += ys) {
+  const auto y_last = static_cast<long>(std::floor((ymax + 1e-9) / ys));
+  for (auto i = static_cast<long>(std::ceil(ymin / ys)); i <= y_last; ++i) {
+    const double t = static_cast<double>(i) * ys;
     os << "<line x1='" << kLeft << "' y1='" << Y(t) << "' x2='" << kLeft + pw << "' y2='" << Y(t)
        << "' stroke='#eee'/><text x='" << kLeft - 6 << "' y='" << Y(t) + 4 << "' text-anchor='end' font-size='11'>"
        << num(t) << "</text>\n";

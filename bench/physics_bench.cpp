@@ -41,8 +41,8 @@ void BM_WorldStep(benchmark::State& state) {
     benchmark::DoNotOptimize(w.ball_position());
   }
   state.counters["substeps"] = w.params().simulation.substeps;
-  state.counters["realtime_factor"] = benchmark::Counter(w.params().simulation.step_s * static_cast<double>(state.iterations()),
-                                                         benchmark::Counter::kIsRate);
+  state.counters["realtime_factor"] = benchmark::Counter(
+      w.params().simulation.step_s * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 // Defaults first; then the substep / solver-iteration trade-off for reference.
 BENCHMARK(BM_WorldStep)

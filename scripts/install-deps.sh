@@ -8,6 +8,8 @@ packages=(
   # build
   cmake ninja-build g++ clang libclang-rt-14-dev pkg-config clang-format clang-tidy
   libgtest-dev libgmock-dev libbenchmark-dev
+  # physics
+  libode-dev libeigen3-dev libtomlplusplus-dev
   # SocketCAN tools and interface set-up
   can-utils iproute2 kmod
   # the VM runner for kernels without CAN (vcan_setup/vm-run.sh)

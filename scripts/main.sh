@@ -12,3 +12,8 @@ echo "== the message set (frames/canhil.dbc)"
 echo
 echo "== a shipped trace of one robot's bus, decoded (frames/samples/one_robot.log)"
 "$canhil" dump --log frames/samples/one_robot.log
+echo
+echo "== physics: the ball-drop and drive calibration experiments (docs/physics.md)"
+"$canhil" experiment ball-drop
+echo
+"$canhil" experiment drive

@@ -1,5 +1,6 @@
 #include "canhil/physics/config.hpp"
 
+#include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -7,7 +8,6 @@
 #include <limits>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 namespace canhil::physics {
 namespace {
@@ -94,8 +94,9 @@ class Reader {
     const auto* i = n->as_integer();
     if (i == nullptr) fail(n, key, "must be a whole number");
     if (i->get() < min || i->get() > max) {
-      fail(n, key, "must be between " + std::to_string(min) + " and " + std::to_string(max) + ", got " +
-                       std::to_string(i->get()));
+      fail(n, key,
+           "must be between " + std::to_string(min) + " and " + std::to_string(max) + ", got " +
+               std::to_string(i->get()));
     }
     out = static_cast<int>(i->get());
   }
@@ -171,8 +172,7 @@ class Reader {
       }
       std::string allowed;
       for (const auto& candidate : known_) allowed += (allowed.empty() ? "" : ", ") + candidate;
-      fail(&v, key,
-           "unknown field" + (best.empty() ? "" : "; did you mean " + best + "?") + " Known here: " + allowed);
+      fail(&v, key, "unknown field" + (best.empty() ? "" : "; did you mean " + best + "?") + " Known here: " + allowed);
     }
   }
 
@@ -265,7 +265,8 @@ void read_all(Reader& root, WorldParams& w) {
     r.number("wheel_radius_m", rb.geometry.wheel_radius_m, kPositive);
     r.number("wheel_distance_m", rb.geometry.wheel_distance_m, kPositive);
     r.numbers("wheel_angles_deg", rb.geometry.wheel_angles_deg);
-    if (rb.mouth_width_m >= 2 * rb.body_radius_m) r.fail(nullptr, "mouth_width_m", "must be less than the body's diameter");
+    if (rb.mouth_width_m >= 2 * rb.body_radius_m)
+      r.fail(nullptr, "mouth_width_m", "must be less than the body's diameter");
     if (rb.mouth_depth_m >= rb.body_radius_m) r.fail(nullptr, "mouth_depth_m", "must be less than body_radius_m");
     if (rb.geometry.wheel_distance_m >= rb.body_radius_m) {
       r.fail(nullptr, "wheel_distance_m", "must be less than body_radius_m (the wheels are under the body)");

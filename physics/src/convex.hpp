@@ -13,8 +13,8 @@ namespace canhil::physics {
 using Outline = std::vector<std::array<double, 2>>;  // convex, counter-clockwise (seen from +z)
 
 struct ConvexShape {
-  std::vector<dReal> planes;        // a, b, c, d per face (outward unit normal, n.p = d)
-  std::vector<dReal> points;        // x, y, z per vertex
+  std::vector<dReal> planes;           // a, b, c, d per face (outward unit normal, n.p = d)
+  std::vector<dReal> points;           // x, y, z per vertex
   std::vector<unsigned int> polygons;  // per face: count, then vertex indices counter-clockwise from outside
   unsigned int plane_count = 0;
   unsigned int point_count = 0;

@@ -123,7 +123,8 @@ ExperimentResult ball_roll(const WorldParams& base, const ExperimentOptions& o) 
     res.rows.push_back({v, distance, stop_time, decel});
     plot.series.push_back(std::move(s));
   }
-  res.figures.push_back(Figure{"deceleration_error_pct", 100 * worst, "<= 10 (vs rolling_resistance * g)", worst <= 0.10});
+  res.figures.push_back(
+      Figure{"deceleration_error_pct", 100 * worst, "<= 10 (vs rolling_resistance * g)", worst <= 0.10});
   res.plots.push_back(std::move(plot));
   return res;
 }
@@ -212,7 +213,8 @@ ExperimentResult kick(const WorldParams& base, const ExperimentOptions& o) {
       const double expected = r.formula_speed * r.formula_speed * std::sin(2 * theta) / base.simulation.gravity_mps2;
       worst_lob = std::max(worst_lob, std::fabs(r.landing_distance - expected) / expected);
     }
-    res.rows.push_back({low ? 1.0 : 0.0, static_cast<double>(power), r.formula_speed, r.launch_speed, r.landing_distance});
+    res.rows.push_back(
+        {low ? 1.0 : 0.0, static_cast<double>(power), r.formula_speed, r.launch_speed, r.landing_distance});
     if (!r.fired) {
       res.figures.push_back(Figure{"fired", 0, "the kicker fires with the ball held", false});
       continue;
@@ -222,13 +224,14 @@ ExperimentResult kick(const WorldParams& base, const ExperimentOptions& o) {
                                    0.05 * base.robot.kicker.max_lob_range_m));
     }
     if (power == pm && low) {
-      res.figures.push_back(within("low_full_power_launch_mps", r.launch_speed, r.formula_speed, 0.05 * r.formula_speed));
+      res.figures.push_back(
+          within("low_full_power_launch_mps", r.launch_speed, r.formula_speed, 0.05 * r.formula_speed));
     }
     plot.series.push_back(std::move(r.height));
   }
   if (worst_lob > 0) {
-    res.figures.push_back(Figure{"worst_lob_range_error_pct", 100 * worst_lob, "<= 5 (flight untouched by damping)",
-                                 worst_lob <= 0.05});
+    res.figures.push_back(
+        Figure{"worst_lob_range_error_pct", 100 * worst_lob, "<= 5 (flight untouched by damping)", worst_lob <= 0.05});
   }
   res.plots.push_back(std::move(plot));
   return res;
@@ -238,7 +241,8 @@ ExperimentResult kick(const WorldParams& base, const ExperimentOptions& o) {
 
 ExperimentResult drive(const WorldParams& base, const ExperimentOptions& o) {
   std::vector<kinematics::Twist> commands = {{1.0, 0, 0}, {0, 1.0, 0}, {0, 0, 2.0}};
-  if (o.vx_mps || o.vy_mps || o.va_radps) commands = {{o.vx_mps.value_or(0), o.vy_mps.value_or(0), o.va_radps.value_or(0)}};
+  if (o.vx_mps || o.vy_mps || o.va_radps)
+    commands = {{o.vx_mps.value_or(0), o.vy_mps.value_or(0), o.va_radps.value_or(0)}};
   ExperimentResult res;
   res.name = "drive";
   res.description = "wheel speeds from inverse kinematics, no correction factor; steady state over the last second";
@@ -255,7 +259,7 @@ ExperimentResult drive(const WorldParams& base, const ExperimentOptions& o) {
     Robot& robot = w.robot(0);
     const kinematics::OmniKinematics k(p.robot.geometry);
     const kinematics::WheelSpeeds ws = k.inverse(cmd);
-    Series s{fmt(cmd.vx_mps, 1) + "," + fmt(cmd.vy_mps, 1) + "," + fmt(cmd.va_radps, 1), {}, {}};
+    Series s{"vx " + fmt(cmd.vx_mps, 1) + " vy " + fmt(cmd.vy_mps, 1) + " va " + fmt(cmd.va_radps, 1), {}, {}};
     kinematics::Twist sum{};
     int samples = 0;
     const double norm = std::hypot(cmd.vx_mps, cmd.vy_mps) + std::fabs(cmd.va_radps);
@@ -276,7 +280,8 @@ ExperimentResult drive(const WorldParams& base, const ExperimentOptions& o) {
     }
     const kinematics::Twist got{sum.vx_mps / samples, sum.vy_mps / samples, sum.va_radps / samples};
     const double err = (std::fabs(got.vx_mps - cmd.vx_mps) + std::fabs(got.vy_mps - cmd.vy_mps) +
-                        std::fabs(got.va_radps - cmd.va_radps)) / norm;
+                        std::fabs(got.va_radps - cmd.va_radps)) /
+                       norm;
     worst = std::max(worst, err);
     res.rows.push_back({cmd.vx_mps, cmd.vy_mps, cmd.va_radps, got.vx_mps, got.vy_mps, got.va_radps, 100 * err});
     plot.series.push_back(std::move(s));

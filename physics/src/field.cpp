@@ -53,7 +53,7 @@ FieldMarkings field_markings(const FieldParams& f) {
   // Goal and penalty areas at both ends: two sides and the front.
   for (const double side : {-1.0, 1.0}) {
     for (const auto& [depth, width] : {std::pair{f.goal_area_depth_m, f.goal_area_width_m},
-                                      std::pair{f.penalty_area_depth_m, f.penalty_area_width_m}}) {
+                                       std::pair{f.penalty_area_depth_m, f.penalty_area_width_m}}) {
       const double x_line = side * hx;
       const double x_front = side * (hx - depth);
       m.segments.push_back({x_line, -width / 2, x_front, -width / 2});

@@ -92,7 +92,6 @@ void write_body(Canon& c, const BodyState& s) {
 
 Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
 
-
 double yaw_of(dBodyID b) {
   const dReal* r = dBodyGetRotation(b);  // row-major 3x4
   return std::atan2(r[4], r[0]);         // angle of the body's +x axis
@@ -143,14 +142,14 @@ struct World::Impl {
   }
   FieldMarkings markings;
   dWorldID world = nullptr;
-  dSpaceID statics = nullptr;  // ground, goals, boundary, static obstacles
-  dSpaceID dynamics = nullptr; // ball, robots (as sub-spaces), movable obstacles
+  dSpaceID statics = nullptr;   // ground, goals, boundary, static obstacles
+  dSpaceID dynamics = nullptr;  // ball, robots (as sub-spaces), movable obstacles
   dJointGroupID contacts = nullptr;
   dBodyID ball = nullptr;
   std::vector<std::unique_ptr<Robot>> robots;
   std::vector<dBodyID> obstacle_bodies;  // nullptr for static obstacles
   std::vector<dGeomID> obstacle_geoms;
-  std::vector<int> obstacle_idle;        // steps still, per obstacle
+  std::vector<int> obstacle_idle;  // steps still, per obstacle
   std::vector<ConvexShape> shapes;
   std::vector<std::unique_ptr<Tag>> tags;
   double time = 0;
@@ -228,7 +227,8 @@ void World::Impl::build_field() {
   const double net = 0.02;  // net thickness
   for (const double side : {-1.0, 1.0}) {
     const double x_post = side * (hx + t / 2);
-    for (const double ys : {-1.0, 1.0}) add_static_box(x_post, ys * (g.width_m / 2 + t / 2), g.height_m / 2, t, t, g.height_m);
+    for (const double ys : {-1.0, 1.0})
+      add_static_box(x_post, ys * (g.width_m / 2 + t / 2), g.height_m / 2, t, t, g.height_m);
     add_static_box(x_post, 0, g.height_m + t / 2, t, g.width_m + 2 * t, t);  // bar
     const double x_back = side * (hx + g.depth_m + net / 2);
     add_static_box(x_back, 0, g.height_m / 2, net, g.width_m + 2 * t, g.height_m);  // back net
@@ -328,7 +328,8 @@ void World::Impl::build_robot(int index, const Placement& at) {
 }
 
 void World::Impl::build_obstacle(int index, const ObstaclePlacement& o) {
-  shapes.push_back(make_frustum(o.params.radius_m, o.params.radius_m, -o.params.height_m / 2, o.params.height_m / 2, 16));
+  shapes.push_back(
+      make_frustum(o.params.radius_m, o.params.radius_m, -o.params.height_m / 2, o.params.height_m / 2, 16));
   dBodyID body = nullptr;
   dGeomID g = nullptr;
   if (o.params.movable) {
@@ -375,12 +376,14 @@ void World::Impl::apply_robot_inputs(RobotImpl& r, double h) {
       const double target = r.state.wheel_command[n];
       const bool driving = (target - w) * w > 0;
       double i_max = mp.current_limit_a;
-      if (driving) i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
+      if (driving)
+        i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
       dJointSetHingeParam(r.hinge[n], dParamVel, target);
       dJointSetHingeParam(r.hinge[n], dParamFMax, i_max * k * gear * mp.gear_efficiency);
     } else {
       const double volts = std::clamp(r.state.wheel_command[n], -v_supply, v_supply);
-      const double i = std::clamp((volts - k * w_motor) / mp.terminal_resistance_ohm, -mp.current_limit_a, mp.current_limit_a);
+      const double i =
+          std::clamp((volts - k * w_motor) / mp.terminal_resistance_ohm, -mp.current_limit_a, mp.current_limit_a);
       dJointSetHingeParam(r.hinge[n], dParamFMax, 0);
       dJointAddHingeTorque(r.hinge[n], i * k * gear * mp.gear_efficiency);
       r.state.motor_current_a[n] = i;
@@ -438,7 +441,8 @@ void World::Impl::update_robot_after(RobotImpl& r, double h) {
   }
   // Kicker recharge and the grabber's release after a kick.
   const KickerParams& kp = r.params->kicker;
-  r.state.kicker_voltage_v += (kp.full_voltage_v - r.state.kicker_voltage_v) * (1.0 - std::exp(-h / kp.recharge_time_constant_s));
+  r.state.kicker_voltage_v +=
+      (kp.full_voltage_v - r.state.kicker_voltage_v) * (1.0 - std::exp(-h / kp.recharge_time_constant_s));
   r.state.grabber_release_left_s = std::max(0.0, r.state.grabber_release_left_s - h);
   // Battery drain (ampere-hours).
   const BatteryParams& bp = r.params->battery;
@@ -586,7 +590,9 @@ bool World::ball_on_ground() const noexcept { return impl_->ball_on_ground; }
 std::size_t World::obstacle_count() const noexcept { return impl_->obstacle_geoms.size(); }
 const ObstacleParams& World::obstacle_params(std::size_t i) const { return impl_->params.obstacles.at(i).params; }
 
-Eigen::Vector3d World::obstacle_position(std::size_t i) const { return vec(dGeomGetPosition(impl_->obstacle_geoms.at(i))); }
+Eigen::Vector3d World::obstacle_position(std::size_t i) const {
+  return vec(dGeomGetPosition(impl_->obstacle_geoms.at(i)));
+}
 
 void World::step() {
   const SimulationParams& s = impl_->params.simulation;
@@ -709,8 +715,9 @@ bool Robot::over_current(int wheel) const {
 bool Robot::wheel_stalled(int wheel) const {
   const std::size_t n = wheel_index(wheel);
   const double stall = impl_->params->motor.stall_speed_radps;
-  const bool commanded = impl_->state.wheel_mode[n] == WheelMode::kSpeed ? std::fabs(impl_->state.wheel_command[n]) > stall
-                                                                         : std::fabs(impl_->state.wheel_command[n]) > 0.5;
+  const bool commanded = impl_->state.wheel_mode[n] == WheelMode::kSpeed
+                             ? std::fabs(impl_->state.wheel_command[n]) > stall
+                             : std::fabs(impl_->state.wheel_command[n]) > 0.5;
   return commanded && std::fabs(wheel_speed_radps(wheel)) < stall && over_current(wheel);
 }
 
@@ -747,8 +754,8 @@ KickResult Robot::kick(bool low, int power) {
   const double speed = v_max * p / k.max_power * (st.kicker_voltage_v / k.full_voltage_v);
   const Eigen::Vector3d front = impl_->front();
   Eigen::Vector3d launch = low ? Eigen::Vector3d(front * speed)
-                               : Eigen::Vector3d(front.x() * std::cos(theta) * speed, front.y() * std::cos(theta) * speed,
-                                                 std::sin(theta) * speed);
+                               : Eigen::Vector3d(front.x() * std::cos(theta) * speed,
+                                                 front.y() * std::cos(theta) * speed, std::sin(theta) * speed);
   // The kick adds to the robot's own motion at the ball.
   const Eigen::Vector3d ball = vec(dBodyGetPosition(impl_->world->ball));
   dVector3 v_at_ball;

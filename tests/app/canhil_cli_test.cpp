@@ -4,6 +4,8 @@
 
 #include <sys/wait.h>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "support/test_paths.hpp"
@@ -128,6 +130,60 @@ TEST(Canhil, UsageErrorsExitTwo) {
   EXPECT_EQ(canhil("fly").status, 2);
   EXPECT_EQ(canhil("frames decode --bogus 131#00").status, 2);
   EXPECT_EQ(canhil("--help").status, 0);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(CanhilExperiment, PrintsTableAndFiguresAndExitsZeroWhenMet) {
+  const CliRun r = canhil("experiment ball-drop");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "bounces"));
+  EXPECT_TRUE(has(r, "rest_time_s"));
+  EXPECT_TRUE(has(r, "target 2.81 +- 0.10"));
+  EXPECT_FALSE(has(r, "MISSED"));
+}
+
+TEST(CanhilExperiment, JsonAndSvg) {
+  const std::string svg = "/tmp/canhil_cli_test_kick.svg";
+  const CliRun r = canhil("experiment kick --high --power 50 --json --svg " + svg);
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "{\"experiment\":\"kick\""));
+  EXPECT_TRUE(has(r, "\"name\":\"high_full_power_landing_m\""));
+  EXPECT_TRUE(has(r, "\"all_met\":true"));
+  std::ifstream in(svg);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("<svg"), std::string::npos);
+  EXPECT_NE(text.find("<polyline"), std::string::npos);
+  std::remove(svg.c_str());
+}
+
+TEST(CanhilExperiment, MissedTargetExitsOne) {
+  const std::string cfg = "/tmp/canhil_cli_test_dead_ball.toml";
+  {
+    std::ofstream out(cfg);
+    out << "[ball]\nrestitution = 0.4\n";
+  }
+  const CliRun r = canhil("experiment ball-drop --config " + cfg);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(has(r, "MISSED"));
+  std::remove(cfg.c_str());
+}
+
+TEST(CanhilExperiment, BadConfigAndUnknownNameExitTwoWithAReason) {
+  const std::string cfg = "/tmp/canhil_cli_test_bad.toml";
+  {
+    std::ofstream out(cfg);
+    out << "[ball]\nmas_kg = 1\n";
+  }
+  CliRun r = canhil("experiment ball-drop --config " + cfg);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, cfg + ":2: ball.mas_kg: unknown field; did you mean mass_kg?")) << r.out;
+  std::remove(cfg.c_str());
+  r = canhil("experiment levitate");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "the experiments are ball-drop, ball-roll, kick, drive, tour"));
 }
 
 }  // namespace

@@ -27,7 +27,8 @@ y_m = -2
 [[obstacles]]
 x_m = 3
 movable = true
-)", "partial.toml");
+)",
+                                           "partial.toml");
   EXPECT_EQ(p.ball.mass_kg, 0.45);
   EXPECT_EQ(p.ball.radius_m, 0.11) << "untouched fields keep their defaults";
   EXPECT_EQ(p.robot.kicker.max_lob_range_m, 12.0);
@@ -59,7 +60,8 @@ TEST_P(BadConfig, NamesFileLineFieldAndWhatToDo) {
     EXPECT_EQ(e.line(), b.line) << e.what();
     EXPECT_EQ(e.field(), b.field) << e.what();
     EXPECT_NE(std::string(e.what()).find(b.says), std::string::npos) << e.what();
-    const std::string prefix = "world.toml:" + std::to_string(b.line) + ": " + (b.field[0] ? std::string(b.field) + ": " : "");
+    const std::string prefix =
+        "world.toml:" + std::to_string(b.line) + ": " + (b.field[0] ? std::string(b.field) + ": " : "");
     EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what();
   }
 }
@@ -76,8 +78,10 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"NotABoolean", "[field]\nboundary = 1\n", 2, "field.boundary", "true or false"},
         Bad{"WrongList", "[robot]\nwheel_angles_deg = [30, 150]\n", 2, "robot.wheel_angles_deg", "list of 3 numbers"},
         Bad{"SectionNotATable", "ball = 3\n", 1, "ball", "must be a table"},
-        Bad{"BadRobotEntry", "[[robots]]\nx_m = 1\n[[robots]]\nx_m = \"left\"\n", 4, "robots[1].x_m", "must be a number"},
-        Bad{"MouthTooWide", "[robot]\nmouth_width_m = 0.6\n", 1, "robot.mouth_width_m", "less than the body's diameter"},
+        Bad{"BadRobotEntry", "[[robots]]\nx_m = 1\n[[robots]]\nx_m = \"left\"\n", 4, "robots[1].x_m",
+            "must be a number"},
+        Bad{"MouthTooWide", "[robot]\nmouth_width_m = 0.6\n", 1, "robot.mouth_width_m",
+            "less than the body's diameter"},
         Bad{"RailUpsideDown", "[robot.battery.logic]\nfull_v = 10\nempty_v = 11\n", 1, "robot.battery.logic.empty_v",
             "below full_v"},
         Bad{"NotToml", "[ball\nmass_kg = 1\n", 1, "", "not valid TOML"}),

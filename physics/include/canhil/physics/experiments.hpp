@@ -15,10 +15,10 @@
 namespace canhil::physics {
 
 struct Figure {
-  std::string name;      ///< e.g. "rest_time_s"
+  std::string name;  ///< e.g. "rest_time_s"
   double value = 0;
-  std::string target;    ///< human text, e.g. "2.81 +- 0.1"; empty when none
-  bool met = true;       ///< false when a target exists and is missed
+  std::string target;  ///< human text, e.g. "2.81 +- 0.1"; empty when none
+  bool met = true;     ///< false when a target exists and is missed
 };
 
 struct Series {
@@ -45,12 +45,12 @@ struct ExperimentResult {
 };
 
 struct ExperimentOptions {
-  std::optional<double> height_m;     ///< ball-drop: height of the ball's bottom
-  std::optional<double> speed_mps;    ///< ball-roll: initial speed
-  std::optional<bool> low;            ///< kick: low (direct) instead of high (lob)
-  std::optional<int> power;           ///< kick: 1..max_power
+  std::optional<double> height_m;                  ///< ball-drop: height of the ball's bottom
+  std::optional<double> speed_mps;                 ///< ball-roll: initial speed
+  std::optional<bool> low;                         ///< kick: low (direct) instead of high (lob)
+  std::optional<int> power;                        ///< kick: 1..max_power
   std::optional<double> vx_mps, vy_mps, va_radps;  ///< drive: one command instead of the three standard ones
-  double duration_s = 0;              ///< 0 = the experiment's default
+  double duration_s = 0;                           ///< 0 = the experiment's default
 };
 
 /// Names: ball-drop, ball-roll, kick, drive, tour.

@@ -16,11 +16,11 @@
 namespace canhil::physics {
 
 struct SimulationParams {
-  double step_s = 0.010;     ///< one world step (the nodes' and vision's clock ticks at this)
-  int substeps = 2;          ///< ODE steps per world step (5 ms each by default; see docs/physics.md)
+  double step_s = 0.010;  ///< one world step (the nodes' and vision's clock ticks at this)
+  int substeps = 2;       ///< ODE steps per world step (5 ms each by default; see docs/physics.md)
   double gravity_mps2 = 9.81;
-  double cfm = 1e-5;         ///< global constraint force mixing
-  double erp = 0.8;          ///< global error reduction
+  double cfm = 1e-5;  ///< global constraint force mixing
+  double erp = 0.8;   ///< global error reduction
   /// ODE's exact (Dantzig LCP) solver instead of the iterative QuickStep; the
   /// islands here are small (one robot is about 27 constraint rows).
   bool exact_solver = true;
@@ -28,15 +28,15 @@ struct SimulationParams {
   /// A movable obstacle still for this many steps sleeps (leaves the solver)
   /// until something touches it; 0 never sleeps.
   int sleep_after_steps = 20;
-  unsigned long seed = 1;    ///< ODE's constraint-order shuffling; part of the saved state
+  unsigned long seed = 1;  ///< ODE's constraint-order shuffling; part of the saved state
 
   friend bool operator==(const SimulationParams&, const SimulationParams&) = default;
 };
 
 struct GoalParams {
-  double width_m = 2.0;        ///< inside, between the posts
-  double height_m = 1.0;       ///< inside, ground to bar
-  double depth_m = 0.6;        ///< back of the net behind the goal line
+  double width_m = 2.0;   ///< inside, between the posts
+  double height_m = 1.0;  ///< inside, ground to bar
+  double depth_m = 0.6;   ///< back of the net behind the goal line
   double post_thickness_m = 0.125;
 
   friend bool operator==(const GoalParams&, const GoalParams&) = default;
@@ -65,11 +65,11 @@ struct FieldParams {
 struct BallParams {
   double radius_m = 0.11;
   double mass_kg = 0.43;
-  double restitution = 0.766;          ///< tuned to the drop test (6 bounces, rest at 2.81 s from 1 m)
-  double bounce_min_speed_mps = 1.0;   ///< below this impact speed the ball does not bounce
-  double friction = 0.8;               ///< ball against carpet and bodies
-  double rolling_resistance = 0.035;   ///< deceleration / g while rolling on the carpet; 0 in flight
-  double spin_damping = 0.5;           ///< 1/s, damps spin about the vertical while on the carpet
+  double restitution = 0.766;         ///< tuned to the drop test (6 bounces, rest at 2.81 s from 1 m)
+  double bounce_min_speed_mps = 1.0;  ///< below this impact speed the ball does not bounce
+  double friction = 0.8;              ///< ball against carpet and bodies
+  double rolling_resistance = 0.035;  ///< deceleration / g while rolling on the carpet; 0 in flight
+  double spin_damping = 0.5;          ///< 1/s, damps spin about the vertical while on the carpet
 
   friend bool operator==(const BallParams&, const BallParams&) = default;
 };
@@ -78,7 +78,7 @@ struct MotorParams {
   double terminal_resistance_ohm = 0.299;  ///< 150 W, 24 V DC motor
   double torque_constant_nm_per_a = 0.0302;
   double gear_efficiency = 0.8;
-  double current_limit_a = 10.0;   ///< the motor driver's limit
+  double current_limit_a = 10.0;  ///< the motor driver's limit
   double rotor_inertia_kgm2 = 1.4e-5;
   double stall_speed_radps = 0.5;  ///< wheel slower than this under load counts as stalled
 
@@ -93,23 +93,23 @@ struct KickerParams {
   double min_fire_voltage_v = 40.0;   ///< below this the kicker does not fire
   double energy_per_full_kick = 0.7;  ///< fraction of the stored energy a full-power kick uses
   double recharge_time_constant_s = 1.5;
-  double grabber_release_s = 0.25;    ///< the grabber lets go this long when the kicker fires
+  double grabber_release_s = 0.25;  ///< the grabber lets go this long when the kicker fires
 
   friend bool operator==(const KickerParams&, const KickerParams&) = default;
 };
 
 struct BarrierParams {
-  double half_angle_deg = 25.0;   ///< ball bearing within +- this of the front
-  double max_distance_m = 0.30;   ///< robot centre to ball centre, horizontal
-  double max_height_m = 0.16;     ///< ball centre above the carpet
+  double half_angle_deg = 25.0;  ///< ball bearing within +- this of the front
+  double max_distance_m = 0.30;  ///< robot centre to ball centre, horizontal
+  double max_height_m = 0.16;    ///< ball centre above the carpet
 
   friend bool operator==(const BarrierParams&, const BarrierParams&) = default;
 };
 
 struct GrabberParams {
-  double range_m = 0.45;          ///< robot centre to ball centre where the wheel reaches
+  double range_m = 0.45;  ///< robot centre to ball centre where the wheel reaches
   double half_angle_deg = 35.0;
-  double max_force_n = 6.0;       ///< pull at mode 100
+  double max_force_n = 6.0;  ///< pull at mode 100
 
   friend bool operator==(const GrabberParams&, const GrabberParams&) = default;
 };
@@ -142,15 +142,15 @@ struct BatteryParams {
 struct RobotParams {
   double body_radius_m = 0.25;
   double body_height_m = 0.145;
-  double body_clearance_m = 0.02;   ///< carpet to the body's underside
-  double mouth_width_m = 0.26;      ///< front cut-out that holds the ball
+  double body_clearance_m = 0.02;  ///< carpet to the body's underside
+  double mouth_width_m = 0.26;     ///< front cut-out that holds the ball
   double mouth_depth_m = 0.10;
-  double cone_radius_m = 0.24;      ///< camera cone on top
+  double cone_radius_m = 0.24;  ///< camera cone on top
   double cone_height_m = 0.565;
   double cone_top_radius_m = 0.04;
-  double mass_kg = 28.0;            ///< without wheels
+  double mass_kg = 28.0;  ///< without wheels
   double wheel_mass_kg = 0.4;
-  double wheel_friction = 1.2;      ///< along the drive direction
+  double wheel_friction = 1.2;        ///< along the drive direction
   double wheel_cross_friction = 0.0;  ///< across it: the rollers turn freely
   kinematics::OmniGeometry geometry;
   kinematics::EncoderSpec encoder;
@@ -167,8 +167,8 @@ struct RobotParams {
 struct ObstacleParams {
   double radius_m = 0.25;
   double height_m = 0.7;
-  double mass_kg = 30.0;   ///< movable obstacles only
-  double friction = 0.3;   ///< against the carpet (movable only): a robot can push it
+  double mass_kg = 30.0;  ///< movable obstacles only
+  double friction = 0.3;  ///< against the carpet (movable only): a robot can push it
   bool movable = false;
 
   friend bool operator==(const ObstacleParams&, const ObstacleParams&) = default;

@@ -46,13 +46,13 @@ struct RobotState {
   std::array<double, 3> wheel_angle_rad{};  ///< unwrapped since start
   std::array<double, 3> hinge_angle_rad{};  ///< ODE's wrapped hinge angle at the last substep
   std::array<WheelMode, 3> wheel_mode{};
-  std::array<double, 3> wheel_command{};    ///< rad/s (kSpeed) or V (kVoltage)
+  std::array<double, 3> wheel_command{};  ///< rad/s (kSpeed) or V (kVoltage)
   std::array<double, 3> motor_current_a{};
   double kicker_voltage_v = 0;
   int grabber_mode = 0;
   double grabber_release_left_s = 0;
   double last_kick_time_s = -1;
-  std::array<double, 3> charge{};           ///< state of charge of the logic, 12 V and 24 V packs
+  std::array<double, 3> charge{};  ///< state of charge of the logic, 12 V and 24 V packs
   friend bool operator==(const RobotState&, const RobotState&) = default;
 };
 
@@ -61,7 +61,7 @@ struct WorldState {
   unsigned long seed = 0;
   BodyState ball;
   std::vector<RobotState> robots;
-  std::vector<BodyState> obstacles;  ///< movable and static alike (static ones never change)
+  std::vector<BodyState> obstacles;      ///< movable and static alike (static ones never change)
   std::vector<int> obstacle_idle_steps;  ///< steps each movable obstacle has been still
   friend bool operator==(const WorldState&, const WorldState&) = default;
 };
