@@ -121,6 +121,13 @@ struct RobotImpl {
     return {std::cos(h), std::sin(h), 0};
   }
   double supply_v() const;
+  /// Wheel n's axle (hinge axis) in world coordinates.
+  Eigen::Vector3d axle_world(std::size_t n) const {
+    const dReal* rot = dBodyGetRotation(chassis);  // row-major 3x4
+    const Eigen::Vector3d& a = axle_body[n];
+    return {rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z(), rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z(),
+            rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z()};
+  }
 };
 
 struct RobotAccess {
@@ -175,7 +182,7 @@ struct World::Impl {
   void build_obstacle(int index, const ObstaclePlacement& o);
   void substep(double h);
   void collide(dGeomID a, dGeomID b);
-  void apply_robot_inputs(RobotImpl& r, double h);
+  void apply_robot_inputs(RobotImpl& r);
   void update_robot_after(RobotImpl& r, double h);
   void apply_grabber(RobotImpl& r);
   RobotImpl& robot(std::size_t i) { return RobotAccess::impl(*robots[i]); }
@@ -361,8 +368,7 @@ double RobotImpl::supply_v() const {
   return rail.empty_v + (rail.full_v - rail.empty_v) * state.charge[2];
 }
 
-void World::Impl::apply_robot_inputs(RobotImpl& r, double h) {
-  (void)h;
+void World::Impl::apply_robot_inputs(RobotImpl& r) {
   const MotorParams& mp = r.params->motor;
   const double gear = r.params->encoder.gear_ratio;
   const double k = mp.torque_constant_nm_per_a;  // = back-EMF constant in SI
@@ -429,11 +435,7 @@ void World::Impl::update_robot_after(RobotImpl& r, double h) {
     r.state.hinge_angle_rad[n] = angle;
     if (r.state.wheel_mode[n] == WheelMode::kSpeed) {
       // Motor torque from the hinge's feedback, about the axle (in world coordinates).
-      const dReal* rot = dBodyGetRotation(r.chassis);
-      const Eigen::Vector3d& a = r.axle_body[n];
-      const Eigen::Vector3d axle(rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z(),
-                                 rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z(),
-                                 rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z());
+      const Eigen::Vector3d axle = r.axle_world(n);
       const Eigen::Vector3d t1(r.feedback[n].t1[0], r.feedback[n].t1[1], r.feedback[n].t1[2]);
       r.state.motor_current_a[n] = t1.dot(axle) / (k * gear * mp.gear_efficiency);
     }
@@ -504,11 +506,7 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
     } else if (tb->kind == Kind::kWheel) {
       // Omni wheel: grips along its drive direction, rolls freely across it.
       const RobotImpl& r = robot(static_cast<std::size_t>(tb->owner));
-      const dReal* rot = dBodyGetRotation(r.chassis);
-      const Eigen::Vector3d& ab = r.axle_body[static_cast<std::size_t>(tb->wheel)];
-      const Eigen::Vector3d axle(rot[0] * ab.x() + rot[1] * ab.y() + rot[2] * ab.z(),
-                                 rot[4] * ab.x() + rot[5] * ab.y() + rot[6] * ab.z(),
-                                 rot[8] * ab.x() + rot[9] * ab.y() + rot[10] * ab.z());
+      const Eigen::Vector3d axle = r.axle_world(static_cast<std::size_t>(tb->wheel));
       const Eigen::Vector3d normal(c[i].geom.normal[0], c[i].geom.normal[1], c[i].geom.normal[2]);
       Eigen::Vector3d roll = axle.cross(normal);
       if (roll.norm() < 1e-6) continue;
@@ -545,7 +543,7 @@ int tag_id(dGeomID g) { return static_cast<const Tag*>(dGeomGetData(g))->id; }
 }  // namespace
 
 void World::Impl::substep(double h) {
-  for (std::size_t i = 0; i < robots.size(); ++i) apply_robot_inputs(robot(i), h);
+  for (std::size_t i = 0; i < robots.size(); ++i) apply_robot_inputs(robot(i));
   ball_on_ground = false;
   pairs.clear();
   dSpaceCollide(dynamics, this, &near_callback);
