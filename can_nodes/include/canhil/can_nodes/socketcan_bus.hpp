@@ -14,15 +14,9 @@
 #include <string>
 
 #include "canhil/can_nodes/bus.hpp"
+#include "canhil/can_nodes/setup_error.hpp"
 
 namespace canhil::can_nodes {
-
-/// A set-up mistake (no CAN in the kernel, no such interface, no permission).
-/// The message says what to do.
-class SetupError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 struct SocketCanOptions {
   /// Receive own frames too (CAN_RAW_RECV_OWN_MSGS); off like SocketCAN's default.

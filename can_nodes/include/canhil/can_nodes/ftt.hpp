@@ -1,0 +1,59 @@
+// canhil/can_nodes/ftt.hpp — the FTT-CAN schedule.
+//
+// The elementary cycle (EC) is laid out as: trigger message (TM) at its start,
+// then the asynchronous window, then the synchronous window at its end, whose
+// length the TM carries. A synchronous message with period P is due in every
+// EC k with k % (P / EC) == 0; its producer sends it at the start of the
+// synchronous window. The window is the worst-case wire time of the frames
+// due (bit stuffing included) at the configured bit rate, plus a guard.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "canhil/can_nodes/clock.hpp"
+#include "canhil/can_nodes/setup_error.hpp"
+#include "canhil/frames/messages.hpp"
+
+namespace canhil::can_nodes {
+
+using namespace std::chrono_literals;
+
+struct FttConfig {
+  Nanos elementary_cycle = 10ms;
+  std::uint32_t bit_rate = 1'000'000;  ///< for wire times; vcan itself has none
+  Nanos sync_window_guard = 20us;      ///< added to every synchronous window
+};
+
+class FttSchedule {
+ public:
+  /// Throws SetupError when a period is not a whole number of ECs or the
+  /// busiest EC does not fit (TM + one asynchronous frame + its window).
+  FttSchedule(const frames::MessageSet& set, const FttConfig& config);
+
+  const FttConfig& config() const noexcept { return config_; }
+  /// Synchronous messages due in EC `ec_index`, as sync_bitmap bits.
+  std::uint32_t bitmap(std::uint64_t ec_index) const noexcept;
+  /// Length of the synchronous window for a bitmap.
+  Nanos sync_window(std::uint32_t bitmap) const noexcept;
+  /// Worst-case wire time of the trigger message.
+  Nanos tm_time() const noexcept { return tm_time_; }
+  /// ECs after which the schedule repeats.
+  std::uint32_t cycle_ecs() const noexcept { return cycle_; }
+  /// Period of the synchronous message with FTT index i, in ECs (0 if none).
+  std::uint32_t period_ecs(int ftt_index) const noexcept;
+  /// Longest synchronous window over the whole cycle.
+  Nanos longest_window() const noexcept { return longest_; }
+
+ private:
+  FttConfig config_;
+  std::array<std::uint32_t, 32> period_ecs_{};  // 0: no message at this index
+  std::array<Nanos, 32> frame_time_{};
+  Nanos tm_time_{0};
+  std::uint32_t cycle_ = 1;
+  Nanos longest_{0};
+};
+
+}  // namespace canhil::can_nodes

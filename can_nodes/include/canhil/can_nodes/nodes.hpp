@@ -1,0 +1,185 @@
+// canhil/can_nodes/nodes.hpp — the emulated microcontrollers of one robot.
+//
+// FttMaster     (on Pic_base)  TM at the start of every elementary cycle
+// PicBase                      M6_1+M6_2 -> inverse kinematics -> M1; M7 -> kicker, grabber; M9; M2
+// MotorNode x3                 M1 -> wheel speed at the 5 ms motor tick; M3_n every EC
+// PicOdom                      M3_1..M3_3 -> forward kinematics -> M4_1, M4_2; M5 sets or resets the pose
+// CompassNode                  M8
+// SystemMonitor (on Pic_base)  M10: nodes alive (seen on the bus), bad-frame count, state
+//
+// Synchronous messages go out at the start of the synchronous window of every
+// EC whose TM schedules them; asynchronous ones just after the TM, no faster
+// than their minimum gap. Units and layouts: frames/messages.hpp.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <optional>
+
+#include "canhil/can_nodes/ftt.hpp"
+#include "canhil/can_nodes/node.hpp"
+#include "canhil/can_nodes/robot_io.hpp"
+#include "canhil/kinematics/omni.hpp"
+
+namespace canhil::can_nodes {
+
+/// Firmware parameters; defaults as on the robot where known (docs/nodes.md).
+struct NodeParams {
+  FttConfig ftt;
+  kinematics::OmniGeometry geometry;  ///< must match the robot's
+  kinematics::EncoderSpec encoder;
+  Nanos watchdog = 150ms;                   ///< Pic_base: no M6 for longer -> brake
+  Nanos motor_watchdog = 100ms;             ///< a motor node: no M1 for longer -> brake
+  int max_setpoint = 900;                   ///< counts per motor tick
+  double max_wheel_accel_radps2 = 60.0;     ///< Pic_base set-point slope (about 3.4 m/s^2 at the wheel)
+  double fine_wheel_accel_radps2 = 15.0;    ///< the same with M6_2.small_adjustment = 1
+  Nanos just_kicked_hold = 100ms;           ///< M9.just_kicked stays 1 this long after a kick
+  Nanos alive_timeout = 200ms;              ///< system monitor: a node unseen this long is not alive
+};
+
+/// When a node's synchronous messages are due, from the TMs it hears.
+class SyncSlot {
+ public:
+  /// Notes the TM; returns the window start when any of `mine` (bits) is due.
+  std::optional<Nanos> on_tm(const frames::Tm& tm, Nanos tm_time, Nanos ec, std::uint32_t mine) noexcept;
+  bool due(int ftt_index) const noexcept { return ((due_ >> ftt_index) & 1u) != 0; }
+  bool pending(Nanos now) const noexcept { return due_ != 0 && now >= start_; }
+  void done() noexcept { due_ = 0; }
+
+ private:
+  std::uint32_t due_ = 0;
+  Nanos start_{0};
+};
+
+class FttMaster final : public Node {
+ public:
+  /// Sends the TM of EC k at first_ec + k * EC.
+  FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const FttSchedule& schedule, Nanos first_ec);
+  std::uint64_t ec_count() const noexcept { return ec_; }
+
+ protected:
+  void on_frame(const frames::TimedFrame&) override {}
+  void step(Nanos now) override;
+
+ private:
+  const FttSchedule& schedule_;
+  Nanos first_ec_;
+  std::uint64_t ec_ = 0;
+};
+
+class PicBase final : public Node {
+ public:
+  PicBase(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot);
+  /// True while braking because M6 stopped arriving.
+  bool watchdog_tripped(Nanos now) const noexcept;
+  const std::array<int, 3>& setpoints() const noexcept { return setpoints_; }
+
+ protected:
+  void on_frame(const frames::TimedFrame& frame) override;
+  void step(Nanos now) override;
+
+ private:
+  void send_m1(Nanos now);
+  const NodeParams& params_;
+  RobotIo& robot_;
+  kinematics::OmniKinematics kinematics_;
+  SyncSlot slot_;
+  frames::M6_1 m6_1_{};
+  frames::M6_2 m6_2_{};
+  Nanos last_m6_ = -kNever;
+  std::array<int, 3> setpoints_{};
+  std::array<double, 3> ramp_{};  // set points before rounding, counts per tick
+  Nanos last_m1_ = -kNever;
+  std::uint8_t m1_seq_ = 0;
+  Nanos last_kick_ = -kNever;
+  int grabber_ = 0;
+  Nanos async_at_ = kNever;
+  Nanos last_m2_ = -kNever;
+};
+
+class MotorNode final : public Node {
+ public:
+  /// `wheel` is 0..2 (Motor1..Motor3).
+  MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
+            int wheel, Nanos first_tick);
+  int setpoint() const noexcept { return setpoint_; }
+  bool enabled_by_base() const noexcept { return enable_; }
+
+ protected:
+  void on_frame(const frames::TimedFrame& frame) override;
+  void step(Nanos now) override;
+
+ private:
+  const NodeParams& params_;
+  RobotIo& robot_;
+  int wheel_;
+  SyncSlot slot_;
+  Nanos next_tick_;
+  int setpoint_ = 0;
+  bool enable_ = false;
+  Nanos last_m1_ = -kNever;
+  std::int64_t last_reported_ = 0;
+  bool reported_once_ = false;
+  std::uint8_t seq_ = 0;
+};
+
+class PicOdom final : public Node {
+ public:
+  PicOdom(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params);
+  const kinematics::Pose& pose() const noexcept { return pose_; }
+
+ protected:
+  void on_frame(const frames::TimedFrame& frame) override;
+  void step(Nanos now) override;
+
+ private:
+  void integrate();
+  const NodeParams& params_;
+  kinematics::OmniKinematics kinematics_;
+  SyncSlot slot_;
+  kinematics::Pose pose_;
+  std::array<std::int32_t, 3> last_encoder_{};
+  std::array<std::int32_t, 3> encoder_{};
+  std::array<bool, 3> seen_{};   // an M3 from each motor since the last integration
+  bool have_reference_ = false;  // last_encoder_ is valid
+  std::optional<frames::M5_1> m5_1_;
+  std::uint16_t seq_ = 0;
+};
+
+class CompassNode final : public Node {
+ public:
+  CompassNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot);
+
+ protected:
+  void on_frame(const frames::TimedFrame& frame) override;
+  void step(Nanos now) override;
+
+ private:
+  const NodeParams& params_;
+  RobotIo& robot_;
+  SyncSlot slot_;
+};
+
+class SystemMonitor final : public Node {
+ public:
+  /// `bad_frames` reports the bad frames the other nodes have counted;
+  /// `state` the node_state byte (see docs/nodes.md).
+  SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
+                std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state);
+  /// alive bitmap as M10 reports it now.
+  std::uint8_t alive(Nanos now) const noexcept;
+
+ protected:
+  void on_frame(const frames::TimedFrame& frame) override;
+  void step(Nanos now) override;
+
+ private:
+  const NodeParams& params_;
+  std::function<std::uint64_t()> bad_frames_;
+  std::function<std::uint8_t(Nanos)> state_;
+  std::array<Nanos, 6> last_seen_;  // Pic_base, Motor1..3, Pic_odom, Compass
+  Nanos async_at_ = kNever;
+  Nanos last_m10_ = -kNever;
+};
+
+}  // namespace canhil::can_nodes

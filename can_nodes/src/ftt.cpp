@@ -1,0 +1,84 @@
+#include "canhil/can_nodes/ftt.hpp"
+
+#include <numeric>
+#include <sstream>
+
+#include "canhil/frames/wire.hpp"
+
+namespace canhil::can_nodes {
+
+FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config) : config_(config) {
+  const Nanos ec = config.elementary_cycle;
+  if (ec <= Nanos{0}) throw SetupError("the elementary cycle must be positive");
+  if (config.bit_rate == 0) throw SetupError("the bit rate must be positive");
+  auto us = [](Nanos t) { return std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(t).count()); };
+  Nanos longest_async{0};
+  for (const frames::MessageCodec& m : set.codec().messages()) {
+    const frames::FttInfo& info = set.ftt(m);
+    const Nanos wire = frames::bits_to_time(frames::worst_case_frame_bits(m.def().length, m.def().extended),
+                                            config.bit_rate);
+    if (info.kind == frames::FttKind::kTrigger) {
+      tm_time_ = wire;
+      if (info.period != ec) {
+        throw SetupError("the trigger message " + m.def().name + " has period " + us(info.period) +
+                         " us but the elementary cycle is " + us(ec) +
+                         " us; make them equal (GenMsgCycleTime in the DBC, or the EC setting)");
+      }
+    } else if (info.kind == frames::FttKind::kAsync) {
+      longest_async = std::max(longest_async, wire);
+    } else {
+      if (info.period.count() % ec.count() != 0) {
+        throw SetupError("message " + m.def().name + " has period " + us(info.period) +
+                         " us, not a whole number of elementary cycles (" + us(ec) +
+                         " us); change its GenMsgCycleTime or the EC");
+      }
+      const auto i = static_cast<std::size_t>(info.index);
+      period_ecs_[i] = static_cast<std::uint32_t>(info.period.count() / ec.count());
+      frame_time_[i] = wire;
+      cycle_ = std::lcm(cycle_, period_ecs_[i]);
+    }
+  }
+  std::uint64_t worst_ec = 0;
+  for (std::uint64_t k = 0; k < cycle_; ++k) {
+    const Nanos w = sync_window(bitmap(k));
+    if (w > longest_) {
+      longest_ = w;
+      worst_ec = k;
+    }
+  }
+  const Nanos needed = tm_time_ + longest_async + longest_;
+  if (needed > ec) {
+    std::ostringstream os;
+    os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message (" << us(tm_time_)
+       << " us), one asynchronous frame (" << us(longest_async) << " us) and the synchronous window of EC "
+       << worst_ec << " (" << us(longest_) << " us, messages";
+    const std::uint32_t b = bitmap(worst_ec);
+    for (int i = 0; i < 32; ++i) {
+      if ((b >> i) & 1u) os << ' ' << set.sync_message(i)->name();
+    }
+    os << ") need " << us(needed) << " us; lengthen the EC, raise the bit rate or lengthen periods";
+    throw SetupError(os.str());
+  }
+}
+
+std::uint32_t FttSchedule::bitmap(std::uint64_t ec_index) const noexcept {
+  std::uint32_t b = 0;
+  for (std::size_t i = 0; i < 32; ++i) {
+    if (period_ecs_[i] != 0 && ec_index % period_ecs_[i] == 0) b |= 1u << i;
+  }
+  return b;
+}
+
+Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
+  Nanos w{0};
+  for (std::size_t i = 0; i < 32; ++i) {
+    if ((b >> i) & 1u) w += frame_time_[i];
+  }
+  return w == Nanos{0} ? w : w + config_.sync_window_guard;
+}
+
+std::uint32_t FttSchedule::period_ecs(int ftt_index) const noexcept {
+  return ftt_index < 0 || ftt_index > 31 ? 0 : period_ecs_[static_cast<std::size_t>(ftt_index)];
+}
+
+}  // namespace canhil::can_nodes

@@ -1,0 +1,77 @@
+#include "canhil/can_nodes/node.hpp"
+
+#include <algorithm>
+
+namespace canhil::can_nodes {
+
+Node::Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet> set)
+    : name_(std::move(name)), bus_(bus), set_(std::move(set)) {}
+
+std::size_t Node::poll() {
+  std::size_t n = 0;
+  while (auto f = bus_.receive()) {
+    ++n;
+    if (!enabled_) continue;  // switched off: hears nothing
+    ++counters_.received;
+    on_frame(*f);
+  }
+  return n;
+}
+
+Nanos Node::next_wakeup() const noexcept {
+  Nanos t = wakes_.empty() ? kNever : wakes_.front();
+  if (!delayed_.empty()) t = std::min(t, delayed_.front().first);
+  return t;
+}
+
+void Node::wake_at(Nanos t) {
+  const auto at = std::lower_bound(wakes_.begin(), wakes_.end(), t);
+  if (at == wakes_.end() || *at != t) wakes_.insert(at, t);
+}
+
+void Node::tick(Nanos now) {
+  while (!delayed_.empty() && delayed_.front().first <= now) {
+    const frames::CanFrame f = delayed_.front().second;
+    delayed_.pop_front();
+    if (enabled_) send_now(f);
+  }
+  if (!wakes_.empty() && wakes_.front() <= now) {
+    // Serve every request that is due with one step; step() may add more.
+    wakes_.erase(wakes_.begin(), std::upper_bound(wakes_.begin(), wakes_.end(), now));
+    step(now);
+  }
+}
+
+void Node::emit(const frames::CanFrame& frame, Nanos now) {
+  if (!enabled_) return;
+  FaultDecision d;
+  if (hook_ != nullptr) d = hook_->on_send(name_, frame, now);
+  if (d.drop) {
+    ++counters_.fault_dropped;
+    return;
+  }
+  frames::CanFrame f = frame;
+  if (d.corrupt_byte >= 0 && d.corrupt_byte < 8) {
+    f.data[static_cast<std::size_t>(d.corrupt_byte)] ^= d.corrupt_mask;
+  }
+  for (int copy = 0; copy <= d.duplicates; ++copy) {
+    if (d.delay > Nanos{0}) {
+      const Nanos due = now + d.delay;
+      const auto at = std::upper_bound(delayed_.begin(), delayed_.end(), due,
+                                       [](Nanos t, const auto& e) { return t < e.first; });
+      delayed_.insert(at, {due, f});
+    } else {
+      send_now(f);
+    }
+  }
+}
+
+void Node::send_now(frames::CanFrame frame) {
+  if (bus_.send(frame) == SendStatus::kOk) {
+    ++counters_.sent;
+  } else {
+    ++counters_.send_failed;
+  }
+}
+
+}  // namespace canhil::can_nodes

@@ -1,0 +1,71 @@
+// canhil/emulator/lockstep.hpp — virtual time: physics, nodes and any other
+// participants (a test playing the laptop, a handler) advanced together on a
+// simulated clock, as fast as the CPU allows, deterministically.
+//
+// At each instant, in this order: the physics step (if one ends now), then the
+// participants whose wake-up has come, in the order they were added; then
+// frames are delivered round after round until no participant has any left
+// (frames sent at an instant are received at that instant). Time then jumps
+// to the next wake-up or physics step.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "canhil/can_nodes/clock.hpp"
+#include "canhil/can_nodes/node.hpp"
+#include "canhil/physics/world.hpp"
+
+namespace canhil::emulator {
+
+using can_nodes::Nanos;
+
+/// Anything the runner drives: nodes, test endpoints, a handler.
+class Participant {
+ public:
+  virtual ~Participant() = default;
+  /// Handles waiting frames; returns how many.
+  virtual std::size_t poll() = 0;
+  virtual void tick(Nanos now) = 0;
+  virtual Nanos next_wakeup() const = 0;
+};
+
+/// A node as a participant.
+class NodeParticipant final : public Participant {
+ public:
+  explicit NodeParticipant(can_nodes::Node& node) : node_(node) {}
+  std::size_t poll() override { return node_.poll(); }
+  void tick(Nanos now) override { node_.tick(now); }
+  Nanos next_wakeup() const override { return node_.next_wakeup(); }
+
+ private:
+  can_nodes::Node& node_;
+};
+
+class Lockstep {
+ public:
+  /// `world` may be null (nodes without physics). Both must outlive the runner.
+  Lockstep(can_nodes::SimulatedClock& clock, physics::World* world);
+  /// Participants are ticked in the order added; they must outlive the runner.
+  void add(Participant& p) { participants_.push_back(&p); }
+  void add(can_nodes::Node& node);
+  /// Runs until the clock reads `end` (inclusive of everything due at `end`).
+  void run_until(Nanos end);
+  void run_for(Nanos duration) { run_until(clock_.now() + duration); }
+  /// Called after every physics step (for recording).
+  void on_physics_step(std::function<void(Nanos)> f) { after_step_ = std::move(f); }
+  std::uint64_t physics_steps() const noexcept { return steps_; }
+
+ private:
+  void deliver();
+  can_nodes::SimulatedClock& clock_;
+  physics::World* world_;
+  Nanos step_{0};
+  Nanos next_step_{0};
+  std::uint64_t steps_ = 0;
+  std::vector<Participant*> participants_;
+  std::vector<std::unique_ptr<NodeParticipant>> owned_;
+  std::function<void(Nanos)> after_step_;
+};
+
+}  // namespace canhil::emulator

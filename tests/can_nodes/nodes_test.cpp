@@ -1,0 +1,314 @@
+// The emulated nodes against a fake robot, on the memory bus, in virtual time:
+// the FTT schedule, both sides of its time boundaries, and bad traffic.
+#include "canhil/can_nodes/nodes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <map>
+
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+#include "support/laptop_endpoint.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::can_nodes {
+namespace {
+
+using namespace std::chrono_literals;
+
+class FakeRobot final : public RobotIo {
+ public:
+  std::array<double, 3> speed{};
+  std::array<std::int64_t, 3> encoder{};
+  bool engaged = false;
+  int kicks = 0;
+  int grabber = -1;
+  void set_wheel_speed(int w, double radps) override { speed[static_cast<std::size_t>(w)] = radps; }
+  std::int64_t encoder_count(int w) const override { return encoder[static_cast<std::size_t>(w)]; }
+  bool wheel_stalled(int) const override { return false; }
+  bool over_current(int) const override { return false; }
+  KickOutcome kick(bool, int) override {
+    if (!engaged) return KickOutcome::kNotEngaged;
+    ++kicks;
+    return KickOutcome::kFired;
+  }
+  void set_grabber(int mode) override { grabber = mode; }
+  bool ball_engaged() const override { return engaged; }
+  double kicker_voltage_v() const override { return 180.0; }
+  double compass_heading_deg() const override { return 42.0; }
+  BatteryVolts battery() const override { return {12.5, 12.4, 25.0}; }
+};
+
+class NodesTest : public ::testing::Test {
+ protected:
+  NodesTest()
+      : set_(frames::MessageSet::load(test::shipped_dbc())),
+        bus_(clock_),
+        nodes_(set_, params_, robot_,
+               [this](const std::string& name) { return std::unique_ptr<Bus>(bus_.attach(name)); }, Nanos{0}),
+        laptop_(bus_, set_, params_.ftt.elementary_cycle),
+        run_(clock_, nullptr) {
+    for (Node* n : nodes_.nodes()) run_.add(*n);
+    run_.add(laptop_);
+  }
+  std::vector<frames::Tm> tms() const { return laptop_.decoded(set_->tm); }
+  Nanos window_start(std::size_t ec) const {
+    const auto tm = laptop_.with_id(set_->tm.message().id()).at(ec);
+    frames::Tm t;
+    set_->tm.decode(tm.frame, t);
+    return tm.time + params_.ftt.elementary_cycle - std::chrono::microseconds(t.sync_window_us);
+  }
+
+  std::shared_ptr<const frames::MessageSet> set_;
+  NodeParams params_;
+  FakeRobot robot_;
+  SimulatedClock clock_;
+  MemoryBus bus_;
+  emulator::RobotNodes nodes_;
+  test::LaptopEndpoint laptop_;
+  emulator::Lockstep run_;
+};
+
+TEST_F(NodesTest, TriggerMessageExactlyEveryElementaryCycle) {
+  run_.run_until(995ms);
+  const auto frames = laptop_.with_id(set_->tm.message().id());
+  ASSERT_EQ(frames.size(), 100u);
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    EXPECT_EQ(frames[k].time, Nanos{static_cast<std::int64_t>(k) * 10'000'000}) << k;
+    frames::Tm tm;
+    ASSERT_TRUE(set_->tm.decode(frames[k].frame, tm).ok());
+    EXPECT_EQ(tm.ec_counter, k);
+  }
+}
+
+TEST_F(NodesTest, BitmapSchedulesEachMessageAtItsPeriod) {
+  run_.run_until(295ms);
+  const auto t = tms();
+  ASSERT_EQ(t.size(), 30u);
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const std::uint32_t b = t[k].sync_bitmap;
+    const bool third = k % 3 == 0;
+    const bool fifth = k % 5 == 0;
+    EXPECT_EQ((b >> 0) & 1u, third ? 1u : 0u) << "M1, EC " << k;
+    for (int i : {1, 2, 3}) EXPECT_EQ((b >> i) & 1u, 1u) << "M3, EC " << k;
+    EXPECT_EQ((b >> 4) & 1u, fifth ? 1u : 0u) << "M4_1, EC " << k;
+    EXPECT_EQ((b >> 5) & 1u, fifth ? 1u : 0u) << "M4_2, EC " << k;
+    EXPECT_EQ((b >> 6) & 1u, third ? 1u : 0u) << "M6_1, EC " << k;
+    EXPECT_EQ((b >> 7) & 1u, third ? 1u : 0u) << "M6_2, EC " << k;
+    EXPECT_EQ((b >> 8) & 1u, fifth ? 1u : 0u) << "M8, EC " << k;
+    EXPECT_EQ((b >> 9) & 1u, third ? 1u : 0u) << "M9, EC " << k;
+    // Window: worst-case wire time of what is due (135 us per frame at 1 Mbit/s) plus the guard.
+    EXPECT_EQ(t[k].sync_window_us, std::popcount(b) * 135 + 20) << k;
+  }
+}
+
+TEST_F(NodesTest, SynchronousFramesOnlyWhenScheduledAndInsideTheWindow) {
+  laptop_.m6_1 = frames::M6_1{0, 0.5};
+  run_.run_until(600ms - 1ns);  // through the end of EC 59
+  const auto tm_frames = laptop_.with_id(set_->tm.message().id());
+  std::map<std::uint32_t, int> counts;
+  for (const auto& f : laptop_.frames()) {
+    const frames::MessageCodec* m = set_->codec().find(f.frame.id);
+    ASSERT_NE(m, nullptr);
+    const frames::FttInfo& info = set_->ftt(*m);
+    if (info.kind != frames::FttKind::kSync) continue;
+    const auto k = static_cast<std::size_t>(f.time / 10ms);
+    frames::Tm tm;
+    ASSERT_TRUE(set_->tm.decode(tm_frames.at(k).frame, tm).ok());
+    EXPECT_TRUE((tm.sync_bitmap >> info.index) & 1u) << m->name() << " in EC " << k << " which does not schedule it";
+    EXPECT_GE(f.time, window_start(k)) << m->name() << " before the synchronous window";
+    EXPECT_LT(f.time, tm_frames.at(k).time + 10ms) << m->name() << " after the EC";
+    ++counts[f.frame.id];
+  }
+  // Over 60 ECs: M3 in each, M1/M6/M9 in every 3rd (the laptop's own M6 are not
+  // heard by itself), M4/M8 in every 5th.
+  EXPECT_EQ(counts[0x111], 60);
+  EXPECT_EQ(counts[0x112], 60);
+  EXPECT_EQ(counts[0x113], 60);
+  EXPECT_EQ(counts[0x100], 20);
+  EXPECT_EQ(counts[0x151], 20);
+  EXPECT_EQ(counts[0x121], 12);
+  EXPECT_EQ(counts[0x122], 12);
+  EXPECT_EQ(counts[0x141], 12);
+}
+
+TEST_F(NodesTest, BothSidesOfTheM1Boundary) {
+  run_.run_until(10ms);  // EC 1 has begun; EC 3 carries the second M1
+  run_.run_until(30ms);
+  const Nanos start3 = window_start(3);
+  run_.run_until(start3 - 1ns);
+  EXPECT_EQ(laptop_.with_id(0x100).size(), 1u) << "just before EC 3's window: only EC 0's M1";
+  run_.run_until(start3);
+  ASSERT_EQ(laptop_.with_id(0x100).size(), 2u) << "at the window start: the frame";
+  EXPECT_EQ(laptop_.with_id(0x100)[1].time, start3);
+}
+
+TEST_F(NodesTest, AsynchronousFramesRespectTheirMinimumGap) {
+  run_.run_until(5s);
+  const auto m2 = laptop_.with_id(0x200);
+  const auto m10 = laptop_.with_id(0x210);
+  ASSERT_EQ(m2.size(), 5u);
+  ASSERT_EQ(m10.size(), 5u);
+  for (std::size_t i = 1; i < m2.size(); ++i) EXPECT_GE(m2[i].time - m2[i - 1].time, 1s);
+  for (const auto& f : m2) {
+    const Nanos in_ec = f.time % 10ms;
+    EXPECT_GT(in_ec, Nanos{0}) << "after the TM";
+    EXPECT_LT(in_ec, 10ms - 1485us) << "before the largest synchronous window";
+  }
+}
+
+TEST_F(NodesTest, PicBaseTurnsM6IntoSaturatedSetPointsAndTheWatchdogBrakes) {
+  laptop_.m6_1 = frames::M6_1{0, 10.0};  // far beyond what the wheels can do
+  run_.run_until(1s);
+  const auto m1 = laptop_.decoded(set_->m1);
+  ASSERT_FALSE(m1.empty());
+  EXPECT_EQ(m1.back().setpoint_1, 900) << "saturated";
+  EXPECT_EQ(m1.back().setpoint_2, -900);
+  EXPECT_EQ(m1.back().setpoint_3, 0);
+  EXPECT_EQ(m1.back().enable, 1);
+  // The ramp: set points climb by at most the acceleration limit times the time
+  // between two M1 (about 30 ms; the window's start depends on the EC's load).
+  const auto m1_frames = laptop_.with_id(0x100);
+  for (std::size_t i = 2; i < 6; ++i) {
+    const double dt = std::chrono::duration<double>(m1_frames[i].time - m1_frames[i - 1].time).count();
+    const double step = params_.encoder.counts_per_tick(params_.max_wheel_accel_radps2) * dt;
+    EXPECT_LE(std::abs(m1[i].setpoint_1 - m1[i - 1].setpoint_1), step + 1) << i;
+    EXPECT_GE(std::abs(m1[i].setpoint_1 - m1[i - 1].setpoint_1), step - 1) << "climbs at the limit " << i;
+  }
+  // Motors apply the set point at their tick.
+  EXPECT_NEAR(robot_.speed[0], params_.encoder.wheel_radps(900), 1e-9);
+  // Silence: within the watchdog time (plus one M1 period) M1 brakes.
+  laptop_.m6_1.reset();
+  const Nanos silent_from = clock_.now();
+  run_.run_until(silent_from + 200ms);
+  const auto after = laptop_.with_id(0x100);
+  Nanos braked_at = kNever;
+  for (const auto& f : after) {
+    frames::M1 v;
+    set_->m1.decode(f.frame, v);
+    if (f.time > silent_from && v.enable == 0 && braked_at == kNever) {
+      braked_at = f.time;
+      EXPECT_EQ(v.setpoint_1, 0);
+      EXPECT_EQ(v.setpoint_2, 0);
+    }
+  }
+  ASSERT_NE(braked_at, kNever);
+  EXPECT_LE(braked_at - silent_from, params_.watchdog + 30ms);
+  EXPECT_GT(braked_at - silent_from, params_.watchdog - 30ms) << "not before the watchdog time";
+  EXPECT_EQ(robot_.speed[0], 0.0);
+}
+
+TEST_F(NodesTest, KickOnlyWhenEngagedAndGrabberFollowsM7) {
+  frames::M7 m7;
+  m7.kick = frames::M7::make_kick(true, 30);
+  m7.grabber_mode = 70;
+  run_.run_until(20ms);
+  laptop_.send(set_->m7.encode(m7));
+  run_.run_until(25ms);
+  EXPECT_EQ(robot_.kicks, 0) << "not engaged: no kick";
+  EXPECT_EQ(robot_.grabber, 70);
+  robot_.engaged = true;
+  laptop_.send(set_->m7.encode(m7));
+  run_.run_until(70ms);
+  EXPECT_EQ(robot_.kicks, 1);
+  const auto m9 = laptop_.with_id(0x151);
+  frames::M9 last;
+  ASSERT_TRUE(set_->m9.decode(m9.back().frame, last).ok());
+  EXPECT_EQ(last.just_kicked, 1);
+  EXPECT_EQ(last.ball_engaged, 1);
+  EXPECT_EQ(last.grabber, 70);
+  run_.run_until(400ms);
+  ASSERT_TRUE(set_->m9.decode(laptop_.with_id(0x151).back().frame, last).ok());
+  EXPECT_EQ(last.just_kicked, 0) << "reset after the hold time";
+}
+
+TEST_F(NodesTest, MalformedFramesAreCountedAndChangeNothing) {
+  laptop_.m6_1 = frames::M6_1{0, 0.5};
+  run_.run_until(500ms);
+  const int before = nodes_.pic_base().setpoints()[0];
+  laptop_.m6_1.reset();  // only the malformed frames below reach Pic_base now... and the watchdog stays off
+  frames::CanFrame short_m6 = set_->m6_1.encode(frames::M6_1{0, 3.0});
+  short_m6.len = 4;
+  frames::CanFrame bad_m1 = set_->m1.encode(frames::M1{});
+  bad_m1.data[0] = 0xE8;  // setpoint_1 = 1000 > 900
+  bad_m1.data[1] = 0x03;
+  for (int i = 0; i < 5; ++i) {
+    laptop_.send(short_m6);
+    laptop_.send(bad_m1);
+    laptop_.send(frames::make_data_frame(0x7FF, {1, 2, 3}));
+    run_.run_for(10ms);
+  }
+  EXPECT_EQ(nodes_.node(emulator::NodeId::kPicBase).counters().wrong_length, 5u);
+  for (auto id : {emulator::NodeId::kMotor1, emulator::NodeId::kMotor2, emulator::NodeId::kMotor3}) {
+    EXPECT_EQ(nodes_.node(id).counters().out_of_range, 5u) << "each motor consumes M1";
+  }
+  EXPECT_EQ(nodes_.node(emulator::NodeId::kSysMon).counters().unknown_id, 5u);
+  EXPECT_EQ(nodes_.pic_base().setpoints()[0], before) << "the short M6 changed nothing";
+  EXPECT_NEAR(robot_.speed[0], params_.encoder.wheel_radps(before), 1e-9) << "the bad M1 changed nothing";
+  run_.run_for(1s);
+  const auto m10 = laptop_.decoded(set_->m10);
+  ASSERT_FALSE(m10.empty());
+  EXPECT_EQ(m10.back().errors, 5 + 15 + 5) << "M10 reports every bad frame the nodes counted";
+}
+
+TEST_F(NodesTest, SystemMonitorReportsWhoIsAliveAndASwitchedOffNode) {
+  laptop_.m6_1 = frames::M6_1{0, 0.2};
+  run_.run_until(1050ms);
+  auto m10 = laptop_.decoded(set_->m10);
+  ASSERT_FALSE(m10.empty());
+  EXPECT_EQ(m10.back().alive, 0x3F) << "all six nodes seen";
+  EXPECT_EQ(m10.back().node_state, 0);
+  nodes_.node(emulator::NodeId::kCompass).set_enabled(false);
+  run_.run_until(2050ms);
+  m10 = laptop_.decoded(set_->m10);
+  EXPECT_EQ(m10.back().alive, 0x3F & ~0x20) << "the compass is silent";
+  EXPECT_EQ(m10.back().node_state & 2, 2);
+  EXPECT_TRUE(laptop_.with_id(0x141).back().time < 1060ms) << "no M8 after switching it off";
+}
+
+TEST_F(NodesTest, FaultHookDropsDelaysCorruptsAndDuplicates) {
+  struct Hook final : FaultHook {
+    FaultDecision on_send(const std::string& node, const frames::CanFrame& f, Nanos) override {
+      FaultDecision d;
+      if (node == "Compass") d.drop = true;
+      if (node == "Motor2") d.delay = 1ms;
+      if (node == "Motor3") d.duplicates = 1;
+      if (node == "Motor1" && f.id == 0x111) {
+        d.corrupt_byte = 7;
+        d.corrupt_mask = 0x80;
+      }
+      return d;
+    }
+  } hook;
+  nodes_.set_fault_hook(&hook);
+  run_.run_until(100ms - 1ns);  // ECs 0..9; EC 9's delayed M3_2 falls after the cut
+  EXPECT_TRUE(laptop_.with_id(0x141).empty()) << "dropped";
+  EXPECT_EQ(nodes_.node(emulator::NodeId::kCompass).counters().fault_dropped, 2u);
+  const auto m3_2 = laptop_.with_id(0x112);
+  ASSERT_EQ(m3_2.size(), 9u);
+  for (std::size_t k = 0; k < m3_2.size(); ++k) EXPECT_EQ(m3_2[k].time, window_start(k) + 1ms) << "delayed, EC " << k;
+  EXPECT_EQ(laptop_.with_id(0x113).size(), 20u) << "duplicated";
+  frames::M3 m3;
+  ASSERT_TRUE(set_->m3[0].decode(laptop_.with_id(0x111)[0].frame, m3).ok());
+  EXPECT_EQ(m3.seq, 0x80) << "seq byte corrupted";
+}
+
+TEST(FttScheduleChecks, RefusesAScheduleThatDoesNotFit) {
+  auto set = frames::MessageSet::load(test::shipped_dbc());
+  FttConfig slow;
+  slow.bit_rate = 125'000;
+  try {
+    FttSchedule s(*set, slow);
+    FAIL();
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not fit the 10000 us elementary cycle"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("raise the bit rate"), std::string::npos);
+  }
+  FttConfig odd;
+  odd.elementary_cycle = 7ms;
+  EXPECT_THROW(FttSchedule(*set, odd), SetupError);
+}
+
+}  // namespace
+}  // namespace canhil::can_nodes

@@ -1,0 +1,78 @@
+// tests/support/laptop_endpoint.hpp — a test participant playing the laptop on
+// a memory bus: records every frame with its time and, when asked, sends
+// M6_1 + M6_2 in their synchronous slots like an FTT slave.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/frames/messages.hpp"
+
+namespace canhil::test {
+
+class LaptopEndpoint final : public emulator::Participant {
+ public:
+  LaptopEndpoint(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, can_nodes::Nanos ec)
+      : endpoint_(bus.attach("laptop", 1 << 16)), set_(std::move(set)), ec_(ec) {}
+
+  /// Velocity sent in the M6 slots; nullopt sends nothing (silence).
+  std::optional<frames::M6_1> m6_1;
+  frames::M6_2 m6_2{};
+
+  std::size_t poll() override {
+    std::size_t n = 0;
+    while (auto f = endpoint_->receive()) {
+      ++n;
+      frames_.push_back(*f);
+      frames::Tm tm;
+      if (f->frame.id == set_->tm.message().id() && set_->tm.decode(f->frame, tm).ok()) {
+        const std::uint32_t mine = (1u << 6) | (1u << 7);
+        if ((tm.sync_bitmap & mine) != 0 && m6_1) {
+          slot_ = f->time + ec_ - std::chrono::microseconds(tm.sync_window_us);
+        }
+      }
+    }
+    return n;
+  }
+  void tick(can_nodes::Nanos) override {
+    slot_ = can_nodes::kNever;
+    if (!m6_1) return;
+    send(set_->m6_1.encode(*m6_1));
+    m6_2.seq = seq_++;
+    send(set_->m6_2.encode(m6_2));
+  }
+  can_nodes::Nanos next_wakeup() const override { return slot_; }
+
+  void send(const frames::CanFrame& f) { endpoint_->send(f); }
+  const std::vector<frames::TimedFrame>& frames() const { return frames_; }
+  /// Frames with this id, in order.
+  std::vector<frames::TimedFrame> with_id(std::uint32_t id) const {
+    std::vector<frames::TimedFrame> out;
+    for (const auto& f : frames_) {
+      if (f.frame.id == id && f.frame.kind == frames::FrameKind::kData) out.push_back(f);
+    }
+    return out;
+  }
+  template <class T>
+  std::vector<T> decoded(const frames::TypedCodec<T>& codec) const {
+    std::vector<T> out;
+    for (const auto& f : with_id(codec.message().id())) {
+      T v;
+      if (codec.decode(f.frame, v).ok()) out.push_back(v);
+    }
+    return out;
+  }
+
+ private:
+  std::unique_ptr<can_nodes::MemoryEndpoint> endpoint_;
+  std::shared_ptr<const frames::MessageSet> set_;
+  can_nodes::Nanos ec_;
+  can_nodes::Nanos slot_ = can_nodes::kNever;
+  std::uint8_t seq_ = 0;
+  std::vector<frames::TimedFrame> frames_;
+};
+
+}  // namespace canhil::test
