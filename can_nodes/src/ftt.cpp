@@ -15,8 +15,8 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   Nanos longest_async{0};
   for (const frames::MessageCodec& m : set.codec().messages()) {
     const frames::FttInfo& info = set.ftt(m);
-    const Nanos wire = frames::bits_to_time(frames::worst_case_frame_bits(m.def().length, m.def().extended),
-                                            config.bit_rate);
+    const Nanos wire =
+        frames::bits_to_time(frames::worst_case_frame_bits(m.def().length, m.def().extended), config.bit_rate);
     if (info.kind == frames::FttKind::kTrigger) {
       tm_time_ = wire;
       if (info.period != ec) {
@@ -49,9 +49,9 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   const Nanos needed = tm_time_ + longest_async + longest_;
   if (needed > ec) {
     std::ostringstream os;
-    os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message (" << us(tm_time_)
-       << " us), one asynchronous frame (" << us(longest_async) << " us) and the synchronous window of EC "
-       << worst_ec << " (" << us(longest_) << " us, messages";
+    os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message ("
+       << us(tm_time_) << " us), one asynchronous frame (" << us(longest_async)
+       << " us) and the synchronous window of EC " << worst_ec << " (" << us(longest_) << " us, messages";
     const std::uint32_t b = bitmap(worst_ec);
     for (int i = 0; i < 32; ++i) {
       if ((b >> i) & 1u) os << ' ' << set.sync_message(i)->name();

@@ -57,8 +57,8 @@ void Node::emit(const frames::CanFrame& frame, Nanos now) {
   for (int copy = 0; copy <= d.duplicates; ++copy) {
     if (d.delay > Nanos{0}) {
       const Nanos due = now + d.delay;
-      const auto at = std::upper_bound(delayed_.begin(), delayed_.end(), due,
-                                       [](Nanos t, const auto& e) { return t < e.first; });
+      const auto at =
+          std::upper_bound(delayed_.begin(), delayed_.end(), due, [](Nanos t, const auto& e) { return t < e.first; });
       delayed_.insert(at, {due, f});
     } else {
       send_now(f);

@@ -32,7 +32,7 @@ double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
 Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, const NodeParams& p, Nanos tm_time,
                  Nanos last_sent) {
   const Nanos gap = set.ftt(m).min_gap;
-  if (last_sent != -kNever && tm_time - last_sent < gap) return kNever;
+  if (tm_time - last_sent < gap) return kNever;
   return tm_time + tm_wire_time(p);
 }
 
@@ -113,7 +113,7 @@ void PicBase::send_m1(Nanos now) {
     const kinematics::WheelSpeeds w = kinematics_.inverse({m6_1_.vx, m6_1_.vy, m6_2_.va});
     for (std::size_t n = 0; n < 3; ++n) target[n] = params_.encoder.counts_per_tick(w[n]);
   }
-  const double dt = last_m1_ == -kNever ? 0.0 : seconds(now - last_m1_);
+  const double dt = last_m1_ == kLongAgo ? 0.0 : seconds(now - last_m1_);
   const double accel = m6_2_.small_adjustment != 0 ? params_.fine_wheel_accel_radps2 : params_.max_wheel_accel_radps2;
   const double max_step = params_.encoder.counts_per_tick(accel) * dt;
   const auto limit = static_cast<double>(params_.max_setpoint);
@@ -158,8 +158,8 @@ void PicBase::step(Nanos now) {
 
 // --- MotorNode -----------------------------------------------------------------
 
-MotorNode::MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
-                     RobotIo& robot, int wheel, Nanos first_tick)
+MotorNode::MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
+                     int wheel, Nanos first_tick)
     : Node("Motor" + std::to_string(wheel + 1), bus, std::move(set)),
       params_(params),
       robot_(robot),
@@ -325,7 +325,7 @@ SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet>
       params_(params),
       bad_frames_(std::move(bad_frames)),
       state_(std::move(state)) {
-  last_seen_.fill(-kNever);
+  last_seen_.fill(kLongAgo);
   const Filter all[] = {Filter::all()};
   bus.set_filters(all);  // watches the whole bus
 }
@@ -333,7 +333,7 @@ SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet>
 std::uint8_t SystemMonitor::alive(Nanos now) const noexcept {
   std::uint8_t bits = 0;
   for (std::size_t i = 0; i < last_seen_.size(); ++i) {
-    if (last_seen_[i] != -kNever && now - last_seen_[i] <= params_.alive_timeout) bits |= static_cast<std::uint8_t>(1u << i);
+    if (now - last_seen_[i] <= params_.alive_timeout) bits |= static_cast<std::uint8_t>(1u << i);
   }
   return bits;
 }
@@ -346,7 +346,8 @@ void SystemMonitor::on_frame(const TimedFrame& tf) {
     count_unknown();
     return;
   }
-  static constexpr std::array<const char*, 6> kNodes = {"Pic_base", "Motor1", "Motor2", "Motor3", "Pic_odom", "Compass"};
+  static constexpr std::array<const char*, 6> kNodes = {"Pic_base", "Motor1",   "Motor2",
+                                                        "Motor3",   "Pic_odom", "Compass"};
   for (std::size_t i = 0; i < kNodes.size(); ++i) {
     if (m->def().transmitter == kNodes[i]) last_seen_[i] = tf.time;
   }

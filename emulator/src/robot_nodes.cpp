@@ -4,10 +4,14 @@ namespace canhil::emulator {
 
 can_nodes::KickOutcome PhysicsRobotIo::kick(bool low, int power) {
   switch (robot_.kick(low, power).outcome) {
-    case physics::KickResult::Outcome::kFired: return can_nodes::KickOutcome::kFired;
-    case physics::KickResult::Outcome::kNotEngaged: return can_nodes::KickOutcome::kNotEngaged;
-    case physics::KickResult::Outcome::kLowVoltage: return can_nodes::KickOutcome::kLowVoltage;
-    case physics::KickResult::Outcome::kNoPower: return can_nodes::KickOutcome::kNoPower;
+    case physics::KickResult::Outcome::kFired:
+      return can_nodes::KickOutcome::kFired;
+    case physics::KickResult::Outcome::kNotEngaged:
+      return can_nodes::KickOutcome::kNotEngaged;
+    case physics::KickResult::Outcome::kLowVoltage:
+      return can_nodes::KickOutcome::kLowVoltage;
+    case physics::KickResult::Outcome::kNoPower:
+      return can_nodes::KickOutcome::kNoPower;
   }
   return can_nodes::KickOutcome::kNoPower;
 }
@@ -26,7 +30,7 @@ can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const c
 }
 
 const char* node_name(NodeId id) noexcept {
-  static constexpr const char* kNames[] = {"FTT master", "Pic_base", "Motor1", "Motor2",
+  static constexpr const char* kNames[] = {"FTT master", "Pic_base", "Motor1",  "Motor2",
                                            "Motor3",     "Pic_odom", "Compass", "SysMon"};
   return kNames[static_cast<std::size_t>(id)];
 }
@@ -39,7 +43,8 @@ RobotNodes::RobotNodes(std::shared_ptr<const frames::MessageSet> set, const can_
   nodes_.push_back(std::make_unique<can_nodes::FttMaster>(bus(NodeId::kMaster), set, schedule_, start));
   nodes_.push_back(std::make_unique<can_nodes::PicBase>(bus(NodeId::kPicBase), set, params, robot));
   for (int w = 0; w < 3; ++w) {
-    nodes_.push_back(std::make_unique<can_nodes::MotorNode>(bus(static_cast<NodeId>(2 + w)), set, params, robot, w, start));
+    nodes_.push_back(
+        std::make_unique<can_nodes::MotorNode>(bus(static_cast<NodeId>(2 + w)), set, params, robot, w, start));
   }
   nodes_.push_back(std::make_unique<can_nodes::PicOdom>(bus(NodeId::kPicOdom), set, params));
   nodes_.push_back(std::make_unique<can_nodes::CompassNode>(bus(NodeId::kCompass), set, params, robot));

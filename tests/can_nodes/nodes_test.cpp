@@ -45,8 +45,9 @@ class NodesTest : public ::testing::Test {
   NodesTest()
       : set_(frames::MessageSet::load(test::shipped_dbc())),
         bus_(clock_),
-        nodes_(set_, params_, robot_,
-               [this](const std::string& name) { return std::unique_ptr<Bus>(bus_.attach(name)); }, Nanos{0}),
+        nodes_(
+            set_, params_, robot_, [this](const std::string& name) { return std::unique_ptr<Bus>(bus_.attach(name)); },
+            Nanos{0}),
         laptop_(bus_, set_, params_.ftt.elementary_cycle),
         run_(clock_, nullptr) {
     for (Node* n : nodes_.nodes()) run_.add(*n);
@@ -197,6 +198,20 @@ TEST_F(NodesTest, PicBaseTurnsM6IntoSaturatedSetPointsAndTheWatchdogBrakes) {
   EXPECT_LE(braked_at - silent_from, params_.watchdog + 30ms);
   EXPECT_GT(braked_at - silent_from, params_.watchdog - 30ms) << "not before the watchdog time";
   EXPECT_EQ(robot_.speed[0], 0.0);
+}
+
+TEST_F(NodesTest, BrakesFromStartUntilTheFirstM6) {
+  run_.run_until(100ms);
+  const auto m1 = laptop_.decoded(set_->m1);
+  ASSERT_FALSE(m1.empty());
+  for (const auto& v : m1) {
+    EXPECT_EQ(v.enable, 0) << "no M6 heard yet: the watchdog holds the brake";
+    EXPECT_EQ(v.setpoint_1, 0);
+  }
+  EXPECT_TRUE(nodes_.pic_base().watchdog_tripped(clock_.now()));
+  const auto m9 = laptop_.decoded(set_->m9);
+  ASSERT_FALSE(m9.empty());
+  EXPECT_EQ(m9.back().just_kicked, 0) << "never kicked";
 }
 
 TEST_F(NodesTest, KickOnlyWhenEngagedAndGrabberFollowsM7) {

@@ -25,15 +25,18 @@
 namespace canhil::can_nodes {
 
 inline constexpr Nanos kNever = Nanos::max();
+/// "Never happened" for last-seen times: far enough back that `now - kLongAgo`
+/// exceeds any timeout, close enough that it cannot overflow (100 years).
+inline constexpr Nanos kLongAgo = -std::chrono::duration_cast<Nanos>(std::chrono::hours(24 * 365 * 100));
 
 struct NodeCounters {
-  std::uint64_t received = 0;      ///< frames handled
-  std::uint64_t sent = 0;          ///< frames handed to the bus
-  std::uint64_t send_failed = 0;   ///< the bus refused (down, queue full)
-  std::uint64_t wrong_length = 0;  ///< a consumed message with the wrong length
-  std::uint64_t out_of_range = 0;  ///< a consumed message with a value outside its range
-  std::uint64_t unknown_id = 0;    ///< an id the message set does not know (counted by listeners of all ids)
-  std::uint64_t fault_dropped = 0; ///< outgoing frames a fault hook dropped
+  std::uint64_t received = 0;       ///< frames handled
+  std::uint64_t sent = 0;           ///< frames handed to the bus
+  std::uint64_t send_failed = 0;    ///< the bus refused (down, queue full)
+  std::uint64_t wrong_length = 0;   ///< a consumed message with the wrong length
+  std::uint64_t out_of_range = 0;   ///< a consumed message with a value outside its range
+  std::uint64_t unknown_id = 0;     ///< an id the message set does not know (counted by listeners of all ids)
+  std::uint64_t fault_dropped = 0;  ///< outgoing frames a fault hook dropped
   std::uint64_t bad_frames() const noexcept { return wrong_length + out_of_range + unknown_id; }
 };
 
@@ -41,9 +44,9 @@ struct NodeCounters {
 struct FaultDecision {
   bool drop = false;
   Nanos delay{0};
-  int corrupt_byte = -1;       ///< 0..7: this byte is XORed with corrupt_mask
+  int corrupt_byte = -1;  ///< 0..7: this byte is XORed with corrupt_mask
   std::uint8_t corrupt_mask = 0xFF;
-  int duplicates = 0;          ///< extra copies sent right after
+  int duplicates = 0;  ///< extra copies sent right after
 };
 
 class FaultHook {
@@ -110,7 +113,7 @@ class Node {
   NodeCounters counters_;
   bool enabled_ = true;
   FaultHook* hook_ = nullptr;
-  std::vector<Nanos> wakes_;                                 // requested wake-ups, ascending
+  std::vector<Nanos> wakes_;                                // requested wake-ups, ascending
   std::deque<std::pair<Nanos, frames::CanFrame>> delayed_;  // by due time (fault delays)
 };
 

@@ -28,13 +28,13 @@ struct NodeParams {
   FttConfig ftt;
   kinematics::OmniGeometry geometry;  ///< must match the robot's
   kinematics::EncoderSpec encoder;
-  Nanos watchdog = 150ms;                   ///< Pic_base: no M6 for longer -> brake
-  Nanos motor_watchdog = 100ms;             ///< a motor node: no M1 for longer -> brake
-  int max_setpoint = 900;                   ///< counts per motor tick
-  double max_wheel_accel_radps2 = 60.0;     ///< Pic_base set-point slope (about 3.4 m/s^2 at the wheel)
-  double fine_wheel_accel_radps2 = 15.0;    ///< the same with M6_2.small_adjustment = 1
-  Nanos just_kicked_hold = 100ms;           ///< M9.just_kicked stays 1 this long after a kick
-  Nanos alive_timeout = 200ms;              ///< system monitor: a node unseen this long is not alive
+  Nanos watchdog = 150ms;                 ///< Pic_base: no M6 for longer -> brake
+  Nanos motor_watchdog = 100ms;           ///< a motor node: no M1 for longer -> brake
+  int max_setpoint = 900;                 ///< counts per motor tick
+  double max_wheel_accel_radps2 = 60.0;   ///< Pic_base set-point slope (about 3.4 m/s^2 at the wheel)
+  double fine_wheel_accel_radps2 = 15.0;  ///< the same with M6_2.small_adjustment = 1
+  Nanos just_kicked_hold = 100ms;         ///< M9.just_kicked stays 1 this long after a kick
+  Nanos alive_timeout = 200ms;            ///< system monitor: a node unseen this long is not alive
 };
 
 /// When a node's synchronous messages are due, from the TMs it hears.
@@ -86,15 +86,15 @@ class PicBase final : public Node {
   SyncSlot slot_;
   frames::M6_1 m6_1_{};
   frames::M6_2 m6_2_{};
-  Nanos last_m6_ = -kNever;
+  Nanos last_m6_ = kLongAgo;
   std::array<int, 3> setpoints_{};
   std::array<double, 3> ramp_{};  // set points before rounding, counts per tick
-  Nanos last_m1_ = -kNever;
+  Nanos last_m1_ = kLongAgo;
   std::uint8_t m1_seq_ = 0;
-  Nanos last_kick_ = -kNever;
+  Nanos last_kick_ = kLongAgo;
   int grabber_ = 0;
   Nanos async_at_ = kNever;
-  Nanos last_m2_ = -kNever;
+  Nanos last_m2_ = kLongAgo;
 };
 
 class MotorNode final : public Node {
@@ -117,7 +117,7 @@ class MotorNode final : public Node {
   Nanos next_tick_;
   int setpoint_ = 0;
   bool enable_ = false;
-  Nanos last_m1_ = -kNever;
+  Nanos last_m1_ = kLongAgo;
   std::int64_t last_reported_ = 0;
   bool reported_once_ = false;
   std::uint8_t seq_ = 0;
@@ -179,7 +179,7 @@ class SystemMonitor final : public Node {
   std::function<std::uint8_t(Nanos)> state_;
   std::array<Nanos, 6> last_seen_;  // Pic_base, Motor1..3, Pic_odom, Compass
   Nanos async_at_ = kNever;
-  Nanos last_m10_ = -kNever;
+  Nanos last_m10_ = kLongAgo;
 };
 
 }  // namespace canhil::can_nodes

@@ -1,0 +1,79 @@
+// emulator_bench — one robot's full node set with its physics, in virtual
+// time, on the memory bus, with a laptop endpoint sending M6 in its slots.
+// Prints simulated seconds per wall second. Target (issue 4): at least 300x.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/frames/messages.hpp"
+
+namespace {
+
+using namespace canhil;
+using namespace std::chrono_literals;
+
+// Sends M6 in its slots (like the laptop's handler) and counts what it hears.
+class Laptop final : public emulator::Participant {
+ public:
+  Laptop(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set)
+      : ep_(bus.attach("laptop", 1 << 16)), set_(std::move(set)) {}
+  std::size_t poll() override {
+    std::size_t n = 0;
+    while (auto f = ep_->receive()) {
+      ++n;
+      frames::Tm tm;
+      if (f->frame.id == 0x010 && set_->tm.decode(f->frame, tm).ok() && (tm.sync_bitmap & (1u << 6)) != 0) {
+        slot_ = f->time + 10ms - std::chrono::microseconds(tm.sync_window_us);
+      }
+    }
+    heard_ += n;
+    return n;
+  }
+  void tick(can_nodes::Nanos now) override {
+    slot_ = can_nodes::kNever;
+    const double t = std::chrono::duration<double>(now).count();
+    ep_->send(set_->m6_1.encode(frames::M6_1{0.3 * std::sin(t), 0.8 * std::cos(0.5 * t)}));
+    ep_->send(set_->m6_2.encode(frames::M6_2{0.5, 0, 0}));
+  }
+  can_nodes::Nanos next_wakeup() const override { return slot_; }
+  std::uint64_t heard_ = 0;
+
+ private:
+  std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
+  std::shared_ptr<const frames::MessageSet> set_;
+  can_nodes::Nanos slot_ = can_nodes::kNever;
+};
+
+void BM_OneRobotVirtualTime(benchmark::State& state) {
+  auto set = frames::MessageSet::load(CANHIL_BENCH_DBC);
+  physics::WorldParams wp;
+  wp.robots = {physics::Placement{0, 0, 0}};
+  wp.ball_start = {2, 2, wp.ball.radius_m};
+  physics::World world(wp);
+  emulator::PhysicsRobotIo io(world.robot(0));
+  const can_nodes::NodeParams params = emulator::node_params_for(wp.robot);
+  can_nodes::SimulatedClock clock;
+  can_nodes::MemoryBus bus(clock);
+  emulator::RobotNodes nodes(
+      set, params, io, [&](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
+      can_nodes::Nanos{0});
+  Laptop laptop(bus, set);
+  emulator::Lockstep run(clock, &world);
+  for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
+  run.add(laptop);
+  std::int64_t simulated_s = 0;
+  for (auto _ : state) {
+    run.run_for(1s);
+    ++simulated_s;
+  }
+  state.counters["realtime_factor"] = benchmark::Counter(static_cast<double>(simulated_s), benchmark::Counter::kIsRate);
+  state.counters["frames_per_sim_s"] = static_cast<double>(laptop.heard_) / static_cast<double>(simulated_s);
+}
+BENCHMARK(BM_OneRobotVirtualTime)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,157 @@
+// The whole robot in virtual time: a test endpoint plays the laptop on the
+// memory bus; behind the nodes is the physics world.
+#include <gtest/gtest.h>
+
+#include "canhil/frames/candump.hpp"
+
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+#include "support/laptop_endpoint.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct Rig {
+  explicit Rig(physics::WorldParams wp = default_world())
+      : set(frames::MessageSet::load(test::shipped_dbc())),
+        world(std::move(wp)),
+        io(world.robot(0)),
+        params(node_params_for(world.params().robot)),
+        bus(clock),
+        nodes(
+            set, params, io, [this](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
+            Nanos{0}),
+        laptop(bus, set, params.ftt.elementary_cycle),
+        run(clock, &world) {
+    for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
+    run.add(laptop);
+  }
+  static physics::WorldParams default_world() {
+    physics::WorldParams p;
+    p.robots = {physics::Placement{0, 0, 0}};  // front along world +y
+    p.ball_start = {4, 4, p.ball.radius_m};
+    return p;
+  }
+  frames::M4_1 last_m4_1() const { return laptop.decoded(set->m4_1).back(); }
+  frames::M4_2 last_m4_2() const { return laptop.decoded(set->m4_2).back(); }
+
+  std::shared_ptr<const frames::MessageSet> set;
+  can_nodes::SimulatedClock clock;
+  physics::World world;
+  PhysicsRobotIo io;
+  can_nodes::NodeParams params;
+  can_nodes::MemoryBus bus;
+  RobotNodes nodes;
+  test::LaptopEndpoint laptop;
+  Lockstep run;
+};
+
+TEST(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {
+  Rig r;
+  r.laptop.m6_1 = frames::M6_1{0, 0.5};
+  r.run.run_until(2s);
+  r.laptop.m6_1.reset();
+  r.run.run_for(600ms);  // brakes, then the next M4
+  const frames::M4_1 m4 = r.last_m4_1();
+  EXPECT_NEAR(m4.y, 1.0, 0.1) << "forward is the robot's +y";
+  EXPECT_NEAR(m4.x, 0.0, 0.02);
+  EXPECT_NEAR(r.last_m4_2().theta, 0.0, 0.02);
+  // Odometry agrees with where the robot really is.
+  const kinematics::Pose truth = r.world.robot(0).pose();
+  EXPECT_NEAR(m4.y, truth.y_m, 0.01);
+  EXPECT_NEAR(m4.x, truth.x_m, 0.01);
+}
+
+TEST(ClosedLoop, M5ResetBringsOdometryToZeroAndM5SetsAPose) {
+  Rig r;
+  r.laptop.m6_1 = frames::M6_1{0.3, 0.3};
+  r.run.run_until(1s);
+  r.laptop.m6_1.reset();
+  r.run.run_for(500ms);
+  ASSERT_GT(std::hypot(r.last_m4_1().x, r.last_m4_1().y), 0.2);
+  r.laptop.send(r.set->m5_1.encode(frames::M5_1{0, 0}));
+  r.laptop.send(r.set->m5_2.encode(frames::M5_2{0, frames::M5_2::kReset}));
+  r.run.run_for(100ms);
+  EXPECT_NEAR(r.last_m4_1().x, 0.0, 1e-4);
+  EXPECT_NEAR(r.last_m4_1().y, 0.0, 1e-4);
+  EXPECT_NEAR(r.last_m4_2().theta, 0.0, 1e-5);
+  r.laptop.send(r.set->m5_1.encode(frames::M5_1{2.5, -1.25}));
+  r.laptop.send(r.set->m5_2.encode(frames::M5_2{1.5, frames::M5_2::kSetPose}));
+  r.run.run_for(100ms);
+  EXPECT_NEAR(r.last_m4_1().x, 2.5, 1e-4);
+  EXPECT_NEAR(r.last_m4_1().y, -1.25, 1e-4);
+  EXPECT_NEAR(r.last_m4_2().theta, 1.5, 1e-5);
+}
+
+physics::WorldParams ball_in_front(double distance) {
+  physics::WorldParams p = Rig::default_world();
+  p.ball_start = {0, distance, p.ball.radius_m};
+  return p;
+}
+
+TEST(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
+  {
+    Rig r(ball_in_front(1.5));  // out of reach
+    r.run.run_until(100ms);
+    frames::M7 m7;
+    m7.kick = frames::M7::make_kick(true, 40);
+    r.laptop.send(r.set->m7.encode(m7));
+    r.run.run_for(500ms);
+    EXPECT_LT(r.world.ball_velocity().norm(), 0.01) << "not engaged: nothing happens";
+    EXPECT_EQ(r.laptop.decoded(r.set->m9).back().just_kicked, 0);
+  }
+  {
+    const physics::RobotParams robot;
+    Rig r(ball_in_front(robot.body_radius_m - robot.mouth_depth_m + 0.11));
+    frames::M7 grab;
+    grab.grabber_mode = 100;
+    r.laptop.send(r.set->m7.encode(grab));
+    r.run.run_until(300ms);
+    ASSERT_EQ(r.laptop.decoded(r.set->m9).back().ball_engaged, 1);
+    frames::M7 m7;
+    m7.kick = frames::M7::make_kick(true, 40);
+    m7.grabber_mode = 100;
+    r.laptop.send(r.set->m7.encode(m7));
+    r.run.run_for(40ms);
+    EXPECT_GT(r.world.ball_velocity().y(), 5.0) << "launched forward";
+    const auto m9 = r.laptop.decoded(r.set->m9);
+    EXPECT_EQ(m9.back().just_kicked, 1);
+    EXPECT_LT(m9.back().kicker_voltage, 170.0) << "the capacitor discharged";
+  }
+}
+
+TEST(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
+  Rig r;
+  r.laptop.m6_1 = frames::M6_1{0, 1.0};
+  r.run.run_until(1s);
+  ASSERT_GT(r.world.robot(0).twist().vy_mps, 0.9);
+  r.laptop.m6_1.reset();
+  r.run.run_for(r.params.watchdog + 30ms);  // the watchdog plus one M1 period
+  const auto m1 = r.laptop.decoded(r.set->m1);
+  EXPECT_EQ(m1.back().enable, 0);
+  EXPECT_EQ(m1.back().setpoint_1, 0);
+  r.run.run_for(400ms);
+  EXPECT_LT(std::fabs(r.world.robot(0).twist().vy_mps), 0.01) << "stopped";
+}
+
+TEST(ClosedLoop, VirtualTimeRunsAreDeterministic) {
+  auto trace = [] {
+    Rig r;
+    r.laptop.m6_1 = frames::M6_1{0.2, 0.6};
+    r.laptop.m6_2.va = 0.5;
+    r.run.run_until(1500ms);
+    std::string out;
+    for (const auto& f : r.laptop.frames())
+      out += std::to_string(f.time.count()) + frames::format_compact(f.frame) + "\n";
+    return out;
+  };
+  const std::string a = trace();
+  EXPECT_EQ(a, trace());
+  EXPECT_GT(a.size(), 1000u);
+}
+
+}  // namespace
+}  // namespace canhil::emulator
