@@ -14,5 +14,7 @@ int run_frames(Args& args, const std::optional<std::string>& dbc);
 int run_dump(Args& args, const std::optional<std::string>& dbc);
 /// `canhil experiment NAME [options]`: a physics calibration experiment.
 int run_experiment(Args& args);
+/// `canhil nodes --iface IFACE`: one robot's node set with physics, in real time.
+int run_nodes(Args& args, const std::optional<std::string>& dbc);
 
 }  // namespace canhil::app

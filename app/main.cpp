@@ -22,6 +22,8 @@ usage:
   canhil dump IFACE [--count N] [--seconds S] [--json]
                                               live, decoded, with kernel timestamps
   canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
+  canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
+                                              one robot's emulated nodes with physics, real time
   canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],
                                               ball-roll [--speed MPS], kick [--low|--high] [--power P],
@@ -55,6 +57,7 @@ int main(int argc, char** argv) {
     if (command == "frames") return canhil::app::run_frames(args, dbc);
     if (command == "dump") return canhil::app::run_dump(args, dbc);
     if (command == "experiment") return canhil::app::run_experiment(args);
+    if (command == "nodes") return canhil::app::run_nodes(args, dbc);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");
   } catch (const canhil::app::UsageError& e) {
     std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);
@@ -63,6 +66,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "canhil: %s\n", e.what());
     return 2;
   } catch (const canhil::physics::ConfigError& e) {
+    std::fprintf(stderr, "canhil: %s\n", e.what());
+    return 2;
+  } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "canhil: %s\n", e.what());
     return 2;
   } catch (const canhil::can_nodes::SetupError& e) {

@@ -573,7 +573,53 @@ void World::Impl::substep(double h) {
 // ---------------------------------------------------------------------------
 // World
 
-World::World(WorldParams params) : impl_(std::make_unique<Impl>(std::move(params))) {}
+namespace {
+// Bodies that start inside each other are shot apart by the contact solver:
+// refuse such a start with a message that says which and where.
+void check_start_positions(const WorldParams& p) {
+  struct Disc {
+    std::string what;
+    double x, y, r;
+  };
+  std::vector<Disc> discs;
+  for (std::size_t i = 0; i < p.robots.size(); ++i) {
+    discs.push_back({"robot " + std::to_string(i), p.robots[i].x_m, p.robots[i].y_m, p.robot.body_radius_m});
+  }
+  for (std::size_t i = 0; i < p.obstacles.size(); ++i) {
+    discs.push_back({"obstacle " + std::to_string(i), p.obstacles[i].at.x_m, p.obstacles[i].at.y_m,
+                     p.obstacles[i].params.radius_m});
+  }
+  const double ball_r = p.ball.radius_m;
+  // A ball held in a robot's mouth (the front cut-out) is inside its disc but not its body.
+  auto in_mouth = [&](std::size_t robot) {
+    const double yaw = p.robots[robot].heading_deg * kPi / 180.0;
+    const double dx = p.ball_start.x_m - p.robots[robot].x_m;
+    const double dy = p.ball_start.y_m - p.robots[robot].y_m;
+    const double across = std::cos(yaw) * dx + std::sin(yaw) * dy;  // robot frame, +x
+    const double ahead = -std::sin(yaw) * dx + std::cos(yaw) * dy;  // robot frame, +y (front)
+    return std::fabs(across) + ball_r <= p.robot.mouth_width_m / 2 + 1e-9 &&
+           ahead >= p.robot.body_radius_m - p.robot.mouth_depth_m + ball_r - 1e-9;
+  };
+  for (std::size_t i = 0; i < discs.size(); ++i) {
+    const Disc& a = discs[i];
+    const bool held = i < p.robots.size() && in_mouth(i);
+    if (p.ball_start.z_m < 1.0 && !held &&
+        std::hypot(a.x - p.ball_start.x_m, a.y - p.ball_start.y_m) < a.r + ball_r - 1e-9) {
+      throw std::invalid_argument("ball_start (" + std::to_string(p.ball_start.x_m) + ", " +
+                                  std::to_string(p.ball_start.y_m) + ") is inside " + a.what +
+                                  "; move the ball or the " + a.what.substr(0, a.what.find(' ')));
+    }
+    for (std::size_t j = i + 1; j < discs.size(); ++j) {
+      const Disc& b = discs[j];
+      if (std::hypot(a.x - b.x, a.y - b.y) < a.r + b.r - 1e-9) {
+        throw std::invalid_argument(a.what + " and " + b.what + " start overlapping; place them further apart");
+      }
+    }
+  }
+}
+}  // namespace
+
+World::World(WorldParams params) : impl_((check_start_positions(params), std::make_unique<Impl>(std::move(params)))) {}
 World::~World() = default;
 const WorldParams& World::params() const noexcept { return impl_->params; }
 const FieldMarkings& World::markings() const noexcept { return impl_->markings; }

@@ -352,6 +352,27 @@ TEST(SaveRestore, RefusesAStateOfAnotherWorldAndMalformedFiles) {
   std::filesystem::remove(path);
 }
 
+TEST(World, RefusesStartPositionsInsideEachOther) {
+  WorldParams p;
+  p.robots = {Placement{0, 0, 0}};
+  p.ball_start = {0.1, 0, 0.11};
+  EXPECT_THROW(World{p}, std::invalid_argument) << "ball inside a robot";
+  p.ball_start = {0.5, 0, 0.11};
+  EXPECT_NO_THROW(World{p});
+  p.ball_start = {0, 0.26, 0.11};  // held in the mouth (the front is +y at heading 0)
+  EXPECT_NO_THROW(World{p});
+  p.ball_start = {0, -0.26, 0.11};  // the same distance behind: inside the body
+  EXPECT_THROW(World{p}, std::invalid_argument);
+  p.ball_start = {0.5, 0, 0.11};
+  p.robots.push_back(Placement{0.3, 0.2, 0});
+  try {
+    World w(p);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("robot 0 and robot 1 start overlapping"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Robot, PlaceTeleportsAndStops) {
   World w(one_robot());
   w.robot(0).place(Placement{2.0, -1.0, 45});
