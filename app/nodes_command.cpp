@@ -120,6 +120,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
     throw can_nodes::SetupError(*iface + " is down; bring it up with `ip link set " + *iface + " up`");
   }
   std::vector<int> fds;
+  fds.reserve(sockets.size());
   for (auto* s : sockets) fds.push_back(s->fd());
   WallWaiter waiter(fds);
   emulator::Realtime loop(clock, &world, [&](can_nodes::Nanos d) { waiter.wait(d); });
@@ -127,14 +128,15 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
 
   std::signal(SIGINT, stop_on_signal);
   std::signal(SIGTERM, stop_on_signal);
-  std::printf("canhil nodes: robot on %s: FTT master (EC %.1f ms, %u bit/s), Pic_base, Motor1-3, Pic_odom, Compass, "
-              "SysMon; physics every %.0f ms. Ctrl-C stops.\n",
-              iface->c_str(), ec_ms, ftt.bit_rate, wp.simulation.step_s * 1000);
+  std::printf(
+      "canhil nodes: robot on %s: FTT master (EC %.1f ms, %u bit/s), Pic_base, Motor1-3, Pic_odom, Compass, "
+      "SysMon; physics every %.0f ms. Ctrl-C stops.\n",
+      iface->c_str(), ec_ms, ftt.bit_rate, wp.simulation.step_s * 1000);
   std::fflush(stdout);
 
-  const can_nodes::Nanos end = duration_s > 0 ? start + std::chrono::duration_cast<can_nodes::Nanos>(
-                                                             std::chrono::duration<double>(duration_s))
-                                              : can_nodes::kNever;
+  const can_nodes::Nanos end =
+      duration_s > 0 ? start + std::chrono::duration_cast<can_nodes::Nanos>(std::chrono::duration<double>(duration_s))
+                     : can_nodes::kNever;
   can_nodes::BusState last_state = can_nodes::BusState::kUp;
   can_nodes::Nanos next_report = start + std::chrono::seconds(5);
   while (!g_stop && clock.now() < end) {
@@ -148,11 +150,11 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
     }
     if (!quiet && clock.now() >= next_report) {
       const kinematics::Pose pose = world.robot(0).pose();
+      const std::uint64_t bad = nodes.bad_frames() + nodes.node(emulator::NodeId::kSysMon).counters().bad_frames();
       std::printf("canhil nodes: %.0f s, %llu TMs, robot at (%.2f, %.2f) m, %llu bad frames, %llu late steps\n",
                   std::chrono::duration<double>(clock.now() - start).count(),
                   static_cast<unsigned long long>(nodes.node(emulator::NodeId::kMaster).counters().sent), pose.x_m,
-                  pose.y_m, static_cast<unsigned long long>(nodes.bad_frames() +
-                                                            nodes.node(emulator::NodeId::kSysMon).counters().bad_frames()),
+                  pose.y_m, static_cast<unsigned long long>(bad),
                   static_cast<unsigned long long>(loop.stats().late_steps));
       std::fflush(stdout);
       next_report += std::chrono::seconds(5);
@@ -160,8 +162,8 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   }
 
   const emulator::RealtimeStats& st = loop.stats();
-  std::printf("\ncanhil nodes: summary after %.1f s on %s\n", std::chrono::duration<double>(clock.now() - start).count(),
-              iface->c_str());
+  std::printf("\ncanhil nodes: summary after %.1f s on %s\n",
+              std::chrono::duration<double>(clock.now() - start).count(), iface->c_str());
   std::printf("  %-12s %10s %10s %10s %12s %10s\n", "node", "sent", "received", "bad", "send failed", "dropped");
   for (std::size_t i = 0; i < emulator::kNodeCount; ++i) {
     const auto& c = nodes.node(static_cast<emulator::NodeId>(i)).counters();
@@ -174,7 +176,8 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   std::printf("  physics: %llu steps, %llu late (worst %.2f ms), %llu skipped; robot at (%.3f, %.3f) m, %.1f deg\n",
               static_cast<unsigned long long>(st.physics_steps), static_cast<unsigned long long>(st.late_steps),
               std::chrono::duration<double, std::milli>(st.worst_lateness).count(),
-              static_cast<unsigned long long>(st.skipped_steps), pose.x_m, pose.y_m, pose.heading_rad * 180 / 3.14159265);
+              static_cast<unsigned long long>(st.skipped_steps), pose.x_m, pose.y_m,
+              pose.heading_rad * 180 / 3.14159265);
   return 0;
 }
 

@@ -35,7 +35,7 @@ const char* node_name(NodeId id) noexcept {
   return kNames[static_cast<std::size_t>(id)];
 }
 
-RobotNodes::RobotNodes(std::shared_ptr<const frames::MessageSet> set, const can_nodes::NodeParams& params,
+RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const can_nodes::NodeParams& params,
                        can_nodes::RobotIo& robot, const EndpointFactory& endpoints, Nanos start)
     : schedule_(*set, params.ftt) {
   for (std::size_t i = 0; i < kNodeCount; ++i) buses_.push_back(endpoints(node_name(static_cast<NodeId>(i))));

@@ -5,12 +5,12 @@
 // counts and outcomes, never timing.
 #include <gtest/gtest.h>
 
-#include <csignal>
-#include <optional>
-#include <cstdio>
-#include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <csignal>
+#include <cstdio>
+#include <optional>
+#include <string>
 
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
@@ -28,7 +28,8 @@ struct Emulator {
   explicit Emulator(const std::string& args) {
     pid = fork();
     if (pid == 0) {
-      const std::string cmd = "exec " + test::canhil_binary() + " nodes --iface vcan0 --quiet " + args + " > " + log + " 2>&1";
+      const std::string cmd =
+          "exec " + test::canhil_binary() + " nodes --iface vcan0 --quiet " + args + " > " + log + " 2>&1";
       execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }

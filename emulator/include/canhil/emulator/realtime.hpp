@@ -30,7 +30,8 @@ class Realtime {
  public:
   using Wait = std::function<void(Nanos deadline)>;
   /// `clock`, `world` (may be null) and `wait` must outlive the loop.
-  Realtime(const can_nodes::Clock& clock, physics::World* world, Wait wait, Nanos max_behind = std::chrono::milliseconds(100));
+  Realtime(const can_nodes::Clock& clock, physics::World* world, Wait wait,
+           Nanos max_behind = std::chrono::milliseconds(100));
   void add(Participant& p) { participants_.push_back(&p); }
   void add(can_nodes::Node& node);
   /// Runs until the clock reads `end` or `stop` becomes true.

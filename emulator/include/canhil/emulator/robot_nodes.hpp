@@ -52,7 +52,7 @@ class RobotNodes {
 
   /// Builds the set. `params` and `robot` must outlive it. Throws
   /// can_nodes::SetupError when the schedule does not fit the EC.
-  RobotNodes(std::shared_ptr<const frames::MessageSet> set, const can_nodes::NodeParams& params,
+  RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const can_nodes::NodeParams& params,
              can_nodes::RobotIo& robot, const EndpointFactory& endpoints, Nanos start);
 
   can_nodes::Node& node(NodeId id) { return *nodes_[static_cast<std::size_t>(id)]; }
