@@ -1,0 +1,56 @@
+// canhil/rtdb/replicator.hpp — the stand-in for the team's wireless: copies
+// each agent's shared items into every other agent's database.
+//
+// Call cycle(now) every `period` (canhil rtdb replicate does, and so does
+// canhil run). Each copy is lost with probability `loss` (seeded, so runs
+// repeat) and otherwise arrives `delay` later, aged accordingly. Needs
+// DB_init_all() in this process. Not thread-safe; the clock is the caller's.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <random>
+#include <vector>
+
+namespace canhil::rtdb {
+
+struct ReplicatorConfig {
+  std::chrono::nanoseconds period = std::chrono::milliseconds(100);
+  std::chrono::nanoseconds delay{0};
+  double loss = 0.0;  ///< 0..1, per copy
+  std::uint64_t seed = 1;
+};
+
+struct ReplicatorStats {
+  std::uint64_t cycles = 0;
+  std::uint64_t copied = 0;
+  std::uint64_t lost = 0;
+};
+
+class Replicator {
+ public:
+  explicit Replicator(const ReplicatorConfig& config);
+  /// One replication cycle at time `now` (any monotonic time base), and
+  /// delivery of every delayed copy that is due.
+  void cycle(std::chrono::nanoseconds now);
+  const ReplicatorStats& stats() const noexcept { return stats_; }
+  const ReplicatorConfig& config() const noexcept { return config_; }
+
+ private:
+  struct InFlight {
+    std::chrono::nanoseconds due;
+    int to_agent;
+    int from_agent;
+    int item;
+    int age_ms;  // age when read
+    std::chrono::nanoseconds read_at;
+    std::vector<unsigned char> value;
+  };
+  ReplicatorConfig config_;
+  std::mt19937_64 rng_;
+  std::deque<InFlight> in_flight_;
+  ReplicatorStats stats_;
+};
+
+}  // namespace canhil::rtdb

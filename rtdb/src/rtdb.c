@@ -1,0 +1,412 @@
+/* The RTDB: one System V shared-memory segment per agent, sequence-locked
+ * item slots, ages from CLOCK_MONOTONIC. See canhil/rtdb/rtdb.h. */
+#define _GNU_SOURCE
+#include "canhil/rtdb/rtdb.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <semaphore.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/ipc.h>
+#include <sys/shm.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "canhil/rtdb/rtdb_table.h"
+
+#define RTDB_MAGIC 0x43484C52u /* "CHLR" */
+#define RTDB_VERSION 1u
+#define MAX_AGENTS 64
+
+typedef struct {
+  _Atomic uint32_t seq; /* odd while a write is in progress */
+  uint32_t size;
+  int64_t stamp_ns; /* CLOCK_MONOTONIC time the value describes */
+} slot_header;
+
+typedef struct {
+  _Atomic uint32_t magic; /* set last by the creator */
+  uint32_t version;
+  uint64_t config_hash;
+  int32_t agent;
+  int32_t creator_pid;
+  int64_t created_ns;
+  uint64_t total_size;
+} segment_header;
+
+static const canhil_rtdb_table *g_table = &canhil_rtdb_config;
+static int g_me = -1;
+static int g_all = 0;
+static void *g_seg[MAX_AGENTS];   /* attached segments, by agent */
+static int g_shmid[MAX_AGENTS];
+static int64_t *g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
+static uint64_t g_sizes[MAX_AGENTS];
+static sem_t *g_frame_sem = NULL;
+
+static int verbose(void) {
+  const char *v = getenv("RTDB_VERBOSE");
+  return v != NULL && v[0] == '1';
+}
+
+static int64_t now_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static uint64_t config_hash(void) {
+  uint64_t h = 1469598103934665603ULL; /* FNV-1a */
+  const canhil_rtdb_table *t = g_table;
+#define MIX(byte) (h = (h ^ (uint8_t)(byte)) * 1099511628211ULL)
+  for (uint32_t a = 0; a < t->n_agents; ++a) {
+    for (const char *c = t->agents[a].name; *c; ++c) MIX(*c);
+    for (uint32_t i = 0; i < t->n_items; ++i) MIX(t->agents[a].membership[i] + 2);
+  }
+  for (uint32_t i = 0; i < t->n_items; ++i) {
+    for (const char *c = t->items[i].name; *c; ++c) MIX(*c);
+    for (int b = 0; b < 4; ++b) MIX(t->items[i].size >> (8 * b));
+  }
+#undef MIX
+  return h;
+}
+
+static key_t base_key(void) {
+  const char *k = getenv("RTDB_KEY");
+  if (k != NULL && *k != '\0') return (key_t)strtol(k, NULL, 0);
+  return (key_t)(0x52400000u | ((unsigned)getuid() & 0xFFFu) << 8);
+}
+
+static int64_t *offset_at(int seg, int owner, int item) {
+  const uint32_t na = g_table->n_agents;
+  const uint32_t ni = g_table->n_items;
+  return &g_offsets[((size_t)seg * na + (size_t)owner) * ni + (size_t)item];
+}
+
+/* Lays out every segment: the agent's own items, then the shared items of each other agent. */
+static int compute_layout(void) {
+  const uint32_t na = g_table->n_agents;
+  const uint32_t ni = g_table->n_items;
+  if (na == 0 || na > MAX_AGENTS) {
+    fprintf(stderr, "rtdb: the configuration has %u agents; canhil supports 1 to %d\n", na, MAX_AGENTS);
+    return -1;
+  }
+  free(g_offsets);
+  g_offsets = malloc(sizeof(int64_t) * na * na * (ni ? ni : 1));
+  if (g_offsets == NULL) return -1;
+  for (uint32_t seg = 0; seg < na; ++seg) {
+    uint64_t off = (sizeof(segment_header) + 7u) & ~(uint64_t)7u;
+    for (uint32_t owner = 0; owner < na; ++owner) {
+      for (uint32_t i = 0; i < ni; ++i) {
+        const int8_t m = g_table->agents[owner].membership[i];
+        const int present = owner == seg ? m >= 0 : m == 1;
+        if (!present) {
+          *offset_at((int)seg, (int)owner, (int)i) = -1;
+          continue;
+        }
+        *offset_at((int)seg, (int)owner, (int)i) = (int64_t)off;
+        off += sizeof(slot_header) + ((g_table->items[i].size + 7u) & ~7u);
+      }
+    }
+    g_sizes[seg] = off;
+  }
+  return 0;
+}
+
+static int process_alive(pid_t pid) { return pid > 0 && (kill(pid, 0) == 0 || errno == EPERM); }
+
+static void init_segment(void *seg, int agent) {
+  segment_header *h = (segment_header *)seg;
+  h->version = RTDB_VERSION;
+  h->config_hash = config_hash();
+  h->agent = agent;
+  h->creator_pid = (int32_t)getpid();
+  h->created_ns = now_ns();
+  h->total_size = g_sizes[agent];
+  for (uint32_t owner = 0; owner < g_table->n_agents; ++owner) {
+    for (uint32_t i = 0; i < g_table->n_items; ++i) {
+      const int64_t off = *offset_at(agent, (int)owner, (int)i);
+      if (off < 0) continue;
+      slot_header *s = (slot_header *)((char *)seg + off);
+      atomic_store(&s->seq, 0);
+      s->size = g_table->items[i].size;
+      s->stamp_ns = h->created_ns;
+    }
+  }
+  atomic_store_explicit(&h->magic, RTDB_MAGIC, memory_order_release);
+}
+
+/* Attaches to agent's segment, creating it or reclaiming a stale one. */
+static int attach(int agent) {
+  if (g_seg[agent] != NULL) return 0;
+  const key_t key = base_key() + agent;
+  const size_t size = (size_t)g_sizes[agent];
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    int created = 1;
+    int id = shmget(key, size, IPC_CREAT | IPC_EXCL | 0600);
+    if (id < 0 && errno == EEXIST) {
+      created = 0;
+      id = shmget(key, 0, 0600);
+      if (id < 0) {
+        fprintf(stderr, "rtdb: the database of agent %d (key 0x%x) exists but is not ours: %s; set RTDB_KEY to another value\n",
+                agent, (unsigned)key, strerror(errno));
+        return -1;
+      }
+      struct shmid_ds ds;
+      if (shmctl(id, IPC_STAT, &ds) < 0) return -1;
+      /* Nobody attached and its creator gone: left by a crashed run. */
+      const int stale = ds.shm_nattch == 0 && !process_alive(ds.shm_cpid);
+      const int wrong_size = ds.shm_segsz != size;
+      if (stale || (wrong_size && ds.shm_nattch == 0)) {
+        if (verbose() || stale) {
+          fprintf(stderr, "rtdb: reclaiming agent %d's database left by %s (pid %d)\n", agent,
+                  stale ? "a crashed run" : "another configuration", (int)ds.shm_cpid);
+        }
+        shmctl(id, IPC_RMID, NULL);
+        continue;
+      }
+      if (wrong_size) {
+        fprintf(stderr,
+                "rtdb: agent %d's database (key 0x%x) is in use by a program built with another RTDB configuration "
+                "(%zu bytes, this one needs %zu); use the same configuration or set RTDB_KEY\n",
+                agent, (unsigned)key, (size_t)ds.shm_segsz, size);
+        return -1;
+      }
+    } else if (id < 0) {
+      fprintf(stderr, "rtdb: cannot create agent %d's database (%zu bytes): %s\n", agent, size, strerror(errno));
+      return -1;
+    }
+    void *seg = shmat(id, NULL, 0);
+    if (seg == (void *)-1) {
+      fprintf(stderr, "rtdb: cannot attach agent %d's database: %s\n", agent, strerror(errno));
+      return -1;
+    }
+    segment_header *h = (segment_header *)seg;
+    if (created) {
+      init_segment(seg, agent);
+    } else {
+      /* Wait (at most 1 s) for a creator that is still filling it in. */
+      for (int i = 0; i < 1000 && atomic_load_explicit(&h->magic, memory_order_acquire) != RTDB_MAGIC; ++i) {
+        usleep(1000);
+      }
+      if (atomic_load_explicit(&h->magic, memory_order_acquire) != RTDB_MAGIC || h->version != RTDB_VERSION ||
+          h->config_hash != config_hash()) {
+        fprintf(stderr,
+                "rtdb: agent %d's database was made by a program with another RTDB configuration or version; "
+                "rebuild both with the same configuration, or set RTDB_KEY\n",
+                agent);
+        shmdt(seg);
+        return -1;
+      }
+    }
+    g_seg[agent] = seg;
+    g_shmid[agent] = id;
+    if (verbose()) fprintf(stderr, "rtdb: %s agent %d's database (%zu bytes)\n", created ? "created" : "attached", agent, size);
+    return 0;
+  }
+  fprintf(stderr, "rtdb: could not get agent %d's database after reclaiming it; try again\n", agent);
+  return -1;
+}
+
+static void detach(int agent) {
+  if (g_seg[agent] == NULL) return;
+  shmdt(g_seg[agent]);
+  g_seg[agent] = NULL;
+  struct shmid_ds ds;
+  if (shmctl(g_shmid[agent], IPC_STAT, &ds) == 0 && ds.shm_nattch == 0) {
+    shmctl(g_shmid[agent], IPC_RMID, NULL); /* the last one out removes it */
+    char name[64];
+    snprintf(name, sizeof name, "/canhil-rtdb-%x-%d", (unsigned)base_key(), agent);
+    sem_unlink(name);
+  }
+}
+
+static slot_header *slot(int seg, int owner, int item) {
+  if (seg < 0 || (uint32_t)seg >= g_table->n_agents || g_seg[seg] == NULL) return NULL;
+  if (owner < 0 || (uint32_t)owner >= g_table->n_agents || item < 0 || (uint32_t)item >= g_table->n_items) return NULL;
+  const int64_t off = *offset_at(seg, owner, item);
+  return off < 0 ? NULL : (slot_header *)((char *)g_seg[seg] + off);
+}
+
+static void write_slot(slot_header *s, const void *value, int64_t stamp) {
+  uint32_t seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
+  for (;;) { /* take the slot: even -> odd (one writer at a time) */
+    if ((seq & 1u) == 0 &&
+        atomic_compare_exchange_weak_explicit(&s->seq, &seq, seq + 1, memory_order_acquire, memory_order_relaxed)) {
+      break;
+    }
+    seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
+  }
+  atomic_thread_fence(memory_order_release);
+  memcpy((char *)(s + 1), value, s->size);
+  s->stamp_ns = stamp;
+  atomic_store_explicit(&s->seq, seq + 2, memory_order_release);
+}
+
+static int read_slot(const slot_header *s, void *value) {
+  for (;;) {
+    const uint32_t before = atomic_load_explicit(&s->seq, memory_order_acquire);
+    if (before & 1u) continue;
+    memcpy(value, (const char *)(s + 1), s->size);
+    const int64_t stamp = s->stamp_ns;
+    atomic_thread_fence(memory_order_acquire);
+    if (atomic_load_explicit(&s->seq, memory_order_relaxed) == before) {
+      const int64_t age = (now_ns() - stamp) / 1000000;
+      return age < 0 ? 0 : (age > INT_MAX ? INT_MAX : (int)age);
+    }
+  }
+}
+
+static int parse_agent(void) {
+  const char *a = getenv("AGENT");
+  if (a == NULL || *a == '\0') {
+    fprintf(stderr, "rtdb: AGENT is not set; set it to this process's agent number:");
+    for (uint32_t i = 0; i < g_table->n_agents; ++i) fprintf(stderr, " %u=%s", i, g_table->agents[i].name);
+    fprintf(stderr, "\n");
+    return -1;
+  }
+  char *end = NULL;
+  const long n = strtol(a, &end, 10);
+  if (*end != '\0' || n < 0 || n >= (long)g_table->n_agents) {
+    fprintf(stderr, "rtdb: AGENT=%s is not an agent number; use 0 to %u\n", a, g_table->n_agents - 1);
+    return -1;
+  }
+  return (int)n;
+}
+
+int DB_init(void) {
+  if (g_me >= 0) return 0;
+  const int me = parse_agent();
+  if (me < 0 || compute_layout() < 0) return -1;
+  if (attach(me) < 0) return -1;
+  g_me = me;
+  return 0;
+}
+
+void DB_free(void) {
+  if (g_me < 0) return;
+  if (g_frame_sem != NULL) {
+    sem_close(g_frame_sem);
+    g_frame_sem = NULL;
+  }
+  if (!g_all) detach(g_me);
+  g_me = -1;
+}
+
+int DB_init_all(int second_rtdb) {
+  (void)second_rtdb;
+  if (g_all) return 0;
+  if (compute_layout() < 0) return -1;
+  for (uint32_t a = 0; a < g_table->n_agents; ++a) {
+    if (attach((int)a) < 0) {
+      for (uint32_t b = 0; b < a; ++b) detach((int)b);
+      return -1;
+    }
+  }
+  g_all = 1;
+  return 0;
+}
+
+void DB_free_all(int second_rtdb) {
+  (void)second_rtdb;
+  if (!g_all) return;
+  for (uint32_t a = 0; a < g_table->n_agents; ++a) {
+    if ((int)a != g_me) detach((int)a);
+  }
+  g_all = 0;
+  if (g_me >= 0) {
+    const int me = g_me;
+    g_me = -1;
+    detach(me);
+  }
+}
+
+int Whoami(void) { return g_me; }
+
+int DB_put(int id, void *value) {
+  slot_header *s = slot(g_me, g_me, id);
+  if (s == NULL || value == NULL) return -1;
+  write_slot(s, value, now_ns());
+  return 0;
+}
+
+int DB_get(int from_agent, int id, void *value) {
+  const slot_header *s = slot(g_me, from_agent, id);
+  if (s == NULL || value == NULL) return -1;
+  return read_slot(s, value);
+}
+
+int DB_put_in(int agent, int to_agent, int id, void *value, int life) {
+  slot_header *s = slot(agent, to_agent, id);
+  if (s == NULL || value == NULL || life < 0) return -1;
+  write_slot(s, value, now_ns() - (int64_t)life * 1000000);
+  return 0;
+}
+
+int DB_get_from(int agent, int from_agent, int id, void *value) {
+  const slot_header *s = slot(agent, from_agent, id);
+  if (s == NULL || value == NULL) return -1;
+  return read_slot(s, value);
+}
+
+int DB_agent_count(void) { return (int)g_table->n_agents; }
+int DB_item_count(void) { return (int)g_table->n_items; }
+const char *DB_agent_name(int agent) {
+  return agent >= 0 && (uint32_t)agent < g_table->n_agents ? g_table->agents[agent].name : NULL;
+}
+const char *DB_item_name(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? g_table->items[id].name : NULL; }
+int DB_item_size(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? (int)g_table->items[id].size : -1; }
+int DB_item_shared(int agent, int id) {
+  if (agent < 0 || (uint32_t)agent >= g_table->n_agents || id < 0 || (uint32_t)id >= g_table->n_items) return -1;
+  return g_table->agents[agent].membership[id];
+}
+
+static sem_t *frame_sem(int agent) {
+  char name[64];
+  snprintf(name, sizeof name, "/canhil-rtdb-%x-%d", (unsigned)base_key(), agent);
+  sem_t *s = sem_open(name, O_CREAT, 0600, 0);
+  return s == SEM_FAILED ? NULL : s;
+}
+
+int DB_signal_frame(int agent) {
+  if (agent < 0 || (uint32_t)agent >= g_table->n_agents) return -1;
+  sem_t *s = frame_sem(agent);
+  if (s == NULL) return -1;
+  int value = 0;
+  if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);
+  sem_close(s);
+  return 0;
+}
+
+int DB_wait_frame(int timeout_ms) {
+  if (g_me < 0) return -1;
+  if (g_frame_sem == NULL && (g_frame_sem = frame_sem(g_me)) == NULL) return -1;
+  int r;
+  if (timeout_ms < 0) {
+    do {
+      r = sem_wait(g_frame_sem);
+    } while (r < 0 && errno == EINTR);
+  } else {
+    struct timespec deadline;
+    clock_gettime(CLOCK_REALTIME, &deadline);
+    deadline.tv_sec += timeout_ms / 1000;
+    deadline.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
+    if (deadline.tv_nsec >= 1000000000L) {
+      deadline.tv_sec += 1;
+      deadline.tv_nsec -= 1000000000L;
+    }
+    do {
+      r = sem_timedwait(g_frame_sem, &deadline);
+    } while (r < 0 && errno == EINTR);
+    if (r < 0 && errno == ETIMEDOUT) return 1;
+  }
+  if (r < 0) return -1;
+  while (sem_trywait(g_frame_sem) == 0) {
+  } /* several posts wake once */
+  return 0;
+}

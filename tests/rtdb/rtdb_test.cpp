@@ -1,0 +1,292 @@
+// The RTDB C API: agents kept apart (in one process and in two), shared items
+// reaching the others through the replicator, no torn values, ages, bad
+// input, crashed runs reclaimed, owner-only segments removed on exit.
+#include "canhil/rtdb/rtdb.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/ipc.h>
+#include <sys/shm.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <thread>
+
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/replicator.hpp"
+#include "rtdb_user.h"
+
+namespace {
+
+using namespace std::chrono_literals;
+
+// Every test gets its own System V keys, so runs never meet.
+class Rtdb : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static int counter = 0;
+    key_ = 0x5A000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6);
+    setenv("RTDB_KEY", std::to_string(key_).c_str(), 1);
+    setenv("AGENT", "1", 1);
+  }
+  void TearDown() override {
+    DB_free_all(0);
+    DB_free();
+    for (int a = 0; a < N_AGENTS; ++a) {  // nothing may be left behind
+      EXPECT_LT(shmget(key_ + a, 0, 0), 0) << "agent " << a << "'s segment was not removed";
+    }
+  }
+  int key_ = 0;
+};
+
+TEST_F(Rtdb, ConfigurationIsTheShippedOne) {
+  EXPECT_EQ(DB_agent_count(), N_AGENTS);
+  EXPECT_EQ(DB_item_count(), N_ITEMS);
+  EXPECT_STREQ(DB_agent_name(CAMBADA_1), "CAMBADA_1");
+  EXPECT_STREQ(DB_item_name(CMD_VEL), "CMD_VEL");
+  EXPECT_EQ(DB_item_size(VISION_INFO), static_cast<int>(sizeof(VisionInfo)));
+  EXPECT_EQ(DB_item_shared(CAMBADA_1, ROBOT_WS), 1);
+  EXPECT_EQ(DB_item_shared(CAMBADA_1, CMD_VEL), 0);
+  EXPECT_EQ(DB_item_shared(BASE_STATION, CMD_VEL), -1);
+  EXPECT_EQ(DB_item_name(N_ITEMS), nullptr);
+}
+
+TEST_F(Rtdb, PutGetRoundTripWithAge) {
+  ASSERT_EQ(DB_init(), 0);
+  EXPECT_EQ(Whoami(), 1);
+  CMD_Vel v{0.5f, -0.25f, 1.5f, true};
+  ASSERT_EQ(DB_put(CMD_VEL, &v), 0);
+  CMD_Vel back{};
+  const int age = DB_get(CAMBADA_1, CMD_VEL, &back);
+  EXPECT_GE(age, 0);
+  EXPECT_LT(age, 1000);
+  EXPECT_EQ(std::memcmp(&v, &back, sizeof v), 0);
+}
+
+TEST_F(Rtdb, BadIdsAndAgentsAreErrors) {
+  CMD_Vel v{};
+  EXPECT_EQ(DB_put(CMD_VEL, &v), -1) << "before DB_init";
+  EXPECT_EQ(DB_get(1, CMD_VEL, &v), -1);
+  EXPECT_EQ(Whoami(), -1);
+  ASSERT_EQ(DB_init(), 0);
+  EXPECT_EQ(DB_put(N_ITEMS, &v), -1);
+  EXPECT_EQ(DB_put(-1, &v), -1);
+  EXPECT_EQ(DB_put(COACH_INFO, &v), -1) << "not in a player's schema";
+  EXPECT_EQ(DB_get(N_AGENTS, CMD_VEL, &v), -1);
+  EXPECT_EQ(DB_get(CAMBADA_2, CMD_VEL, &v), -1) << "another robot's local item is not here";
+  EXPECT_EQ(DB_put(CMD_VEL, nullptr), -1);
+}
+
+TEST_F(Rtdb, AgentEnvironmentIsChecked) {
+  unsetenv("AGENT");
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(DB_init(), -1);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("AGENT is not set"), std::string::npos);
+  setenv("AGENT", "99", 1);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(DB_init(), -1);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("use 0 to 6"), std::string::npos);
+}
+
+TEST_F(Rtdb, NeverWrittenItemsReadAsZerosAndLifeAgesAWrite) {
+  ASSERT_EQ(DB_init_all(0), 0);
+  CMD_Pos p{1, 2, 3, 4, 5, 6};
+  ASSERT_GE(DB_get_from(CAMBADA_2, CAMBADA_2, CMD_POS, &p), 0);
+  EXPECT_EQ(p.px, 0.0f);
+  CMD_Pos q{1, 2, 3, 0, 0, 0};
+  ASSERT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_POS, &q, 250), 0);
+  const int age = DB_get_from(CAMBADA_2, CAMBADA_2, CMD_POS, &p);
+  EXPECT_GE(age, 250);
+  EXPECT_LT(age, 1250);
+  EXPECT_EQ(p.py, 2.0f);
+  EXPECT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_POS, &q, -5), -1);
+}
+
+TEST_F(Rtdb, TwoAgentsInOneProcessKeepLocalItemsApartAndShareThroughTheReplicator) {
+  ASSERT_EQ(DB_init_all(0), 0);
+  CMD_Vel v1{1, 1, 1, false};
+  CMD_Vel v2{2, 2, 2, false};
+  ASSERT_EQ(DB_put_in(CAMBADA_1, CAMBADA_1, CMD_VEL, &v1, 0), 0);
+  ASSERT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_VEL, &v2, 0), 0);
+  CMD_Vel out{};
+  DB_get_from(CAMBADA_1, CAMBADA_1, CMD_VEL, &out);
+  EXPECT_EQ(out.vx, 1.0f);
+  DB_get_from(CAMBADA_2, CAMBADA_2, CMD_VEL, &out);
+  EXPECT_EQ(out.vx, 2.0f);
+  EXPECT_EQ(DB_get_from(CAMBADA_2, CAMBADA_1, CMD_VEL, &out), -1) << "local items are not visible to others";
+
+  RobotWS w{3.0f, 4.0f, 0.5f, 1, 7};
+  ASSERT_EQ(DB_put_in(CAMBADA_1, CAMBADA_1, ROBOT_WS, &w, 0), 0);
+  RobotWS seen{};
+  DB_get_from(CAMBADA_2, CAMBADA_1, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 0u) << "not replicated yet";
+  canhil::rtdb::Replicator rep({});
+  rep.cycle(0ns);
+  DB_get_from(CAMBADA_2, CAMBADA_1, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 7u);
+  EXPECT_EQ(seen.x, 3.0f);
+  DB_get_from(BASE_STATION, CAMBADA_1, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 7u) << "the base station gets it too";
+  // Every cycle copies every shared item (the base station's COACH_INFO and
+  // the six robots' ROBOT_WS) to the six other agents.
+  EXPECT_EQ(rep.stats().copied, 7u * (N_AGENTS - 1));
+}
+
+TEST_F(Rtdb, ReplicatorDelayAndLossAreApplied) {
+  ASSERT_EQ(DB_init_all(0), 0);
+  canhil::rtdb::ReplicatorConfig cfg;
+  cfg.delay = 300ms;
+  canhil::rtdb::Replicator rep(cfg);
+  RobotWS w{0, 0, 0, 1, 42};
+  DB_put_in(CAMBADA_3, CAMBADA_3, ROBOT_WS, &w, 0);
+  rep.cycle(0ms);
+  RobotWS seen{};
+  DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 0u) << "still in flight";
+  rep.cycle(200ms);
+  DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 0u);
+  rep.cycle(300ms);
+  const int age = DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 42u) << "arrived after the delay";
+  EXPECT_GE(age, 300) << "aged by its time in flight";
+
+  canhil::rtdb::ReplicatorConfig lossy;
+  lossy.loss = 0.5;
+  lossy.seed = 9;
+  canhil::rtdb::Replicator r2(lossy);
+  for (int i = 0; i < 200; ++i) r2.cycle(std::chrono::milliseconds(100 * i));
+  const double lost = static_cast<double>(r2.stats().lost) / static_cast<double>(r2.stats().lost + r2.stats().copied);
+  EXPECT_NEAR(lost, 0.5, 0.05);
+  canhil::rtdb::Replicator r3(lossy);
+  for (int i = 0; i < 200; ++i) r3.cycle(std::chrono::milliseconds(100 * i));
+  EXPECT_EQ(r3.stats().lost, r2.stats().lost) << "seeded: the same losses";
+}
+
+TEST_F(Rtdb, TwoAgentsInTwoProcesses) {
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    setenv("AGENT", "1", 1);
+    if (DB_init() != 0) _exit(10);
+    CMD_Vel v{1.5f, 0, 0, false};
+    RobotWS w{0, 0, 0, 1, 99};
+    DB_put(CMD_VEL, &v);
+    DB_put(ROBOT_WS, &w);
+    (void)!write(ready[1], "x", 1);
+    char c;
+    (void)!read(ready[0], &c, 1);  // wait until the parent is done
+    DB_free();
+    _exit(0);
+  }
+  char c;
+  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  setenv("AGENT", "2", 1);
+  ASSERT_EQ(DB_init(), 0);
+  CMD_Vel mine{2.5f, 0, 0, false};
+  ASSERT_EQ(DB_put(CMD_VEL, &mine), 0);
+  CMD_Vel out{};
+  DB_get(CAMBADA_2, CMD_VEL, &out);
+  EXPECT_EQ(out.vx, 2.5f) << "its own item, not the other process's";
+  EXPECT_EQ(DB_get(CAMBADA_1, CMD_VEL, &out), -1);
+  // The replicator (here in this process) carries the shared item across.
+  ASSERT_EQ(DB_init_all(0), 0);
+  canhil::rtdb::Replicator rep({});
+  rep.cycle(0ns);
+  RobotWS seen{};
+  DB_get(CAMBADA_1, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 99u);
+  (void)!write(ready[1], "x", 1);
+  int status = 0;
+  waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  close(ready[0]);
+  close(ready[1]);
+}
+
+TEST_F(Rtdb, NoReaderEverSeesAHalfWrittenItem) {
+  ASSERT_EQ(DB_init(), 0);
+  std::atomic<bool> stop{false};
+  std::atomic<long> torn{0};
+  std::atomic<long> reads{0};
+  std::thread reader([&] {
+    VisionInfo v;  // 4.8 kB: a copy takes long enough to be caught mid-write
+    while (!stop) {
+      DB_get(CAMBADA_1, VISION_INFO, &v);
+      const int k = v.nBalls;
+      for (int i = 0; i < MAX_POINTS; ++i) {
+        if (v.linePoints.point[i].x != static_cast<float>(k) || v.obstacles.point[i].y != static_cast<float>(k)) {
+          ++torn;
+          break;
+        }
+      }
+      ++reads;
+    }
+  });
+  auto v = std::make_unique<VisionInfo>();
+  for (int k = 0; k < 200000 && torn == 0; ++k) {
+    v->nBalls = k;
+    for (int i = 0; i < MAX_POINTS; ++i) {
+      v->linePoints.point[i] = {static_cast<float>(k), static_cast<float>(k)};
+      v->obstacles.point[i] = {static_cast<float>(k), static_cast<float>(k)};
+    }
+    DB_put(VISION_INFO, v.get());
+  }
+  stop = true;
+  reader.join();
+  EXPECT_EQ(torn.load(), 0);
+  EXPECT_GT(reads.load(), 1000);
+}
+
+TEST_F(Rtdb, SegmentsAreOwnerOnlyAndRemovedOnCleanExit) {
+  ASSERT_EQ(DB_init(), 0);
+  const int id = shmget(key_ + 1, 0, 0);
+  ASSERT_GE(id, 0);
+  shmid_ds ds{};
+  ASSERT_EQ(shmctl(id, IPC_STAT, &ds), 0);
+  EXPECT_EQ(ds.shm_perm.mode & 0777, 0600);
+  DB_free();
+  EXPECT_LT(shmget(key_ + 1, 0, 0), 0) << "the last process out removes the segment";
+}
+
+TEST_F(Rtdb, ACrashedRunsSegmentIsReclaimed) {
+  const pid_t child = fork();
+  if (child == 0) {
+    if (DB_init() != 0) _exit(10);
+    CMD_Vel v{9, 9, 9, true};
+    DB_put(CMD_VEL, &v);
+    kill(getpid(), SIGKILL);  // crash: no DB_free
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  ASSERT_GE(shmget(key_ + 1, 0, 0), 0) << "the crash left the segment behind";
+  testing::internal::CaptureStderr();
+  ASSERT_EQ(DB_init(), 0);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("reclaiming agent 1's database left by a crashed run"),
+            std::string::npos);
+  CMD_Vel v{};
+  DB_get(CAMBADA_1, CMD_VEL, &v);
+  EXPECT_EQ(v.vx, 0.0f) << "a fresh database, not the crashed run's values";
+}
+
+TEST_F(Rtdb, VisionWakesTheAgent) {
+  ASSERT_EQ(DB_init(), 0);
+  EXPECT_EQ(DB_wait_frame(20), 1) << "nothing posted: timeout";
+  std::thread vision([] {
+    std::this_thread::sleep_for(20ms);
+    DB_signal_frame(CAMBADA_1);
+    DB_signal_frame(CAMBADA_1);
+  });
+  EXPECT_EQ(DB_wait_frame(5000), 0);
+  vision.join();
+  EXPECT_EQ(DB_wait_frame(20), 1) << "two posts while busy wake once";
+}
+
+}  // namespace
