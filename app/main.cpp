@@ -24,6 +24,11 @@ usage:
   canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
   canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
                                               one robot's emulated nodes with physics, real time
+  canhil rtdb list                            agents and items of the RTDB on this machine, with ages
+  canhil rtdb dump|watch ITEM [--agent A] [--from B]
+                                              one item (known types decoded, others in hex); watch repeats
+  canhil rtdb replicate [--period-ms 100] [--delay-ms 0] [--loss 0] [--seed 1]
+                                              copy shared items between agents (the team's wireless)
   canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],
                                               ball-roll [--speed MPS], kick [--low|--high] [--power P],
@@ -58,6 +63,7 @@ int main(int argc, char** argv) {
     if (command == "dump") return canhil::app::run_dump(args, dbc);
     if (command == "experiment") return canhil::app::run_experiment(args);
     if (command == "nodes") return canhil::app::run_nodes(args, dbc);
+    if (command == "rtdb") return canhil::app::run_rtdb(args);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");
   } catch (const canhil::app::UsageError& e) {
     std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);
