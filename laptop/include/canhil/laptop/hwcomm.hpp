@@ -1,0 +1,84 @@
+// canhil/laptop/hwcomm.hpp — the reference low-level communication handler:
+// an FTT slave between the CAN bus and this robot's RTDB.
+//
+//   bus -> RTDB   M4_1 + M4_2 -> CMD_POS    M2, M9 -> CMD_INFO   M9 -> CMD_GRABBER_INFO
+//                 M8 -> CMD_IMU             M10 (+ own counts) -> CMD_HWERRORS
+//   RTDB -> bus   CMD_VEL -> M6_1 + M6_2 in their synchronous slots
+//                 CMD_KICKER (power != 0) -> M7 once, then power reset to 0; CMD_GRABBER changes -> M7
+//                 CMD_SETPOSE (pending) -> M5_1 + M5_2 once
+//
+// Uses only the DBC codec and the RTDB C API (DB_init by the caller); the
+// transport and the clock are the caller's: canhil-hwcomm uses SocketCAN and
+// the wall clock, tests the memory bus and virtual time.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "canhil/frames/messages.hpp"
+
+namespace canhil::laptop {
+
+using Nanos = frames::Nanos;
+inline constexpr std::size_t kMaxLatencySamples = 1'000'000;
+
+struct HwCommStats {
+  std::map<std::string, std::uint64_t> received;  ///< per message name
+  std::map<std::string, std::uint64_t> sent;
+  std::uint64_t wrong_length = 0;
+  std::uint64_t out_of_range = 0;
+  std::uint64_t unknown_id = 0;
+  std::uint64_t missed_tms = 0;     ///< gaps in the TM's ec_counter
+  std::uint64_t send_failed = 0;
+  std::uint64_t kicks_sent = 0;
+  std::vector<Nanos> latencies;     ///< receive timestamp -> RTDB write, per update (first kMaxLatencySamples)
+};
+
+class HwComm {
+ public:
+  using Send = std::function<bool(const frames::CanFrame&)>;
+  using Clock = std::function<Nanos()>;
+
+  /// `ec` is the elementary cycle (the TM carries the window, not the EC).
+  HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock);
+
+  /// A received frame with its receive timestamp.
+  void on_frame(const frames::CanFrame& frame, Nanos rx_time);
+  /// When the handler must act next (its M6 slot), or Nanos::max().
+  Nanos next_deadline() const noexcept { return m6_slot_; }
+  /// Acts at `now` (call at or after next_deadline()).
+  void on_time(Nanos now);
+
+  const HwCommStats& stats() const noexcept { return stats_; }
+  /// Multi-line summary for the end of a run.
+  std::string summary() const;
+
+ private:
+  void send(const frames::CanFrame& f, const char* name);
+  void on_tm(const frames::Tm& tm, Nanos rx_time);
+  void latency(Nanos rx_time);
+  void write_hwerrors();
+
+  std::shared_ptr<const frames::MessageSet> set_;
+  Nanos ec_;
+  Send send_;
+  Clock clock_;
+  HwCommStats stats_;
+  Nanos m6_slot_ = Nanos::max();
+  bool have_tm_ = false;
+  std::uint16_t last_ec_ = 0;
+  bool have_m4_1_ = false;
+  frames::M4_1 m4_1_{};
+  bool have_pose_ = false;
+  float last_px_ = 0, last_py_ = 0, last_pa_ = 0;
+  Nanos last_m7_ = -Nanos(std::chrono::hours(24 * 365));
+  Nanos last_m5_ = -Nanos(std::chrono::hours(24 * 365));
+  int last_grabber_ = -1;
+  std::uint8_t m6_seq_ = 0;
+  frames::M10 m10_{};
+};
+
+}  // namespace canhil::laptop

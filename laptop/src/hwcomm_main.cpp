@@ -1,0 +1,102 @@
+// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S]
+//
+// The reference low-level communication handler: this robot's RTDB (AGENT)
+// on one side, its CAN bus on the other. Runs until Ctrl-C (or --duration)
+// and prints a summary, with the latency from each frame's kernel receive
+// timestamp to its RTDB write.
+#include <poll.h>
+#include <sys/timerfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "canhil/frames/messages.hpp"
+#include "canhil/laptop/hwcomm.hpp"
+#include "canhil/laptop/raw_can.hpp"
+#include "canhil/rtdb/rtdb.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+canhil::laptop::Nanos wall_now() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return std::chrono::seconds(ts.tv_sec) + canhil::laptop::Nanos(ts.tv_nsec);
+}
+
+int usage(const char* why) {
+  std::fprintf(stderr, "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S]\n", why);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string iface;
+  std::string dbc = canhil::frames::default_dbc_path().string();
+  double ec_ms = 10;
+  double duration_s = 0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) return usage(("missing value for " + a).c_str());
+    if (a == "--iface") {
+      iface = argv[++i];
+    } else if (a == "--dbc") {
+      dbc = argv[++i];
+    } else if (a == "--ec-ms") {
+      ec_ms = std::atof(argv[++i]);
+    } else if (a == "--duration") {
+      duration_s = std::atof(argv[++i]);
+    } else {
+      return usage(("unknown option " + a).c_str());
+    }
+  }
+  if (iface.empty()) return usage("--iface is required");
+  try {
+    auto set = canhil::frames::MessageSet::load(dbc);
+    canhil::laptop::RawCan can(iface);
+    if (DB_init() != 0) return 2;
+    const auto ec = std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
+    canhil::laptop::HwComm hw(set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now);
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    const int timer = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
+    const canhil::laptop::Nanos end =
+        duration_s > 0 ? wall_now() + std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double>(duration_s))
+                       : canhil::laptop::Nanos::max();
+    std::printf("canhil-hwcomm: agent %d (%s) on %s\n", Whoami(), DB_agent_name(Whoami()), iface.c_str());
+    std::fflush(stdout);
+    while (!g_stop && wall_now() < end) {
+      pollfd p[2] = {{can.fd(), POLLIN, 0}, {timer, POLLIN, 0}};
+      const canhil::laptop::Nanos deadline = hw.next_deadline();
+      timespec timeout{0, 100'000'000};
+      if (deadline != canhil::laptop::Nanos::max()) {
+        itimerspec spec{};
+        spec.it_value.tv_sec = static_cast<time_t>(deadline.count() / 1'000'000'000);
+        spec.it_value.tv_nsec = static_cast<long>(deadline.count() % 1'000'000'000);
+        timerfd_settime(timer, TFD_TIMER_ABSTIME, &spec, nullptr);
+      }
+      ::ppoll(p, 2, &timeout, nullptr);
+      if ((p[1].revents & POLLIN) != 0) {
+        std::uint64_t n = 0;
+        [[maybe_unused]] const auto r = ::read(timer, &n, sizeof n);
+      }
+      while (auto f = can.receive()) hw.on_frame(f->frame, f->time);
+      if (wall_now() >= hw.next_deadline()) hw.on_time(wall_now());
+    }
+    ::close(timer);
+    std::printf("canhil-hwcomm: summary\n%s", hw.summary().c_str());
+    DB_free();
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "canhil-hwcomm: %s\n", e.what());
+    return 2;
+  }
+}

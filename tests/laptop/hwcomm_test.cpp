@@ -1,0 +1,166 @@
+// The reference handler in virtual time: HwComm on the memory bus against the
+// emulated nodes and the physics, with a real RTDB.
+#include "canhil/laptop/hwcomm.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/shm.h>
+#include <unistd.h>
+
+#include <cstdlib>
+
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/rtdb.h"
+#include "rtdb_user.h"
+#include "support/test_paths.hpp"
+
+namespace canhil::laptop {
+namespace {
+
+using namespace std::chrono_literals;
+
+// HwComm as a participant of the lockstep runner, on a memory endpoint.
+class HwCommParticipant final : public emulator::Participant {
+ public:
+  HwCommParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set,
+                    const can_nodes::SimulatedClock& clock)
+      : ep_(bus.attach("laptop", 1 << 16)),
+        hw_(std::move(set), 10ms, [this](const frames::CanFrame& f) { return send(f); }, [&clock] { return clock.now(); }) {}
+  std::size_t poll() override {
+    std::size_t n = 0;
+    while (auto f = ep_->receive()) {
+      ++n;
+      hw_.on_frame(f->frame, f->time);
+    }
+    return n;
+  }
+  void tick(can_nodes::Nanos now) override { hw_.on_time(now); }
+  can_nodes::Nanos next_wakeup() const override { return hw_.next_deadline(); }
+  bool send(const frames::CanFrame& f) {
+    sent_.push_back(f);
+    return ep_->send(f) == can_nodes::SendStatus::kOk;
+  }
+  HwComm& hw() { return hw_; }
+  std::vector<frames::CanFrame> sent_;
+
+ private:
+  std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
+  HwComm hw_;
+};
+
+class HwCommTest : public ::testing::Test {
+ protected:
+  HwCommTest() {
+    setenv("RTDB_KEY", std::to_string(0x5B000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+    setenv("AGENT", "1", 1);
+    EXPECT_EQ(DB_init(), 0);
+    set_ = frames::MessageSet::load(test::shipped_dbc());
+    physics::WorldParams wp;
+    wp.robots = {physics::Placement{0, 0, 0}};
+    wp.ball_start = {0, 0.26, wp.ball.radius_m};  // in the mouth
+    world_ = std::make_unique<physics::World>(wp);
+    io_ = std::make_unique<emulator::PhysicsRobotIo>(world_->robot(0));
+    params_ = emulator::node_params_for(wp.robot);
+    bus_ = std::make_unique<can_nodes::MemoryBus>(clock_);
+    nodes_ = std::make_unique<emulator::RobotNodes>(
+        set_, params_, *io_, [this](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus_->attach(n)); },
+        can_nodes::Nanos{0});
+    laptop_ = std::make_unique<HwCommParticipant>(*bus_, set_, clock_);
+    run_ = std::make_unique<emulator::Lockstep>(clock_, world_.get());
+    for (can_nodes::Node* n : nodes_->nodes()) run_->add(*n);
+    run_->add(*laptop_);
+  }
+  ~HwCommTest() override { DB_free(); }
+  int count_sent(std::uint32_t id) const {
+    int n = 0;
+    for (const auto& f : laptop_->sent_) n += f.id == id ? 1 : 0;
+    return n;
+  }
+
+  std::shared_ptr<const frames::MessageSet> set_;
+  can_nodes::SimulatedClock clock_;
+  std::unique_ptr<physics::World> world_;
+  std::unique_ptr<emulator::PhysicsRobotIo> io_;
+  can_nodes::NodeParams params_;
+  std::unique_ptr<can_nodes::MemoryBus> bus_;
+  std::unique_ptr<emulator::RobotNodes> nodes_;
+  std::unique_ptr<HwCommParticipant> laptop_;
+  std::unique_ptr<emulator::Lockstep> run_;
+};
+
+TEST_F(HwCommTest, CmdVelMovesCmdPos) {
+  CMD_Vel v{0, 0.5f, 0, false};
+  DB_put(CMD_VEL, &v);
+  run_->run_until(2s);
+  CMD_Vel stop{0, 0, 0, false};
+  DB_put(CMD_VEL, &stop);
+  run_->run_for(600ms);
+  CMD_Pos p{};
+  const int age = DB_get(CAMBADA_1, CMD_POS, &p);
+  EXPECT_GE(age, 0);
+  EXPECT_NEAR(p.py, 1.0, 0.1);
+  EXPECT_NEAR(p.px, 0.0, 0.02);
+  EXPECT_EQ(count_sent(0x131), count_sent(0x132));
+  EXPECT_GE(count_sent(0x131), 85) << "M6 in every third EC: about 87 in 2.6 s";
+  EXPECT_EQ(nodes_->bad_frames(), 0u);
+}
+
+TEST_F(HwCommTest, KickerCommandIsSentExactlyOnceAndReset) {
+  CMD_Grabber g{100};
+  DB_put(CMD_GRABBER, &g);
+  run_->run_until(1200ms);  // the grabber M7 went out; its minimum gap has passed
+  const int m7_before = count_sent(0x0B0);
+  EXPECT_EQ(m7_before, 1) << "one M7 for the grabber change";
+  CMD_Grabber_Info gi{};
+  DB_get(CAMBADA_1, CMD_GRABBER_INFO, &gi);
+  ASSERT_EQ(gi.ballEngaged, 1);
+  CMD_Kicker k{static_cast<unsigned char>(0x80 | 40), 0, 0};
+  DB_put(CMD_KICKER, &k);
+  run_->run_for(3s);
+  EXPECT_EQ(count_sent(0x0B0), m7_before + 1) << "exactly one M7 for the kick";
+  EXPECT_EQ(laptop_->hw().stats().kicks_sent, 1u);
+  CMD_Kicker after{};
+  DB_get(CAMBADA_1, CMD_KICKER, &after);
+  EXPECT_EQ(after.power, 0) << "power reset once sent";
+  EXPECT_GT(world_->ball_position().y(), 2.0) << "the ball was kicked";
+}
+
+TEST_F(HwCommTest, BusToRtdbItemsAreWritten) {
+  CMD_Vel v{0, 0.3f, 0.2f, false};
+  DB_put(CMD_VEL, &v);
+  run_->run_until(1500ms);
+  CMD_Info info{};
+  EXPECT_GE(DB_get(CAMBADA_1, CMD_INFO, &info), 0);
+  EXPECT_NEAR(info.Voltage_power24 / 100.0, 25.0, 1.0);
+  EXPECT_NEAR(info.Kicker_voltage / 100.0, 180.0, 1.0);
+  CMD_Imu imu{};
+  DB_get(CAMBADA_1, CMD_IMU, &imu);
+  const double heading = world_->robot(0).compass_heading_deg();
+  EXPECT_NEAR(imu.yaw / 100.0, heading, 2.0);
+  CMD_HWerrors e{};
+  DB_get(CAMBADA_1, CMD_HWERRORS, &e);
+  EXPECT_EQ(e.error_count[0][1], 0x3F) << "all nodes alive, from M10";
+  EXPECT_EQ(e.error_count[0][0], 0) << "no bad frames";
+  EXPECT_FALSE(laptop_->hw().stats().latencies.empty());
+}
+
+TEST_F(HwCommTest, SetPoseAndResetThroughM5) {
+  CMD_SetPose sp{1.5f, -2.0f, 0.75f, 0, 1};
+  DB_put(CMD_SETPOSE, &sp);
+  run_->run_until(300ms);
+  CMD_Pos p{};
+  DB_get(CAMBADA_1, CMD_POS, &p);
+  EXPECT_NEAR(p.px, 1.5, 1e-3);
+  EXPECT_NEAR(p.py, -2.0, 1e-3);
+  EXPECT_NEAR(p.pa, 0.75, 1e-4);
+  CMD_SetPose after{};
+  DB_get(CAMBADA_1, CMD_SETPOSE, &after);
+  EXPECT_EQ(after.pending, 0);
+  EXPECT_EQ(count_sent(0x0A1), 1);
+  EXPECT_EQ(count_sent(0x0A2), 1);
+}
+
+}  // namespace
+}  // namespace canhil::laptop
