@@ -1,11 +1,11 @@
 // `canhil rtdb list|dump|watch|replicate`: look into the RTDB of every agent on
 // this machine (canhil's shipped item configuration), and run the replicator.
 #include <atomic>
-#include <stdexcept>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -48,11 +48,13 @@ std::string decode(const std::string& item, const std::vector<unsigned char>& ra
   if (item == "CMD_VEL") {
     CMD_Vel v;
     as(&v);
-    std::snprintf(buf, sizeof buf, "vx=%.3f m/s vy=%.3f m/s va=%.3f rad/s smallAdjustment=%d", v.vx, v.vy, v.va, v.smallAdjustment);
+    std::snprintf(buf, sizeof buf, "vx=%.3f m/s vy=%.3f m/s va=%.3f rad/s smallAdjustment=%d", v.vx, v.vy, v.va,
+                  v.smallAdjustment);
   } else if (item == "CMD_POS") {
     CMD_Pos p;
     as(&p);
-    std::snprintf(buf, sizeof buf, "px=%.4f py=%.4f pa=%.5f dx=%.4f dy=%.4f da=%.5f", p.px, p.py, p.pa, p.dx, p.dy, p.da);
+    std::snprintf(buf, sizeof buf, "px=%.4f py=%.4f pa=%.5f dx=%.4f dy=%.4f da=%.5f", p.px, p.py, p.pa, p.dx, p.dy,
+                  p.da);
   } else if (item == "CMD_KICKER") {
     CMD_Kicker k;
     as(&k);
@@ -66,8 +68,8 @@ std::string decode(const std::string& item, const std::vector<unsigned char>& ra
     CMD_Info i;
     as(&i);
     std::snprintf(buf, sizeof buf, "logic=%.2f V power12=%.2f V power24=%.2f V kicker=%.2f V justKicked=%d",
-                  i.Voltage_logic / 100.0, i.Voltage_power12 / 100.0, i.Voltage_power24 / 100.0, i.Kicker_voltage / 100.0,
-                  i.justKicked);
+                  i.Voltage_logic / 100.0, i.Voltage_power12 / 100.0, i.Voltage_power24 / 100.0,
+                  i.Kicker_voltage / 100.0, i.justKicked);
   } else if (item == "CMD_IMU") {
     CMD_Imu i;
     as(&i);
@@ -79,11 +81,13 @@ std::string decode(const std::string& item, const std::vector<unsigned char>& ra
   } else if (item == "CMD_SETPOSE") {
     CMD_SetPose s;
     as(&s);
-    std::snprintf(buf, sizeof buf, "px=%.3f py=%.3f pa=%.4f command=%d pending=%d", s.px, s.py, s.pa, s.command, s.pending);
+    std::snprintf(buf, sizeof buf, "px=%.3f py=%.3f pa=%.4f command=%d pending=%d", s.px, s.py, s.pa, s.command,
+                  s.pending);
   } else if (item == "ROBOT_WS") {
     RobotWS w;
     as(&w);
-    std::snprintf(buf, sizeof buf, "x=%.3f y=%.3f orientation=%.4f running=%d frame=%u", w.x, w.y, w.orientation, w.running, w.frame);
+    std::snprintf(buf, sizeof buf, "x=%.3f y=%.3f orientation=%.4f running=%d frame=%u", w.x, w.y, w.orientation,
+                  w.running, w.frame);
   } else if (item == "COACH_INFO") {
     CoachInfo c;
     as(&c);
@@ -94,7 +98,8 @@ std::string decode(const std::string& item, const std::vector<unsigned char>& ra
     std::string out;
     for (int r = 0; r < 5; ++r) {
       for (int c = 0; c < 8; ++c) {
-        if (h.error_count[r][c] != 0) out += "[" + std::to_string(r) + "][" + std::to_string(c) + "]=" + std::to_string(h.error_count[r][c]) + " ";
+        if (h.error_count[r][c] != 0)
+          out += "[" + std::to_string(r) + "][" + std::to_string(c) + "]=" + std::to_string(h.error_count[r][c]) + " ";
       }
     }
     return out.empty() ? "all zero" : out;
@@ -165,15 +170,16 @@ int run_rtdb(Args& args) {
     const can_nodes::WallClock clock;
     std::printf("canhil rtdb replicate: every %lld ms, delay %lld ms, loss %.2f; Ctrl-C stops\n",
                 static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.period).count()),
-                static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.delay).count()), cfg.loss);
+                static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.delay).count()),
+                cfg.loss);
     std::fflush(stdout);
     while (!g_stop) {
       rep.cycle(clock.now());
       std::this_thread::sleep_for(cfg.period);
     }
     std::printf("canhil rtdb replicate: %llu cycles, %llu copies, %llu lost\n",
-                static_cast<unsigned long long>(rep.stats().cycles), static_cast<unsigned long long>(rep.stats().copied),
-                static_cast<unsigned long long>(rep.stats().lost));
+                static_cast<unsigned long long>(rep.stats().cycles),
+                static_cast<unsigned long long>(rep.stats().copied), static_cast<unsigned long long>(rep.stats().lost));
     return 0;
   }
   if (words.size() < 3) throw UsageError("rtdb " + sub + " needs an item name, e.g. rtdb dump CMD_POS");
@@ -185,8 +191,8 @@ int run_rtdb(Args& args) {
   do {
     const int age = DB_get_from(agent, from, item, raw.data());
     if (age < 0) {
-      throw std::invalid_argument(std::string("agent ") + DB_agent_name(agent) + "'s database has no " + words[2] + " of " +
-                       DB_agent_name(from));
+      throw std::invalid_argument(std::string("agent ") + DB_agent_name(agent) + "'s database has no " + words[2] +
+                                  " of " + DB_agent_name(from));
     }
     std::printf("%s[%s] %s age %s: %s\n", DB_agent_name(agent), DB_agent_name(from), words[2].c_str(),
                 age_text(age).c_str(), decode(words[2], raw).c_str());

@@ -8,10 +8,14 @@ namespace canhil::laptop {
 
 const char* state_name(AgentState s) noexcept {
   switch (s) {
-    case AgentState::kSearch: return "search";
-    case AgentState::kApproach: return "approach";
-    case AgentState::kAim: return "aim";
-    case AgentState::kCooldown: return "cooldown";
+    case AgentState::kSearch:
+      return "search";
+    case AgentState::kApproach:
+      return "approach";
+    case AgentState::kAim:
+      return "aim";
+    case AgentState::kCooldown:
+      return "cooldown";
   }
   return "?";
 }

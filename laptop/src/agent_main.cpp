@@ -56,7 +56,8 @@ int main(int argc, char** argv) {
     if (i + 1 >= argc) return usage("missing value for " + a);
     const std::string v = argv[++i];
     if (a == "--pose") {
-      if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &pose[0], &pose[1], &pose[2]) != 3) return usage("--pose takes X,Y,HEADING_DEG");
+      if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &pose[0], &pose[1], &pose[2]) != 3)
+        return usage("--pose takes X,Y,HEADING_DEG");
       have_pose = true;
     } else if (a == "--goal-x") {
       config.goal_x_m = std::atof(v.c_str());
@@ -72,10 +73,12 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   if (have_pose) {
-    CMD_SetPose p{static_cast<float>(pose[0]), static_cast<float>(pose[1]), static_cast<float>(pose[2] * M_PI / 180.0), 0, 1};
+    CMD_SetPose p{static_cast<float>(pose[0]), static_cast<float>(pose[1]), static_cast<float>(pose[2] * M_PI / 180.0),
+                  0, 1};
     DB_put(CMD_SETPOSE, &p);
   }
-  std::printf("canhil-agent: agent %d (%s), opponent goal at x = %.2f m\n", Whoami(), DB_agent_name(Whoami()), config.goal_x_m);
+  std::printf("canhil-agent: agent %d (%s), opponent goal at x = %.2f m\n", Whoami(), DB_agent_name(Whoami()),
+              config.goal_x_m);
   std::fflush(stdout);
   canhil::laptop::Agent agent(config);
   auto vision = std::make_unique<VisionInfo>();
@@ -111,7 +114,8 @@ int main(int argc, char** argv) {
     DB_get(Whoami(), CMD_GRABBER_INFO, &gi);
     in.ball_engaged = gi.ballEngaged != 0;
     const canhil::laptop::AgentOutput out = agent.decide(in);
-    CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps), false};
+    CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps),
+                false};
     DB_put(CMD_VEL, &vel);
     CMD_Grabber grab{static_cast<unsigned char>(out.grabber)};
     DB_put(CMD_GRABBER, &grab);

@@ -200,9 +200,11 @@ std::string HwComm::summary() const {
     std::vector<Nanos> l = stats_.latencies;
     std::sort(l.begin(), l.end());
     auto us = [](Nanos t) { return std::chrono::duration<double, std::micro>(t).count(); };
-    auto pct = [&](double p) { return l[std::min(l.size() - 1, static_cast<std::size_t>(p * static_cast<double>(l.size())))]; };
-    os << "  latency receive timestamp -> RTDB write over " << l.size() << " updates: p50 " << us(pct(0.5)) << " us, p99 "
-       << us(pct(0.99)) << " us, max " << us(l.back()) << " us\n";
+    auto pct = [&](double p) {
+      return l[std::min(l.size() - 1, static_cast<std::size_t>(p * static_cast<double>(l.size())))];
+    };
+    os << "  latency receive timestamp -> RTDB write over " << l.size() << " updates: p50 " << us(pct(0.5))
+       << " us, p99 " << us(pct(0.99)) << " us, max " << us(l.back()) << " us\n";
   }
   return os.str();
 }

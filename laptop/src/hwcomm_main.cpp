@@ -1,10 +1,12 @@
-// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S]
+// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] [--rt-priority N]
 //
 // The reference low-level communication handler: this robot's RTDB (AGENT)
 // on one side, its CAN bus on the other. Runs until Ctrl-C (or --duration)
 // and prints a summary, with the latency from each frame's kernel receive
 // timestamp to its RTDB write.
 #include <poll.h>
+#include <sched.h>
+#include <sys/mman.h>
 #include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -32,7 +34,10 @@ canhil::laptop::Nanos wall_now() {
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S]\n", why);
+  std::fprintf(stderr,
+               "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] "
+               "[--rt-priority N]\n",
+               why);
   return 2;
 }
 
@@ -43,6 +48,7 @@ int main(int argc, char** argv) {
   std::string dbc = canhil::frames::default_dbc_path().string();
   double ec_ms = 10;
   double duration_s = 0;
+  int rt_priority = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (i + 1 >= argc) return usage(("missing value for " + a).c_str());
@@ -54,23 +60,35 @@ int main(int argc, char** argv) {
       ec_ms = std::atof(argv[++i]);
     } else if (a == "--duration") {
       duration_s = std::atof(argv[++i]);
+    } else if (a == "--rt-priority") {
+      rt_priority = std::atoi(argv[++i]);
     } else {
       return usage(("unknown option " + a).c_str());
     }
   }
   if (iface.empty()) return usage("--iface is required");
+  if (rt_priority > 0) {
+    // Hardware in the loop: run before ordinary work and never page out.
+    sched_param sp{};
+    sp.sched_priority = rt_priority;
+    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0 || mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+      std::fprintf(stderr, "canhil-hwcomm: --rt-priority needs CAP_SYS_NICE (run as root); going on without it\n");
+    }
+  }
   try {
     auto set = canhil::frames::MessageSet::load(dbc);
     canhil::laptop::RawCan can(iface);
     if (DB_init() != 0) return 2;
     const auto ec = std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
-    canhil::laptop::HwComm hw(set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now);
+    canhil::laptop::HwComm hw(
+        set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const int timer = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
     const canhil::laptop::Nanos end =
-        duration_s > 0 ? wall_now() + std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double>(duration_s))
-                       : canhil::laptop::Nanos::max();
+        duration_s > 0
+            ? wall_now() + std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double>(duration_s))
+            : canhil::laptop::Nanos::max();
     std::printf("canhil-hwcomm: agent %d (%s) on %s\n", Whoami(), DB_agent_name(Whoami()), iface.c_str());
     std::fflush(stdout);
     while (!g_stop && wall_now() < end) {

@@ -50,7 +50,8 @@ std::vector<Token> tokenize(const std::string& text, const std::string& file) {
 
 bool is_identifier(const std::string& s) {
   if (s.empty() || (std::isalpha(static_cast<unsigned char>(s[0])) == 0 && s[0] != '_')) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; });
+  return std::all_of(s.begin(), s.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; });
 }
 
 class Parser {
@@ -168,11 +169,14 @@ class Parser {
     c.agent_schema.assign(c.agents.size(), -1);
     for (std::size_t k = 0; k < assignments.size(); ++k) {
       const auto& [schema, agents] = assignments[k];
-      const auto s = std::find_if(c.schemas.begin(), c.schemas.end(), [&](const SchemaDecl& d) { return d.name == schema; });
-      if (s == c.schemas.end()) fail(assignment_lines[k], "ASSIGNMENT names schema " + schema + ", which is not declared");
+      const auto s =
+          std::find_if(c.schemas.begin(), c.schemas.end(), [&](const SchemaDecl& d) { return d.name == schema; });
+      if (s == c.schemas.end())
+        fail(assignment_lines[k], "ASSIGNMENT names schema " + schema + ", which is not declared");
       for (const auto& a : agents) {
         const auto at = std::find(c.agents.begin(), c.agents.end(), a);
-        if (at == c.agents.end()) fail(assignment_lines[k], "ASSIGNMENT names agent " + a + ", which AGENTS does not list");
+        if (at == c.agents.end())
+          fail(assignment_lines[k], "ASSIGNMENT names agent " + a + ", which AGENTS does not list");
         int& slot = c.agent_schema[static_cast<std::size_t>(at - c.agents.begin())];
         if (slot >= 0) fail(assignment_lines[k], "agent " + a + " is assigned two schemas; give it one");
         slot = static_cast<int>(s - c.schemas.begin());
@@ -246,7 +250,8 @@ RtdbConfig load_rtdb_config(const std::filesystem::path& path) {
 std::string generate_user_header(const RtdbConfig& c) {
   std::ostringstream os;
   os << "/* Generated from " << c.file << " by canhil-rtdb-gen. Do not edit: edit the configuration. */\n"
-     << "#ifndef RTDB_USER_H\n#define RTDB_USER_H\n\n/* Agents (the AGENT environment variable takes these numbers). */\n";
+     << "#ifndef RTDB_USER_H\n#define RTDB_USER_H\n\n/* Agents (the AGENT environment variable takes these numbers). "
+        "*/\n";
   for (std::size_t a = 0; a < c.agents.size(); ++a) os << "#define " << c.agents[a] << " " << a << "\n";
   os << "#define N_AGENTS " << c.agents.size() << "\n\n/* Items. */\n";
   for (std::size_t i = 0; i < c.items.size(); ++i) os << "#define " << c.items[i].name << " " << i << "\n";

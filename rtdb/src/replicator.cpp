@@ -31,7 +31,8 @@ void Replicator::cycle(std::chrono::nanoseconds now) {
     }
   }
   // Deliver what is due, aged by its time in flight.
-  std::stable_sort(in_flight_.begin(), in_flight_.end(), [](const InFlight& a, const InFlight& b) { return a.due < b.due; });
+  std::stable_sort(in_flight_.begin(), in_flight_.end(),
+                   [](const InFlight& a, const InFlight& b) { return a.due < b.due; });
   while (!in_flight_.empty() && in_flight_.front().due <= now) {
     InFlight& f = in_flight_.front();
     const auto flight_ms = std::chrono::duration_cast<std::chrono::milliseconds>(now - f.read_at).count();

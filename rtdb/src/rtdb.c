@@ -40,17 +40,17 @@ typedef struct {
   uint64_t total_size;
 } segment_header;
 
-static const canhil_rtdb_table *g_table = &canhil_rtdb_config;
+static const canhil_rtdb_table* g_table = &canhil_rtdb_config;
 static int g_me = -1;
 static int g_all = 0;
-static void *g_seg[MAX_AGENTS];   /* attached segments, by agent */
+static void* g_seg[MAX_AGENTS]; /* attached segments, by agent */
 static int g_shmid[MAX_AGENTS];
-static int64_t *g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
+static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
 static uint64_t g_sizes[MAX_AGENTS];
-static sem_t *g_frame_sem = NULL;
+static sem_t* g_frame_sem = NULL;
 
 static int verbose(void) {
-  const char *v = getenv("RTDB_VERBOSE");
+  const char* v = getenv("RTDB_VERBOSE");
   return v != NULL && v[0] == '1';
 }
 
@@ -62,14 +62,14 @@ static int64_t now_ns(void) {
 
 static uint64_t config_hash(void) {
   uint64_t h = 1469598103934665603ULL; /* FNV-1a */
-  const canhil_rtdb_table *t = g_table;
+  const canhil_rtdb_table* t = g_table;
 #define MIX(byte) (h = (h ^ (uint8_t)(byte)) * 1099511628211ULL)
   for (uint32_t a = 0; a < t->n_agents; ++a) {
-    for (const char *c = t->agents[a].name; *c; ++c) MIX(*c);
+    for (const char* c = t->agents[a].name; *c; ++c) MIX(*c);
     for (uint32_t i = 0; i < t->n_items; ++i) MIX(t->agents[a].membership[i] + 2);
   }
   for (uint32_t i = 0; i < t->n_items; ++i) {
-    for (const char *c = t->items[i].name; *c; ++c) MIX(*c);
+    for (const char* c = t->items[i].name; *c; ++c) MIX(*c);
     for (int b = 0; b < 4; ++b) MIX(t->items[i].size >> (8 * b));
   }
 #undef MIX
@@ -77,12 +77,12 @@ static uint64_t config_hash(void) {
 }
 
 static key_t base_key(void) {
-  const char *k = getenv("RTDB_KEY");
+  const char* k = getenv("RTDB_KEY");
   if (k != NULL && *k != '\0') return (key_t)strtol(k, NULL, 0);
   return (key_t)(0x52400000u | ((unsigned)getuid() & 0xFFFu) << 8);
 }
 
-static int64_t *offset_at(int seg, int owner, int item) {
+static int64_t* offset_at(int seg, int owner, int item) {
   const uint32_t na = g_table->n_agents;
   const uint32_t ni = g_table->n_items;
   return &g_offsets[((size_t)seg * na + (size_t)owner) * ni + (size_t)item];
@@ -120,8 +120,8 @@ static int compute_layout(void) {
 
 static int process_alive(pid_t pid) { return pid > 0 && (kill(pid, 0) == 0 || errno == EPERM); }
 
-static void init_segment(void *seg, int agent) {
-  segment_header *h = (segment_header *)seg;
+static void init_segment(void* seg, int agent) {
+  segment_header* h = (segment_header*)seg;
   h->version = RTDB_VERSION;
   h->config_hash = config_hash();
   h->agent = agent;
@@ -132,7 +132,7 @@ static void init_segment(void *seg, int agent) {
     for (uint32_t i = 0; i < g_table->n_items; ++i) {
       const int64_t off = *offset_at(agent, (int)owner, (int)i);
       if (off < 0) continue;
-      slot_header *s = (slot_header *)((char *)seg + off);
+      slot_header* s = (slot_header*)((char*)seg + off);
       atomic_store(&s->seq, 0);
       s->size = g_table->items[i].size;
       s->stamp_ns = h->created_ns;
@@ -153,7 +153,8 @@ static int attach(int agent) {
       created = 0;
       id = shmget(key, 0, 0600);
       if (id < 0) {
-        fprintf(stderr, "rtdb: the database of agent %d (key 0x%x) exists but is not ours: %s; set RTDB_KEY to another value\n",
+        fprintf(stderr,
+                "rtdb: the database of agent %d (key 0x%x) exists but is not ours: %s; set RTDB_KEY to another value\n",
                 agent, (unsigned)key, strerror(errno));
         return -1;
       }
@@ -181,12 +182,12 @@ static int attach(int agent) {
       fprintf(stderr, "rtdb: cannot create agent %d's database (%zu bytes): %s\n", agent, size, strerror(errno));
       return -1;
     }
-    void *seg = shmat(id, NULL, 0);
-    if (seg == (void *)-1) {
+    void* seg = shmat(id, NULL, 0);
+    if (seg == (void*)-1) {
       fprintf(stderr, "rtdb: cannot attach agent %d's database: %s\n", agent, strerror(errno));
       return -1;
     }
-    segment_header *h = (segment_header *)seg;
+    segment_header* h = (segment_header*)seg;
     if (created) {
       init_segment(seg, agent);
     } else {
@@ -206,7 +207,8 @@ static int attach(int agent) {
     }
     g_seg[agent] = seg;
     g_shmid[agent] = id;
-    if (verbose()) fprintf(stderr, "rtdb: %s agent %d's database (%zu bytes)\n", created ? "created" : "attached", agent, size);
+    if (verbose())
+      fprintf(stderr, "rtdb: %s agent %d's database (%zu bytes)\n", created ? "created" : "attached", agent, size);
     return 0;
   }
   fprintf(stderr, "rtdb: could not get agent %d's database after reclaiming it; try again\n", agent);
@@ -226,14 +228,14 @@ static void detach(int agent) {
   }
 }
 
-static slot_header *slot(int seg, int owner, int item) {
+static slot_header* slot(int seg, int owner, int item) {
   if (seg < 0 || (uint32_t)seg >= g_table->n_agents || g_seg[seg] == NULL) return NULL;
   if (owner < 0 || (uint32_t)owner >= g_table->n_agents || item < 0 || (uint32_t)item >= g_table->n_items) return NULL;
   const int64_t off = *offset_at(seg, owner, item);
-  return off < 0 ? NULL : (slot_header *)((char *)g_seg[seg] + off);
+  return off < 0 ? NULL : (slot_header*)((char*)g_seg[seg] + off);
 }
 
-static void write_slot(slot_header *s, const void *value, int64_t stamp) {
+static void write_slot(slot_header* s, const void* value, int64_t stamp) {
   uint32_t seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
   for (;;) { /* take the slot: even -> odd (one writer at a time) */
     if ((seq & 1u) == 0 &&
@@ -243,16 +245,16 @@ static void write_slot(slot_header *s, const void *value, int64_t stamp) {
     seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
   }
   atomic_thread_fence(memory_order_release);
-  memcpy((char *)(s + 1), value, s->size);
+  memcpy((char*)(s + 1), value, s->size);
   s->stamp_ns = stamp;
   atomic_store_explicit(&s->seq, seq + 2, memory_order_release);
 }
 
-static int read_slot(const slot_header *s, void *value) {
+static int read_slot(const slot_header* s, void* value) {
   for (;;) {
     const uint32_t before = atomic_load_explicit(&s->seq, memory_order_acquire);
     if (before & 1u) continue;
-    memcpy(value, (const char *)(s + 1), s->size);
+    memcpy(value, (const char*)(s + 1), s->size);
     const int64_t stamp = s->stamp_ns;
     atomic_thread_fence(memory_order_acquire);
     if (atomic_load_explicit(&s->seq, memory_order_relaxed) == before) {
@@ -263,14 +265,14 @@ static int read_slot(const slot_header *s, void *value) {
 }
 
 static int parse_agent(void) {
-  const char *a = getenv("AGENT");
+  const char* a = getenv("AGENT");
   if (a == NULL || *a == '\0') {
     fprintf(stderr, "rtdb: AGENT is not set; set it to this process's agent number:");
     for (uint32_t i = 0; i < g_table->n_agents; ++i) fprintf(stderr, " %u=%s", i, g_table->agents[i].name);
     fprintf(stderr, "\n");
     return -1;
   }
-  char *end = NULL;
+  char* end = NULL;
   const long n = strtol(a, &end, 10);
   if (*end != '\0' || n < 0 || n >= (long)g_table->n_agents) {
     fprintf(stderr, "rtdb: AGENT=%s is not an agent number; use 0 to %u\n", a, g_table->n_agents - 1);
@@ -328,54 +330,54 @@ void DB_free_all(int second_rtdb) {
 
 int Whoami(void) { return g_me; }
 
-int DB_put(int id, void *value) {
-  slot_header *s = slot(g_me, g_me, id);
+int DB_put(int id, void* value) {
+  slot_header* s = slot(g_me, g_me, id);
   if (s == NULL || value == NULL) return -1;
   write_slot(s, value, now_ns());
   return 0;
 }
 
-int DB_get(int from_agent, int id, void *value) {
-  const slot_header *s = slot(g_me, from_agent, id);
+int DB_get(int from_agent, int id, void* value) {
+  const slot_header* s = slot(g_me, from_agent, id);
   if (s == NULL || value == NULL) return -1;
   return read_slot(s, value);
 }
 
-int DB_put_in(int agent, int to_agent, int id, void *value, int life) {
-  slot_header *s = slot(agent, to_agent, id);
+int DB_put_in(int agent, int to_agent, int id, void* value, int life) {
+  slot_header* s = slot(agent, to_agent, id);
   if (s == NULL || value == NULL || life < 0) return -1;
   write_slot(s, value, now_ns() - (int64_t)life * 1000000);
   return 0;
 }
 
-int DB_get_from(int agent, int from_agent, int id, void *value) {
-  const slot_header *s = slot(agent, from_agent, id);
+int DB_get_from(int agent, int from_agent, int id, void* value) {
+  const slot_header* s = slot(agent, from_agent, id);
   if (s == NULL || value == NULL) return -1;
   return read_slot(s, value);
 }
 
 int DB_agent_count(void) { return (int)g_table->n_agents; }
 int DB_item_count(void) { return (int)g_table->n_items; }
-const char *DB_agent_name(int agent) {
+const char* DB_agent_name(int agent) {
   return agent >= 0 && (uint32_t)agent < g_table->n_agents ? g_table->agents[agent].name : NULL;
 }
-const char *DB_item_name(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? g_table->items[id].name : NULL; }
+const char* DB_item_name(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? g_table->items[id].name : NULL; }
 int DB_item_size(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? (int)g_table->items[id].size : -1; }
 int DB_item_shared(int agent, int id) {
   if (agent < 0 || (uint32_t)agent >= g_table->n_agents || id < 0 || (uint32_t)id >= g_table->n_items) return -1;
   return g_table->agents[agent].membership[id];
 }
 
-static sem_t *frame_sem(int agent) {
+static sem_t* frame_sem(int agent) {
   char name[64];
   snprintf(name, sizeof name, "/canhil-rtdb-%x-%d", (unsigned)base_key(), agent);
-  sem_t *s = sem_open(name, O_CREAT, 0600, 0);
+  sem_t* s = sem_open(name, O_CREAT, 0600, 0);
   return s == SEM_FAILED ? NULL : s;
 }
 
 int DB_signal_frame(int agent) {
   if (agent < 0 || (uint32_t)agent >= g_table->n_agents) return -1;
-  sem_t *s = frame_sem(agent);
+  sem_t* s = frame_sem(agent);
   if (s == NULL) return -1;
   int value = 0;
   if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);

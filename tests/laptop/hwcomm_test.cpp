@@ -27,7 +27,9 @@ class HwCommParticipant final : public emulator::Participant {
   HwCommParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set,
                     const can_nodes::SimulatedClock& clock)
       : ep_(bus.attach("laptop", 1 << 16)),
-        hw_(std::move(set), 10ms, [this](const frames::CanFrame& f) { return send(f); }, [&clock] { return clock.now(); }) {}
+        hw_(
+            std::move(set), 10ms, [this](const frames::CanFrame& f) { return send(f); },
+            [&clock] { return clock.now(); }) {}
   std::size_t poll() override {
     std::size_t n = 0;
     while (auto f = ep_->receive()) {

@@ -24,7 +24,8 @@ TEST(RtdbConfig, ShippedFileParses) {
 
 TEST(RtdbConfig, DefaultsForHeaderAndPeriod) {
   const RtdbConfig c = parse_rtdb_config(
-      "AGENTS = A;\nITEM X { datatype = Foo; }\nSCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = A; }\n", "t.conf");
+      "AGENTS = A;\nITEM X { datatype = Foo; }\nSCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = A; }\n",
+      "t.conf");
   EXPECT_EQ(c.items[0].headerfile, "Foo.h");
   EXPECT_EQ(c.items[0].period, 1);
 }
@@ -67,18 +68,18 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"UnknownSchema", "AGENTS = A;\nITEM X { datatype = T; }\nASSIGNMENT { schema = Q; agents = A; }\n", 3,
             "names schema Q"},
         Bad{"UnknownAgent",
-            "AGENTS = A;\nITEM X { datatype = T; }\nSCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = B; }\n", 4,
-            "names agent B"},
-        Bad{"Unassigned", "AGENTS = A, B;\nITEM X { datatype = T; }\nSCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = A; }\n",
+            "AGENTS = A;\nITEM X { datatype = T; }\nSCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = B; }\n",
+            4, "names agent B"},
+        Bad{"Unassigned",
+            "AGENTS = A, B;\nITEM X { datatype = T; }\nSCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = A; "
+            "}\n",
             1, "agent B has no ASSIGNMENT"},
         Bad{"MissingBrace", "AGENTS = A;\nITEM X datatype = T; }\n", 2, "expected '{'"},
         Bad{"UnknownSection", "AGENTS = A;\nITEMS X { datatype = T; }\n", 2, "unknown section"},
         Bad{"StrayCharacter", "AGENTS = A;\nITEM X { datatype = T*; }\n", 2, "unexpected character '*'"}),
     [](const ::testing::TestParamInfo<Bad>& p) { return std::string(p.param.name); });
 
-TEST(RtdbConfig, MissingFile) {
-  EXPECT_THROW(load_rtdb_config("/nonexistent/rtdb.conf"), RtdbConfigError);
-}
+TEST(RtdbConfig, MissingFile) { EXPECT_THROW(load_rtdb_config("/nonexistent/rtdb.conf"), RtdbConfigError); }
 
 }  // namespace
 }  // namespace canhil::rtdb

@@ -18,9 +18,9 @@ struct AgentConfig {
   double max_speed_mps = 1.5;
   double grabber_distance_m = 1.0;
   double aim_tolerance_rad = 0.06;
-  int aimed_frames = 3;   ///< frames inside the tolerance before kicking
-  int kick_power = 40;    ///< 1..50
-  bool low_kick = true;   ///< along the carpet; false lobs
+  int aimed_frames = 3;  ///< frames inside the tolerance before kicking
+  int kick_power = 40;   ///< 1..50
+  bool low_kick = true;  ///< along the carpet; false lobs
   double cooldown_s = 1.0;
 };
 
@@ -30,7 +30,7 @@ struct AgentInput {
   double x_m = 0, y_m = 0;            ///< own pose (odometry), world frame
   double heading_rad = 0;             ///< yaw of the robot's +x axis; its front points at heading + pi/2
   bool ball_engaged = false;
-  double dt_s = 1.0 / 30;             ///< since the last decision
+  double dt_s = 1.0 / 30;  ///< since the last decision
 };
 
 enum class AgentState : std::uint8_t { kSearch, kApproach, kAim, kCooldown };

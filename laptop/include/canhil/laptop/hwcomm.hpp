@@ -31,10 +31,10 @@ struct HwCommStats {
   std::uint64_t wrong_length = 0;
   std::uint64_t out_of_range = 0;
   std::uint64_t unknown_id = 0;
-  std::uint64_t missed_tms = 0;     ///< gaps in the TM's ec_counter
+  std::uint64_t missed_tms = 0;  ///< gaps in the TM's ec_counter
   std::uint64_t send_failed = 0;
   std::uint64_t kicks_sent = 0;
-  std::vector<Nanos> latencies;     ///< receive timestamp -> RTDB write, per update (first kMaxLatencySamples)
+  std::vector<Nanos> latencies;  ///< receive timestamp -> RTDB write, per update (first kMaxLatencySamples)
 };
 
 class HwComm {

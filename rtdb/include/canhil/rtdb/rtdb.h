@@ -41,14 +41,14 @@ void DB_free(void);
 
 /* Writes item `id` of this agent. Returns 0, or -1 (not initialised, unknown
  * id, or an item this agent's schema does not have). */
-int DB_put(int id, void *value);
+int DB_put(int id, void* value);
 
 /* Reads item `id` of agent `from_agent` (this agent's own item when
  * from_agent == Whoami(), else the replicated copy of that agent's shared
  * item) into `value`. Returns the item's age in ms, or -1 on error. An item
  * never written reads as zeros with its age counted from the database's
  * creation. */
-int DB_get(int from_agent, int id, void *value);
+int DB_get(int from_agent, int id, void* value);
 
 /* This process's agent number, or -1 before DB_init. */
 int Whoami(void);
@@ -57,7 +57,7 @@ int Whoami(void);
  * writes into agent `agent`'s database the item `id` of agent `to_agent`
  * (`agent` itself, or the copy of another agent's shared item), as if it was
  * written `life` ms ago. Returns 0 or -1. */
-int DB_put_in(int agent, int to_agent, int id, void *value, int life);
+int DB_put_in(int agent, int to_agent, int id, void* value, int life);
 
 /* Attaches to the databases of all agents (creating them as needed).
  * `second_rtdb` is accepted for compatibility and ignored. Returns 0 or -1. */
@@ -68,7 +68,7 @@ void DB_free_all(int second_rtdb);
 
 /* After DB_init_all: reads, from agent `agent`'s database, the item `id` of
  * agent `from_agent`. Returns the age in ms or -1. */
-int DB_get_from(int agent, int from_agent, int id, void *value);
+int DB_get_from(int agent, int from_agent, int id, void* value);
 
 /* --- canhil extensions ---------------------------------------------------- */
 
@@ -76,8 +76,8 @@ int DB_get_from(int agent, int from_agent, int id, void *value);
 int DB_agent_count(void);
 int DB_item_count(void);
 /* Names from the configuration (NULL when out of range). */
-const char *DB_agent_name(int agent);
-const char *DB_item_name(int id);
+const char* DB_agent_name(int agent);
+const char* DB_item_name(int id);
 /* Size in bytes of item `id`, or -1. */
 int DB_item_size(int id);
 /* 1 if agent `agent`'s schema has item `id` as shared, 0 as local, -1 neither. */

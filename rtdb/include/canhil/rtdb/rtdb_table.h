@@ -10,23 +10,23 @@ extern "C" {
 #endif
 
 typedef struct {
-  const char *name;
+  const char* name;
   uint32_t size;   /* sizeof(datatype) */
   uint32_t period; /* replication period in replicator cycles */
 } canhil_rtdb_item;
 
 typedef struct {
-  const char *name;
+  const char* name;
   /* Per item: 1 shared, 0 local, -1 not in this agent's schema. */
-  const int8_t *membership;
+  const int8_t* membership;
 } canhil_rtdb_agent;
 
 typedef struct {
   uint32_t n_agents;
   uint32_t n_items;
-  const canhil_rtdb_agent *agents;
-  const canhil_rtdb_item *items;
-  const char *source; /* the configuration file it was generated from */
+  const canhil_rtdb_agent* agents;
+  const canhil_rtdb_item* items;
+  const char* source; /* the configuration file it was generated from */
 } canhil_rtdb_table;
 
 /* Defined by the generated rtdb_config.c. */
