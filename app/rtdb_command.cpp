@@ -185,7 +185,8 @@ int run_rtdb(Args& args) {
   if (words.size() < 3) throw UsageError("rtdb " + sub + " needs an item name, e.g. rtdb dump CMD_POS");
   const int item = item_by_name(words[2]);
   const char* env_agent = std::getenv("AGENT");
-  const int agent = agent_option(agent_text, "--agent", env_agent != nullptr ? std::atoi(env_agent) : 1);
+  const int agent = agent_option(
+      env_agent != nullptr && !agent_text ? std::optional<std::string>(env_agent) : agent_text, "--agent", 1);
   const int from = agent_option(from_text, "--from", agent);
   std::vector<unsigned char> raw(static_cast<std::size_t>(DB_item_size(item)));
   do {

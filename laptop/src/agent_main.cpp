@@ -19,6 +19,7 @@
 #include "canhil/laptop/agent.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
+#include "cli_numbers.hpp"
 #include "rtdb_user.h"
 
 namespace {
@@ -55,18 +56,26 @@ int main(int argc, char** argv) {
     }
     if (i + 1 >= argc) return usage("missing value for " + a);
     const std::string v = argv[++i];
-    if (a == "--pose") {
-      if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &pose[0], &pose[1], &pose[2]) != 3)
-        return usage("--pose takes X,Y,HEADING_DEG");
-      have_pose = true;
-    } else if (a == "--goal-x") {
-      config.goal_x_m = std::atof(v.c_str());
-    } else if (a == "--power") {
-      config.kick_power = std::atoi(v.c_str());
-    } else if (a == "--duration") {
-      duration_s = std::atof(v.c_str());
-    } else {
-      return usage("unknown option " + a);
+    try {
+      if (a == "--pose") {
+        const auto c1 = v.find(',');
+        const auto c2 = c1 == std::string::npos ? c1 : v.find(',', c1 + 1);
+        if (c2 == std::string::npos) return usage("--pose takes X,Y,HEADING_DEG");
+        pose[0] = canhil::laptop::parse_number(a, v.substr(0, c1));
+        pose[1] = canhil::laptop::parse_number(a, v.substr(c1 + 1, c2 - c1 - 1));
+        pose[2] = canhil::laptop::parse_number(a, v.substr(c2 + 1));
+        have_pose = true;
+      } else if (a == "--goal-x") {
+        config.goal_x_m = canhil::laptop::parse_number(a, v);
+      } else if (a == "--power") {
+        config.kick_power = static_cast<int>(canhil::laptop::parse_number(a, v));
+      } else if (a == "--duration") {
+        duration_s = canhil::laptop::parse_number(a, v);
+      } else {
+        return usage("unknown option " + a);
+      }
+    } catch (const std::invalid_argument& e) {
+      return usage(e.what());
     }
   }
   if (DB_init() != 0) return 2;

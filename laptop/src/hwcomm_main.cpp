@@ -21,6 +21,7 @@
 #include "canhil/laptop/hwcomm.hpp"
 #include "canhil/laptop/raw_can.hpp"
 #include "canhil/rtdb/rtdb.h"
+#include "cli_numbers.hpp"
 
 namespace {
 
@@ -49,22 +50,26 @@ int main(int argc, char** argv) {
   double ec_ms = 10;
   double duration_s = 0;
   int rt_priority = 0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) return usage(("missing value for " + a).c_str());
-    if (a == "--iface") {
-      iface = argv[++i];
-    } else if (a == "--dbc") {
-      dbc = argv[++i];
-    } else if (a == "--ec-ms") {
-      ec_ms = std::atof(argv[++i]);
-    } else if (a == "--duration") {
-      duration_s = std::atof(argv[++i]);
-    } else if (a == "--rt-priority") {
-      rt_priority = std::atoi(argv[++i]);
-    } else {
-      return usage(("unknown option " + a).c_str());
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (i + 1 >= argc) return usage(("missing value for " + a).c_str());
+      if (a == "--iface") {
+        iface = argv[++i];
+      } else if (a == "--dbc") {
+        dbc = argv[++i];
+      } else if (a == "--ec-ms") {
+        ec_ms = canhil::laptop::parse_number(a, argv[++i]);
+      } else if (a == "--duration") {
+        duration_s = canhil::laptop::parse_number(a, argv[++i]);
+      } else if (a == "--rt-priority") {
+        rt_priority = static_cast<int>(canhil::laptop::parse_number(a, argv[++i]));
+      } else {
+        return usage(("unknown option " + a).c_str());
+      }
     }
+  } catch (const std::invalid_argument& e) {
+    return usage(e.what());
   }
   if (iface.empty()) return usage("--iface is required");
   if (rt_priority > 0) {

@@ -168,7 +168,8 @@ class Parser {
     }
     c.agent_schema.assign(c.agents.size(), -1);
     for (std::size_t k = 0; k < assignments.size(); ++k) {
-      const auto& [schema, agents] = assignments[k];
+      const std::string& schema = assignments[k].first;
+      const std::vector<std::string>& agents = assignments[k].second;
       const auto s =
           std::find_if(c.schemas.begin(), c.schemas.end(), [&](const SchemaDecl& d) { return d.name == schema; });
       if (s == c.schemas.end())

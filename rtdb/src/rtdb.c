@@ -1,6 +1,6 @@
 /* The RTDB: one System V shared-memory segment per agent, sequence-locked
  * item slots, ages from CLOCK_MONOTONIC. See canhil/rtdb/rtdb.h. */
-#define _GNU_SOURCE
+#define _GNU_SOURCE  // NOLINT(bugprone-reserved-identifier): the POSIX/GNU feature macro
 #include "canhil/rtdb/rtdb.h"
 
 #include <errno.h>
@@ -183,7 +183,7 @@ static int attach(int agent) {
       return -1;
     }
     void* seg = shmat(id, NULL, 0);
-    if (seg == (void*)-1) {
+    if (seg == (void*)-1) {  // NOLINT(performance-no-int-to-ptr): shmat's error value
       fprintf(stderr, "rtdb: cannot attach agent %d's database: %s\n", agent, strerror(errno));
       return -1;
     }

@@ -3,7 +3,7 @@
  *   rtdb_drive vel VX VY VA SECONDS   CMD_VEL for SECONDS, then zero; prints CMD_POS
  *   rtdb_drive kick POWER             one kicker command; waits; prints CMD_KICKER.power
  *   rtdb_drive pos                    prints CMD_POS */
-#define _GNU_SOURCE
+#define _GNU_SOURCE  // NOLINT(bugprone-reserved-identifier)
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
