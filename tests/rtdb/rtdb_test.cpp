@@ -279,14 +279,18 @@ TEST_F(Rtdb, ACrashedRunsSegmentIsReclaimed) {
 TEST_F(Rtdb, VisionWakesTheAgent) {
   ASSERT_EQ(DB_init(), 0);
   EXPECT_EQ(DB_wait_frame(20), 1) << "nothing posted: timeout";
+  // Blocked in the wait, woken by a later frame.
   std::thread vision([] {
     std::this_thread::sleep_for(20ms);
-    DB_signal_frame(CAMBADA_1);
     DB_signal_frame(CAMBADA_1);
   });
   EXPECT_EQ(DB_wait_frame(5000), 0);
   vision.join();
-  EXPECT_EQ(DB_wait_frame(20), 1) << "two posts while busy wake once";
+  // Two frames while the agent was busy wake it once.
+  DB_signal_frame(CAMBADA_1);
+  DB_signal_frame(CAMBADA_1);
+  EXPECT_EQ(DB_wait_frame(20), 0);
+  EXPECT_EQ(DB_wait_frame(20), 1);
 }
 
 }  // namespace
