@@ -6,6 +6,8 @@
 #include "canhil/frames/describe.hpp"
 #include "canhil/physics/config.hpp"
 #include "canhil/physics/experiments.hpp"
+#include "canhil/vision_emu/runner.hpp"
+#include "canhil/vision_emu/svg.hpp"
 #include "commands.hpp"
 #include "svg_plot.hpp"
 
@@ -69,6 +71,53 @@ void print_json(const physics::ExperimentResult& r) {
   std::printf("%s\n", out.c_str());
 }
 
+// `canhil experiment vision`: one frame of one robot in a busy scene.
+int vision_experiment(const physics::WorldParams& base, int robot, const std::optional<std::string>& svg, bool json,
+                      double noise) {
+  physics::WorldParams p = base;
+  if (p.robots.empty()) {
+    p.robots = {{-3.0, 0.0, -90}, {0.0, 2.0, 0}, {2.5, -2.0, 45}, {4.5, 1.0, 90}, {-5.0, -3.0, -45}};
+    const std::vector<std::pair<double, double>> obstacles = {
+        {-1.5, 0.35}, {1.0, -1.2}, {3.0, 3.0}, {-2.0, -3.0}, {6.0, -1.0}};
+    for (const auto& [x, y] : obstacles) p.obstacles.push_back(physics::ObstaclePlacement{{x, y, 0}, {}});
+    p.ball_start = {0.2, 0.9, p.ball.radius_m};
+  }
+  physics::World world(p);
+  vision_emu::VisionParams vp;
+  vp.point_noise_m = noise;
+  vp.ball_noise_m = noise;
+  const vision_emu::Vision vision(vp, world.markings());
+  const vision_emu::Scene scene = vision_emu::snapshot(world);
+  const auto r = static_cast<std::size_t>(robot);
+  if (r >= scene.robots.size())
+    throw UsageError("--robot " + std::to_string(r) + ": the scene has " + std::to_string(scene.robots.size()) +
+                     " robots");
+  std::mt19937 rng(vp.seed);
+  const vision_emu::VisionFrame f = vision.see(scene, r, rng);
+  if (json) {
+    std::printf(
+        "{\"experiment\":\"vision\",\"robot\":%zu,\"line_points\":%zu,\"obstacle_points\":%zu,\"balls\":%zu,\"line_"
+        "rays\":%d}\n",
+        r, f.lines.size(), f.obstacles.size(), f.balls.size(), f.line_rays);
+  } else {
+    std::printf("vision: robot %zu at (%.2f, %.2f), %zu robots, %zu obstacles\n", r, scene.robots[r].x_m,
+                scene.robots[r].y_m, scene.robots.size(), scene.obstacles.size());
+    std::printf("  line points      %4zu  (%d radial sensors in %d passes, %zu circular sensors, cap %d)\n",
+                f.lines.size(), vp.line_sensors, vp.line_passes, vp.circle_radii_m.size(), vp.max_line_points);
+    std::printf("  obstacle points  %4zu  (%d radial sensors)\n", f.obstacles.size(), vp.obstacle_sensors);
+    std::printf("  balls            %4zu", f.balls.size());
+    if (!f.balls.empty()) std::printf("  at (%.3f, %.3f) m in the robot frame", f.balls[0].x(), f.balls[0].y());
+    std::printf("\n");
+  }
+  if (svg) {
+    std::ofstream out(*svg);
+    out << vision_emu::render_svg(vision, scene, r, f);
+    if (!out) throw UsageError("cannot write " + *svg);
+    if (!json) std::printf("frame drawn in %s\n", svg->c_str());
+  }
+  return 0;
+}
+
 }  // namespace
 
 int run_experiment(Args& args) {
@@ -83,15 +132,22 @@ int run_experiment(Args& args) {
   if (const auto v = args.option("--vy")) options.vy_mps = to_number("--vy", *v);
   if (const auto v = args.option("--va")) options.va_radps = to_number("--va", *v);
   if (const auto v = args.option("--duration")) options.duration_s = to_number("--duration", *v);
+  const auto robot_text = args.option("--robot");
+  const auto noise_text = args.option("--noise");
   if (args.flag("--low")) options.low = true;
   if (args.flag("--high")) options.low = false;
   const std::vector<std::string> words = args.positionals();
   if (words.size() != 2) {
     std::string names;
     for (const auto& n : physics::experiment_names()) names += (names.empty() ? "" : ", ") + n;
-    throw UsageError("experiment needs one name: " + names);
+    throw UsageError("experiment needs one name: " + names + ", vision");
   }
   const physics::WorldParams params = config ? physics::load_world_params(*config) : physics::WorldParams{};
+  if (words[1] == "vision") {
+    const int robot = robot_text ? static_cast<int>(to_number("--robot", *robot_text)) : 0;
+    if (robot < 0) throw UsageError("--robot takes a robot number, 0 or more");
+    return vision_experiment(params, robot, svg, json, noise_text ? to_number("--noise", *noise_text) : 0.0);
+  }
   physics::ExperimentResult result;
   try {
     result = physics::run_experiment(words[1], params, options);

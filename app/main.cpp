@@ -32,7 +32,8 @@ usage:
   canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],
                                               ball-roll [--speed MPS], kick [--low|--high] [--power P],
-                                              drive [--vx --vy --va], tour; exit 1 if a target is missed
+                                              drive [--vx --vy --va], tour; exit 1 if a target is missed;
+                                              vision [--robot N] [--noise M] [--svg FILE]: one frame, drawn
 
 common options:
   --dbc FILE    use another message set (default: the shipped canhil.dbc; CANHIL_DBC also works)

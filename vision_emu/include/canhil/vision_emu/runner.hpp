@@ -1,0 +1,42 @@
+// canhil/vision_emu/runner.hpp — vision for several robots at its frame rate:
+// keeps a short history of world snapshots (for the latency), makes each
+// robot's frame and hands it to a sink (the RTDB writer, a test, an SVG).
+#pragma once
+
+#include <deque>
+#include <functional>
+#include <random>
+
+#include "canhil/physics/world.hpp"
+#include "canhil/vision_emu/vision.hpp"
+
+namespace canhil::vision_emu {
+
+/// A snapshot of the physics world as vision sees it.
+Scene snapshot(const physics::World& world);
+
+class VisionRunner {
+ public:
+  using Sink = std::function<void(std::size_t robot, const VisionFrame& frame, double world_time_s)>;
+  /// One Vision per robot (each may have its own parameters).
+  VisionRunner(std::vector<Vision> per_robot, Sink sink);
+  /// Call after every physics step: records the world and, when a robot's
+  /// next frame is due, produces it from the snapshot `latency` ago.
+  void on_step(const physics::World& world);
+  std::uint64_t frames() const noexcept { return frames_; }
+
+ private:
+  std::vector<Vision> vision_;
+  Sink sink_;
+  std::deque<Scene> history_;
+  std::vector<double> next_frame_s_;
+  std::vector<std::mt19937> rng_;
+  std::vector<VisionFrame> frame_;  // reused per robot
+  std::uint64_t frames_ = 0;
+};
+
+/// Writes a robot's frame into its RTDB (DB_init_all first): VISION_INFO, then
+/// DB_signal_frame to wake its agent. `agent_of_robot[i]` is robot i's agent.
+VisionRunner::Sink rtdb_sink(std::vector<int> agent_of_robot);
+
+}  // namespace canhil::vision_emu

@@ -1,0 +1,280 @@
+#include "canhil/vision_emu/vision.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace canhil::vision_emu {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Circle {
+  Eigen::Vector2d c;  // robot frame
+  double r;
+  double dist;        // centre distance
+  double bearing;     // atan2(y, x) of the centre
+  double half_width;  // angular half-width as seen from the camera
+};
+
+// Nearest t >= 0 where origin + t * dir hits the circle, or inf.
+double ray_circle(const Eigen::Vector2d& dir, const Circle& c) {
+  const double b = dir.dot(c.c);
+  const double disc = b * b - (c.c.squaredNorm() - c.r * c.r);
+  if (disc < 0) return kInf;
+  const double t = b - std::sqrt(disc);
+  return t >= 0 ? t : kInf;
+}
+
+// Does the segment from the origin to p pass through the circle (p beyond it)?
+bool occluded(const Eigen::Vector2d& p, const std::vector<Circle>& circles) {
+  const double len = p.norm();
+  if (len < 1e-9) return false;
+  const Eigen::Vector2d dir = p / len;
+  for (const Circle& c : circles) {
+    if (c.dist - c.r > len) continue;  // the obstacle is farther than the point
+    const double t = ray_circle(dir, c);
+    if (t < len - 1e-9) return true;
+  }
+  return false;
+}
+
+double wrap_angle(double a) { return std::remainder(a, 2 * kPi); }
+
+bool on_arc(const physics::LineArc& a, double angle) {
+  double rel = std::fmod(angle - a.start_rad, 2 * kPi);
+  if (rel < 0) rel += 2 * kPi;
+  return rel <= (a.end_rad - a.start_rad) + 1e-12;
+}
+
+}  // namespace
+
+Vision::Vision(const VisionParams& params, physics::FieldMarkings markings)
+    : params_(params), markings_(std::move(markings)) {
+  const int n = std::max(1, params_.obstacle_sensors);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * kPi * i / n;
+    ray_cos_.push_back(std::cos(a));
+    ray_sin_.push_back(std::sin(a));
+  }
+  const int sensors = std::max(1, params_.line_sensors);
+  const int passes = std::max(1, params_.line_passes);
+  for (int pass = 0; pass < passes; ++pass) {
+    for (int k = 0; k < sensors; ++k) {
+      // Pass p fills the gaps the earlier passes left: offset by p/passes of the spacing.
+      const double angle = 2 * kPi * (k + static_cast<double>(pass) / passes) / sensors;
+      line_dir_.emplace_back(std::cos(angle), std::sin(angle));
+    }
+  }
+}
+
+Eigen::Vector2d Vision::to_robot(const kinematics::Pose& pose, const Eigen::Vector2d& w) {
+  const double dx = w.x() - pose.x_m;
+  const double dy = w.y() - pose.y_m;
+  const double c = std::cos(pose.heading_rad);
+  const double s = std::sin(pose.heading_rad);
+  return {c * dx + s * dy, -s * dx + c * dy};
+}
+
+Eigen::Vector2d Vision::to_world(const kinematics::Pose& pose, const Eigen::Vector2d& l) {
+  const double c = std::cos(pose.heading_rad);
+  const double s = std::sin(pose.heading_rad);
+  return {pose.x_m + c * l.x() - s * l.y(), pose.y_m + s * l.x() + c * l.y()};
+}
+
+VisionFrame Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng) const {
+  VisionFrame out;
+  see(scene, robot, rng, out);
+  return out;
+}
+
+void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, VisionFrame& out) const {
+  out.obstacles.clear();
+  out.lines.clear();
+  out.balls.clear();
+  out.line_rays = 0;
+  const kinematics::Pose& me = scene.robots.at(robot);
+  // Single-precision draws (one engine call each): ample for centimetre noise.
+  std::normal_distribution<float> point_noise(
+      0.0f, params_.point_noise_m > 0 ? static_cast<float>(params_.point_noise_m) : 1.0f);
+  std::uniform_real_distribution<float> chance(0.0f, 1.0f);
+  const bool noisy = params_.point_noise_m > 0;
+  const auto detection = static_cast<float>(params_.detection_probability);
+
+  // Scratch space, per thread, reused frame after frame.
+  thread_local std::vector<Circle> circles;
+  circles.clear();
+  auto add_circle = [&](const Eigen::Vector2d& world, double r) {
+    const Eigen::Vector2d c = to_robot(me, world);
+    const double d = c.norm();
+    if (d <= r + 1e-9 || d - r > params_.obstacle_range_m + params_.line_range_m) return;
+    circles.push_back({c, r, d, std::atan2(c.y(), c.x()), std::asin(std::min(1.0, r / d))});
+  };
+  for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+    if (i != robot) add_circle({scene.robots[i].x_m, scene.robots[i].y_m}, scene.robot_radius_m);
+  }
+  for (const auto& o : scene.obstacles) add_circle(o.centre, o.radius_m);
+
+  // --- obstacle points: nearest hit per radial sensor, only where a circle lies.
+  const int n_obs = static_cast<int>(ray_cos_.size());
+  thread_local std::vector<double> nearest;
+  nearest.assign(static_cast<std::size_t>(n_obs), kInf);
+  const double step = 2 * kPi / n_obs;
+  for (const Circle& c : circles) {
+    if (c.dist - c.r > params_.obstacle_range_m) continue;
+    const int first = static_cast<int>(std::ceil((c.bearing - c.half_width) / step));
+    const int last = static_cast<int>(std::floor((c.bearing + c.half_width) / step));
+    for (int k = first; k <= last; ++k) {
+      const auto i = static_cast<std::size_t>(((k % n_obs) + n_obs) % n_obs);
+      const double t = ray_circle({ray_cos_[i], ray_sin_[i]}, c);
+      if (t < nearest[i]) nearest[i] = t;
+    }
+  }
+  for (std::size_t i = 0; i < nearest.size(); ++i) {
+    if (nearest[i] > params_.obstacle_range_m) continue;
+    if (static_cast<int>(out.obstacles.size()) >= params_.max_obstacle_points) break;
+    if (detection < 1 && chance(rng) > detection) continue;
+    Eigen::Vector2d p(ray_cos_[i] * nearest[i], ray_sin_[i] * nearest[i]);
+    if (noisy) p += Eigen::Vector2d(point_noise(rng), point_noise(rng));
+    out.obstacles.push_back(p);
+  }
+
+  // --- line points: marking geometry in the robot frame.
+  struct Seg {
+    Eigen::Vector2d a, b;
+  };
+  thread_local std::vector<Seg> segs;
+  segs.clear();
+  for (const auto& s : markings_.segments)
+    segs.push_back({to_robot(me, {s.x0_m, s.y0_m}), to_robot(me, {s.x1_m, s.y1_m})});
+  struct Arc {
+    Eigen::Vector2d c;
+    double r, start, end;
+  };
+  thread_local std::vector<Arc> arcs;
+  arcs.clear();
+  for (const auto& a : markings_.arcs) {
+    arcs.push_back({to_robot(me, {a.cx_m, a.cy_m}), a.radius_m, wrap_angle(a.start_rad - me.heading_rad),
+                    wrap_angle(a.start_rad - me.heading_rad) + (a.end_rad - a.start_rad)});
+  }
+  auto keep = [&](Eigen::Vector2d p) {
+    if (static_cast<int>(out.lines.size()) >= params_.max_line_points) return false;
+    if (detection < 1 && chance(rng) > detection) return true;
+    if (noisy) p += Eigen::Vector2d(point_noise(rng), point_noise(rng));
+    out.lines.push_back(p);
+    return true;
+  };
+  // Radial sensors: every ray's crossings, nearest first. Points are then
+  // taken round-robin — the nearest crossing of each ray of pass 1, of pass 2,
+  // ..., then the second crossings — so that when the cap is reached the
+  // points already cover the whole circle.
+  const int sensors = std::max(1, params_.line_sensors);
+  const int passes = std::max(1, params_.line_passes);
+  constexpr std::size_t kMaxHits = 16;
+  const auto rays = static_cast<std::size_t>(sensors * passes);
+  thread_local std::vector<double> hit_t;
+  thread_local std::vector<std::size_t> hit_n;
+  if (hit_t.size() < rays * kMaxHits) hit_t.resize(rays * kMaxHits);  // no need to clear: hit_n says what is valid
+  hit_n.assign(rays, 0);
+  const std::vector<Eigen::Vector2d>& ray_dir = line_dir_;
+  for (int pass = 0; pass < passes; ++pass) {
+    for (int k = 0; k < sensors; ++k) {
+      const auto ray = static_cast<std::size_t>(pass * sensors + k);
+      const Eigen::Vector2d& dir = ray_dir[ray];
+      ++out.line_rays;
+      double blocked = params_.line_range_m;  // occlusion: nothing beyond the nearest obstacle on this ray
+      for (const Circle& c : circles) blocked = std::min(blocked, ray_circle(dir, c));
+      double* t_out = &hit_t[ray * kMaxHits];
+      std::size_t& n = hit_n[ray];
+      auto add = [&](double t) {
+        if (n < kMaxHits) t_out[n++] = t;
+      };
+      for (const Seg& sg : segs) {
+        // Ray origin + t dir against segment a + u (b - a).
+        const Eigen::Vector2d e = sg.b - sg.a;
+        const double den = dir.x() * e.y() - dir.y() * e.x();
+        if (std::fabs(den) < 1e-12) continue;
+        const double t = (sg.a.x() * e.y() - sg.a.y() * e.x()) / den;
+        const double u = (sg.a.x() * dir.y() - sg.a.y() * dir.x()) / den;
+        if (t > 0 && t <= blocked && u >= 0 && u <= 1) add(t);
+      }
+      for (const Arc& a : arcs) {
+        const double b = dir.dot(a.c);
+        const double disc = b * b - (a.c.squaredNorm() - a.r * a.r);
+        if (disc < 0) continue;
+        for (const double t : {b - std::sqrt(disc), b + std::sqrt(disc)}) {
+          if (t <= 0 || t > blocked) continue;
+          const Eigen::Vector2d q = dir * t - a.c;
+          if (on_arc(physics::LineArc{0, 0, a.r, a.start, a.end}, std::atan2(q.y(), q.x()))) add(t);
+        }
+      }
+      std::sort(t_out, t_out + n);
+    }
+  }
+  bool room = true;
+  for (std::size_t round = 0; round < kMaxHits && room; ++round) {
+    bool any = false;
+    for (std::size_t ray = 0; ray < rays && room; ++ray) {
+      if (round >= hit_n[ray]) continue;
+      any = true;
+      room = keep(ray_dir[ray] * hit_t[ray * kMaxHits + round]);
+    }
+    if (!any) break;
+  }
+  // Circular sensors: crossings of rings around the robot with the markings
+  // (they see the lines a radial sensor meets only at a grazing angle).
+  for (const double r : params_.circle_radii_m) {
+    if (r > params_.line_range_m) continue;
+    for (const Seg& s : segs) {
+      const Eigen::Vector2d e = s.b - s.a;
+      const double A = e.squaredNorm();
+      const double B = 2 * s.a.dot(e);
+      const double C = s.a.squaredNorm() - r * r;
+      const double disc = B * B - 4 * A * C;
+      if (disc < 0 || A < 1e-12) continue;
+      for (const double u : {(-B - std::sqrt(disc)) / (2 * A), (-B + std::sqrt(disc)) / (2 * A)}) {
+        if (u < 0 || u > 1) continue;
+        const Eigen::Vector2d p = s.a + u * e;
+        if (!occluded(p, circles) && !keep(p)) break;
+      }
+    }
+    for (const Arc& a : arcs) {
+      // Two circles: |p| = r and |p - c| = a.r.
+      const double d = a.c.norm();
+      if (d < 1e-9 || d > r + a.r || d < std::fabs(r - a.r)) continue;
+      const double along = (r * r - a.r * a.r + d * d) / (2 * d);
+      const double h = std::sqrt(std::max(0.0, r * r - along * along));
+      const Eigen::Vector2d mid = a.c * (along / d);
+      const Eigen::Vector2d perp(-a.c.y() / d, a.c.x() / d);
+      for (const double sign : {-1.0, 1.0}) {
+        const Eigen::Vector2d p = mid + sign * h * perp;
+        const Eigen::Vector2d q = p - a.c;
+        if (!on_arc(physics::LineArc{0, 0, a.r, a.start, a.end}, std::atan2(q.y(), q.x()))) continue;
+        if (!occluded(p, circles) && !keep(p)) break;
+      }
+    }
+  }
+
+  // --- the ball: projected to the ground, within the see limit, not occluded.
+  const Eigen::Vector2d ball_local = to_robot(me, scene.ball.head<2>());
+  const double d_prime = ball_local.norm();
+  const double h = params_.camera_height_m;
+  const double h_prime = scene.ball.z() - scene.ball_radius_m;  // height above its resting height
+  if (h_prime < h && d_prime > 1e-9) {
+    const double d = h * d_prime / (h - h_prime);
+    const bool seen =
+        d < params_.ball_see_limit_m && !occluded(ball_local, circles) && (detection >= 1 || chance(rng) <= detection);
+    if (seen) {
+      Eigen::Vector2d p = ball_local * (d / d_prime);
+      if (params_.ball_noise_m > 0) {
+        std::normal_distribution<float> bn(0.0f, static_cast<float>(params_.ball_noise_m));
+        p += Eigen::Vector2d(bn(rng), bn(rng));
+      }
+      out.balls.push_back(p);
+    }
+  }
+}
+
+}  // namespace canhil::vision_emu
