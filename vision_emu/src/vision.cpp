@@ -170,18 +170,15 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   // taken round-robin — the nearest crossing of each ray of pass 1, of pass 2,
   // ..., then the second crossings — so that when the cap is reached the
   // points already cover the whole circle.
-  const int sensors = std::max(1, params_.line_sensors);
-  const int passes = std::max(1, params_.line_passes);
   constexpr std::size_t kMaxHits = 16;
-  const auto rays = static_cast<std::size_t>(sensors * passes);
+  const std::size_t rays = line_dir_.size();  // pass after pass
   thread_local std::vector<double> hit_t;
   thread_local std::vector<std::size_t> hit_n;
   if (hit_t.size() < rays * kMaxHits) hit_t.resize(rays * kMaxHits);  // no need to clear: hit_n says what is valid
   hit_n.assign(rays, 0);
   const std::vector<Eigen::Vector2d>& ray_dir = line_dir_;
-  for (int pass = 0; pass < passes; ++pass) {
-    for (int k = 0; k < sensors; ++k) {
-      const auto ray = static_cast<std::size_t>(pass * sensors + k);
+  for (std::size_t ray = 0; ray < rays; ++ray) {
+    {
       const Eigen::Vector2d& dir = ray_dir[ray];
       ++out.line_rays;
       double blocked = params_.line_range_m;  // occlusion: nothing beyond the nearest obstacle on this ray
