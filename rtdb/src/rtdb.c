@@ -132,7 +132,7 @@ static void init_segment(void* seg, int agent) {
     for (uint32_t i = 0; i < g_table->n_items; ++i) {
       const int64_t off = *offset_at(agent, (int)owner, (int)i);
       if (off < 0) continue;
-      slot_header* s = (slot_header*)((char*)seg + off);
+      slot_header* s = (slot_header*)(void*)((char*)seg + off) /* offsets are 8-aligned */;
       atomic_store(&s->seq, 0);
       s->size = g_table->items[i].size;
       s->stamp_ns = h->created_ns;
@@ -232,7 +232,7 @@ static slot_header* slot(int seg, int owner, int item) {
   if (seg < 0 || (uint32_t)seg >= g_table->n_agents || g_seg[seg] == NULL) return NULL;
   if (owner < 0 || (uint32_t)owner >= g_table->n_agents || item < 0 || (uint32_t)item >= g_table->n_items) return NULL;
   const int64_t off = *offset_at(seg, owner, item);
-  return off < 0 ? NULL : (slot_header*)((char*)g_seg[seg] + off);
+  return off < 0 ? NULL : (slot_header*)(void*)((char*)g_seg[seg] + off);
 }
 
 static void write_slot(slot_header* s, const void* value, int64_t stamp) {

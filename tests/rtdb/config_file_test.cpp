@@ -50,7 +50,6 @@ TEST_P(BadRtdbConfig, NamesTheLineAndWhatToDo) {
   }
 }
 
-const char* const kTail = "SCHEMA S { local = X; }\nASSIGNMENT { schema = S; agents = A; }\n";
 
 INSTANTIATE_TEST_SUITE_P(
     EachKindOfMistake, BadRtdbConfig,
