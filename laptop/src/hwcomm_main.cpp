@@ -1,4 +1,4 @@
-// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] [--rt-priority N]
+// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] [--rt-priority N] [--busy-poll]
 //
 // The reference low-level communication handler: this robot's RTDB (AGENT)
 // on one side, its CAN bus on the other. Runs until Ctrl-C (or --duration)
@@ -50,9 +50,14 @@ int main(int argc, char** argv) {
   double ec_ms = 10;
   double duration_s = 0;
   int rt_priority = 0;
+  bool busy_poll = false;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
+      if (a == "--busy-poll") {
+        busy_poll = true;
+        continue;
+      }
       if (i + 1 >= argc) return usage(("missing value for " + a).c_str());
       if (a == "--iface") {
         iface = argv[++i];
@@ -105,6 +110,10 @@ int main(int argc, char** argv) {
         spec.it_value.tv_sec = static_cast<time_t>(deadline.count() / 1'000'000'000);
         spec.it_value.tv_nsec = static_cast<long>(deadline.count() % 1'000'000'000);
         timerfd_settime(timer, TFD_TIMER_ABSTIME, &spec, nullptr);
+      }
+      if (busy_poll) {
+        // Spin instead of sleeping: no wake-up latency, one core fully used.
+        timeout = timespec{0, 0};
       }
       ::ppoll(p, 2, &timeout, nullptr);
       if ((p[1].revents & POLLIN) != 0) {
