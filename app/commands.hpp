@@ -14,6 +14,8 @@ int run_frames(Args& args, const std::optional<std::string>& dbc);
 int run_dump(Args& args, const std::optional<std::string>& dbc);
 /// `canhil experiment NAME [options]`: a physics calibration experiment.
 int run_experiment(Args& args);
+/// `canhil timing SOURCE`: timing and FTT compliance of a log or interface.
+int run_timing(Args& args, const std::optional<std::string>& dbc);
 /// `canhil rtdb list|dump ITEM|watch ITEM|replicate`.
 int run_rtdb(Args& args);
 /// `canhil nodes --iface IFACE`: one robot's node set with physics, in real time.

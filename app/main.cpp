@@ -24,6 +24,9 @@ usage:
   canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
   canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
                                               one robot's emulated nodes with physics, real time
+  canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
+                                              periods, jitter, missing/late frames, FTT compliance and
+                                              bus load of a candump log or a live interface; exit 1 if violated
   canhil rtdb list                            agents and items of the RTDB on this machine, with ages
   canhil rtdb dump|watch ITEM [--agent A] [--from B]
                                               one item (known types decoded, others in hex); watch repeats
@@ -65,6 +68,7 @@ int main(int argc, char** argv) {
     if (command == "experiment") return canhil::app::run_experiment(args);
     if (command == "nodes") return canhil::app::run_nodes(args, dbc);
     if (command == "rtdb") return canhil::app::run_rtdb(args);
+    if (command == "timing") return canhil::app::run_timing(args, dbc);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");
   } catch (const canhil::app::UsageError& e) {
     std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);
