@@ -168,8 +168,11 @@ TEST_F(Rtdb, ReplicatorDelayAndLossAreApplied) {
 }
 
 TEST_F(Rtdb, TwoAgentsInTwoProcesses) {
-  int ready[2];
-  ASSERT_EQ(pipe(ready), 0);
+  // One pipe each way: the child says "written", the parent says "done".
+  int to_parent[2];
+  int to_child[2];
+  ASSERT_EQ(pipe(to_parent), 0);
+  ASSERT_EQ(pipe(to_child), 0);
   const pid_t child = fork();
   if (child == 0) {
     setenv("AGENT", "1", 1);
@@ -178,14 +181,14 @@ TEST_F(Rtdb, TwoAgentsInTwoProcesses) {
     RobotWS w{0, 0, 0, 1, 99};
     DB_put(CMD_VEL, &v);
     DB_put(ROBOT_WS, &w);
-    (void)!write(ready[1], "x", 1);
+    (void)!write(to_parent[1], "x", 1);
     char c;
-    (void)!read(ready[0], &c, 1);  // wait until the parent is done
+    (void)!read(to_child[0], &c, 1);  // wait until the parent is done
     DB_free();
     _exit(0);
   }
   char c;
-  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  ASSERT_EQ(read(to_parent[0], &c, 1), 1);
   setenv("AGENT", "2", 1);
   ASSERT_EQ(DB_init(), 0);
   CMD_Vel mine{2.5f, 0, 0, false};
@@ -201,12 +204,11 @@ TEST_F(Rtdb, TwoAgentsInTwoProcesses) {
   RobotWS seen{};
   DB_get(CAMBADA_1, ROBOT_WS, &seen);
   EXPECT_EQ(seen.frame, 99u);
-  (void)!write(ready[1], "x", 1);
+  (void)!write(to_child[1], "x", 1);
   int status = 0;
   waitpid(child, &status, 0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-  close(ready[0]);
-  close(ready[1]);
+  for (int fd : {to_parent[0], to_parent[1], to_child[0], to_child[1]}) close(fd);
 }
 
 TEST_F(Rtdb, NoReaderEverSeesAHalfWrittenItem) {
