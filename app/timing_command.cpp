@@ -47,7 +47,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
   const double seconds = number(args.option("--seconds"), "--seconds", 10);
   const std::vector<std::string> words = args.positionals();
   if (words.size() != 2) throw UsageError("timing needs one SOURCE: a candump log file or an interface (e.g. vcan0)");
-  const std::string source = words[1];
+  const std::string& source = words[1];
   auto set = frames::MessageSet::create(load_chosen_dbc(dbc));
   timing::TimingAnalyzer analyzer(set, cfg);
   if (std::filesystem::exists(source)) {

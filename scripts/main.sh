@@ -13,7 +13,13 @@ echo
 echo "== a shipped trace of one robot's bus, decoded (frames/samples/one_robot.log)"
 "$canhil" dump --log frames/samples/one_robot.log
 echo
+echo "== its timing and FTT compliance (canhil timing)"
+"$canhil" timing frames/samples/one_robot.log
+echo
 echo "== physics: the ball-drop and drive calibration experiments (docs/physics.md)"
 "$canhil" experiment ball-drop
 echo
 "$canhil" experiment drive
+echo
+echo "== vision: one frame of one robot among five, drawn in build/plain/vision.svg"
+"$canhil" experiment vision --svg build/plain/vision.svg
