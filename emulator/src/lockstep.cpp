@@ -11,24 +11,43 @@ Lockstep::Lockstep(can_nodes::SimulatedClock& clock, physics::World* world) : cl
   }
 }
 
-void Lockstep::add(can_nodes::Node& node) {
+void Participants::add(can_nodes::Node& node) {
   owned_.push_back(std::make_unique<NodeParticipant>(node));
-  participants_.push_back(owned_.back().get());
+  list_.push_back(owned_.back().get());
 }
 
-void Lockstep::deliver() {
-  // Frames sent while handling frames are delivered in the same instant.
-  while (true) {
+void Participants::deliver() {
+  for (int round = 0; round < 10'000; ++round) {
     std::size_t handled = 0;
-    for (Participant* p : participants_) handled += p->poll();
+    for (Participant* p : list_) handled += p->poll();
     if (handled == 0) return;
   }
 }
 
+void Participants::tick_due(const can_nodes::Clock& clock) {
+  for (int round = 0; round < 64; ++round) {
+    const Nanos now = clock.now();
+    bool any = false;
+    for (Participant* p : list_) {
+      if (p->next_wakeup() <= now) {
+        p->tick(now);
+        any = true;
+      }
+    }
+    deliver();
+    if (!any) return;
+  }
+}
+
+Nanos Participants::next_wakeup() const {
+  Nanos t = can_nodes::kNever;
+  for (const Participant* p : list_) t = std::min(t, p->next_wakeup());
+  return t;
+}
+
 void Lockstep::run_until(Nanos end) {
   while (true) {
-    Nanos next = world_ != nullptr ? next_step_ : can_nodes::kNever;
-    for (const Participant* p : participants_) next = std::min(next, p->next_wakeup());
+    const Nanos next = std::min(world_ != nullptr ? next_step_ : can_nodes::kNever, participants_.next_wakeup());
     if (next > end) break;
     clock_.set(std::max(next, clock_.now()));
     const Nanos now = clock_.now();
@@ -38,22 +57,11 @@ void Lockstep::run_until(Nanos end) {
       next_step_ += step_;
       if (after_step_) after_step_(now);
     }
-    deliver();
-    // Everyone due now, repeatedly: a participant may ask to be woken again now.
-    for (int round = 0; round < 64; ++round) {
-      bool any = false;
-      for (Participant* p : participants_) {
-        if (p->next_wakeup() <= now) {
-          p->tick(now);
-          any = true;
-        }
-      }
-      deliver();
-      if (!any) break;
-    }
+    participants_.deliver();
+    participants_.tick_due(clock_);
   }
   if (clock_.now() < end) clock_.set(end);
-  deliver();
+  participants_.deliver();
 }
 
 }  // namespace canhil::emulator

@@ -11,28 +11,15 @@ Realtime::Realtime(const can_nodes::Clock& clock, physics::World* world, Wait wa
   }
 }
 
-void Realtime::add(can_nodes::Node& node) {
-  owned_.push_back(std::make_unique<NodeParticipant>(node));
-  participants_.push_back(owned_.back().get());
-}
-
-void Realtime::deliver() {
-  for (int round = 0; round < 64; ++round) {
-    std::size_t handled = 0;
-    for (Participant* p : participants_) handled += p->poll();
-    if (handled == 0) return;
-  }
-}
-
 void Realtime::run_until(Nanos end, const std::atomic<bool>& stop) {
   if (world_ != nullptr && next_step_ == can_nodes::kNever) next_step_ = clock_.now() + step_;
   while (!stop.load(std::memory_order_relaxed)) {
-    Nanos deadline = std::min(end, world_ != nullptr ? next_step_ : can_nodes::kNever);
-    for (const Participant* p : participants_) deadline = std::min(deadline, p->next_wakeup());
+    const Nanos deadline =
+        std::min({end, world_ != nullptr ? next_step_ : can_nodes::kNever, participants_.next_wakeup()});
     wait_(deadline);
     ++stats_.wakeups;
-    Nanos now = clock_.now();
-    deliver();
+    const Nanos now = clock_.now();
+    participants_.deliver();
     if (world_ != nullptr && now >= next_step_) {
       const Nanos late = now - next_step_;
       stats_.worst_lateness = std::max(stats_.worst_lateness, late);
@@ -48,18 +35,7 @@ void Realtime::run_until(Nanos end, const std::atomic<bool>& stop) {
       next_step_ += step_;
       if (after_step_) after_step_(now);
     }
-    for (int round = 0; round < 64; ++round) {
-      now = clock_.now();
-      bool any = false;
-      for (Participant* p : participants_) {
-        if (p->next_wakeup() <= now) {
-          p->tick(now);
-          any = true;
-        }
-      }
-      deliver();
-      if (!any) break;
-    }
+    participants_.tick_due(clock_);
     if (clock_.now() >= end) break;
   }
 }

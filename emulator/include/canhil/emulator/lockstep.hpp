@@ -10,6 +10,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "canhil/can_nodes/clock.hpp"
@@ -42,13 +43,31 @@ class NodeParticipant final : public Participant {
   can_nodes::Node& node_;
 };
 
+/// A runner's participants, in the order added (the order they are ticked).
+class Participants {
+ public:
+  void add(Participant& p) { list_.push_back(&p); }
+  void add(can_nodes::Node& node);
+  /// Delivers frames round after round until nobody has any left (frames sent
+  /// while handling frames arrive in the same instant).
+  void deliver();
+  /// Ticks everyone due at now(), delivers, and repeats while anyone is due
+  /// (a participant may ask to be woken again at once). now() is re-read each round.
+  void tick_due(const can_nodes::Clock& clock);
+  Nanos next_wakeup() const;
+
+ private:
+  std::vector<Participant*> list_;
+  std::vector<std::unique_ptr<NodeParticipant>> owned_;
+};
+
 class Lockstep {
  public:
   /// `world` may be null (nodes without physics). Both must outlive the runner.
   Lockstep(can_nodes::SimulatedClock& clock, physics::World* world);
   /// Participants are ticked in the order added; they must outlive the runner.
-  void add(Participant& p) { participants_.push_back(&p); }
-  void add(can_nodes::Node& node);
+  void add(Participant& p) { participants_.add(p); }
+  void add(can_nodes::Node& node) { participants_.add(node); }
   /// Runs until the clock reads `end` (inclusive of everything due at `end`).
   void run_until(Nanos end);
   void run_for(Nanos duration) { run_until(clock_.now() + duration); }
@@ -57,14 +76,12 @@ class Lockstep {
   std::uint64_t physics_steps() const noexcept { return steps_; }
 
  private:
-  void deliver();
   can_nodes::SimulatedClock& clock_;
   physics::World* world_;
   Nanos step_{0};
   Nanos next_step_{0};
   std::uint64_t steps_ = 0;
-  std::vector<Participant*> participants_;
-  std::vector<std::unique_ptr<NodeParticipant>> owned_;
+  Participants participants_;
   std::function<void(Nanos)> after_step_;
 };
 

@@ -32,8 +32,8 @@ class Realtime {
   /// `clock`, `world` (may be null) and `wait` must outlive the loop.
   Realtime(const can_nodes::Clock& clock, physics::World* world, Wait wait,
            Nanos max_behind = std::chrono::milliseconds(100));
-  void add(Participant& p) { participants_.push_back(&p); }
-  void add(can_nodes::Node& node);
+  void add(Participant& p) { participants_.add(p); }
+  void add(can_nodes::Node& node) { participants_.add(node); }
   /// Runs until the clock reads `end` or `stop` becomes true.
   void run_until(Nanos end, const std::atomic<bool>& stop);
   const RealtimeStats& stats() const noexcept { return stats_; }
@@ -41,15 +41,13 @@ class Realtime {
   void on_physics_step(std::function<void(Nanos)> f) { after_step_ = std::move(f); }
 
  private:
-  void deliver();
   const can_nodes::Clock& clock_;
   physics::World* world_;
   Wait wait_;
   Nanos max_behind_;
   Nanos step_{0};
   Nanos next_step_ = can_nodes::kNever;
-  std::vector<Participant*> participants_;
-  std::vector<std::unique_ptr<NodeParticipant>> owned_;
+  Participants participants_;
   RealtimeStats stats_;
   std::function<void(Nanos)> after_step_;
 };

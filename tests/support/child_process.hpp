@@ -1,0 +1,53 @@
+// tests/support/child_process.hpp — a program run in the background for the
+// vcan tests (the emulator, the handler), its output captured to a file;
+// stop() sends SIGINT (its Ctrl-C) and waits.
+#pragma once
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <string>
+
+namespace canhil::test {
+
+class ChildProcess {
+ public:
+  ChildProcess(const std::string& command, std::string log_file) : log_(std::move(log_file)) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      const std::string full = "exec " + command + " > " + log_ + " 2>&1";  // exec: the signal reaches it
+      execl("/bin/sh", "sh", "-c", full.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+  }
+  ~ChildProcess() { stop(); }
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  /// SIGINT, then waits; returns the wait status (or -1 if already stopped).
+  int stop() {
+    if (pid_ <= 0) return -1;
+    kill(pid_, SIGINT);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return status;
+  }
+  std::string output() const {
+    std::string out;
+    if (FILE* f = std::fopen(log_.c_str(), "r")) {
+      char buf[512];
+      while (std::fgets(buf, sizeof buf, f) != nullptr) out += buf;
+      std::fclose(f);
+    }
+    return out;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  std::string log_;
+};
+
+}  // namespace canhil::test
