@@ -50,7 +50,6 @@ TEST_P(BadRtdbConfig, NamesTheLineAndWhatToDo) {
   }
 }
 
-
 INSTANTIATE_TEST_SUITE_P(
     EachKindOfMistake, BadRtdbConfig,
     ::testing::Values(
