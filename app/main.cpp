@@ -24,6 +24,9 @@ usage:
   canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
   canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
                                               one robot's emulated nodes with physics, real time
+  canhil run --virtual-time [--duration 20] [--config WORLD.toml] [--trace FILE] [--kick-power 40]
+                                              the whole loop in virtual time: nodes, physics, vision,
+                                              the reference handler and agent; a candump trace per bus
   canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
                                               periods, jitter, missing/late frames, FTT compliance and
                                               bus load of a candump log or a live interface; exit 1 if violated
@@ -69,6 +72,7 @@ int main(int argc, char** argv) {
     if (command == "nodes") return canhil::app::run_nodes(args, dbc);
     if (command == "rtdb") return canhil::app::run_rtdb(args);
     if (command == "timing") return canhil::app::run_timing(args, dbc);
+    if (command == "run") return canhil::app::run_run(args, dbc);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");
   } catch (const canhil::app::UsageError& e) {
     std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);

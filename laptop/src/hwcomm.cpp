@@ -20,8 +20,20 @@ unsigned short sat16(double v) { return static_cast<unsigned short>(std::clamp(s
 
 }  // namespace
 
-HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock)
-    : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)) {}
+HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, int agent)
+    : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)), agent_(agent) {}
+
+int HwComm::get(int id, void* value) const {
+  return agent_ < 0 ? DB_get(Whoami(), id, value) : DB_get_from(agent_, agent_, id, value);
+}
+
+void HwComm::put(int id, void* value) const {
+  if (agent_ < 0) {
+    DB_put(id, value);
+  } else {
+    DB_put_in(agent_, agent_, id, value, 0);
+  }
+}
 
 void HwComm::send(const frames::CanFrame& f, const char* name) {
   if (send_(f)) {
@@ -79,28 +91,28 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
     last_pa_ = p.pa;
     have_pose_ = true;
     have_m4_1_ = false;
-    DB_put(CMD_POS, &p);
+    put(CMD_POS, &p);
     latency(rx);
   } else if (is(f, s.m2.message())) {
     frames::M2 m2;
     if (!usable(s.m2, f, m2, stats_)) return;
     CMD_Info info;
-    DB_get(Whoami(), CMD_INFO, &info);
+    get(CMD_INFO, &info);
     info.Voltage_logic = sat16(m2.v_logic * 100);
     info.Voltage_power12 = sat16(m2.v_power12 * 100);
     info.Voltage_power24 = sat16(m2.v_power24 * 100);
-    DB_put(CMD_INFO, &info);
+    put(CMD_INFO, &info);
     latency(rx);
   } else if (is(f, s.m9.message())) {
     frames::M9 m9;
     if (!usable(s.m9, f, m9, stats_)) return;
     CMD_Info info;
-    DB_get(Whoami(), CMD_INFO, &info);
+    get(CMD_INFO, &info);
     info.justKicked = m9.just_kicked != 0;
     info.Kicker_voltage = sat16(m9.kicker_voltage * 100);
-    DB_put(CMD_INFO, &info);
+    put(CMD_INFO, &info);
     CMD_Grabber_Info g{m9.ball_engaged, m9.grabber};
-    DB_put(CMD_GRABBER_INFO, &g);
+    put(CMD_GRABBER_INFO, &g);
     latency(rx);
   } else if (is(f, s.m8.message())) {
     frames::M8 m8;
@@ -109,7 +121,7 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
     imu.compass = static_cast<int>(std::lround(m8.heading)) % 360;
     imu.yaw = static_cast<int>(std::lround(m8.heading * 100));
     imu.rawYaw = m8.raw;
-    DB_put(CMD_IMU, &imu);
+    put(CMD_IMU, &imu);
     latency(rx);
   } else if (is(f, s.m10.message())) {
     if (usable(s.m10, f, m10_, stats_)) {
@@ -130,7 +142,7 @@ void HwComm::write_hwerrors() {
   for (std::size_t i = 0; i < std::size(own); ++i) {
     e.error_count[1][i] = static_cast<unsigned short>(std::min<std::uint64_t>(own[i], 65535));
   }
-  DB_put(CMD_HWERRORS, &e);
+  put(CMD_HWERRORS, &e);
 }
 
 void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
@@ -147,8 +159,8 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
   const Nanos now = rx;
   CMD_Kicker kick;
   CMD_Grabber grab;
-  DB_get(Whoami(), CMD_KICKER, &kick);
-  DB_get(Whoami(), CMD_GRABBER, &grab);
+  get(CMD_KICKER, &kick);
+  get(CMD_GRABBER, &grab);
   const bool kick_wanted = (kick.power & 0x7F) != 0;
   const bool grabber_changed = grab.mode != last_grabber_;
   if ((kick_wanted || grabber_changed) && now - last_m7_ >= s.ftt(s.m7.message()).min_gap) {
@@ -163,17 +175,17 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
     if (kick_wanted) {
       ++stats_.kicks_sent;
       kick.power = 0;  // sent once: the agent asks again for another kick
-      DB_put(CMD_KICKER, &kick);
+      put(CMD_KICKER, &kick);
     }
   }
   CMD_SetPose pose;
-  DB_get(Whoami(), CMD_SETPOSE, &pose);
+  get(CMD_SETPOSE, &pose);
   if (pose.pending != 0 && now - last_m5_ >= s.ftt(s.m5_1.message()).min_gap) {
     send(s.m5_1.encode(frames::M5_1{pose.px, pose.py}), "M5_1");
     send(s.m5_2.encode(frames::M5_2{pose.pa, pose.command}), "M5_2");
     last_m5_ = now;
     pose.pending = 0;
-    DB_put(CMD_SETPOSE, &pose);
+    put(CMD_SETPOSE, &pose);
   }
 }
 
@@ -181,7 +193,7 @@ void HwComm::on_time(Nanos now) {
   if (now < m6_slot_) return;
   m6_slot_ = Nanos::max();
   CMD_Vel v;
-  DB_get(Whoami(), CMD_VEL, &v);
+  get(CMD_VEL, &v);
   const frames::MessageSet& s = *set_;
   send(s.m6_1.encode(frames::M6_1{v.vx, v.vy}), "M6_1");
   send(s.m6_2.encode(frames::M6_2{v.va, static_cast<std::uint8_t>(v.smallAdjustment ? 1 : 0), m6_seq_++}), "M6_2");

@@ -43,7 +43,9 @@ class HwComm {
   using Clock = std::function<Nanos()>;
 
   /// `ec` is the elementary cycle (the TM carries the window, not the EC).
-  HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock);
+  /// `agent` < 0: this process's agent (DB_init); else that agent's database
+  /// through DB_init_all (a process serving several robots, e.g. canhil run).
+  HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, int agent = -1);
 
   /// A received frame with its receive timestamp.
   void on_frame(const frames::CanFrame& frame, Nanos rx_time);
@@ -61,6 +63,8 @@ class HwComm {
   void on_tm(const frames::Tm& tm, Nanos rx_time);
   void latency(Nanos rx_time);
   void write_hwerrors();
+  int get(int id, void* value) const;
+  void put(int id, void* value) const;
 
   std::shared_ptr<const frames::MessageSet> set_;
   Nanos ec_;
@@ -79,6 +83,7 @@ class HwComm {
   int last_grabber_ = -1;
   std::uint8_t m6_seq_ = 0;
   frames::M10 m10_{};
+  int agent_ = -1;
 };
 
 }  // namespace canhil::laptop

@@ -35,6 +35,9 @@ class VisionRunner {
   std::uint64_t frames_ = 0;
 };
 
+/// Writes a frame into agent `agent`'s VISION_INFO (DB_init_all first).
+void write_vision_info(int agent, const VisionFrame& frame);
+
 /// Writes a robot's frame into its RTDB (DB_init_all first): VISION_INFO, then
 /// DB_signal_frame to wake its agent. `agent_of_robot[i]` is robot i's agent.
 VisionRunner::Sink rtdb_sink(std::vector<int> agent_of_robot);

@@ -1,0 +1,61 @@
+// canhil/emulator/virtual_run.hpp — the whole loop in virtual time, in one
+// process, deterministically: the physics world; per robot its emulated nodes
+// on its own in-memory bus, the reference handler (laptop::HwComm) on that bus
+// and its agent's RTDB, the emulated vision writing VISION_INFO, and the
+// reference agent woken after each vision frame. Every bus is recorded as a
+// candump log. `canhil run --virtual-time` is built on this.
+//
+// Uses the RTDB of every agent (DB_init_all; set RTDB_KEY to keep runs apart).
+// Robot i is agent i + 1 (CAMBADA_1, ...). One VirtualRun per process at a time.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/physics/world.hpp"
+#include "canhil/vision_emu/vision.hpp"
+
+namespace canhil::emulator {
+
+struct VirtualRunConfig {
+  physics::WorldParams world;  ///< robots from its placements (at most 6)
+  vision_emu::VisionParams vision;
+  can_nodes::FttConfig ftt;
+  std::shared_ptr<const frames::MessageSet> messages;
+  int kick_power = 40;
+};
+
+struct RobotOutcome {
+  kinematics::Pose pose;
+  int kicks = 0;             ///< kicks the agent asked for
+  std::uint64_t frames = 0;  ///< on its bus
+  std::uint64_t bad_frames = 0;
+};
+
+class VirtualRun {
+ public:
+  /// Builds everything and attaches to the RTDB (DB_init_all). Throws
+  /// std::invalid_argument (world, more than 6 robots) or SetupError (RTDB, schedule).
+  explicit VirtualRun(const VirtualRunConfig& config);
+  ~VirtualRun();
+  VirtualRun(const VirtualRun&) = delete;
+  VirtualRun& operator=(const VirtualRun&) = delete;
+
+  void run_for(Nanos duration);
+  Nanos now() const noexcept;
+  const physics::World& world() const noexcept;
+  std::vector<RobotOutcome> outcomes() const;
+  /// Every bus as a candump log, interface vcanN for robot N, in time order.
+  std::string trace() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace canhil::emulator

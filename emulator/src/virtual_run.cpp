@@ -1,0 +1,223 @@
+#include "canhil/emulator/virtual_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "canhil/frames/candump.hpp"
+#include "canhil/laptop/agent.hpp"
+#include "canhil/laptop/hwcomm.hpp"
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/rtdb.h"
+#include "canhil/vision_emu/runner.hpp"
+#include "rtdb_user.h"
+
+namespace canhil::emulator {
+namespace {
+
+// The reference handler on a robot's bus, serving its agent's database.
+class HandlerParticipant final : public Participant {
+ public:
+  HandlerParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, Nanos ec,
+                     const can_nodes::Clock& clock, int agent)
+      : ep_(bus.attach("handler", 1 << 16)),
+        hw_(
+            std::move(set), ec,
+            [this](const frames::CanFrame& f) { return ep_->send(f) == can_nodes::SendStatus::kOk; },
+            [&clock] { return clock.now(); }, agent) {}
+  std::size_t poll() override {
+    std::size_t n = 0;
+    while (auto f = ep_->receive()) {
+      ++n;
+      hw_.on_frame(f->frame, f->time);
+    }
+    return n;
+  }
+  void tick(Nanos now) override { hw_.on_time(now); }
+  Nanos next_wakeup() const override { return hw_.next_deadline(); }
+
+ private:
+  std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
+  laptop::HwComm hw_;
+};
+
+// The reference agent, woken after each of its vision frames.
+class AgentParticipant final : public Participant {
+ public:
+  AgentParticipant(int agent, const laptop::AgentConfig& config) : agent_(agent), logic_(config) {}
+  void frame_ready(Nanos now) { wake_ = now; }
+  std::size_t poll() override { return 0; }
+  Nanos next_wakeup() const override { return wake_; }
+  void tick(Nanos now) override {
+    wake_ = can_nodes::kNever;
+    auto vision = std::make_unique<VisionInfo>();
+    DB_get_from(agent_, agent_, VISION_INFO, vision.get());
+    laptop::AgentInput in;
+    in.dt_s = last_ == can_nodes::kNever ? 1.0 / 30 : std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    in.ball_seen = vision->nBalls > 0;
+    if (in.ball_seen) {
+      in.ball_x_m = vision->ball[0].x;
+      in.ball_y_m = vision->ball[0].y;
+    }
+    CMD_Pos pos;
+    DB_get_from(agent_, agent_, CMD_POS, &pos);
+    in.x_m = pos.px;
+    in.y_m = pos.py;
+    in.heading_rad = pos.pa;
+    CMD_Grabber_Info gi;
+    DB_get_from(agent_, agent_, CMD_GRABBER_INFO, &gi);
+    in.ball_engaged = gi.ballEngaged != 0;
+    const laptop::AgentOutput out = logic_.decide(in);
+    CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps),
+                false};
+    DB_put_in(agent_, agent_, CMD_VEL, &vel, 0);
+    CMD_Grabber grab{static_cast<unsigned char>(out.grabber)};
+    DB_put_in(agent_, agent_, CMD_GRABBER, &grab, 0);
+    if (out.kick != 0) {
+      CMD_Kicker kick{out.kick, 0, 0};
+      DB_put_in(agent_, agent_, CMD_KICKER, &kick, 0);
+    }
+  }
+  int kicks() const { return logic_.kicks(); }
+
+ private:
+  int agent_;
+  laptop::Agent logic_;
+  Nanos wake_ = can_nodes::kNever;
+  Nanos last_ = can_nodes::kNever;
+};
+
+}  // namespace
+
+struct VirtualRun::Impl {
+  VirtualRunConfig config;
+  can_nodes::SimulatedClock clock;
+  std::unique_ptr<physics::World> world;
+  std::vector<std::unique_ptr<PhysicsRobotIo>> io;
+  std::vector<can_nodes::NodeParams> params;
+  std::vector<std::unique_ptr<can_nodes::MemoryBus>> buses;
+  std::vector<std::unique_ptr<RobotNodes>> nodes;
+  std::vector<std::unique_ptr<HandlerParticipant>> handlers;
+  std::vector<std::unique_ptr<AgentParticipant>> agents;
+  std::vector<std::unique_ptr<can_nodes::MemoryEndpoint>> recorders;
+  std::vector<std::vector<frames::TimedFrame>> recorded;
+  std::unique_ptr<vision_emu::VisionRunner> vision;
+  std::unique_ptr<Lockstep> run;
+  bool rtdb = false;
+
+  void record() {
+    for (std::size_t r = 0; r < recorders.size(); ++r) {
+      while (auto f = recorders[r]->receive()) recorded[r].push_back(*f);
+    }
+  }
+};
+
+VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.config = config;
+  if (s.config.world.robots.empty()) s.config.world.robots.push_back(physics::Placement{-3.0, 0, -90});
+  const std::size_t n = s.config.world.robots.size();
+  if (n > 6)
+    throw std::invalid_argument("a virtual run takes at most 6 robots (agents CAMBADA_1..6); this one has " +
+                                std::to_string(n));
+  if (!s.config.messages) throw std::invalid_argument("no message set");
+  s.world = std::make_unique<physics::World>(s.config.world);
+  if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
+  s.rtdb = true;
+  laptop::AgentConfig agent_cfg;
+  agent_cfg.goal_x_m = s.config.world.field.length_m / 2;
+  agent_cfg.kick_power = s.config.kick_power;
+  s.params.reserve(n);
+  s.recorded.resize(n);
+  std::vector<vision_emu::Vision> vision;
+  for (std::size_t r = 0; r < n; ++r) {
+    const int agent = static_cast<int>(r) + 1;
+    // A fresh database for this run: zero every item the agent has.
+    for (int item = 0; item < DB_item_count(); ++item) {
+      if (DB_item_shared(agent, item) < 0) continue;
+      std::vector<unsigned char> zero(static_cast<std::size_t>(DB_item_size(item)), 0);
+      DB_put_in(agent, agent, item, zero.data(), 0);
+    }
+    // The agent asks the handler to put the odometry where the robot stands.
+    const physics::Placement& at = s.config.world.robots[r];
+    CMD_SetPose pose{static_cast<float>(at.x_m), static_cast<float>(at.y_m),
+                     static_cast<float>(at.heading_deg * M_PI / 180.0), 0, 1};
+    DB_put_in(agent, agent, CMD_SETPOSE, &pose, 0);
+    s.io.push_back(std::make_unique<PhysicsRobotIo>(s.world->robot(r)));
+    s.params.push_back(node_params_for(s.config.world.robot, s.config.ftt));
+    s.buses.push_back(std::make_unique<can_nodes::MemoryBus>(s.clock, "vcan" + std::to_string(r)));
+    can_nodes::MemoryBus& bus = *s.buses.back();
+    s.nodes.push_back(std::make_unique<RobotNodes>(
+        s.config.messages, s.params.back(), *s.io.back(),
+        [&bus](const std::string& name) { return std::unique_ptr<can_nodes::Bus>(bus.attach(name)); }, Nanos{0}));
+    s.handlers.push_back(
+        std::make_unique<HandlerParticipant>(bus, s.config.messages, s.config.ftt.elementary_cycle, s.clock, agent));
+    s.agents.push_back(std::make_unique<AgentParticipant>(agent, agent_cfg));
+    s.recorders.push_back(bus.attach("trace", 1 << 20));
+    vision.emplace_back(s.config.vision, s.world->markings());
+  }
+  s.vision = std::make_unique<vision_emu::VisionRunner>(
+      std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
+        vision_emu::write_vision_info(static_cast<int>(r) + 1, f);
+        impl_->agents[r]->frame_ready(impl_->clock.now());
+      });
+  s.run = std::make_unique<Lockstep>(s.clock, s.world.get());
+  for (std::size_t r = 0; r < n; ++r) {
+    for (can_nodes::Node* node : s.nodes[r]->nodes()) s.run->add(*node);
+    s.run->add(*s.handlers[r]);
+    s.run->add(*s.agents[r]);
+  }
+  s.run->on_physics_step([this](Nanos) {
+    impl_->vision->on_step(*impl_->world);
+    impl_->record();
+  });
+}
+
+VirtualRun::~VirtualRun() {
+  if (impl_ && impl_->rtdb) DB_free_all(0);
+}
+
+void VirtualRun::run_for(Nanos duration) {
+  impl_->run->run_for(duration);
+  impl_->record();
+}
+
+Nanos VirtualRun::now() const noexcept { return impl_->clock.now(); }
+const physics::World& VirtualRun::world() const noexcept { return *impl_->world; }
+
+std::vector<RobotOutcome> VirtualRun::outcomes() const {
+  std::vector<RobotOutcome> out;
+  for (std::size_t r = 0; r < impl_->agents.size(); ++r) {
+    RobotOutcome o;
+    o.pose = impl_->world->robot(r).pose();
+    o.kicks = impl_->agents[r]->kicks();
+    o.frames = impl_->recorded[r].size();
+    o.bad_frames = impl_->nodes[r]->bad_frames();
+    out.push_back(o);
+  }
+  return out;
+}
+
+std::string VirtualRun::trace() const {
+  struct Line {
+    Nanos time;
+    std::size_t bus;
+    std::size_t order;
+  };
+  std::vector<Line> lines;
+  for (std::size_t r = 0; r < impl_->recorded.size(); ++r) {
+    for (std::size_t i = 0; i < impl_->recorded[r].size(); ++i) lines.push_back({impl_->recorded[r][i].time, r, i});
+  }
+  std::stable_sort(lines.begin(), lines.end(),
+                   [](const Line& a, const Line& b) { return a.time != b.time ? a.time < b.time : a.bus < b.bus; });
+  std::string out;
+  for (const Line& l : lines) {
+    out += frames::format_log_line(l.time, "vcan" + std::to_string(l.bus), impl_->recorded[l.bus][l.order].frame);
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace canhil::emulator
