@@ -1,0 +1,181 @@
+#include "canhil/can_nodes/fault.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+namespace canhil::can_nodes {
+namespace {
+
+constexpr std::uint32_t kNoId = 0xFFFFFFFF;
+constexpr const char* kSyntax =
+    "; a fault is KIND:TARGET[:ARGS][@SECONDS] with KIND drop, delay, corrupt, duplicate or silence, "
+    "e.g. drop:M4_1:0.5, delay:M3_1:3, corrupt:M1:2, duplicate:M9:2, silence:Motor2:5 (see docs/faults.md)";
+
+[[noreturn]] void bad(std::string_view text, const std::string& what) {
+  throw std::invalid_argument("fault '" + std::string(text) + "': " + what + kSyntax);
+}
+
+std::vector<std::string_view> split(std::string_view s, char sep) {
+  std::vector<std::string_view> out;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= s.size(); ++i) {
+    if (i == s.size() || s[i] == sep) {
+      out.push_back(s.substr(start, i - start));
+      start = i + 1;
+    }
+  }
+  return out;
+}
+
+double number(std::string_view text, std::string_view field, const std::string& name) {
+  double v = 0;
+  const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), v);
+  if (ec != std::errc{} || end != field.data() + field.size() || !std::isfinite(v)) {
+    bad(text, name + " must be a number, got '" + std::string(field) + "'");
+  }
+  return v;
+}
+
+double probability(std::string_view text, std::string_view field) {
+  const double p = number(text, field, "the probability");
+  if (p < 0 || p > 1) bad(text, "the probability must be between 0 and 1, got " + std::string(field));
+  return p;
+}
+
+Nanos seconds(double s) { return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s)); }
+
+}  // namespace
+
+std::string fault_node_name(std::string_view node) {
+  std::string out(node);
+  std::replace(out.begin(), out.end(), ' ', '_');
+  return out;
+}
+
+FaultRule parse_fault(std::string_view text) {
+  FaultRule rule;
+  rule.text = std::string(text);
+  std::string_view body = text;
+  if (const auto at = body.find('@'); at != std::string_view::npos) {
+    const double from = number(text, body.substr(at + 1), "the start time after @");
+    if (from < 0) bad(text, "the start time must be 0 or more");
+    rule.from = seconds(from);
+    body = body.substr(0, at);
+  }
+  const auto parts = split(body, ':');
+  if (parts.size() < 2 || parts[1].empty()) bad(text, "a kind and a target are needed");
+  const std::string_view kind = parts[0];
+  rule.target = std::string(parts[1]);
+  const auto args = parts.size() - 2;
+  auto arg = [&](std::size_t k) { return parts[2 + k]; };
+  if (kind == "drop") {
+    rule.kind = FaultKind::kDrop;
+    if (args > 1) bad(text, "drop takes at most a probability");
+    if (args == 1) rule.probability = probability(text, arg(0));
+  } else if (kind == "delay") {
+    rule.kind = FaultKind::kDelay;
+    if (args < 1 || args > 2) bad(text, "delay takes milliseconds and optionally a probability");
+    const double ms = number(text, arg(0), "the delay");
+    if (ms <= 0 || ms > 10'000) bad(text, "the delay must be above 0 and at most 10000 ms");
+    rule.delay = seconds(ms / 1000);
+    if (args == 2) rule.probability = probability(text, arg(1));
+  } else if (kind == "corrupt") {
+    rule.kind = FaultKind::kCorrupt;
+    if (args < 1 || args > 2) bad(text, "corrupt takes a byte number (0-7) and optionally a probability");
+    const double b = number(text, arg(0), "the byte");
+    if (b < 0 || b > 7 || b != std::floor(b)) bad(text, "the byte must be a whole number 0-7");
+    rule.byte = static_cast<int>(b);
+    if (args == 2) rule.probability = probability(text, arg(1));
+  } else if (kind == "duplicate") {
+    rule.kind = FaultKind::kDuplicate;
+    if (args > 2) bad(text, "duplicate takes optionally a number of copies and a probability");
+    if (args >= 1) {
+      const double c = number(text, arg(0), "the number of copies");
+      if (c < 1 || c > 16 || c != std::floor(c)) bad(text, "the copies must be a whole number 1-16");
+      rule.copies = static_cast<int>(c);
+    }
+    if (args == 2) rule.probability = probability(text, arg(1));
+  } else if (kind == "silence") {
+    rule.kind = FaultKind::kSilence;
+    if (args != 1) bad(text, "silence takes the time in seconds it starts");
+    const double from = number(text, arg(0), "the time");
+    if (from < 0) bad(text, "the time must be 0 or more");
+    rule.from = std::max(rule.from, seconds(from));
+  } else {
+    bad(text, "unknown kind '" + std::string(kind) + "'");
+  }
+  return rule;
+}
+
+FaultInjector::FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,
+                             const std::vector<std::string>& node_names, std::uint64_t seed)
+    : rules_(std::move(rules)), set_(std::move(set)), state_(seed) {
+  for (const FaultRule& rule : rules_) {
+    std::uint32_t id = kNoId;
+    if (rule.target != "*") {
+      if (const frames::MessageCodec* m = set_->codec().find(rule.target)) {
+        id = m->id();
+      } else {
+        const bool node = std::any_of(node_names.begin(), node_names.end(),
+                                      [&](const std::string& n) { return fault_node_name(n) == rule.target; });
+        if (!node) {
+          std::string known;
+          for (const std::string& n : node_names) known += " " + fault_node_name(n);
+          throw std::invalid_argument("fault '" + rule.text + "': '" + rule.target +
+                                      "' is neither a message of the message set nor a node; the nodes are" + known);
+        }
+      }
+    }
+    rule_ids_.push_back(id);
+    counts_.push_back({rule.text, 0, 0});
+  }
+}
+
+bool FaultInjector::matches(std::size_t k, const std::string& node, std::uint32_t id) const {
+  const FaultRule& rule = rules_[k];
+  if (rule.target == "*") return true;
+  if (rule_ids_[k] != kNoId) return rule_ids_[k] == id;
+  return fault_node_name(node) == rule.target;
+}
+
+double FaultInjector::uniform() {
+  // SplitMix64: small, fast and the same everywhere.
+  std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanFrame& frame, Nanos now) {
+  FaultDecision d;
+  for (std::size_t k = 0; k < rules_.size(); ++k) {
+    const FaultRule& rule = rules_[k];
+    if (now < rule.from || !matches(k, node, frame.id)) continue;
+    ++counts_[k].matched;
+    // Every matching rule draws once, so one rule's outcome never shifts another's draws.
+    const double draw = uniform();
+    if (rule.kind != FaultKind::kSilence && draw >= rule.probability) continue;
+    ++counts_[k].applied;
+    switch (rule.kind) {
+      case FaultKind::kDrop:
+      case FaultKind::kSilence:
+        d.drop = true;
+        break;
+      case FaultKind::kDelay:
+        d.delay = std::max(d.delay, rule.delay);
+        break;
+      case FaultKind::kCorrupt:
+        d.corrupt_byte = rule.byte;
+        d.corrupt_mask = 0xFF;
+        break;
+      case FaultKind::kDuplicate:
+        d.duplicates += rule.copies;
+        break;
+    }
+  }
+  return d;
+}
+
+}  // namespace canhil::can_nodes

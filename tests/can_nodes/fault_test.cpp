@@ -1,0 +1,117 @@
+// Fault rules: the text a user writes, and each kind doing what it says to the
+// frames of its target only, reproducibly for a seed.
+#include "canhil/can_nodes/fault.hpp"
+
+#include <gtest/gtest.h>
+
+#include "support/test_paths.hpp"
+
+namespace canhil::can_nodes {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::vector<std::string> kNodes = {"FTT master", "Pic_base", "Motor1", "Motor2", "Pic_odom"};
+
+class FaultTest : public ::testing::Test {
+ protected:
+  std::shared_ptr<const frames::MessageSet> set = frames::MessageSet::load(test::shipped_dbc());
+  FaultInjector injector(std::vector<std::string> texts, std::uint64_t seed = 1) {
+    std::vector<FaultRule> rules;
+    for (const auto& t : texts) rules.push_back(parse_fault(t));
+    return FaultInjector(std::move(rules), set, kNodes, seed);
+  }
+  static frames::CanFrame frame(std::uint32_t id) {
+    frames::CanFrame f;
+    f.id = id;
+    f.len = 8;
+    return f;
+  }
+};
+
+TEST_F(FaultTest, ParsesEveryKind) {
+  const FaultRule drop = parse_fault("drop:M4_1:0.25");
+  EXPECT_EQ(drop.kind, FaultKind::kDrop);
+  EXPECT_EQ(drop.target, "M4_1");
+  EXPECT_DOUBLE_EQ(drop.probability, 0.25);
+  EXPECT_EQ(parse_fault("drop:*").probability, 1.0);
+  const FaultRule delay = parse_fault("delay:M3_1:3.5");
+  EXPECT_EQ(delay.kind, FaultKind::kDelay);
+  EXPECT_EQ(delay.delay, 3500us);
+  EXPECT_EQ(parse_fault("corrupt:M1:2:0.5").byte, 2);
+  EXPECT_EQ(parse_fault("duplicate:M9").copies, 1);
+  EXPECT_EQ(parse_fault("duplicate:M9:3").copies, 3);
+  const FaultRule silence = parse_fault("silence:Motor2:5");
+  EXPECT_EQ(silence.kind, FaultKind::kSilence);
+  EXPECT_EQ(silence.from, 5s);
+  EXPECT_EQ(parse_fault("drop:M1:1@2.5").from, 2500ms);
+}
+
+TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
+  for (const char* text : {"drop", "explode:M1", "drop:M1:2", "delay:M1", "delay:M1:-1", "corrupt:M1:8", "corrupt:M1:x",
+                           "duplicate:M1:0", "silence:Motor1", "drop:M1@soon"}) {
+    try {
+      parse_fault(text);
+      ADD_FAILURE() << text << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(text), std::string::npos) << what;
+      EXPECT_NE(what.find("KIND:TARGET"), std::string::npos) << what;
+    }
+  }
+  try {
+    injector({"drop:Motor9"});
+    ADD_FAILURE() << "an unknown target was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("FTT_master"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(FaultTest, EachKindChangesOnlyItsTarget) {
+  FaultInjector inj = injector({"drop:M4_1", "delay:M3_1:2", "corrupt:M1:3", "duplicate:M9:2"});
+  const auto id = [&](const char* name) { return set->codec().find(name)->id(); };
+  EXPECT_TRUE(inj.on_send("Pic_odom", frame(id("M4_1")), 0s).drop);
+  EXPECT_FALSE(inj.on_send("Pic_odom", frame(id("M4_2")), 0s).drop);
+  EXPECT_EQ(inj.on_send("Motor1", frame(id("M3_1")), 0s).delay, 2ms);
+  EXPECT_EQ(inj.on_send("Motor2", frame(id("M3_2")), 0s).delay, 0ms);
+  EXPECT_EQ(inj.on_send("Pic_base", frame(id("M1")), 0s).corrupt_byte, 3);
+  EXPECT_EQ(inj.on_send("Pic_base", frame(id("M2")), 0s).corrupt_byte, -1);
+  EXPECT_EQ(inj.on_send("Pic_base", frame(id("M9")), 0s).duplicates, 2);
+  for (const FaultCount& c : inj.counts()) {
+    EXPECT_EQ(c.matched, 1u) << c.rule;
+    EXPECT_EQ(c.applied, 1u) << c.rule;
+  }
+}
+
+TEST_F(FaultTest, SilenceAndStartTimesActFromTheirTimeOn) {
+  FaultInjector inj = injector({"silence:Motor1:2", "drop:M4_2:1@1"});
+  const auto m3 = frame(set->codec().find("M3_1")->id());
+  const auto m4 = frame(set->codec().find("M4_2")->id());
+  EXPECT_FALSE(inj.on_send("Motor1", m3, 1999ms).drop);
+  EXPECT_TRUE(inj.on_send("Motor1", m3, 2s).drop);
+  EXPECT_TRUE(inj.on_send("Motor1", m3, 100s).drop);
+  EXPECT_FALSE(inj.on_send("Motor2", m3, 100s).drop) << "another node";
+  EXPECT_FALSE(inj.on_send("Pic_odom", m4, 999ms).drop);
+  EXPECT_TRUE(inj.on_send("Pic_odom", m4, 1s).drop);
+}
+
+TEST_F(FaultTest, ProbabilitiesHoldAndTheSeedReproducesThem) {
+  const auto m4 = frame(set->codec().find("M4_1")->id());
+  auto pattern = [&](std::uint64_t seed) {
+    FaultInjector inj = injector({"drop:M4_1:0.3"}, seed);
+    std::vector<bool> dropped;
+    for (int k = 0; k < 10'000; ++k) dropped.push_back(inj.on_send("Pic_odom", m4, 0s).drop);
+    EXPECT_EQ(inj.counts()[0].matched, 10'000u);
+    EXPECT_EQ(inj.counts()[0].applied, static_cast<std::uint64_t>(std::count(dropped.begin(), dropped.end(), true)));
+    return dropped;
+  };
+  const auto a = pattern(7);
+  const auto n = std::count(a.begin(), a.end(), true);
+  EXPECT_GT(n, 2'800);
+  EXPECT_LT(n, 3'200);
+  EXPECT_EQ(pattern(7), a);
+  EXPECT_NE(pattern(8), a);
+}
+
+}  // namespace
+}  // namespace canhil::can_nodes
