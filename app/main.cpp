@@ -24,9 +24,13 @@ usage:
   canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
   canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
                                               one robot's emulated nodes with physics, real time
-  canhil run --virtual-time [--duration 20] [--config WORLD.toml] [--trace FILE] [--kick-power 40]
+  canhil run --virtual-time [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]...
+             [--trace FILE] [--world-log FILE.csv] [--world-log-period 0.05] [--kick-power P] [--quiet]
                                               the whole loop in virtual time: nodes, physics, vision,
-                                              the reference handler and agent; a candump trace per bus
+                                              the reference handler and agent per robot; a candump trace
+                                              of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
+                                              scenarios in emulator/scenarios/
+  canhil bench [--seconds 10]                 real-time factor of the five-robot scenario in virtual time
   canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
                                               periods, jitter, missing/late frames, FTT compliance and
                                               bus load of a candump log or a live interface; exit 1 if violated

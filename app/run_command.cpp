@@ -1,37 +1,92 @@
-// `canhil run --virtual-time --duration S [--config WORLD.toml] [--trace FILE]`:
-// the whole loop in virtual time (emulator/virtual_run.hpp). Real-time mode and
-// scenarios with interfaces, fault injection and the world log come next.
+// `canhil run --virtual-time [--config SCENARIO] ...`: the whole loop in
+// virtual time (emulator/virtual_run.hpp) from a scenario file
+// (emulator/scenario.hpp), with faults, a trace and a world log. Real time:
+// the emulator alone is `canhil nodes --iface vcan0` (see docs/user-guide.md).
 #include <unistd.h>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 
+#include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_run.hpp"
-#include "canhil/physics/config.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 
 namespace canhil::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void stop_run(int) { g_stop = true; }
+
+double number_option(Args& args, const std::string& name, double fallback) {
+  const auto text = args.option(name);
+  if (!text) return fallback;
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(*text, &used);
+    if (used != text->size()) throw std::invalid_argument(*text);
+    return v;
+  } catch (const std::exception&) {
+    throw UsageError(name + " takes a number, got '" + *text + "'");
+  }
+}
+
+void write_file(const std::string& path, const std::string& text, const char* what) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw UsageError("cannot write the " + std::string(what) + " to " + path);
+}
+
+}  // namespace
 
 int run_run(Args& args, const std::optional<std::string>& dbc) {
   const bool virtual_time = args.flag("--virtual-time");
   const auto config = args.option("--config");
   const auto trace = args.option("--trace");
-  const auto duration_text = args.option("--duration");
-  const auto power_text = args.option("--kick-power");
+  const auto world_log = args.option("--world-log");
+  std::vector<std::string> fault_texts;
+  while (auto f = args.option("--fault")) fault_texts.push_back(*f);
+  const auto seed_text = args.option("--seed");
+  const bool quiet = args.flag("--quiet");
+  emulator::Scenario scenario;
+  if (config) {
+    scenario = emulator::load_scenario(*config);
+  } else {
+    scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};  // facing the opponent goal (+x)
+    scenario.world.ball_start = {-1.0, 1.0, scenario.world.ball.radius_m};
+    scenario.interfaces = {"vcan0"};
+    scenario.agents = {1};
+    scenario.duration_s = 8;
+  }
+  const double duration = number_option(args, "--duration", scenario.duration_s);
+  const double log_period = number_option(args, "--world-log-period", 0.05);
+  scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
+  if (seed_text) {
+    try {
+      std::size_t used = 0;
+      scenario.seed = std::stoull(*seed_text, &used);
+      if (used != seed_text->size() || (*seed_text)[0] == '-') throw std::invalid_argument(*seed_text);
+    } catch (const std::exception&) {
+      throw UsageError("--seed takes a whole number, 0 or more, got '" + *seed_text + "'");
+    }
+  }
   if (args.positionals().size() != 1) throw UsageError("run takes no other arguments");
   if (!virtual_time) {
     throw UsageError(
-        "only --virtual-time is built so far; for real time run the emulator with `canhil nodes --iface vcan0`");
+        "canhil run needs --virtual-time: the real-time runner for whole scenarios is not built yet; for real time "
+        "start the emulator with `canhil nodes --iface vcan0` and your handler next to it (docs/user-guide.md)");
   }
-  double duration = 20;
-  int power = 40;
-  try {
-    if (duration_text) duration = std::stod(*duration_text);
-    if (power_text) power = std::stoi(*power_text);
-  } catch (const std::exception&) {
-    throw UsageError("--duration and --kick-power take numbers");
+  if (!(duration > 0)) throw UsageError("--duration takes seconds above 0");
+  if (!(log_period > 0)) throw UsageError("--world-log-period takes seconds above 0");
+  for (const auto& f : fault_texts) {
+    try {
+      scenario.faults.push_back(can_nodes::parse_fault(f));
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--fault: ") + e.what());
+    }
   }
   if (std::getenv("RTDB_KEY") == nullptr) {
     // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
@@ -39,37 +94,71 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   }
   emulator::VirtualRunConfig cfg;
   cfg.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-  if (config) cfg.world = physics::load_world_params(*config);
-  if (cfg.world.robots.empty()) {
-    cfg.world.robots = {physics::Placement{-3.0, 0.0, -90}};  // facing the opponent goal (+x)
-    cfg.world.ball_start = {-1.0, 1.0, cfg.world.ball.radius_m};
+  cfg.world = scenario.world;
+  cfg.kick_power = scenario.kick_power;
+  cfg.interfaces = scenario.interfaces;
+  cfg.agents = scenario.agents;
+  cfg.faults = scenario.faults;
+  cfg.seed = scenario.seed;
+  if (world_log)
+    cfg.world_log_period = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(log_period));
+  std::unique_ptr<emulator::VirtualRun> run;
+  try {
+    run = std::make_unique<emulator::VirtualRun>(cfg);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError((config ? *config + ": " : std::string()) + e.what());
   }
-  cfg.kick_power = power;
-  emulator::VirtualRun run(cfg);
-  std::printf("canhil run: %zu robot(s), virtual time, %.0f s\n", cfg.world.robots.size(), duration);
+  std::printf("canhil run: %zu robot(s), virtual time, %g s, seed %llu, %zu fault rule(s)\n", cfg.world.robots.size(),
+              duration, static_cast<unsigned long long>(cfg.seed), cfg.faults.size());
+  std::signal(SIGINT, stop_run);
+  std::signal(SIGTERM, stop_run);
   const auto step = std::chrono::seconds(1);
   const auto total = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(duration));
-  while (run.now() < total) {
-    run.run_for(std::min<frames::Nanos>(step, total - run.now()));
-    const Eigen::Vector3d b = run.world().ball_position();
-    const auto o = run.outcomes();
-    std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", std::chrono::duration<double>(run.now()).count(), b.x(), b.y());
+  const auto wall_start = std::chrono::steady_clock::now();
+  while (run->now() < total && !g_stop) {
+    run->run_for(std::min<frames::Nanos>(step, total - run->now()));
+    if (quiet) continue;
+    const Eigen::Vector3d b = run->world().ball_position();
+    const auto o = run->outcomes();
+    std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", std::chrono::duration<double>(run->now()).count(), b.x(), b.y());
     for (std::size_t r = 0; r < o.size(); ++r) {
-      std::printf("  robot %zu (%5.2f, %5.2f) kicks %d", r, o[r].pose.x_m, o[r].pose.y_m, o[r].kicks);
+      std::printf("  %s (%5.2f, %5.2f) kicks %d", cfg.interfaces[r].c_str(), o[r].pose.x_m, o[r].pose.y_m, o[r].kicks);
     }
     std::printf("\n");
   }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  const double simulated = std::chrono::duration<double>(run->now()).count();
   if (trace) {
-    std::ofstream out(*trace);
-    out << run.trace();
-    if (!out) throw UsageError("cannot write " + *trace);
+    write_file(*trace, run->trace(), "trace");
     std::printf("trace written to %s (candump log; check it with `canhil timing %s`)\n", trace->c_str(),
                 trace->c_str());
   }
+  if (world_log) {
+    write_file(*world_log, run->world_log(), "world log");
+    std::printf("world log written to %s (CSV, one line every %g s)\n", world_log->c_str(), log_period);
+  }
+  // The summary.
+  std::printf("canhil run: %s after %.2f s of virtual time in %.2f s of wall time (%.0fx real time)\n",
+              g_stop ? "stopped" : "done", simulated, wall, wall > 0 ? simulated / wall : 0.0);
+  const Eigen::Vector3d b = run->world().ball_position();
+  std::printf("  ball at (%.2f, %.2f)%s\n", b.x(), b.y(),
+              std::abs(b.x()) > cfg.world.field.length_m / 2 && std::abs(b.y()) < cfg.world.field.goal.width_m / 2
+                  ? ": in a goal"
+                  : "");
   std::uint64_t bad = 0;
-  for (const auto& o : run.outcomes()) bad += o.bad_frames;
-  std::printf("canhil run: done; bad frames counted by the nodes: %llu\n", static_cast<unsigned long long>(bad));
-  return 0;
+  const auto outcomes = run->outcomes();
+  for (std::size_t r = 0; r < outcomes.size(); ++r) {
+    const auto& o = outcomes[r];
+    bad += o.bad_frames;
+    std::printf("  %s agent %d: at (%.2f, %.2f), %d kick(s), %llu frames, %llu bad\n", cfg.interfaces[r].c_str(),
+                cfg.agents[r], o.pose.x_m, o.pose.y_m, o.kicks, static_cast<unsigned long long>(o.frames),
+                static_cast<unsigned long long>(o.bad_frames));
+  }
+  for (const auto& c : run->fault_counts()) {
+    std::printf("  fault %-24s matched %8llu frames, applied to %8llu\n", c.rule.c_str(),
+                static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
+  }
+  return g_stop ? 130 : 0;
 }
 
 }  // namespace canhil::app

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
@@ -105,7 +106,30 @@ struct VirtualRun::Impl {
   std::vector<std::vector<frames::TimedFrame>> recorded;
   std::unique_ptr<vision_emu::VisionRunner> vision;
   std::unique_ptr<Lockstep> run;
+  std::vector<std::unique_ptr<can_nodes::FaultInjector>> injectors;
+  std::string world_log;
+  Nanos next_log{0};
   bool rtdb = false;
+
+  int agent(std::size_t r) const { return config.agents[r]; }
+  void log_world(Nanos now) {
+    if (config.world_log_period <= Nanos{0} || now < next_log) return;
+    next_log = now + config.world_log_period;
+    char buf[160];
+    const Eigen::Vector3d b = world->ball_position();
+    std::snprintf(buf, sizeof buf, "%.3f,%.4f,%.4f,%.4f", std::chrono::duration<double>(now).count(), b.x(), b.y(),
+                  b.z());
+    world_log += buf;
+    for (std::size_t r = 0; r < io.size(); ++r) {
+      const kinematics::Pose p = world->robot(r).pose();
+      CMD_Pos reported{};
+      DB_get_from(agent(r), agent(r), CMD_POS, &reported);
+      std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.2f,%.4f,%.4f,%.2f", p.x_m, p.y_m, p.heading_rad * 180 / M_PI,
+                    reported.px, reported.py, reported.pa * 180 / M_PI);
+      world_log += buf;
+    }
+    world_log += '\n';
+  }
 
   void record() {
     for (std::size_t r = 0; r < recorders.size(); ++r) {
@@ -123,6 +147,22 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     throw std::invalid_argument("a virtual run takes at most 6 robots (agents CAMBADA_1..6); this one has " +
                                 std::to_string(n));
   if (!s.config.messages) throw std::invalid_argument("no message set");
+  if (s.config.interfaces.empty()) {
+    for (std::size_t r = 0; r < n; ++r) s.config.interfaces.push_back("vcan" + std::to_string(r));
+  }
+  if (s.config.agents.empty()) {
+    for (std::size_t r = 0; r < n; ++r) s.config.agents.push_back(static_cast<int>(r) + 1);
+  }
+  if (s.config.interfaces.size() != n || s.config.agents.size() != n) {
+    throw std::invalid_argument("give one interface and one agent number per robot (" + std::to_string(n) + " robots)");
+  }
+  for (std::size_t r = 0; r < n; ++r) {
+    const int a = s.config.agents[r];
+    if (a < 1 || a > 6) throw std::invalid_argument("agent numbers are 1..6, got " + std::to_string(a));
+    if (std::count(s.config.agents.begin(), s.config.agents.end(), a) > 1) {
+      throw std::invalid_argument("agent " + std::to_string(a) + " is given to two robots");
+    }
+  }
   s.world = std::make_unique<physics::World>(s.config.world);
   if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
   s.rtdb = true;
@@ -133,7 +173,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
   s.recorded.resize(n);
   std::vector<vision_emu::Vision> vision;
   for (std::size_t r = 0; r < n; ++r) {
-    const int agent = static_cast<int>(r) + 1;
+    const int agent = s.config.agents[r];
     // A fresh database for this run: zero every item the agent has.
     for (int item = 0; item < DB_item_count(); ++item) {
       if (DB_item_shared(agent, item) < 0) continue;
@@ -147,7 +187,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     DB_put_in(agent, agent, CMD_SETPOSE, &pose, 0);
     s.io.push_back(std::make_unique<PhysicsRobotIo>(s.world->robot(r)));
     s.params.push_back(node_params_for(s.config.world.robot, s.config.ftt));
-    s.buses.push_back(std::make_unique<can_nodes::MemoryBus>(s.clock, "vcan" + std::to_string(r)));
+    s.buses.push_back(std::make_unique<can_nodes::MemoryBus>(s.clock, s.config.interfaces[r]));
     can_nodes::MemoryBus& bus = *s.buses.back();
     s.nodes.push_back(std::make_unique<RobotNodes>(
         s.config.messages, s.params.back(), *s.io.back(),
@@ -156,11 +196,18 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
         std::make_unique<HandlerParticipant>(bus, s.config.messages, s.config.ftt.elementary_cycle, s.clock, agent));
     s.agents.push_back(std::make_unique<AgentParticipant>(agent, agent_cfg));
     s.recorders.push_back(bus.attach("trace", 1 << 20));
+    if (!s.config.faults.empty()) {
+      std::vector<std::string> names;
+      for (can_nodes::Node* node : s.nodes.back()->nodes()) names.push_back(node->name());
+      s.injectors.push_back(
+          std::make_unique<can_nodes::FaultInjector>(s.config.faults, s.config.messages, names, s.config.seed + r));
+      for (can_nodes::Node* node : s.nodes.back()->nodes()) node->set_fault_hook(s.injectors.back().get());
+    }
     vision.emplace_back(s.config.vision, s.world->markings());
   }
   s.vision = std::make_unique<vision_emu::VisionRunner>(
       std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
-        vision_emu::write_vision_info(static_cast<int>(r) + 1, f);
+        vision_emu::write_vision_info(impl_->agent(r), f);
         impl_->agents[r]->frame_ready(impl_->clock.now());
       });
   s.run = std::make_unique<Lockstep>(s.clock, s.world.get());
@@ -169,9 +216,19 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     s.run->add(*s.handlers[r]);
     s.run->add(*s.agents[r]);
   }
-  s.run->on_physics_step([this](Nanos) {
+  if (s.config.world_log_period > Nanos{0}) {
+    s.world_log = "time_s,ball_x_m,ball_y_m,ball_z_m";
+    for (std::size_t r = 0; r < n; ++r) {
+      const std::string p = "robot" + std::to_string(r) + "_";
+      s.world_log += "," + p + "x_m," + p + "y_m," + p + "heading_deg," + p + "reported_x_m," + p + "reported_y_m," +
+                     p + "reported_heading_deg";
+    }
+    s.world_log += '\n';
+  }
+  s.run->on_physics_step([this](Nanos now) {
     impl_->vision->on_step(*impl_->world);
     impl_->record();
+    impl_->log_world(now);
   });
 }
 
@@ -214,10 +271,28 @@ std::string VirtualRun::trace() const {
                    [](const Line& a, const Line& b) { return a.time != b.time ? a.time < b.time : a.bus < b.bus; });
   std::string out;
   for (const Line& l : lines) {
-    out += frames::format_log_line(l.time, "vcan" + std::to_string(l.bus), impl_->recorded[l.bus][l.order].frame);
+    out += frames::format_log_line(l.time, impl_->config.interfaces[l.bus], impl_->recorded[l.bus][l.order].frame);
     out += '\n';
   }
   return out;
+}
+
+const std::string& VirtualRun::world_log() const noexcept { return impl_->world_log; }
+
+std::vector<can_nodes::FaultCount> VirtualRun::fault_counts() const {
+  std::vector<can_nodes::FaultCount> sum;
+  for (const auto& inj : impl_->injectors) {
+    const auto& c = inj->counts();
+    if (sum.empty())
+      sum = c;
+    else {
+      for (std::size_t k = 0; k < c.size(); ++k) {
+        sum[k].matched += c[k].matched;
+        sum[k].applied += c[k].applied;
+      }
+    }
+  }
+  return sum;
 }
 
 }  // namespace canhil::emulator

@@ -157,6 +157,10 @@ class Reader {
       sub.finish();
     }
   }
+  /// Marks every key of this table as known (another layer reads them).
+  void skip_rest() {
+    for (const auto& [k, v] : table_) known_.insert(std::string(k.str()));
+  }
   void finish() const {
     for (const auto& [k, v] : table_) {
       const std::string key(k.str());
@@ -344,7 +348,8 @@ ConfigError::ConfigError(std::string file, int line, std::string field, const st
       line_(line),
       field_(std::move(field)) {}
 
-WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name) {
+WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name,
+                               const std::vector<std::string>& other_tables) {
   toml::table root;
   try {
     root = toml::parse(toml_text, file_name);
@@ -355,16 +360,21 @@ WorldParams parse_world_params(std::string_view toml_text, const std::string& fi
   WorldParams w;
   Reader reader(root, "", file_name);
   read_all(reader, w);
+  for (const std::string& t : other_tables) reader.table(t, [](Reader& r) { r.skip_rest(); });
   reader.finish();
   return w;
 }
 
-WorldParams load_world_params(const std::filesystem::path& path) {
+std::string read_config_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path.string(), 0, "", "cannot read the configuration file (does it exist?)");
   std::ostringstream buf;
   buf << in.rdbuf();
-  return parse_world_params(buf.str(), path.string());
+  return buf.str();
+}
+
+WorldParams load_world_params(const std::filesystem::path& path, const std::vector<std::string>& other_tables) {
+  return parse_world_params(read_config_file(path), path.string(), other_tables);
 }
 
 }  // namespace canhil::physics

@@ -186,4 +186,42 @@ TEST(CanhilExperiment, BadConfigAndUnknownNameExitTwoWithAReason) {
   EXPECT_TRUE(has(r, "the experiments are ball-drop, ball-roll, kick, drive, tour"));
 }
 
+TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
+  const std::string trace = "/tmp/canhil_cli_run.log";
+  const std::string world = "/tmp/canhil_cli_run.csv";
+  CliRun r = canhil(
+      "run --virtual-time --config emulator/scenarios/one_robot.toml --duration 4 --quiet --fault "
+      "drop:M4_2:0.5 --seed 3 --trace " +
+      trace + " --world-log " + world);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "1 robot(s), virtual time, 4 s, seed 3, 1 fault rule(s)")) << r.out;
+  EXPECT_TRUE(has(r, "fault drop:M4_2:0.5")) << r.out;
+  EXPECT_TRUE(has(r, "vcan0 agent 1: at")) << r.out;
+  std::ifstream csv(world);
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("time_s,ball_x_m,ball_y_m,ball_z_m,robot0_x_m", 0), 0u) << header;
+  int lines = 0;
+  for (std::string l; std::getline(csv, l);) ++lines;
+  EXPECT_GE(lines, 75);  // every 0.05 s over 4 s
+  // The dropped odometry frames show up as missing in the timing report: exit 1.
+  r = canhil("timing " + trace);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r, "M4_2")) << r.out;
+  std::remove(trace.c_str());
+  std::remove(world.c_str());
+}
+
+TEST(CanhilRun, MistakesExitTwoWithAReason) {
+  CliRun r = canhil("run --virtual-time --fault explode:M1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "--fault: fault 'explode:M1': unknown kind")) << r.out;
+  r = canhil("run --virtual-time --fault drop:Motor9");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "neither a message of the message set nor a node")) << r.out;
+  r = canhil("run --duration 1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "needs --virtual-time")) << r.out;
+}
+
 }  // namespace

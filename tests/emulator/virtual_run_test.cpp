@@ -11,7 +11,9 @@
 #include <sstream>
 #include <string>
 
+#include "canhil/emulator/scenario.hpp"
 #include "canhil/frames/candump.hpp"
+#include "canhil/physics/config.hpp"
 #include "canhil/timing/analysis.hpp"
 #include "support/test_paths.hpp"
 
@@ -81,6 +83,133 @@ TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
   const Eigen::Vector3d ball = run.world().ball_position();
   EXPECT_GT(ball.x(), start_x + 3.0) << "the ball went towards the opponent goal (+x)";
   EXPECT_LT(std::fabs(ball.y()), 3.0);
+}
+
+timing::TimingReport analyse(const std::string& trace, const std::shared_ptr<const frames::MessageSet>& set,
+                             const std::string& iface) {
+  timing::TimingAnalyzer analyzer(set, timing::TimingConfig{});
+  std::istringstream in(trace);
+  std::string line;
+  while (std::getline(in, line)) {
+    frames::LogEntry e;
+    if (!frames::parse_log_line(line, e)) ADD_FAILURE() << line;
+    if (e.iface == iface) analyzer.add({e.frame, e.time});
+  }
+  return analyzer.finish();
+}
+
+TEST_F(VirtualRunTest, TheFiveRobotScenarioRunsWithEveryLoopClosed) {
+  const Scenario sc = load_scenario(test::source_dir() + "/emulator/scenarios/five_robots.toml");
+  ASSERT_EQ(sc.world.robots.size(), 5u);
+  ASSERT_EQ(sc.world.obstacles.size(), 5u);
+  VirtualRunConfig c = one_robot();
+  c.world = sc.world;
+  c.interfaces = sc.interfaces;
+  c.agents = sc.agents;
+  c.world_log_period = 100ms;
+  VirtualRun run(c);
+  run.run_for(6s);
+  const auto outcomes = run.outcomes();
+  const std::string trace = run.trace();
+  // Every robot: its agent's commands moved it (it drove or turned), and its
+  // handler's odometry (CMD_POS, in the world log) followed the true pose.
+  std::istringstream log(run.world_log());
+  std::string line;
+  std::getline(log, line);
+  EXPECT_EQ(line.rfind("time_s,ball_x_m", 0), 0u) << line;
+  std::vector<std::vector<double>> rows;
+  while (std::getline(log, line)) {
+    std::vector<double> row;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
+    ASSERT_EQ(row.size(), 4u + 6u * 5u) << line;
+    rows.push_back(row);
+  }
+  ASSERT_GE(rows.size(), 55u);
+  for (std::size_t r = 0; r < 5; ++r) {
+    SCOPED_TRACE("robot " + std::to_string(r));
+    const std::size_t k = 4 + 6 * r;
+    double travel = 0, turned = 0, worst = 0;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      travel += std::hypot(rows[i][k] - rows[i - 1][k], rows[i][k + 1] - rows[i - 1][k + 1]);
+      turned += std::fabs(std::remainder(rows[i][k + 2] - rows[i - 1][k + 2], 360.0));
+      worst = std::max(worst, std::hypot(rows[i][k] - rows[i][k + 3], rows[i][k + 1] - rows[i][k + 4]));
+    }
+    EXPECT_TRUE(travel > 0.5 || turned > 90) << "travel " << travel << " m, turned " << turned << " deg";
+    EXPECT_LT(worst, 0.25) << "the reported pose strayed from the true one";
+    EXPECT_EQ(outcomes[r].bad_frames, 0u);
+    EXPECT_GT(outcomes[r].frames, 3000u);
+    const timing::TimingReport report = analyse(trace, c.messages, sc.interfaces[r]);
+    EXPECT_TRUE(report.ok()) << timing::format_table(report);
+  }
+}
+
+TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
+  VirtualRunConfig c = one_robot();
+  c.faults = {can_nodes::parse_fault("drop:M4_1:0.5"), can_nodes::parse_fault("silence:Motor2:1")};
+  c.seed = 7;
+  std::string first;
+  std::vector<can_nodes::FaultCount> counts;
+  {
+    VirtualRun run(c);
+    run.run_for(2s);
+    first = run.trace();
+    counts = run.fault_counts();
+  }
+  ASSERT_EQ(counts.size(), 2u);
+  EXPECT_EQ(counts[1].applied, counts[1].matched);
+  EXPECT_GT(counts[1].applied, 50u);
+  const frames::MessageSet& set = *c.messages;
+  const std::uint32_t m4_1 = set.codec().find("M4_1")->id();
+  const std::uint32_t m3_2 = set.codec().find("M3_2")->id();
+  std::size_t m4_seen = 0, m3_2_before = 0, m3_2_after = 0;
+  std::istringstream in(first);
+  std::string line;
+  while (std::getline(in, line)) {
+    frames::LogEntry e;
+    ASSERT_TRUE(frames::parse_log_line(line, e));
+    if (e.frame.id == m4_1) ++m4_seen;
+    if (e.frame.id == m3_2) (e.time < 1s ? m3_2_before : m3_2_after) += 1;
+  }
+  EXPECT_EQ(m4_seen + counts[0].applied, counts[0].matched) << "every dropped M4_1 is missing from the bus";
+  EXPECT_GT(counts[0].applied, counts[0].matched / 3);
+  EXPECT_LT(counts[0].applied, counts[0].matched * 2 / 3);
+  EXPECT_GT(m3_2_before, 10u);
+  EXPECT_EQ(m3_2_after, 0u) << "Motor2 is silent from 1 s on";
+  // The timing report sees the faults: M4_1 frames missing, M3_2 missing.
+  const timing::TimingReport report = analyse(first, c.messages, "vcan0");
+  EXPECT_FALSE(report.ok());
+  VirtualRun again(c);
+  again.run_for(2s);
+  EXPECT_EQ(again.trace(), first) << "same scenario and seed, same faults";
+}
+
+TEST_F(VirtualRunTest, ScenarioMistakesNameTheFileTheFieldAndWhatToDo) {
+  auto error_of = [](const std::string& text) {
+    try {
+      parse_scenario(text, "bad.toml");
+    } catch (const physics::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string robot = "[[robots]]\nx_m = 0\n";
+  EXPECT_NE(
+      error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n").find("bad.toml:4: run.interfaces: give one"),
+      std::string::npos)
+      << error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n");
+  EXPECT_NE(error_of("[run]\nfaults = [\"drop:M1:7\"]\n").find("run.faults: fault 'drop:M1:7'"), std::string::npos);
+  EXPECT_NE(error_of("[run]\nduratoin_s = 3\n").find("run.duratoin_s: unknown field"), std::string::npos);
+  EXPECT_NE(error_of(robot + robot + "[run]\nagents = [2, 2]\n").find("appears twice"), std::string::npos);
+  EXPECT_NE(error_of("[rnu]\n").find("unknown field"), std::string::npos) << "the world's own check";
+  const Scenario ok = parse_scenario(robot + robot + "[run]\nseed = 9\nagents = [3, 1]\n", "ok.toml");
+  EXPECT_EQ(ok.seed, 9u);
+  EXPECT_EQ(ok.agents, (std::vector<int>{3, 1}));
+  EXPECT_EQ(ok.interfaces, (std::vector<std::string>{"vcan0", "vcan1"}));
+  const Scenario one = load_scenario(test::source_dir() + "/emulator/scenarios/one_robot.toml");
+  EXPECT_EQ(one.world.robots.size(), 1u);
+  EXPECT_DOUBLE_EQ(one.duration_s, 8);
 }
 
 }  // namespace

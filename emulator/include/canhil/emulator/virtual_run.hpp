@@ -5,14 +5,20 @@
 // reference agent woken after each vision frame. Every bus is recorded as a
 // candump log. `canhil run --virtual-time` is built on this.
 //
+// Faults (can_nodes/fault.hpp) act on the frames the emulated nodes send, one
+// seeded injector per robot. The world log is CSV: time, the ball, and per
+// robot its true pose next to the pose its handler reports (CMD_POS).
+//
 // Uses the RTDB of every agent (DB_init_all; set RTDB_KEY to keep runs apart).
-// Robot i is agent i + 1 (CAMBADA_1, ...). One VirtualRun per process at a time.
+// Robot i is agent i + 1 (CAMBADA_1, ...) unless `agents` says otherwise.
+// One VirtualRun per process at a time.
 #pragma once
 
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "canhil/can_nodes/fault.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/lockstep.hpp"
 #include "canhil/emulator/robot_nodes.hpp"
@@ -27,6 +33,11 @@ struct VirtualRunConfig {
   can_nodes::FttConfig ftt;
   std::shared_ptr<const frames::MessageSet> messages;
   int kick_power = 40;
+  std::vector<std::string> interfaces;  ///< per robot, names its bus in the trace; default vcan0, vcan1, ...
+  std::vector<int> agents;              ///< per robot, 1..6, all different; default 1, 2, ...
+  std::vector<can_nodes::FaultRule> faults;
+  std::uint64_t seed = 1;     ///< fault draws (robot r uses seed + r)
+  Nanos world_log_period{0};  ///< 0: no world log
 };
 
 struct RobotOutcome {
@@ -51,6 +62,10 @@ class VirtualRun {
   std::vector<RobotOutcome> outcomes() const;
   /// Every bus as a candump log, interface vcanN for robot N, in time order.
   std::string trace() const;
+  /// The world log (CSV with a header line); empty when world_log_period is 0.
+  const std::string& world_log() const noexcept;
+  /// What each fault rule did, summed over the robots.
+  std::vector<can_nodes::FaultCount> fault_counts() const;
 
   struct Impl;
 

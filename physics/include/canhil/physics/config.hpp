@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "canhil/physics/params.hpp"
 
@@ -31,8 +32,13 @@ class ConfigError : public std::runtime_error {
   std::string field_;
 };
 
-WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name);
+/// `other_tables`: top-level tables another layer reads from the same file
+/// (a scenario's [run]); they are not reported as unknown.
+WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name,
+                               const std::vector<std::string>& other_tables = {});
 /// Throws ConfigError (also when the file cannot be read).
-WorldParams load_world_params(const std::filesystem::path& path);
+WorldParams load_world_params(const std::filesystem::path& path, const std::vector<std::string>& other_tables = {});
+/// The whole file as text; throws ConfigError naming it when it cannot be read.
+std::string read_config_file(const std::filesystem::path& path);
 
 }  // namespace canhil::physics
