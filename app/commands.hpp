@@ -16,6 +16,8 @@ int run_dump(Args& args, const std::optional<std::string>& dbc);
 int run_experiment(Args& args);
 /// `canhil run --virtual-time ...`: the whole loop in virtual time.
 int run_run(Args& args, const std::optional<std::string>& dbc);
+/// `canhil bench`: the five-robot real-time factor in virtual time.
+int run_bench(Args& args, const std::optional<std::string>& dbc);
 /// `canhil timing SOURCE`: timing and FTT compliance of a log or interface.
 int run_timing(Args& args, const std::optional<std::string>& dbc);
 /// `canhil rtdb list|dump ITEM|watch ITEM|replicate`.

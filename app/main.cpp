@@ -30,7 +30,7 @@ usage:
                                               the reference handler and agent per robot; a candump trace
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
                                               scenarios in emulator/scenarios/
-  canhil bench [--seconds 10]                 real-time factor of the five-robot scenario in virtual time
+  canhil bench [--seconds 20] [--config S]    real-time factor of the five-robot scenario in virtual time
   canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
                                               periods, jitter, missing/late frames, FTT compliance and
                                               bus load of a candump log or a live interface; exit 1 if violated
@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
     if (command == "rtdb") return canhil::app::run_rtdb(args);
     if (command == "timing") return canhil::app::run_timing(args, dbc);
     if (command == "run") return canhil::app::run_run(args, dbc);
+    if (command == "bench") return canhil::app::run_bench(args, dbc);
     throw canhil::app::UsageError("unknown command \"" + command + "\"");
   } catch (const canhil::app::UsageError& e) {
     std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);

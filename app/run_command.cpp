@@ -141,10 +141,11 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   std::printf("canhil run: %s after %.2f s of virtual time in %.2f s of wall time (%.0fx real time)\n",
               g_stop ? "stopped" : "done", simulated, wall, wall > 0 ? simulated / wall : 0.0);
   const Eigen::Vector3d b = run->world().ball_position();
-  std::printf("  ball at (%.2f, %.2f)%s\n", b.x(), b.y(),
-              std::abs(b.x()) > cfg.world.field.length_m / 2 && std::abs(b.y()) < cfg.world.field.goal.width_m / 2
-                  ? ": in a goal"
-                  : "");
+  std::printf("  ball at (%.2f, %.2f)\n", b.x(), b.y());
+  for (const emulator::Goal& g : run->goals()) {
+    std::printf("  GOAL at %.2f s in the %s goal\n", std::chrono::duration<double>(g.time).count(),
+                g.positive_x ? "+x (opponent)" : "-x (own)");
+  }
   std::uint64_t bad = 0;
   const auto outcomes = run->outcomes();
   for (std::size_t r = 0; r < outcomes.size(); ++r) {

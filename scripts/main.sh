@@ -23,3 +23,11 @@ echo
 echo
 echo "== vision: one frame of one robot among five, drawn in build/plain/vision.svg"
 "$canhil" experiment vision --svg build/plain/vision.svg
+echo
+echo "== the demo: one robot, the whole loop in virtual time (emulated nodes, physics, vision,"
+echo "   the reference handler and agent); the robot drives to the ball and kicks it toward the goal"
+"$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --trace build/plain/demo.log \
+  --world-log build/plain/demo.csv
+echo
+echo "== the demo's timing report (canhil timing build/plain/demo.log)"
+"$canhil" timing build/plain/demo.log

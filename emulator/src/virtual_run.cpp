@@ -109,7 +109,20 @@ struct VirtualRun::Impl {
   std::vector<std::unique_ptr<can_nodes::FaultInjector>> injectors;
   std::string world_log;
   Nanos next_log{0};
+  std::vector<Goal> goals;
+  bool ball_in_goal = false;
   bool rtdb = false;
+
+  // A goal: the whole ball past a goal line, between the posts, under the bar.
+  void watch_goals(Nanos now) {
+    const Eigen::Vector3d b = world->ball_position();
+    const auto& f = config.world.field;
+    const double r = config.world.ball.radius_m;
+    const bool in = std::fabs(b.x()) > f.length_m / 2 + r && std::fabs(b.y()) < f.goal.width_m / 2 &&
+                    b.z() < f.goal.height_m && std::fabs(b.x()) < f.length_m / 2 + f.goal.depth_m + r;
+    if (in && !ball_in_goal) goals.push_back(Goal{now, b.x() > 0});
+    ball_in_goal = in;
+  }
 
   int agent(std::size_t r) const { return config.agents[r]; }
   void log_world(Nanos now) {
@@ -229,6 +242,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     impl_->vision->on_step(*impl_->world);
     impl_->record();
     impl_->log_world(now);
+    impl_->watch_goals(now);
   });
 }
 
@@ -276,6 +290,8 @@ std::string VirtualRun::trace() const {
   }
   return out;
 }
+
+const std::vector<Goal>& VirtualRun::goals() const noexcept { return impl_->goals; }
 
 const std::string& VirtualRun::world_log() const noexcept { return impl_->world_log; }
 

@@ -224,4 +224,14 @@ TEST(CanhilRun, MistakesExitTwoWithAReason) {
   EXPECT_TRUE(has(r, "needs --virtual-time")) << r.out;
 }
 
+TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
+  // The figure is wall-clock: printed, never judged here (the exit status says met or missed).
+  const CliRun r = canhil("bench --seconds 1");
+  EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
+  EXPECT_TRUE(has(r, "5 robot(s), 5 obstacle(s)")) << r.out;
+  EXPECT_TRUE(has(r, "real-time factor, virtual time, everything on:")) << r.out;
+  EXPECT_TRUE(has(r, "target >= 100x")) << r.out;
+  EXPECT_EQ(canhil("bench --seconds -1").status, 2);
+}
+
 }  // namespace

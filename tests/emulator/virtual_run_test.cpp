@@ -82,6 +82,9 @@ TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
   run.run_for(2s);
   const Eigen::Vector3d ball = run.world().ball_position();
   EXPECT_GT(ball.x(), start_x + 3.0) << "the ball went towards the opponent goal (+x)";
+  run.run_for(3s);
+  ASSERT_EQ(run.goals().size(), 1u) << "the reference agent scores from this start";
+  EXPECT_TRUE(run.goals()[0].positive_x);
   EXPECT_LT(std::fabs(ball.y()), 3.0);
 }
 

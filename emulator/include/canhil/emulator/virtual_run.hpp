@@ -47,6 +47,12 @@ struct RobotOutcome {
   std::uint64_t bad_frames = 0;
 };
 
+/// The ball entered a goal: wholly past the goal line, between the posts, under the bar.
+struct Goal {
+  Nanos time{0};
+  bool positive_x = true;  ///< the goal at +x (the one the reference agents attack)
+};
+
 class VirtualRun {
  public:
   /// Builds everything and attaches to the RTDB (DB_init_all). Throws
@@ -64,6 +70,7 @@ class VirtualRun {
   std::string trace() const;
   /// The world log (CSV with a header line); empty when world_log_period is 0.
   const std::string& world_log() const noexcept;
+  const std::vector<Goal>& goals() const noexcept;
   /// What each fault rule did, summed over the robots.
   std::vector<can_nodes::FaultCount> fault_counts() const;
 
