@@ -146,11 +146,9 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     std::printf("  GOAL at %.2f s in the %s goal\n", std::chrono::duration<double>(g.time).count(),
                 g.positive_x ? "+x (opponent)" : "-x (own)");
   }
-  std::uint64_t bad = 0;
   const auto outcomes = run->outcomes();
   for (std::size_t r = 0; r < outcomes.size(); ++r) {
     const auto& o = outcomes[r];
-    bad += o.bad_frames;
     std::printf("  %s agent %d: at (%.2f, %.2f), %d kick(s), %llu frames, %llu bad\n", cfg.interfaces[r].c_str(),
                 cfg.agents[r], o.pose.x_m, o.pose.y_m, o.kicks, static_cast<unsigned long long>(o.frames),
                 static_cast<unsigned long long>(o.bad_frames));
