@@ -33,7 +33,7 @@ std::filesystem::path shipped_scenario(const std::string& name) {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
-    const fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "scenarios" / name;
+    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "scenarios" / name;
     if (fs::exists(installed, ec)) return installed;
   }
   return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
