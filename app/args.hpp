@@ -64,4 +64,18 @@ class Args {
   std::vector<std::string> words_;
 };
 
+/// Removes `--name VALUE` and returns VALUE as a number, or `fallback` when absent.
+inline double number_option(Args& args, const std::string& name, double fallback) {
+  const auto v = args.option(name);
+  if (!v) return fallback;
+  try {
+    std::size_t used = 0;
+    const double d = std::stod(*v, &used);
+    if (used != v->size()) throw std::invalid_argument(*v);
+    return d;
+  } catch (const std::exception&) {
+    throw UsageError(name + " takes a number, got \"" + *v + "\"");
+  }
+}
+
 }  // namespace canhil::app

@@ -30,6 +30,10 @@ usage:
                                               the reference handler and agent per robot; a candump trace
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
                                               scenarios in emulator/scenarios/
+  canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B] [--quiet]
+                                              real time: every robot's nodes on its interface (vcan0, ...),
+                                              vision into its agent's RTDB; run your handler and agent
+                                              (or canhil-hwcomm, canhil-agent) with AGENT=N next to it
   canhil bench [--seconds 20] [--config S]    real-time factor of the five-robot scenario in virtual time
   canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
                                               periods, jitter, missing/late frames, FTT compliance and

@@ -18,63 +18,13 @@
 #include "canhil/physics/config.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "wall_waiter.hpp"
 
 namespace canhil::app {
 namespace {
 
 std::atomic<bool> g_stop{false};
 extern "C" void stop_on_signal(int) { g_stop = true; }
-
-double number_option(Args& args, const std::string& name, double fallback) {
-  const auto v = args.option(name);
-  if (!v) return fallback;
-  try {
-    std::size_t used = 0;
-    const double d = std::stod(*v, &used);
-    if (used != v->size()) throw std::invalid_argument(*v);
-    return d;
-  } catch (const std::exception&) {
-    throw UsageError(name + " takes a number, got \"" + *v + "\"");
-  }
-}
-
-/// Waits until an absolute CLOCK_REALTIME deadline or until a socket is readable.
-class WallWaiter {
- public:
-  explicit WallWaiter(std::vector<int> fds) : fds_(std::move(fds)) {
-    timer_ = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
-    if (timer_ < 0) throw can_nodes::SetupError("timerfd_create failed");
-  }
-  ~WallWaiter() { ::close(timer_); }
-  WallWaiter(const WallWaiter&) = delete;
-  WallWaiter& operator=(const WallWaiter&) = delete;
-
-  void wait(can_nodes::Nanos deadline) {
-    std::vector<pollfd> p;
-    for (int fd : fds_) p.push_back(pollfd{fd, POLLIN, 0});
-    timespec timeout{0, 100'000'000};  // at most 100 ms, to notice Ctrl-C
-    timespec* to = &timeout;
-    if (deadline != can_nodes::kNever) {
-      itimerspec spec{};
-      const auto ns = deadline.count();
-      spec.it_value.tv_sec = static_cast<time_t>(ns / 1'000'000'000);
-      spec.it_value.tv_nsec = static_cast<long>(ns % 1'000'000'000);
-      if (spec.it_value.tv_sec == 0 && spec.it_value.tv_nsec == 0) spec.it_value.tv_nsec = 1;
-      timerfd_settime(timer_, TFD_TIMER_ABSTIME, &spec, nullptr);
-      p.push_back(pollfd{timer_, POLLIN, 0});
-      to = nullptr;
-    }
-    const int r = ::ppoll(p.data(), p.size(), to, nullptr);
-    if (r > 0 && deadline != can_nodes::kNever && (p.back().revents & POLLIN) != 0) {
-      std::uint64_t expirations = 0;
-      [[maybe_unused]] const auto n = ::read(timer_, &expirations, sizeof expirations);
-    }
-  }
-
- private:
-  std::vector<int> fds_;
-  int timer_ = -1;
-};
 
 const char* state_text(can_nodes::BusState s) {
   return s == can_nodes::BusState::kUp ? "up" : s == can_nodes::BusState::kDown ? "down" : "gone";

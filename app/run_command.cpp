@@ -1,7 +1,8 @@
-// `canhil run --virtual-time [--config SCENARIO] ...`: the whole loop in
-// virtual time (emulator/virtual_run.hpp) from a scenario file
-// (emulator/scenario.hpp), with faults, a trace and a world log. Real time:
-// the emulator alone is `canhil nodes --iface vcan0` (see docs/user-guide.md).
+// `canhil run [--virtual-time] [--config SCENARIO] ...`: a scenario file
+// (emulator/scenario.hpp) run either in virtual time, the whole loop in one
+// process (emulator/virtual_run.hpp) with a trace and a world log, or in real
+// time on SocketCAN next to the team's handler and agent (realtime_run.cpp).
+// Faults work in both.
 #include <unistd.h>
 
 #include <atomic>
@@ -14,25 +15,13 @@
 #include "canhil/emulator/virtual_run.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "realtime_run.hpp"
 
 namespace canhil::app {
 namespace {
 
 std::atomic<bool> g_stop{false};
 extern "C" void stop_run(int) { g_stop = true; }
-
-double number_option(Args& args, const std::string& name, double fallback) {
-  const auto text = args.option(name);
-  if (!text) return fallback;
-  try {
-    std::size_t used = 0;
-    const double v = std::stod(*text, &used);
-    if (used != text->size()) throw std::invalid_argument(*text);
-    return v;
-  } catch (const std::exception&) {
-    throw UsageError(name + " takes a number, got '" + *text + "'");
-  }
-}
 
 void write_file(const std::string& path, const std::string& text, const char* what) {
   std::ofstream out(path);
@@ -61,7 +50,13 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     scenario.agents = {1};
     scenario.duration_s = 8;
   }
-  const double duration = number_option(args, "--duration", scenario.duration_s);
+  const auto duration_text = args.option("--duration");
+  const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
+  double duration = scenario.duration_s;
+  if (duration_text) {
+    Args one({"--duration", *duration_text});
+    duration = number_option(one, "--duration", 0);
+  }
   const double log_period = number_option(args, "--world-log-period", 0.05);
   scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
   if (seed_text) {
@@ -74,11 +69,6 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     }
   }
   if (args.positionals().size() != 1) throw UsageError("run takes no other arguments");
-  if (!virtual_time) {
-    throw UsageError(
-        "canhil run needs --virtual-time: the real-time runner for whole scenarios is not built yet; for real time "
-        "start the emulator with `canhil nodes --iface vcan0` and your handler next to it (docs/user-guide.md)");
-  }
   if (!(duration > 0)) throw UsageError("--duration takes seconds above 0");
   if (!(log_period > 0)) throw UsageError("--world-log-period takes seconds above 0");
   for (const auto& f : fault_texts) {
@@ -87,6 +77,20 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("--fault: ") + e.what());
     }
+  }
+  if (!virtual_time) {
+    if (trace || world_log) {
+      throw UsageError(
+          "--trace and --world-log are for --virtual-time runs; in real time record the buses with `candump -l "
+          "vcan0` or `canhil dump vcan0`");
+    }
+    if (!(bit_rate >= 10'000 && bit_rate <= 1'000'000)) throw UsageError("--bit-rate takes 10000..1000000 bit/s");
+    RealtimeOptions opt;
+    opt.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
+    opt.duration_s = duration_text ? duration : 0;
+    opt.bit_rate = static_cast<std::uint32_t>(bit_rate);
+    opt.quiet = quiet;
+    return run_realtime(scenario, opt);
   }
   if (std::getenv("RTDB_KEY") == nullptr) {
     // A run of its own: RTDB keys of this process, so it never meets a live robot's database.

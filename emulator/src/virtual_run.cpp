@@ -92,6 +92,17 @@ class AgentParticipant final : public Participant {
 
 }  // namespace
 
+// A goal: the whole ball past a goal line, between the posts, under the bar.
+void GoalWatcher::step(const physics::World& world, Nanos now) {
+  const Eigen::Vector3d b = world.ball_position();
+  const auto& f = params_.field;
+  const double r = params_.ball.radius_m;
+  const bool in = std::fabs(b.x()) > f.length_m / 2 + r && std::fabs(b.y()) < f.goal.width_m / 2 &&
+                  b.z() < f.goal.height_m && std::fabs(b.x()) < f.length_m / 2 + f.goal.depth_m + r;
+  if (in && !in_) goals_.push_back(Goal{now, b.x() > 0});
+  in_ = in;
+}
+
 struct VirtualRun::Impl {
   VirtualRunConfig config;
   can_nodes::SimulatedClock clock;
@@ -109,20 +120,8 @@ struct VirtualRun::Impl {
   std::vector<std::unique_ptr<can_nodes::FaultInjector>> injectors;
   std::string world_log;
   Nanos next_log{0};
-  std::vector<Goal> goals;
-  bool ball_in_goal = false;
+  std::unique_ptr<GoalWatcher> goals;
   bool rtdb = false;
-
-  // A goal: the whole ball past a goal line, between the posts, under the bar.
-  void watch_goals(Nanos now) {
-    const Eigen::Vector3d b = world->ball_position();
-    const auto& f = config.world.field;
-    const double r = config.world.ball.radius_m;
-    const bool in = std::fabs(b.x()) > f.length_m / 2 + r && std::fabs(b.y()) < f.goal.width_m / 2 &&
-                    b.z() < f.goal.height_m && std::fabs(b.x()) < f.length_m / 2 + f.goal.depth_m + r;
-    if (in && !ball_in_goal) goals.push_back(Goal{now, b.x() > 0});
-    ball_in_goal = in;
-  }
 
   int agent(std::size_t r) const { return config.agents[r]; }
   void log_world(Nanos now) {
@@ -177,6 +176,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     }
   }
   s.world = std::make_unique<physics::World>(s.config.world);
+  s.goals = std::make_unique<GoalWatcher>(s.config.world);
   if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
   s.rtdb = true;
   laptop::AgentConfig agent_cfg;
@@ -242,7 +242,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     impl_->vision->on_step(*impl_->world);
     impl_->record();
     impl_->log_world(now);
-    impl_->watch_goals(now);
+    impl_->goals->step(*impl_->world, now);
   });
 }
 
@@ -291,7 +291,7 @@ std::string VirtualRun::trace() const {
   return out;
 }
 
-const std::vector<Goal>& VirtualRun::goals() const noexcept { return impl_->goals; }
+const std::vector<Goal>& VirtualRun::goals() const noexcept { return impl_->goals->goals(); }
 
 const std::string& VirtualRun::world_log() const noexcept { return impl_->world_log; }
 

@@ -219,9 +219,12 @@ TEST(CanhilRun, MistakesExitTwoWithAReason) {
   r = canhil("run --virtual-time --fault drop:Motor9");
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(has(r, "neither a message of the message set nor a node")) << r.out;
-  r = canhil("run --duration 1");
+  r = canhil("run --duration 1 --trace /tmp/x.log");
   EXPECT_EQ(r.status, 2);
-  EXPECT_TRUE(has(r, "needs --virtual-time")) << r.out;
+  EXPECT_TRUE(has(r, "--trace and --world-log are for --virtual-time runs")) << r.out;
+  r = canhil("run --virtual-time --config /nonexistent.toml");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "/nonexistent.toml")) << r.out;
 }
 
 TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {

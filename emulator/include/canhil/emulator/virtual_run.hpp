@@ -53,6 +53,19 @@ struct Goal {
   bool positive_x = true;  ///< the goal at +x (the one the reference agents attack)
 };
 
+/// Counts the ball's entries into either goal, step by step (real or virtual time).
+class GoalWatcher {
+ public:
+  explicit GoalWatcher(const physics::WorldParams& world) : params_(world) {}
+  void step(const physics::World& world, Nanos now);
+  const std::vector<Goal>& goals() const noexcept { return goals_; }
+
+ private:
+  physics::WorldParams params_;
+  std::vector<Goal> goals_;
+  bool in_ = false;
+};
+
 class VirtualRun {
  public:
   /// Builds everything and attaches to the RTDB (DB_init_all). Throws

@@ -1,0 +1,161 @@
+// `canhil run --config SCENARIO` in real time: every robot of the scenario with
+// its emulated nodes on its SocketCAN interface, the physics locked to the wall
+// clock, the emulated vision written into each robot's agent's RTDB (with
+// DB_signal_frame), faults on the nodes' frames. The team's own handler and
+// agent (or canhil-hwcomm and canhil-agent) run next to it, one per robot with
+// AGENT set. It reports when it falls behind, an interface going down and up,
+// goals, and ends (duration, Ctrl-C) with a summary.
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+
+#include "canhil/can_nodes/socketcan_bus.hpp"
+#include "canhil/emulator/realtime.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/virtual_run.hpp"
+#include "canhil/rtdb/rtdb.h"
+#include "canhil/vision_emu/runner.hpp"
+#include "realtime_run.hpp"
+#include "wall_waiter.hpp"
+
+namespace canhil::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void stop_realtime(int) { g_stop = true; }
+
+const char* state_text(can_nodes::BusState s) {
+  return s == can_nodes::BusState::kUp ? "up" : s == can_nodes::BusState::kDown ? "down" : "gone";
+}
+
+struct Robot {
+  std::unique_ptr<emulator::PhysicsRobotIo> io;
+  std::vector<can_nodes::SocketCanBus*> sockets;
+  std::unique_ptr<emulator::RobotNodes> nodes;
+  std::unique_ptr<can_nodes::FaultInjector> faults;
+  can_nodes::BusState state = can_nodes::BusState::kUp;
+};
+
+}  // namespace
+
+int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
+  physics::World world(sc.world);
+  const std::size_t n = sc.world.robots.size();
+  can_nodes::FttConfig ftt;
+  ftt.bit_rate = opt.bit_rate;
+  const can_nodes::NodeParams params = emulator::node_params_for(sc.world.robot, ftt);
+  const can_nodes::WallClock clock;
+  const auto ec = params.ftt.elementary_cycle;
+  const can_nodes::Nanos start = (clock.now() / ec + 10) * ec;  // on a whole EC, a little ahead
+  std::vector<Robot> robots(n);
+  std::vector<int> fds;
+  for (std::size_t r = 0; r < n; ++r) {
+    Robot& robot = robots[r];
+    robot.io = std::make_unique<emulator::PhysicsRobotIo>(world.robot(r));
+    const std::string& iface = sc.interfaces[r];
+    robot.nodes = std::make_unique<emulator::RobotNodes>(
+        opt.messages, params, *robot.io,
+        [&](const std::string&) {
+          auto bus = can_nodes::SocketCanBus::open(iface);
+          robot.sockets.push_back(bus.get());
+          return std::unique_ptr<can_nodes::Bus>(std::move(bus));
+        },
+        start);
+    if (robot.sockets.front()->state() != can_nodes::BusState::kUp) {
+      throw can_nodes::SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
+    }
+    for (auto* s : robot.sockets) fds.push_back(s->fd());
+    if (!sc.faults.empty()) {
+      std::vector<std::string> names;
+      for (can_nodes::Node* node : robot.nodes->nodes()) names.push_back(node->name());
+      robot.faults = std::make_unique<can_nodes::FaultInjector>(sc.faults, opt.messages, names, sc.seed + r);
+      for (can_nodes::Node* node : robot.nodes->nodes()) node->set_fault_hook(robot.faults.get());
+    }
+  }
+  if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
+  struct RtdbGuard {
+    ~RtdbGuard() { DB_free_all(0); }
+  } rtdb_guard;
+  std::vector<vision_emu::Vision> vision;
+  for (std::size_t r = 0; r < n; ++r) vision.emplace_back(opt.vision, world.markings());
+  vision_emu::VisionRunner vision_runner(std::move(vision), vision_emu::rtdb_sink(sc.agents));
+  emulator::GoalWatcher goals(sc.world);
+
+  WallWaiter waiter(fds);
+  emulator::Realtime loop(clock, &world, [&](can_nodes::Nanos d) { waiter.wait(d); });
+  for (Robot& robot : robots) {
+    for (can_nodes::Node* node : robot.nodes->nodes()) loop.add(*node);
+  }
+  loop.on_physics_step([&](can_nodes::Nanos now) {
+    vision_runner.on_step(world);
+    goals.step(world, now);
+  });
+
+  std::signal(SIGINT, stop_realtime);
+  std::signal(SIGTERM, stop_realtime);
+  char length[32] = "until Ctrl-C";
+  if (opt.duration_s > 0) std::snprintf(length, sizeof length, "%g s", opt.duration_s);
+  std::printf("canhil run: %zu robot(s), real time, %s, seed %llu, %zu fault rule(s)\n", n, length,
+              static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  for (std::size_t r = 0; r < n; ++r) {
+    std::printf("  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,
+                sc.interfaces[r].c_str(), sc.agents[r], sc.agents[r]);
+  }
+  std::fflush(stdout);
+  const can_nodes::Nanos end =
+      opt.duration_s > 0
+          ? start + std::chrono::duration_cast<can_nodes::Nanos>(std::chrono::duration<double>(opt.duration_s))
+          : can_nodes::kNever;
+  can_nodes::Nanos next_report = start + std::chrono::seconds(1);
+  std::size_t goals_reported = 0;
+  while (!g_stop && clock.now() < end) {
+    loop.run_until(std::min(end, clock.now() + std::chrono::milliseconds(200)), g_stop);
+    for (std::size_t r = 0; r < n; ++r) {
+      const can_nodes::BusState state = robots[r].sockets.front()->refresh_state();
+      if (state != robots[r].state) {
+        std::printf("canhil run: %s is %s\n", sc.interfaces[r].c_str(), state_text(state));
+        robots[r].state = state;
+      }
+    }
+    for (; goals_reported < goals.goals().size(); ++goals_reported) {
+      std::printf("  GOAL at %.2f s\n",
+                  std::chrono::duration<double>(goals.goals()[goals_reported].time - start).count());
+    }
+    if (!opt.quiet && clock.now() >= next_report) {
+      const Eigen::Vector3d b = world.ball_position();
+      std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", std::chrono::duration<double>(clock.now() - start).count(), b.x(),
+                  b.y());
+      for (std::size_t r = 0; r < n; ++r) {
+        const kinematics::Pose p = world.robot(r).pose();
+        std::printf("  %s (%5.2f, %5.2f)", sc.interfaces[r].c_str(), p.x_m, p.y_m);
+      }
+      std::printf("  late steps %llu\n", static_cast<unsigned long long>(loop.stats().late_steps));
+      next_report += std::chrono::seconds(1);
+    }
+    std::fflush(stdout);
+  }
+  const auto& st = loop.stats();
+  const Eigen::Vector3d b = world.ball_position();
+  std::printf("canhil run: %s after %.2f s; physics steps %llu, late %llu, skipped %llu, worst lateness %.1f ms\n",
+              g_stop ? "stopped" : "done", std::chrono::duration<double>(clock.now() - start).count(),
+              static_cast<unsigned long long>(st.physics_steps), static_cast<unsigned long long>(st.late_steps),
+              static_cast<unsigned long long>(st.skipped_steps),
+              std::chrono::duration<double, std::milli>(st.worst_lateness).count());
+  std::printf("  ball at (%.2f, %.2f); %zu goal(s)\n", b.x(), b.y(), goals.goals().size());
+  for (std::size_t r = 0; r < n; ++r) {
+    const kinematics::Pose p = world.robot(r).pose();
+    const auto& tm = robots[r].nodes->node(emulator::NodeId::kMaster).counters();
+    std::printf("  %s agent %d: at (%.2f, %.2f), %llu TMs sent, %llu bad frames\n", sc.interfaces[r].c_str(),
+                sc.agents[r], p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
+                static_cast<unsigned long long>(robots[r].nodes->bad_frames()));
+    if (robots[r].faults) {
+      for (const auto& c : robots[r].faults->counts()) {
+        std::printf("    fault %-24s matched %8llu frames, applied to %8llu\n", c.rule.c_str(),
+                    static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
+      }
+    }
+  }
+  return g_stop ? 130 : 0;
+}
+
+}  // namespace canhil::app

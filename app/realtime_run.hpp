@@ -1,0 +1,23 @@
+// app/realtime_run.hpp — `canhil run` in real time (see realtime_run.cpp).
+#pragma once
+
+#include <memory>
+
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/frames/messages.hpp"
+#include "canhil/vision_emu/vision.hpp"
+
+namespace canhil::app {
+
+struct RealtimeOptions {
+  std::shared_ptr<const frames::MessageSet> messages;
+  vision_emu::VisionParams vision;
+  double duration_s = 0;  ///< 0: until Ctrl-C
+  std::uint32_t bit_rate = 1'000'000;
+  bool quiet = false;
+};
+
+/// Runs until the duration ends or Ctrl-C; returns the exit status (130 after Ctrl-C).
+int run_realtime(const emulator::Scenario& scenario, const RealtimeOptions& options);
+
+}  // namespace canhil::app

@@ -1,0 +1,55 @@
+// app/wall_waiter.hpp — the real-time loops' wait: until an absolute
+// CLOCK_REALTIME deadline (a timerfd with TFD_TIMER_ABSTIME) or until one of
+// the sockets is readable, at most 100 ms so Ctrl-C is noticed.
+#pragma once
+
+#include <poll.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
+
+#include <vector>
+
+#include "canhil/can_nodes/bus.hpp"
+#include "canhil/can_nodes/node.hpp"
+
+namespace canhil::app {
+
+/// Waits until an absolute CLOCK_REALTIME deadline or until a socket is readable.
+class WallWaiter {
+ public:
+  explicit WallWaiter(std::vector<int> fds) : fds_(std::move(fds)) {
+    timer_ = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
+    if (timer_ < 0) throw can_nodes::SetupError("timerfd_create failed");
+  }
+  ~WallWaiter() { ::close(timer_); }
+  WallWaiter(const WallWaiter&) = delete;
+  WallWaiter& operator=(const WallWaiter&) = delete;
+
+  void wait(can_nodes::Nanos deadline) {
+    std::vector<pollfd> p;
+    for (int fd : fds_) p.push_back(pollfd{fd, POLLIN, 0});
+    timespec timeout{0, 100'000'000};  // at most 100 ms, to notice Ctrl-C
+    timespec* to = &timeout;
+    if (deadline != can_nodes::kNever) {
+      itimerspec spec{};
+      const auto ns = deadline.count();
+      spec.it_value.tv_sec = static_cast<time_t>(ns / 1'000'000'000);
+      spec.it_value.tv_nsec = static_cast<long>(ns % 1'000'000'000);
+      if (spec.it_value.tv_sec == 0 && spec.it_value.tv_nsec == 0) spec.it_value.tv_nsec = 1;
+      timerfd_settime(timer_, TFD_TIMER_ABSTIME, &spec, nullptr);
+      p.push_back(pollfd{timer_, POLLIN, 0});
+      to = nullptr;
+    }
+    const int r = ::ppoll(p.data(), p.size(), to, nullptr);
+    if (r > 0 && deadline != can_nodes::kNever && (p.back().revents & POLLIN) != 0) {
+      std::uint64_t expirations = 0;
+      [[maybe_unused]] const auto n = ::read(timer_, &expirations, sizeof expirations);
+    }
+  }
+
+ private:
+  std::vector<int> fds_;
+  int timer_ = -1;
+};
+
+}  // namespace canhil::app

@@ -1,0 +1,51 @@
+// The README demo in real time over a real vcan: `canhil run` with the
+// one-robot scenario (nodes, physics, vision into the RTDB), the reference
+// handler canhil-hwcomm and the reference agent canhil-agent, each its own
+// process as on a robot. Checks the outcome (the ball went toward the
+// opponent goal), never timing: real time here is an emulated machine.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <thread>
+
+#include "support/child_process.hpp"
+#include "support/test_paths.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(VcanDemo, OneRobotInRealTimeKicksTheBallTowardTheGoal) {
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  setenv("AGENT", "1", 1);
+  const std::string bin = canhil::test::build_dir();
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --config " + canhil::test::source_dir() +
+                                          "/emulator/scenarios/one_robot.toml --duration 30 --quiet",
+                                      "/tmp/canhil_vcan_demo_run.log");
+  std::this_thread::sleep_for(1s);  // the emulator creates the RTDB and starts the bus
+  canhil::test::ChildProcess handler(bin + "/laptop/canhil-hwcomm --iface vcan0", "/tmp/canhil_vcan_demo_hwcomm.log");
+  canhil::test::ChildProcess agent(bin + "/laptop/canhil-agent --pose -3,0,-90 --duration 40",
+                                   "/tmp/canhil_vcan_demo_agent.log");
+  // The emulator ends by itself after its 30 s and prints its summary.
+  for (int i = 0; i < 90 && emulator.output().find("canhil run: done") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(500ms);
+  }
+  const std::string out = emulator.output();
+  agent.stop();
+  handler.stop();
+  emulator.stop();
+  const std::string context = out + "\nhandler:\n" + handler.output() + "\nagent:\n" + agent.output();
+  const auto at = out.find("ball at (");
+  ASSERT_NE(at, std::string::npos) << context;
+  float x = 0, y = 0;
+  ASSERT_EQ(std::sscanf(out.c_str() + at, "ball at (%f, %f)", &x, &y), 2) << context;
+  // The ball starts at (-1, 1); a kick toward the +x goal carries it metres on.
+  EXPECT_GT(x, 2.0) << "the ball went toward the opponent goal\n" << context;
+  EXPECT_LT(std::abs(y), 3.0) << context;
+  EXPECT_NE(out.find("0 bad frames"), std::string::npos) << context;
+}
+
+}  // namespace
