@@ -31,3 +31,7 @@ echo "   the reference handler and agent); the robot drives to the ball and kick
 echo
 echo "== the demo's timing report (canhil timing build/plain/demo.log)"
 "$canhil" timing build/plain/demo.log
+echo
+echo "== the demo in real time on vcan (this machine's, or the VM runner's where the kernel has no CAN):"
+echo "   canhil run, canhil-hwcomm and canhil-agent as three processes; timing of the live bus at the end"
+bash vcan_setup/with-vcan.sh -- bash scripts/demo.sh 20
