@@ -55,14 +55,8 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   }
   const std::filesystem::path path = config ? std::filesystem::path(*config) : shipped_scenario("five_robots.toml");
   const emulator::Scenario sc = emulator::load_scenario(path);
-  emulator::VirtualRunConfig cfg;
-  cfg.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-  cfg.world = sc.world;
-  cfg.interfaces = sc.interfaces;
-  cfg.agents = sc.agents;
-  cfg.faults = sc.faults;
-  cfg.seed = sc.seed;
-  cfg.kick_power = sc.kick_power;
+  const emulator::VirtualRunConfig cfg =
+      emulator::virtual_run_config(sc, frames::MessageSet::create(load_chosen_dbc(dbc)));
   std::printf("canhil bench: %s, %zu robot(s), %zu obstacle(s), %g s of virtual time\n", path.string().c_str(),
               sc.world.robots.size(), sc.world.obstacles.size(), seconds);
   const double cpu0 = cpu_seconds();

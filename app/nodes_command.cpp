@@ -26,10 +26,6 @@ namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void stop_on_signal(int) { g_stop = true; }
 
-const char* state_text(can_nodes::BusState s) {
-  return s == can_nodes::BusState::kUp ? "up" : s == can_nodes::BusState::kDown ? "down" : "gone";
-}
-
 }  // namespace
 
 int run_nodes(Args& args, const std::optional<std::string>& dbc) {
@@ -94,7 +90,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
     loop.run_until(slice, g_stop);
     const can_nodes::BusState state = sockets.front()->refresh_state();
     if (state != last_state) {
-      std::printf("canhil nodes: %s is %s\n", iface->c_str(), state_text(state));
+      std::printf("canhil nodes: %s is %s\n", iface->c_str(), bus_state_text(state));
       std::fflush(stdout);
       last_state = state;
     }

@@ -24,10 +24,6 @@ namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void stop_realtime(int) { g_stop = true; }
 
-const char* state_text(can_nodes::BusState s) {
-  return s == can_nodes::BusState::kUp ? "up" : s == can_nodes::BusState::kDown ? "down" : "gone";
-}
-
 struct Robot {
   std::unique_ptr<emulator::PhysicsRobotIo> io;
   std::vector<can_nodes::SocketCanBus*> sockets;
@@ -113,7 +109,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     for (std::size_t r = 0; r < n; ++r) {
       const can_nodes::BusState state = robots[r].sockets.front()->refresh_state();
       if (state != robots[r].state) {
-        std::printf("canhil run: %s is %s\n", sc.interfaces[r].c_str(), state_text(state));
+        std::printf("canhil run: %s is %s\n", sc.interfaces[r].c_str(), bus_state_text(state));
         robots[r].state = state;
       }
     }

@@ -96,14 +96,8 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
     setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
   }
-  emulator::VirtualRunConfig cfg;
-  cfg.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-  cfg.world = scenario.world;
-  cfg.kick_power = scenario.kick_power;
-  cfg.interfaces = scenario.interfaces;
-  cfg.agents = scenario.agents;
-  cfg.faults = scenario.faults;
-  cfg.seed = scenario.seed;
+  emulator::VirtualRunConfig cfg =
+      emulator::virtual_run_config(scenario, frames::MessageSet::create(load_chosen_dbc(dbc)));
   if (world_log)
     cfg.world_log_period = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(log_period));
   std::unique_ptr<emulator::VirtualRun> run;

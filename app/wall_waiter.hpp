@@ -1,6 +1,7 @@
 // app/wall_waiter.hpp — the real-time loops' wait: until an absolute
 // CLOCK_REALTIME deadline (a timerfd with TFD_TIMER_ABSTIME) or until one of
-// the sockets is readable, at most 100 ms so Ctrl-C is noticed.
+// the sockets is readable, at most 100 ms so Ctrl-C is noticed; and how
+// they name a bus state.
 #pragma once
 
 #include <poll.h>
@@ -51,5 +52,10 @@ class WallWaiter {
   std::vector<int> fds_;
   int timer_ = -1;
 };
+
+/// A bus state as the real-time commands report it.
+inline const char* bus_state_text(can_nodes::BusState s) {
+  return s == can_nodes::BusState::kUp ? "up" : s == can_nodes::BusState::kDown ? "down" : "gone";
+}
 
 }  // namespace canhil::app

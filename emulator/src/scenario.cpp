@@ -107,4 +107,16 @@ Scenario load_scenario(const std::filesystem::path& path) {
   return parse_scenario(physics::read_config_file(path), path.string());
 }
 
+VirtualRunConfig virtual_run_config(const Scenario& scenario, std::shared_ptr<const frames::MessageSet> messages) {
+  VirtualRunConfig cfg;
+  cfg.messages = std::move(messages);
+  cfg.world = scenario.world;
+  cfg.kick_power = scenario.kick_power;
+  cfg.interfaces = scenario.interfaces;
+  cfg.agents = scenario.agents;
+  cfg.faults = scenario.faults;
+  cfg.seed = scenario.seed;
+  return cfg;
+}
+
 }  // namespace canhil::emulator

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/fault.hpp"
+#include "canhil/emulator/virtual_run.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::emulator {
@@ -36,5 +37,7 @@ struct Scenario {
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name);
 Scenario load_scenario(const std::filesystem::path& path);
+/// What a virtual-time run of the scenario takes (world log off).
+VirtualRunConfig virtual_run_config(const Scenario& scenario, std::shared_ptr<const frames::MessageSet> messages);
 
 }  // namespace canhil::emulator
