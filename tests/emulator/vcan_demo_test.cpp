@@ -4,12 +4,16 @@
 // process as on a robot. Checks the outcome (the ball went toward the
 // opponent goal), never timing: real time here is an emulated machine.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "support/child_process.hpp"
 #include "support/test_paths.hpp"
@@ -46,6 +50,43 @@ TEST(VcanDemo, OneRobotInRealTimeKicksTheBallTowardTheGoal) {
   EXPECT_GT(x, 2.0) << "the ball went toward the opponent goal\n" << context;
   EXPECT_LT(std::abs(y), 3.0) << context;
   EXPECT_NE(out.find("0 bad frames"), std::string::npos) << context;
+}
+
+TEST(VcanDemo, KillingTheHandlerLeavesTheEmulatorRunningAndTheMotorsBraked) {
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8) + 0x40).c_str(), 1);
+  setenv("AGENT", "1", 1);
+  const std::string bin = canhil::test::build_dir();
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --config " + canhil::test::source_dir() +
+                                          "/emulator/scenarios/one_robot.toml --duration 18",
+                                      "/tmp/canhil_vcan_kill_run.log");
+  std::this_thread::sleep_for(1s);
+  canhil::test::ChildProcess handler(bin + "/laptop/canhil-hwcomm --iface vcan0", "/tmp/canhil_vcan_kill_hwcomm.log");
+  std::this_thread::sleep_for(2s);
+  // Sideways (robot -x is world +y here), away from the ball, for longer than the handler lives.
+  canhil::test::ChildProcess drive(bin + "/tests/rtdb_drive vel -0.3 0 0 10", "/tmp/canhil_vcan_kill_drive.log");
+  std::this_thread::sleep_for(4s);
+  handler.kill_with(SIGKILL);  // no goodbye: the M6 stream just stops
+  for (int i = 0; i < 60 && emulator.output().find("canhil run: done") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(500ms);
+  }
+  drive.stop();
+  const std::string out = emulator.output();
+  const int status = emulator.stop();
+  ASSERT_NE(out.find("canhil run: done"), std::string::npos) << "the emulator kept running to its end\n" << out;
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << out;
+  // Progress lines: "t=  5.0 s  ball (...)  vcan0 (x, y)  late steps N".
+  std::vector<std::pair<float, float>> poses;
+  for (std::size_t at = out.find("vcan0 ("); at != std::string::npos; at = out.find("vcan0 (", at + 1)) {
+    float x = 0, y = 0;
+    if (std::sscanf(out.c_str() + at, "vcan0 (%f, %f)", &x, &y) == 2) poses.emplace_back(x, y);
+  }
+  ASSERT_GE(poses.size(), 8u) << out;
+  const auto& last = poses.back();
+  EXPECT_GT(std::hypot(last.first - (-3.0F), last.second - 0.0F), 0.3F) << "it drove while the handler lived\n" << out;
+  for (std::size_t k = poses.size() - 4; k < poses.size(); ++k) {
+    EXPECT_NEAR(poses[k].first, last.first, 0.02) << "braked: it stays where it stopped\n" << out;
+    EXPECT_NEAR(poses[k].second, last.second, 0.02) << out;
+  }
 }
 
 }  // namespace

@@ -35,6 +35,15 @@ class ChildProcess {
     pid_ = -1;
     return status;
   }
+  /// Sends `sig` (e.g. SIGKILL: the process dies without cleaning up) and reaps it.
+  int kill_with(int sig) {
+    if (pid_ <= 0) return -1;
+    ::kill(pid_, sig);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return status;
+  }
   std::string output() const {
     std::string out;
     if (FILE* f = std::fopen(log_.c_str(), "r")) {
