@@ -7,14 +7,18 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "canhil/can_nodes/clock.hpp"
+#include "canhil/can_nodes/socketcan_bus.hpp"
 #include "support/child_process.hpp"
 #include "support/test_paths.hpp"
 
@@ -87,6 +91,47 @@ TEST(VcanDemo, KillingTheHandlerLeavesTheEmulatorRunningAndTheMotorsBraked) {
     EXPECT_NEAR(poses[k].first, last.first, 0.02) << "braked: it stays where it stopped\n" << out;
     EXPECT_NEAR(poses[k].second, last.second, 0.02) << out;
   }
+}
+
+TEST(VcanDemo, InterfaceDownAndUpIsReportedAndTheRunResumesWithoutABurst) {
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8) + 0x80).c_str(), 1);
+  const std::string bin = canhil::test::build_dir();
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --config " + canhil::test::source_dir() +
+                                          "/emulator/scenarios/one_robot.toml --duration 12 --quiet",
+                                      "/tmp/canhil_vcan_updown_run.log");
+  std::this_thread::sleep_for(3s);
+  ASSERT_EQ(std::system("ip link set vcan0 down"), 0);
+  std::this_thread::sleep_for(1s);  // about 100 trigger messages not sent
+  ASSERT_EQ(std::system("ip link set vcan0 up"), 0);
+  const canhil::can_nodes::WallClock clock;
+  const canhil::can_nodes::Nanos up = clock.now();
+  auto bus = canhil::can_nodes::SocketCanBus::open("vcan0");  // only what is sent from now on
+  const canhil::can_nodes::Filter tm[] = {canhil::can_nodes::Filter::exact(0x010)};
+  bus->set_filters(tm);
+  std::vector<canhil::can_nodes::Nanos> tms;
+  while (clock.now() < up + 2s) {
+    if (bus->wait_readable(50ms)) {
+      while (auto f = bus->receive()) tms.push_back(f->time);
+    }
+  }
+  for (int i = 0; i < 40 && emulator.output().find("canhil run: done") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(500ms);
+  }
+  const std::string out = emulator.output();
+  emulator.stop();
+  EXPECT_NE(out.find("canhil run: vcan0 is down"), std::string::npos) << out;
+  EXPECT_NE(out.find("canhil run: vcan0 is up"), std::string::npos) << out;
+  EXPECT_NE(out.find("canhil run: done"), std::string::npos) << "the run went on to its end\n" << out;
+  ASSERT_FALSE(tms.empty()) << "no trigger message after the interface came back\n" << out;
+  EXPECT_LT(tms.front() - up, 1s) << "the run resumed within a second";
+  // No catch-up burst of the ECs missed while down: at most one TM per EC
+  // (10 ms) over the first second back, with slack for a late wake-up.
+  const auto in_first_second =
+      std::count_if(tms.begin(), tms.end(), [&](canhil::can_nodes::Nanos t) { return t < tms.front() + 1s; });
+  std::printf("down/up: first TM %.1f ms after up; %ld TMs in the first second back\n",
+              std::chrono::duration<double, std::milli>(tms.front() - up).count(), static_cast<long>(in_first_second));
+  EXPECT_LE(in_first_second, 105) << out;
+  EXPECT_GE(in_first_second, 50) << "trigger messages flow again\n" << out;
 }
 
 }  // namespace
