@@ -8,6 +8,7 @@
 
 #include "canhil/frames/candump.hpp"
 #include "canhil/laptop/agent.hpp"
+#include "canhil/laptop/agent_io.hpp"
 #include "canhil/laptop/hwcomm.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
@@ -46,45 +47,20 @@ class HandlerParticipant final : public Participant {
 // The reference agent, woken after each of its vision frames.
 class AgentParticipant final : public Participant {
  public:
-  AgentParticipant(int agent, const laptop::AgentConfig& config) : agent_(agent), logic_(config) {}
+  AgentParticipant(int agent, const laptop::AgentConfig& config) : io_(agent), logic_(config) {}
   void frame_ready(Nanos now) { wake_ = now; }
   std::size_t poll() override { return 0; }
   Nanos next_wakeup() const override { return wake_; }
   void tick(Nanos now) override {
     wake_ = can_nodes::kNever;
-    auto vision = std::make_unique<VisionInfo>();
-    DB_get_from(agent_, agent_, VISION_INFO, vision.get());
-    laptop::AgentInput in;
-    in.dt_s = last_ == can_nodes::kNever ? 1.0 / 30 : std::chrono::duration<double>(now - last_).count();
+    const double dt = last_ == can_nodes::kNever ? 1.0 / 30 : std::chrono::duration<double>(now - last_).count();
     last_ = now;
-    in.ball_seen = vision->nBalls > 0;
-    if (in.ball_seen) {
-      in.ball_x_m = vision->ball[0].x;
-      in.ball_y_m = vision->ball[0].y;
-    }
-    CMD_Pos pos;
-    DB_get_from(agent_, agent_, CMD_POS, &pos);
-    in.x_m = pos.px;
-    in.y_m = pos.py;
-    in.heading_rad = pos.pa;
-    CMD_Grabber_Info gi;
-    DB_get_from(agent_, agent_, CMD_GRABBER_INFO, &gi);
-    in.ball_engaged = gi.ballEngaged != 0;
-    const laptop::AgentOutput out = logic_.decide(in);
-    CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps),
-                false};
-    DB_put_in(agent_, agent_, CMD_VEL, &vel, 0);
-    CMD_Grabber grab{static_cast<unsigned char>(out.grabber)};
-    DB_put_in(agent_, agent_, CMD_GRABBER, &grab, 0);
-    if (out.kick != 0) {
-      CMD_Kicker kick{out.kick, 0, 0};
-      DB_put_in(agent_, agent_, CMD_KICKER, &kick, 0);
-    }
+    io_.write(logic_.decide(io_.read(dt)));
   }
   int kicks() const { return logic_.kicks(); }
 
  private:
-  int agent_;
+  laptop::AgentIo io_;
   laptop::Agent logic_;
   Nanos wake_ = can_nodes::kNever;
   Nanos last_ = can_nodes::kNever;

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "canhil/laptop/agent.hpp"
+#include "canhil/laptop/agent_io.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "cli_numbers.hpp"
@@ -90,7 +91,7 @@ int main(int argc, char** argv) {
               config.goal_x_m);
   std::fflush(stdout);
   canhil::laptop::Agent agent(config);
-  auto vision = std::make_unique<VisionInfo>();
+  canhil::laptop::AgentIo io(Whoami());
   const double start = monotonic_s();
   double last = start;
   long frames = 0;
@@ -105,32 +106,11 @@ int main(int argc, char** argv) {
     }
     ++frames;
     const double now = monotonic_s();
-    canhil::laptop::AgentInput in;
-    in.dt_s = now - last;
+    const canhil::laptop::AgentInput in = io.read(now - last);
     last = now;
-    DB_get(Whoami(), VISION_INFO, vision.get());
-    in.ball_seen = vision->nBalls > 0;
-    if (in.ball_seen) {
-      in.ball_x_m = vision->ball[0].x;
-      in.ball_y_m = vision->ball[0].y;
-    }
-    CMD_Pos pos;
-    DB_get(Whoami(), CMD_POS, &pos);
-    in.x_m = pos.px;
-    in.y_m = pos.py;
-    in.heading_rad = pos.pa;
-    CMD_Grabber_Info gi;
-    DB_get(Whoami(), CMD_GRABBER_INFO, &gi);
-    in.ball_engaged = gi.ballEngaged != 0;
     const canhil::laptop::AgentOutput out = agent.decide(in);
-    CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps),
-                false};
-    DB_put(CMD_VEL, &vel);
-    CMD_Grabber grab{static_cast<unsigned char>(out.grabber)};
-    DB_put(CMD_GRABBER, &grab);
+    io.write(out);
     if (out.kick != 0) {
-      CMD_Kicker kick{out.kick, 0, 0};
-      DB_put(CMD_KICKER, &kick);
       std::printf("canhil-agent: kick (0x%02X) at (%.2f, %.2f)\n", out.kick, in.x_m, in.y_m);
     }
     if (agent.state() != shown) {

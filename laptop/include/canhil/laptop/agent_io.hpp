@@ -1,0 +1,27 @@
+// canhil/laptop/agent_io.hpp — the reference agent's RTDB side: what it reads
+// before deciding (VISION_INFO, CMD_POS, CMD_GRABBER_INFO) and what it writes
+// after (CMD_VEL, CMD_GRABBER, and CMD_KICKER once per kick), for one agent.
+// Used by canhil-agent (its own agent) and by the virtual-time run (each
+// robot's agent in one process). DB_init or DB_init_all first.
+#pragma once
+
+#include <memory>
+
+#include "canhil/laptop/agent.hpp"
+#include "canhil/rtdb/cambada_types.h"
+
+namespace canhil::laptop {
+
+class AgentIo {
+ public:
+  explicit AgentIo(int agent) : agent_(agent), vision_(std::make_unique<VisionInfo>()) {}
+  /// The inputs as the agent's database holds them now; `dt_s` since the last decision.
+  AgentInput read(double dt_s);
+  void write(const AgentOutput& out);
+
+ private:
+  int agent_;
+  std::unique_ptr<VisionInfo> vision_;  // large: kept, not on the stack or allocated per frame
+};
+
+}  // namespace canhil::laptop
