@@ -27,7 +27,8 @@ class WallWaiter {
   WallWaiter& operator=(const WallWaiter&) = delete;
 
   void wait(can_nodes::Nanos deadline) {
-    std::vector<pollfd> p;
+    std::vector<pollfd>& p = polled_;  // reused: no allocation per wait
+    p.clear();
     for (int fd : fds_) p.push_back(pollfd{fd, POLLIN, 0});
     timespec timeout{0, 100'000'000};  // at most 100 ms, to notice Ctrl-C
     timespec* to = &timeout;
@@ -50,6 +51,7 @@ class WallWaiter {
 
  private:
   std::vector<int> fds_;
+  std::vector<pollfd> polled_;
   int timer_ = -1;
 };
 
