@@ -64,10 +64,10 @@ class Args {
   std::vector<std::string> words_;
 };
 
-/// Removes `--name VALUE` and returns VALUE as a number, or `fallback` when absent.
-inline double number_option(Args& args, const std::string& name, double fallback) {
+/// Removes `--name VALUE` and returns VALUE as a number; nothing when absent.
+inline std::optional<double> optional_number(Args& args, const std::string& name) {
   const auto v = args.option(name);
-  if (!v) return fallback;
+  if (!v) return std::nullopt;
   try {
     std::size_t used = 0;
     const double d = std::stod(*v, &used);
@@ -76,6 +76,11 @@ inline double number_option(Args& args, const std::string& name, double fallback
   } catch (const std::exception&) {
     throw UsageError(name + " takes a number, got \"" + *v + "\"");
   }
+}
+
+/// Removes `--name VALUE` and returns VALUE as a number, or `fallback` when absent.
+inline double number_option(Args& args, const std::string& name, double fallback) {
+  return optional_number(args, name).value_or(fallback);
 }
 
 }  // namespace canhil::app

@@ -40,15 +40,9 @@ std::filesystem::path shipped_scenario(const std::string& name) {
 }
 
 int run_bench(Args& args, const std::optional<std::string>& dbc) {
-  const auto seconds_text = args.option("--seconds");
+  const double seconds = number_option(args, "--seconds", 20);
   const auto config = args.option("--config");
   if (args.positionals().size() != 1) throw UsageError("bench takes no other arguments");
-  double seconds = 20;
-  try {
-    if (seconds_text) seconds = std::stod(*seconds_text);
-  } catch (const std::exception&) {
-    throw UsageError("--seconds takes a number");
-  }
   if (!(seconds > 0)) throw UsageError("--seconds takes a number above 0");
   if (std::getenv("RTDB_KEY") == nullptr) {
     setenv("RTDB_KEY", std::to_string(0x57000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);

@@ -50,13 +50,9 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     scenario.agents = {1};
     scenario.duration_s = 8;
   }
-  const auto duration_text = args.option("--duration");
+  const std::optional<double> duration_given = optional_number(args, "--duration");
   const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
-  double duration = scenario.duration_s;
-  if (duration_text) {
-    Args one({"--duration", *duration_text});
-    duration = number_option(one, "--duration", 0);
-  }
+  const double duration = duration_given.value_or(scenario.duration_s);
   const double log_period = number_option(args, "--world-log-period", 0.05);
   scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
   if (seed_text) {
@@ -87,7 +83,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     if (!(bit_rate >= 10'000 && bit_rate <= 1'000'000)) throw UsageError("--bit-rate takes 10000..1000000 bit/s");
     RealtimeOptions opt;
     opt.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-    opt.duration_s = duration_text ? duration : 0;
+    opt.duration_s = duration_given.value_or(0);  // none: until Ctrl-C
     opt.bit_rate = static_cast<std::uint32_t>(bit_rate);
     opt.quiet = quiet;
     return run_realtime(scenario, opt);
