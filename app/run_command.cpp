@@ -94,6 +94,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   }
   emulator::VirtualRunConfig cfg =
       emulator::virtual_run_config(scenario, frames::MessageSet::create(load_chosen_dbc(dbc)));
+  cfg.record_trace = trace.has_value();  // a long run without --trace keeps no frames
   if (world_log)
     cfg.world_log_period = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(log_period));
   std::unique_ptr<emulator::VirtualRun> run;

@@ -90,7 +90,8 @@ struct VirtualRun::Impl {
   std::vector<std::unique_ptr<HandlerParticipant>> handlers;
   std::vector<std::unique_ptr<AgentParticipant>> agents;
   std::vector<std::unique_ptr<can_nodes::MemoryEndpoint>> recorders;
-  std::vector<std::vector<frames::TimedFrame>> recorded;
+  std::vector<std::vector<frames::TimedFrame>> recorded;  // kept only when record_trace
+  std::vector<std::uint64_t> frame_counts;
   std::unique_ptr<vision_emu::VisionRunner> vision;
   std::unique_ptr<Lockstep> run;
   std::vector<std::unique_ptr<can_nodes::FaultInjector>> injectors;
@@ -121,7 +122,10 @@ struct VirtualRun::Impl {
 
   void record() {
     for (std::size_t r = 0; r < recorders.size(); ++r) {
-      while (auto f = recorders[r]->receive()) recorded[r].push_back(*f);
+      while (auto f = recorders[r]->receive()) {
+        ++frame_counts[r];
+        if (config.record_trace) recorded[r].push_back(*f);
+      }
     }
   }
 };
@@ -160,6 +164,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
   agent_cfg.kick_power = s.config.kick_power;
   s.params.reserve(n);
   s.recorded.resize(n);
+  s.frame_counts.resize(n);
   std::vector<vision_emu::Vision> vision;
   for (std::size_t r = 0; r < n; ++r) {
     const int agent = s.config.agents[r];
@@ -240,7 +245,7 @@ std::vector<RobotOutcome> VirtualRun::outcomes() const {
     RobotOutcome o;
     o.pose = impl_->world->robot(r).pose();
     o.kicks = impl_->agents[r]->kicks();
-    o.frames = impl_->recorded[r].size();
+    o.frames = impl_->frame_counts[r];
     o.bad_frames = impl_->nodes[r]->bad_frames();
     out.push_back(o);
   }

@@ -50,6 +50,15 @@ TEST_F(VirtualRunTest, SameScenarioSameTraceByteForByte) {
   EXPECT_GT(first.size(), 50'000u);
 }
 
+TEST_F(VirtualRunTest, WithoutATraceFramesAreCountedNotKept) {
+  VirtualRunConfig c = one_robot();
+  c.record_trace = false;
+  VirtualRun run(c);
+  run.run_for(1s);
+  EXPECT_TRUE(run.trace().empty());
+  EXPECT_GT(run.outcomes()[0].frames, 500u);
+}
+
 TEST_F(VirtualRunTest, TheTraceIsFttCompliant) {
   VirtualRun run(one_robot());
   run.run_for(4s);

@@ -38,6 +38,7 @@ struct VirtualRunConfig {
   std::vector<can_nodes::FaultRule> faults;
   std::uint64_t seed = 1;     ///< fault draws (robot r uses seed + r)
   Nanos world_log_period{0};  ///< 0: no world log
+  bool record_trace = true;   ///< false: frames are counted, not kept (trace() is then empty)
 };
 
 struct RobotOutcome {
@@ -79,7 +80,7 @@ class VirtualRun {
   Nanos now() const noexcept;
   const physics::World& world() const noexcept;
   std::vector<RobotOutcome> outcomes() const;
-  /// Every bus as a candump log, interface vcanN for robot N, in time order.
+  /// Every bus as a candump log, one interface name per robot, in time order (record_trace).
   std::string trace() const;
   /// The world log (CSV with a header line); empty when world_log_period is 0.
   const std::string& world_log() const noexcept;
