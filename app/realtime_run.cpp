@@ -5,9 +5,11 @@
 // agent (or canhil-hwcomm and canhil-agent) run next to it, one per robot with
 // AGENT set. It reports when it falls behind, an interface going down and up,
 // goals, and ends (duration, Ctrl-C) with a summary.
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/realtime.hpp"
@@ -32,6 +34,11 @@ struct Robot {
   can_nodes::BusState state = can_nodes::BusState::kUp;
 };
 
+// A network device with a `device` link is hardware (a CAN adapter); vcan has none.
+bool is_virtual_interface(const std::string& iface) {
+  return !std::filesystem::exists("/sys/class/net/" + iface + "/device");
+}
+
 }  // namespace
 
 int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
@@ -45,6 +52,16 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   const can_nodes::Nanos start = (clock.now() / ec + 10) * ec;  // on a whole EC, a little ahead
   std::vector<Robot> robots(n);
   std::vector<int> fds;
+  const bool error_frames = std::any_of(sc.faults.begin(), sc.faults.end(), [](const can_nodes::FaultRule& f) {
+    return f.kind == can_nodes::FaultKind::kErrorFrame;
+  });
+  for (std::size_t r = 0; r < n && error_frames; ++r) {
+    if (!is_virtual_interface(sc.interfaces[r])) {
+      // A controller cannot be told to send an error frame: the flag would be masked and a data frame go out.
+      throw can_nodes::SetupError("error-frame faults need a virtual interface; " + sc.interfaces[r] +
+                                  " is a CAN adapter. Use a bus disturber on a real bus, or run on vcan");
+    }
+  }
   for (std::size_t r = 0; r < n; ++r) {
     Robot& robot = robots[r];
     robot.io = std::make_unique<emulator::PhysicsRobotIo>(world.robot(r));
@@ -64,7 +81,9 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     if (!sc.faults.empty()) {
       std::vector<std::string> names;
       for (can_nodes::Node* node : robot.nodes->nodes()) names.push_back(node->name());
-      robot.faults = std::make_unique<can_nodes::FaultInjector>(sc.faults, opt.messages, names, sc.seed + r);
+      robot.faults =
+          std::make_unique<can_nodes::FaultInjector>(sc.faults, opt.messages, names, sc.seed + r, opt.bit_rate);
+      robot.faults->start_at(start);  // rule times count from the run's start, not the clock's epoch
       for (can_nodes::Node* node : robot.nodes->nodes()) node->set_fault_hook(robot.faults.get());
     }
   }
@@ -83,6 +102,9 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     for (can_nodes::Node* node : robot.nodes->nodes()) loop.add(*node);
   }
   loop.on_physics_step([&](can_nodes::Nanos now) {
+    for (std::size_t r = 0; r < n; ++r) {
+      if (robots[r].faults) world.robot(r).drain(robots[r].faults->battery_drain_until(now));
+    }
     vision_runner.on_step(world);
     goals.step(world, now);
   });
@@ -141,13 +163,14 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   for (std::size_t r = 0; r < n; ++r) {
     const kinematics::Pose p = world.robot(r).pose();
     const auto& tm = robots[r].nodes->node(emulator::NodeId::kMaster).counters();
-    std::printf("  %s agent %d: at (%.2f, %.2f), %llu TMs sent, %llu bad frames\n", sc.interfaces[r].c_str(),
-                sc.agents[r], p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
-                static_cast<unsigned long long>(robots[r].nodes->bad_frames()));
+    const physics::Robot& robot = world.robot(r);
+    std::printf("  %s agent %d: at (%.2f, %.2f), %llu TMs sent, %llu bad frames, 24 V pack %.1f V (%.0f %%)\n",
+                sc.interfaces[r].c_str(), sc.agents[r], p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
+                static_cast<unsigned long long>(robots[r].nodes->bad_frames()), robot.battery().power24_v,
+                100 * robot.charge()[2]);
     if (robots[r].faults) {
       for (const auto& c : robots[r].faults->counts()) {
-        std::printf("    fault %-24s matched %8llu frames, applied to %8llu\n", c.rule.c_str(),
-                    static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
+        std::printf("    fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
       }
     }
   }

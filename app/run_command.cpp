@@ -144,13 +144,13 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const auto outcomes = run->outcomes();
   for (std::size_t r = 0; r < outcomes.size(); ++r) {
     const auto& o = outcomes[r];
-    std::printf("  %s agent %d: at (%.2f, %.2f), %d kick(s), %llu frames, %llu bad\n", cfg.interfaces[r].c_str(),
-                cfg.agents[r], o.pose.x_m, o.pose.y_m, o.kicks, static_cast<unsigned long long>(o.frames),
-                static_cast<unsigned long long>(o.bad_frames));
+    std::printf("  %s agent %d: at (%.2f, %.2f), %d kick(s), %llu frames, %llu bad, 24 V pack %.1f V (%.0f %%)\n",
+                cfg.interfaces[r].c_str(), cfg.agents[r], o.pose.x_m, o.pose.y_m, o.kicks,
+                static_cast<unsigned long long>(o.frames), static_cast<unsigned long long>(o.bad_frames),
+                o.battery.power24_v, 100 * o.charge[2]);
   }
   for (const auto& c : run->fault_counts()) {
-    std::printf("  fault %-24s matched %8llu frames, applied to %8llu\n", c.rule.c_str(),
-                static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
+    std::printf("  fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
   }
   return g_stop ? 130 : 0;
 }

@@ -3,14 +3,18 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+
+#include "canhil/frames/wire.hpp"
 
 namespace canhil::can_nodes {
 namespace {
 
 constexpr std::uint32_t kNoId = 0xFFFFFFFF;
 constexpr const char* kSyntax =
-    "; a fault is KIND:TARGET[:ARGS][@SECONDS] with KIND drop, delay, corrupt, duplicate or silence, "
-    "e.g. drop:M4_1:0.5, delay:M3_1:3, corrupt:M1:2, duplicate:M9:2, silence:Motor2:5 (see docs/faults.md)";
+    "; a fault is KIND:TARGET[:ARGS][@SECONDS] with KIND drop, delay, corrupt, duplicate, silence, error or "
+    "battery, e.g. drop:M4_1:0.5, delay:M3_1:3, corrupt:M1:2, duplicate:M9:2, silence:Motor2:5, error:*:0.01, "
+    "battery:power24:2 (see docs/faults.md)";
 
 [[noreturn]] void bad(std::string_view text, const std::string& what) {
   throw std::invalid_argument("fault '" + std::string(text) + "': " + what + kSyntax);
@@ -111,18 +115,50 @@ FaultRule parse_fault(std::string_view text) {
     const double from = number(text, arg(0), "the time");
     if (from < 0) bad(text, "the time must be 0 or more");
     rule.from = std::max(rule.from, seconds(from));
+  } else if (kind == "error") {
+    rule.kind = FaultKind::kErrorFrame;
+    if (args > 1) bad(text, "error takes at most a probability");
+    if (args == 1) rule.probability = probability(text, arg(0));
+  } else if (kind == "battery") {
+    rule.kind = FaultKind::kBattery;
+    if (rule.target != "*" &&
+        std::find(std::begin(kBatteryPacks), std::end(kBatteryPacks), rule.target) == std::end(kBatteryPacks)) {
+      bad(text, "the battery's target is a pack: logic, power12, power24 or *");
+    }
+    if (args != 1) bad(text, "battery takes the pack and the percent of a full pack it loses per second");
+    const double percent = number(text, arg(0), "the percent per second");
+    if (percent <= 0 || percent > 100) bad(text, "the percent per second must be above 0 and at most 100");
+    rule.drain_per_s = percent / 100;
   } else {
     bad(text, "unknown kind '" + std::string(kind) + "'");
   }
   return rule;
 }
 
+FaultCount& FaultCount::operator+=(const FaultCount& other) {
+  matched += other.matched;
+  applied += other.applied;
+  active += other.active;
+  return *this;
+}
+
+std::string describe(const FaultCount& c) {
+  char line[96];
+  if (c.kind == FaultKind::kBattery) {
+    std::snprintf(line, sizeof line, "drained for %.1f s", std::chrono::duration<double>(c.active).count());
+  } else {
+    std::snprintf(line, sizeof line, "matched %8llu frames, applied to %8llu",
+                  static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
+  }
+  return line;
+}
+
 FaultInjector::FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,
-                             const std::vector<std::string>& node_names, std::uint64_t seed)
-    : rules_(std::move(rules)), set_(std::move(set)), state_(seed) {
+                             const std::vector<std::string>& node_names, std::uint64_t seed, std::uint32_t bit_rate)
+    : rules_(std::move(rules)), set_(std::move(set)), state_(seed), bit_rate_(bit_rate) {
   for (const FaultRule& rule : rules_) {
     std::uint32_t id = kNoId;
-    if (rule.target != "*") {
+    if (rule.target != "*" && rule.kind != FaultKind::kBattery) {
       if (const frames::MessageCodec* m = set_->codec().find(rule.target)) {
         id = m->id();
       } else {
@@ -137,7 +173,7 @@ FaultInjector::FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const
       }
     }
     rule_ids_.push_back(id);
-    counts_.push_back({rule.text, 0, 0});
+    counts_.push_back({rule.text, rule.kind, 0, 0, Nanos{0}});
   }
 }
 
@@ -161,7 +197,7 @@ FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanF
   FaultDecision d;
   for (std::size_t k = 0; k < rules_.size(); ++k) {
     const FaultRule& rule = rules_[k];
-    if (now < rule.from || !matches(k, node, frame.id)) continue;
+    if (rule.kind == FaultKind::kBattery || now - start_ < rule.from || !matches(k, node, frame.id)) continue;
     ++counts_[k].matched;
     // Every matching rule draws once, so one rule's outcome never shifts another's draws.
     const double draw = uniform();
@@ -182,9 +218,36 @@ FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanF
       case FaultKind::kDuplicate:
         d.duplicates += rule.copies;
         break;
+      case FaultKind::kErrorFrame:
+        // The error is taken to hit the frame's last bits: the whole frame and
+        // the error frame pass before the controller's retransmission starts.
+        d.error_frame = true;
+        d.delay =
+            std::max(d.delay, frames::bits_to_time(frames::frame_bits(frame) + frames::kErrorFrameBits, bit_rate_));
+        break;
+      case FaultKind::kBattery:
+        break;
     }
   }
   return d;
+}
+
+std::array<double, 3> FaultInjector::battery_drain_until(Nanos now) {
+  std::array<double, 3> drain{};
+  const Nanos since = drained_until_;
+  drained_until_ = std::max(drained_until_, now);
+  for (std::size_t k = 0; k < rules_.size(); ++k) {
+    const FaultRule& rule = rules_[k];
+    if (rule.kind != FaultKind::kBattery) continue;
+    const Nanos from = std::max(since, start_ + rule.from);
+    if (now <= from) continue;
+    counts_[k].active += now - from;
+    const double amount = rule.drain_per_s * std::chrono::duration<double>(now - from).count();
+    for (std::size_t pack = 0; pack < drain.size(); ++pack) {
+      if (rule.target == "*" || rule.target == kBatteryPacks[pack]) drain[pack] += amount;
+    }
+  }
+  return drain;
 }
 
 }  // namespace canhil::can_nodes

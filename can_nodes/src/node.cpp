@@ -50,6 +50,10 @@ void Node::emit(const frames::CanFrame& frame, Nanos now) {
     ++counters_.fault_dropped;
     return;
   }
+  if (d.error_frame) {
+    ++counters_.error_frames;  // not a frame the node sent: no `sent` count
+    if (bus_.send(frames::make_bus_error_frame()) != SendStatus::kOk) ++counters_.send_failed;
+  }
   frames::CanFrame f = frame;
   if (d.corrupt_byte >= 0 && d.corrupt_byte < 8) {
     f.data[static_cast<std::size_t>(d.corrupt_byte)] ^= d.corrupt_mask;

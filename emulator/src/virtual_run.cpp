@@ -190,11 +190,12 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
         std::make_unique<HandlerParticipant>(bus, s.config.messages, s.config.ftt.elementary_cycle, s.clock, agent));
     s.agents.push_back(std::make_unique<AgentParticipant>(agent, agent_cfg));
     s.recorders.push_back(bus.attach("trace", 1 << 20));
+    s.recorders.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
     if (!s.config.faults.empty()) {
       std::vector<std::string> names;
       for (can_nodes::Node* node : s.nodes.back()->nodes()) names.push_back(node->name());
-      s.injectors.push_back(
-          std::make_unique<can_nodes::FaultInjector>(s.config.faults, s.config.messages, names, s.config.seed + r));
+      s.injectors.push_back(std::make_unique<can_nodes::FaultInjector>(s.config.faults, s.config.messages, names,
+                                                                       s.config.seed + r, s.config.ftt.bit_rate));
       for (can_nodes::Node* node : s.nodes.back()->nodes()) node->set_fault_hook(s.injectors.back().get());
     }
     vision.emplace_back(s.config.vision, s.world->markings());
@@ -220,6 +221,9 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     s.world_log += '\n';
   }
   s.run->on_physics_step([this](Nanos now) {
+    for (std::size_t r = 0; r < impl_->injectors.size(); ++r) {
+      impl_->world->robot(r).drain(impl_->injectors[r]->battery_drain_until(now));
+    }
     impl_->vision->on_step(*impl_->world);
     impl_->record();
     impl_->log_world(now);
@@ -247,6 +251,8 @@ std::vector<RobotOutcome> VirtualRun::outcomes() const {
     o.kicks = impl_->agents[r]->kicks();
     o.frames = impl_->frame_counts[r];
     o.bad_frames = impl_->nodes[r]->bad_frames();
+    o.battery = impl_->world->robot(r).battery();
+    o.charge = impl_->world->robot(r).charge();
     out.push_back(o);
   }
   return out;
@@ -283,10 +289,7 @@ std::vector<can_nodes::FaultCount> VirtualRun::fault_counts() const {
     if (sum.empty())
       sum = c;
     else {
-      for (std::size_t k = 0; k < c.size(); ++k) {
-        sum[k].matched += c[k].matched;
-        sum[k].applied += c[k].applied;
-      }
+      for (std::size_t k = 0; k < c.size(); ++k) sum[k] += c[k];
     }
   }
   return sum;

@@ -29,6 +29,7 @@ std::uint16_t can_crc15(const std::uint8_t* bits, std::uint32_t count) noexcept 
 }
 
 std::uint32_t frame_bits(const CanFrame& f) noexcept {
+  if (f.kind == FrameKind::kError) return kErrorFrameBits;
   BitBuffer b;
   const bool remote = f.kind == FrameKind::kRemote;
   const std::uint32_t dlc = f.len8_dlc > 8 ? f.len8_dlc : f.len;

@@ -840,6 +840,14 @@ BatteryReading Robot::battery() const {
                         volts(bp.power24, st.charge[2], bp.power24.base_current_a + motors)};
 }
 
+std::array<double, 3> Robot::charge() const { return impl_->state.charge; }
+
+void Robot::drain(const std::array<double, 3>& fraction) {
+  for (std::size_t i = 0; i < fraction.size(); ++i) {
+    impl_->state.charge[i] = std::clamp(impl_->state.charge[i] - fraction[i], 0.0, 1.0);
+  }
+}
+
 kinematics::Pose Robot::pose() const {
   const dReal* p = dBodyGetPosition(impl_->chassis);
   return kinematics::Pose{p[0], p[1], yaw_of(impl_->chassis)};

@@ -191,11 +191,14 @@ TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
   const std::string world = "/tmp/canhil_cli_run.csv";
   CliRun r = canhil(
       "run --virtual-time --config emulator/scenarios/one_robot.toml --duration 4 --quiet --fault "
-      "drop:M4_2:0.5 --seed 3 --trace " +
+      "drop:M4_2:0.5 --fault error:M9:0.5 --fault battery:power24:10@2 --seed 3 --trace " +
       trace + " --world-log " + world);
   ASSERT_EQ(r.status, 0) << r.out;
-  EXPECT_TRUE(has(r, "1 robot(s), virtual time, 4 s, seed 3, 1 fault rule(s)")) << r.out;
+  EXPECT_TRUE(has(r, "1 robot(s), virtual time, 4 s, seed 3, 3 fault rule(s)")) << r.out;
   EXPECT_TRUE(has(r, "fault drop:M4_2:0.5")) << r.out;
+  EXPECT_TRUE(has(r, "fault error:M9:0.5")) << r.out;
+  EXPECT_TRUE(has(r, "fault battery:power24:10@2     drained for 2.0 s")) << r.out;
+  EXPECT_TRUE(has(r, "(80 %)")) << "the 24 V pack lost 20 % (and a little to the motors)\n" << r.out;
   EXPECT_TRUE(has(r, "vcan0 agent 1: at")) << r.out;
   std::ifstream csv(world);
   std::string header;
@@ -208,6 +211,7 @@ TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
   r = canhil("timing " + trace);
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_TRUE(has(r, "M4_2")) << r.out;
+  EXPECT_FALSE(has(r, " 0 error frames")) << "the error frames are in the trace\n" << r.out;
   std::remove(trace.c_str());
   std::remove(world.c_str());
 }

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "canhil/frames/wire.hpp"
+
 #include "support/test_paths.hpp"
 
 namespace canhil::can_nodes {
@@ -45,11 +47,21 @@ TEST_F(FaultTest, ParsesEveryKind) {
   EXPECT_EQ(silence.kind, FaultKind::kSilence);
   EXPECT_EQ(silence.from, 5s);
   EXPECT_EQ(parse_fault("drop:M1:1@2.5").from, 2500ms);
+  const FaultRule error = parse_fault("error:*:0.01");
+  EXPECT_EQ(error.kind, FaultKind::kErrorFrame);
+  EXPECT_DOUBLE_EQ(error.probability, 0.01);
+  EXPECT_EQ(parse_fault("error:M3_1").probability, 1.0);
+  const FaultRule battery = parse_fault("battery:power24:2.5@10");
+  EXPECT_EQ(battery.kind, FaultKind::kBattery);
+  EXPECT_EQ(battery.target, "power24");
+  EXPECT_DOUBLE_EQ(battery.drain_per_s, 0.025);
+  EXPECT_EQ(battery.from, 10s);
 }
 
 TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
   for (const char* text : {"drop", "explode:M1", "drop:M1:2", "delay:M1", "delay:M1:-1", "corrupt:M1:8", "corrupt:M1:x",
-                           "duplicate:M1:0", "silence:Motor1", "drop:M1@soon"}) {
+                           "duplicate:M1:0", "silence:Motor1", "drop:M1@soon", "error:M1:1.5", "error:M1:0.5:2",
+                           "battery:power48:1", "battery:*", "battery:logic:0", "battery:logic:101"}) {
     try {
       parse_fault(text);
       ADD_FAILURE() << text << " was accepted";
@@ -93,6 +105,46 @@ TEST_F(FaultTest, SilenceAndStartTimesActFromTheirTimeOn) {
   EXPECT_FALSE(inj.on_send("Motor2", m3, 100s).drop) << "another node";
   EXPECT_FALSE(inj.on_send("Pic_odom", m4, 999ms).drop);
   EXPECT_TRUE(inj.on_send("Pic_odom", m4, 1s).drop);
+}
+
+TEST_F(FaultTest, RuleTimesCountFromTheRunsStart) {
+  // In real time the nodes' clock is the wall clock: 5 s means 5 s into the run.
+  FaultInjector inj = injector({"silence:Motor1:5", "battery:*:10@2"});
+  const Nanos start = 1'800'000'000s;
+  inj.start_at(start);
+  const auto m3 = frame(set->codec().find("M3_1")->id());
+  EXPECT_FALSE(inj.on_send("Motor1", m3, start + 4s).drop);
+  EXPECT_TRUE(inj.on_send("Motor1", m3, start + 5s).drop);
+  EXPECT_EQ(inj.battery_drain_until(start + 2s), (std::array<double, 3>{0, 0, 0}));
+  const auto drain = inj.battery_drain_until(start + 3s);
+  for (double d : drain) EXPECT_NEAR(d, 0.10, 1e-9);
+}
+
+TEST_F(FaultTest, AnErrorFrameDelaysTheFrameByItsRetransmission) {
+  FaultInjector inj = injector({"error:M3_1"});
+  const auto m3_1 = frame(set->codec().find("M3_1")->id());
+  const FaultDecision d = inj.on_send("Motor1", m3_1, 0s);
+  EXPECT_TRUE(d.error_frame);
+  // The destroyed frame and the error frame pass first: 1 us a bit at 1 Mbit/s.
+  EXPECT_EQ(d.delay, std::chrono::microseconds(frames::frame_bits(m3_1) + frames::kErrorFrameBits));
+  EXPECT_FALSE(inj.on_send("Motor2", frame(set->codec().find("M3_2")->id()), 0s).error_frame);
+  std::vector<FaultRule> slow = {parse_fault("error:*")};
+  FaultInjector at_125k(slow, set, kNodes, 1, 125'000);
+  EXPECT_EQ(at_125k.on_send("Motor1", m3_1, 0s).delay, 8 * d.delay) << "eight times as long at 125 kbit/s";
+}
+
+TEST_F(FaultTest, BatteryRulesDrainTheirPackFromTheirTimeOn) {
+  FaultInjector inj = injector({"battery:power24:5", "battery:*:1@10"});
+  auto drain = inj.battery_drain_until(2s);
+  EXPECT_NEAR(drain[0], 0.0, 1e-12);
+  EXPECT_NEAR(drain[2], 0.10, 1e-12) << "5 % a second for 2 s";
+  drain = inj.battery_drain_until(12s);
+  EXPECT_NEAR(drain[0], 0.02, 1e-12) << "the second rule from 10 s: 2 s at 1 %";
+  EXPECT_NEAR(drain[2], 0.52, 1e-12);
+  EXPECT_EQ(inj.counts()[0].active, 12s);
+  EXPECT_EQ(inj.counts()[1].active, 2s);
+  EXPECT_EQ(describe(inj.counts()[1]), "drained for 2.0 s");
+  EXPECT_FALSE(inj.on_send("Pic_base", frame(set->codec().find("M1")->id()), 0s).drop) << "frames untouched";
 }
 
 TEST_F(FaultTest, ProbabilitiesHoldAndTheSeedReproducesThem) {

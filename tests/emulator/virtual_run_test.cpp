@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/frames/candump.hpp"
@@ -195,6 +197,86 @@ TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
   VirtualRun again(c);
   again.run_for(2s);
   EXPECT_EQ(again.trace(), first) << "same scenario and seed, same faults";
+}
+
+TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
+  VirtualRunConfig c = one_robot();
+  c.faults = {can_nodes::parse_fault("error:M3_1:0.2")};
+  VirtualRun run(c);
+  run.run_for(2s);
+  const auto counts = run.fault_counts();
+  ASSERT_EQ(counts.size(), 1u);
+  EXPECT_GT(counts[0].applied, counts[0].matched / 10);
+  EXPECT_LT(counts[0].applied, counts[0].matched * 3 / 10);
+  const std::uint32_t m3_1 = c.messages->codec().find("M3_1")->id();
+  std::size_t errors = 0, m3_seen = 0, retransmitted = 0;
+  frames::Nanos last_error{-1};
+  std::istringstream in(run.trace());
+  std::string line;
+  while (std::getline(in, line)) {
+    frames::LogEntry e;
+    ASSERT_TRUE(frames::parse_log_line(line, e)) << line;
+    if (e.frame.kind == frames::FrameKind::kError) {
+      ++errors;
+      EXPECT_EQ(e.frame.id, frames::kErrorClassProtocol | frames::kErrorClassBusError) << line;
+      last_error = e.time;
+    } else if (e.frame.id == m3_1) {
+      ++m3_seen;
+      // The retransmission follows its error frame by the frame's and the error frame's bits.
+      if (last_error >= frames::Nanos{0} && e.time - last_error < 1ms) ++retransmitted;
+    }
+  }
+  EXPECT_EQ(errors, counts[0].applied) << "every error frame is in the trace";
+  EXPECT_EQ(m3_seen, counts[0].matched) << "no frame is lost: the controller sends it again";
+  EXPECT_EQ(retransmitted, counts[0].applied);
+  const timing::TimingReport report = analyse(run.trace(), c.messages, "vcan0");
+  EXPECT_EQ(report.error_frames, errors);
+  for (const timing::MessageTiming& m : report.messages) {
+    EXPECT_EQ(m.violations.count(timing::ViolationKind::kMissing), 0u) << m.name << "\n"
+                                                                       << timing::format_table(report);
+  }
+}
+
+TEST_F(VirtualRunTest, ABatteryFaultDrainsThePackTheSystemMonitorReports) {
+  // M2's v_power24 over a run: full, then from 1 s on 20 % of the pack a second.
+  auto power24 = [&](std::vector<std::string> rules) {
+    VirtualRunConfig c = one_robot();
+    for (const auto& r : rules) c.faults.push_back(can_nodes::parse_fault(r));
+    VirtualRun run(c);
+    run.run_for(5s);
+    const frames::MessageCodec& m2 = *c.messages->codec().find("M2");
+    const std::size_t v24 = *m2.index_of("v_power24");
+    std::vector<std::pair<double, double>> volts;  // (time, V)
+    std::istringstream in(run.trace());
+    std::string line;
+    while (std::getline(in, line)) {
+      frames::LogEntry e;
+      EXPECT_TRUE(frames::parse_log_line(line, e));
+      if (e.frame.kind != frames::FrameKind::kData || e.frame.id != m2.id()) continue;
+      std::vector<double> v(m2.signal_count());
+      EXPECT_EQ(m2.decode(e.frame, v).status, frames::DecodeStatus::kOk);
+      volts.emplace_back(std::chrono::duration<double>(e.time).count(), v[v24]);
+    }
+    const auto outcome = run.outcomes().at(0);
+    return std::make_tuple(volts, outcome.charge, run.fault_counts());
+  };
+  const auto [healthy, healthy_charge, none] = power24({});
+  const auto [draining, charge, counts] = power24({"battery:power24:20@1"});
+  ASSERT_GE(healthy.size(), 4u) << "M2 every second";
+  ASSERT_EQ(healthy.size(), draining.size());
+  for (std::size_t k = 0; k < healthy.size(); ++k) {
+    const double t = healthy[k].first;
+    ASSERT_DOUBLE_EQ(draining[k].first, t);
+    EXPECT_GT(healthy[k].second, 24.0);
+    // 20 % of the pack a second from 1 s on; the pack spans 21.0 to 25.2 V.
+    const double expected = 0.2 * std::max(0.0, t - 1.0) * (25.2 - 21.0);
+    EXPECT_NEAR(healthy[k].second - draining[k].second, expected, 0.1) << "at " << t << " s";
+  }
+  EXPECT_GT(healthy.back().second - draining.back().second, 2.0) << "visibly low by the end";
+  EXPECT_NEAR(healthy_charge[2] - charge[2], 0.8, 0.01) << "4 s at 20 %";
+  EXPECT_NEAR(charge[0], healthy_charge[0], 1e-9) << "only the 24 V pack";
+  ASSERT_EQ(counts.size(), 1u);
+  EXPECT_NEAR(std::chrono::duration<double>(counts[0].active).count(), 4.0, 0.02);
 }
 
 TEST_F(VirtualRunTest, ScenarioMistakesNameTheFileTheFieldAndWhatToDo) {

@@ -46,6 +46,13 @@ TEST(Wire, StuffingIsCountedForLongRuns) {
   EXPECT_LE(mixed, 111u + 3u);
 }
 
+TEST(Wire, AnErrorFrameTakesItsFlagsDelimiterAndInterframeSpace) {
+  const CanFrame error = make_bus_error_frame();
+  EXPECT_EQ(error.kind, FrameKind::kError);
+  EXPECT_EQ(frame_bits(error), 23u) << "6 + 6 flag bits, 8 delimiter, 3 interframe space";
+  EXPECT_LT(frame_bits(error), best_case_frame_bits(0)) << "shorter than any data frame";
+}
+
 TEST(Wire, Crc15OfAKnownSequence) {
   // CRC-15/CAN of the ASCII bytes "123456789" is 0x059E.
   std::vector<std::uint8_t> bits;

@@ -58,6 +58,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
   report_.end = t;
   ++report_.frames;
   report_.bits += frames::frame_bits(f);
+  if (f.kind == frames::FrameKind::kError) ++report_.error_frames;
   if (f.kind != frames::FrameKind::kData) return;
   const frames::MessageCodec* codec = set_->codec().find(f.id, f.extended);
   if (codec == nullptr) {
@@ -183,9 +184,11 @@ std::string format_table(const TimingReport& r) {
     os << line;
   }
   std::snprintf(line, sizeof line,
-                "\n%llu frames over %.3f s, %llu unknown; bus load %.2f %% (%llu bits, stuffing included)\n",
+                "\n%llu frames over %.3f s, %llu unknown, %llu error frames; bus load %.2f %% (%llu bits, stuffing "
+                "included)\n",
                 static_cast<unsigned long long>(r.frames), std::chrono::duration<double>(r.end - r.start).count(),
-                static_cast<unsigned long long>(r.unknown), 100 * r.bus_load, static_cast<unsigned long long>(r.bits));
+                static_cast<unsigned long long>(r.unknown), static_cast<unsigned long long>(r.error_frames),
+                100 * r.bus_load, static_cast<unsigned long long>(r.bits));
   os << line;
   if (r.ok()) {
     os << "FTT compliance: no violations\n";
@@ -205,7 +208,7 @@ std::string format_table(const TimingReport& r) {
 std::string format_json(const TimingReport& r) {
   std::ostringstream os;
   os.precision(9);
-  os << "{\"frames\":" << r.frames << ",\"unknown\":" << r.unknown
+  os << "{\"frames\":" << r.frames << ",\"unknown\":" << r.unknown << ",\"error_frames\":" << r.error_frames
      << ",\"duration_s\":" << std::chrono::duration<double>(r.end - r.start).count() << ",\"bits\":" << r.bits
      << ",\"bus_load\":" << r.bus_load << ",\"ok\":" << (r.ok() ? "true" : "false")
      << ",\"violation_count\":" << r.violation_count << ",\"messages\":[";

@@ -8,14 +8,19 @@
 //   corrupt:TARGET:BYTE[:PROBABILITY]      that data byte is inverted
 //   duplicate:TARGET[:COPIES[:PROBABILITY]] extra copies right after
 //   silence:TARGET:FROM_SECONDS            nothing from then on
+//   error:TARGET[:PROBABILITY]             an error frame destroys the frame; the
+//                                          sender's controller sends it again
+//   battery:RAIL:PERCENT_PER_SECOND        the pack drains that much faster
 //
 // TARGET is a message name of the message set (M3_1, M1, TM), a node name
-// (Motor1, Pic_base, "FTT master" written FTT_master) or * for every frame.
+// (Motor1, Pic_base, "FTT master" written FTT_master) or * for every frame;
+// for battery, a pack: logic, power12, power24 or * for all three.
 // Any rule may end in @SECONDS to start then, e.g. drop:M4_1:0.5@2. The
 // injector draws from its own generator (SplitMix64) seeded by the run's seed,
 // so the same rules and seed give the same faults on every machine.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -27,17 +32,18 @@
 
 namespace canhil::can_nodes {
 
-enum class FaultKind { kDrop, kDelay, kCorrupt, kDuplicate, kSilence };
+enum class FaultKind { kDrop, kDelay, kCorrupt, kDuplicate, kSilence, kErrorFrame, kBattery };
 
 struct FaultRule {
   FaultKind kind = FaultKind::kDrop;
   std::string target = "*";
   double probability = 1.0;
-  Nanos delay{0};    ///< kDelay
-  int byte = 0;      ///< kCorrupt: 0..7
-  int copies = 1;    ///< kDuplicate
-  Nanos from{0};     ///< the rule applies from this time on
-  std::string text;  ///< as written
+  Nanos delay{0};          ///< kDelay
+  int byte = 0;            ///< kCorrupt: 0..7
+  int copies = 1;          ///< kDuplicate
+  double drain_per_s = 0;  ///< kBattery: fraction of a full pack per second
+  Nanos from{0};           ///< the rule applies from this time on
+  std::string text;        ///< as written
 };
 
 /// Parses one rule; throws std::invalid_argument saying what is wrong and the syntax.
@@ -46,17 +52,41 @@ FaultRule parse_fault(std::string_view text);
 /// What one rule did over a run.
 struct FaultCount {
   std::string rule;
+  FaultKind kind = FaultKind::kDrop;
   std::uint64_t matched = 0;  ///< frames of its target sent while it was active
   std::uint64_t applied = 0;  ///< frames it changed
+  Nanos active{0};            ///< kBattery: how long it drained
+
+  /// Adds another robot's count of the same rule.
+  FaultCount& operator+=(const FaultCount& other);
 };
+
+/// "matched N frames, applied to M" or, for a battery rule, "drained for S s".
+std::string describe(const FaultCount& count);
+
+/// The battery packs, in the order of physics::RobotState::charge.
+inline constexpr const char* kBatteryPacks[3] = {"logic", "power12", "power24"};
 
 class FaultInjector final : public FaultHook {
  public:
-  /// Throws std::invalid_argument when a target is neither a message nor a node name.
+  /// Throws std::invalid_argument when a target is neither a message nor a node
+  /// name (nor a pack, for battery rules). `bit_rate` times an error frame and
+  /// the retransmission it causes.
   FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,
-                const std::vector<std::string>& node_names, std::uint64_t seed);
+                const std::vector<std::string>& node_names, std::uint64_t seed, std::uint32_t bit_rate = 1'000'000);
+
+  /// The time on the nodes' clock the run starts at: rule times (@SECONDS,
+  /// silence's FROM_SECONDS) count from here. 0 in virtual time; the wall
+  /// clock's start of the run in real time.
+  void start_at(Nanos start) noexcept {
+    start_ = start;
+    drained_until_ = start;
+  }
 
   FaultDecision on_send(const std::string& node, const frames::CanFrame& frame, Nanos now) override;
+  /// The fraction of each full pack (logic, power12, power24) the battery rules
+  /// take between the previous call and `now`, for the physics to remove.
+  std::array<double, 3> battery_drain_until(Nanos now);
   const std::vector<FaultCount>& counts() const noexcept { return counts_; }
 
  private:
@@ -68,6 +98,9 @@ class FaultInjector final : public FaultHook {
   std::vector<std::uint32_t> rule_ids_;  ///< the message id of a message rule; kNoId otherwise
   std::vector<FaultCount> counts_;
   std::uint64_t state_;
+  std::uint32_t bit_rate_;
+  Nanos start_{0};
+  Nanos drained_until_{0};
 };
 
 /// Node names as written in rules: spaces become underscores ("FTT master" -> FTT_master).

@@ -37,6 +37,7 @@ struct NodeCounters {
   std::uint64_t out_of_range = 0;   ///< a consumed message with a value outside its range
   std::uint64_t unknown_id = 0;     ///< an id the message set does not know (counted by listeners of all ids)
   std::uint64_t fault_dropped = 0;  ///< outgoing frames a fault hook dropped
+  std::uint64_t error_frames = 0;   ///< error frames a fault hook put on the bus
   std::uint64_t bad_frames() const noexcept { return wrong_length + out_of_range + unknown_id; }
 };
 
@@ -47,6 +48,9 @@ struct FaultDecision {
   int corrupt_byte = -1;  ///< 0..7: this byte is XORed with corrupt_mask
   std::uint8_t corrupt_mask = 0xFF;
   int duplicates = 0;  ///< extra copies sent right after
+  /// An error frame goes on the bus first, destroying the frame; it is sent
+  /// again after `delay` (the controller's automatic retransmission).
+  bool error_frame = false;
 };
 
 class FaultHook {

@@ -53,6 +53,25 @@ constexpr CanFrame make_data_frame(std::uint32_t id, std::initializer_list<std::
   return f;
 }
 
+/// Error classes and protocol-error details of linux/can/error.h that canhil
+/// produces (the error-frame fault) and recognises.
+inline constexpr std::uint32_t kErrorClassProtocol = 0x08u;  ///< CAN_ERR_PROT: data[2], data[3] say what and where
+inline constexpr std::uint32_t kErrorClassBusError = 0x80u;  ///< CAN_ERR_BUSERROR
+inline constexpr std::uint8_t kProtocolErrorBit = 0x01;      ///< CAN_ERR_PROT_BIT, in data[2]
+inline constexpr std::uint8_t kProtocolLocationCrc = 0x08;   ///< CAN_ERR_PROT_LOC_CRC_SEQ, in data[3]
+
+/// The error frame a bit error in a frame's CRC sequence gives, as SocketCAN
+/// reports it: protocol violation and bus error, all 8 data bytes.
+constexpr CanFrame make_bus_error_frame() {
+  CanFrame f;
+  f.kind = FrameKind::kError;
+  f.id = kErrorClassProtocol | kErrorClassBusError;
+  f.len = kMaxDataBytes;
+  f.data[2] = kProtocolErrorBit;
+  f.data[3] = kProtocolLocationCrc;
+  return f;
+}
+
 /// A frame together with the time it was sent or received.
 struct TimedFrame {
   CanFrame frame;

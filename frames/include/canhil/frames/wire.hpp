@@ -13,7 +13,12 @@
 
 namespace canhil::frames {
 
-/// Exact bits on the wire (stuff bits included, interframe space included).
+/// An error frame: 6-bit error flag, up to 6 more from the other nodes' flags,
+/// 8-bit delimiter, 3-bit interframe space (the longest case).
+inline constexpr std::uint32_t kErrorFrameBits = 6 + 6 + 8 + 3;
+
+/// Exact bits on the wire (stuff bits included, interframe space included);
+/// kErrorFrameBits for an error frame.
 std::uint32_t frame_bits(const CanFrame& frame) noexcept;
 
 /// Most bits any frame of this shape can take (worst-case stuffing).

@@ -128,6 +128,11 @@ class Robot {
   /// Heading of the robot's front, clockwise from magnetic north, [0, 360).
   double compass_heading_deg() const;
   BatteryReading battery() const;
+  /// State of charge of the logic, 12 V and 24 V packs, 0..1.
+  std::array<double, 3> charge() const;
+  /// Takes these fractions of a full pack from each pack on top of what the
+  /// robot uses (a fault: a failing cell, a drain left on); never below empty.
+  void drain(const std::array<double, 3>& fraction);
 
   // --- ground truth ---------------------------------------------------------------
   kinematics::Pose pose() const;

@@ -60,9 +60,10 @@ struct MessageTiming {
 struct TimingReport {
   Nanos start{0}, end{0};
   std::uint64_t frames = 0;
-  std::uint64_t unknown = 0;  ///< frames of ids the message set does not know
-  std::uint64_t bits = 0;     ///< on the wire, stuffing included
-  double bus_load = 0;        ///< bits / (duration x bit rate)
+  std::uint64_t unknown = 0;       ///< frames of ids the message set does not know
+  std::uint64_t error_frames = 0;  ///< error frames seen (their bits count toward the load)
+  std::uint64_t bits = 0;          ///< on the wire, stuffing included
+  double bus_load = 0;             ///< bits / (duration x bit rate)
   std::vector<MessageTiming> messages;
   std::vector<Violation> violations;  ///< the first kMaxListed, in time order
   std::uint64_t violation_count = 0;
