@@ -30,7 +30,8 @@ usage:
                                               the reference handler and agent per robot; a candump trace
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
                                               scenarios in emulator/scenarios/
-  canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B] [--quiet]
+  canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B]
+             [--rx-buffer-kb 1024] [--quiet]
                                               real time: every robot's nodes on its interface (vcan0, ...),
                                               vision into its agent's RTDB; run your handler and agent
                                               (or canhil-hwcomm, canhil-agent) with AGENT=N next to it

@@ -96,7 +96,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
     }
     if (!quiet && clock.now() >= next_report) {
       const kinematics::Pose pose = world.robot(0).pose();
-      const std::uint64_t bad = nodes.bad_frames() + nodes.node(emulator::NodeId::kSysMon).counters().bad_frames();
+      const std::uint64_t bad = nodes.bad_frames();
       std::printf("canhil nodes: %.0f s, %llu TMs, robot at (%.2f, %.2f) m, %llu bad frames, %llu late steps\n",
                   std::chrono::duration<double>(clock.now() - start).count(),
                   static_cast<unsigned long long>(nodes.node(emulator::NodeId::kMaster).counters().sent), pose.x_m,

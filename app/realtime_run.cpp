@@ -69,7 +69,9 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     robot.nodes = std::make_unique<emulator::RobotNodes>(
         opt.messages, params, *robot.io,
         [&](const std::string&) {
-          auto bus = can_nodes::SocketCanBus::open(iface);
+          can_nodes::SocketCanOptions socket_options;
+          socket_options.receive_buffer_bytes = opt.receive_buffer_bytes;
+          auto bus = can_nodes::SocketCanBus::open(iface, socket_options);
           robot.sockets.push_back(bus.get());
           return std::unique_ptr<can_nodes::Bus>(std::move(bus));
         },
@@ -152,6 +154,11 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     }
     std::fflush(stdout);
   }
+  // What is still queued is read and counted, so the summary covers every frame
+  // that reached the emulator (bounded: a flood may still be going on).
+  for (Robot& robot : robots) {
+    for (can_nodes::Node* node : robot.nodes->nodes()) node->poll(std::size_t{1} << 16);
+  }
   const auto& st = loop.stats();
   const Eigen::Vector3d b = world.ball_position();
   std::printf("canhil run: %s after %.2f s; physics steps %llu, late %llu, skipped %llu, worst lateness %.1f ms\n",
@@ -168,6 +175,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
                 sc.interfaces[r].c_str(), sc.agents[r], p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
                 static_cast<unsigned long long>(robots[r].nodes->bad_frames()), robot.battery().power24_v,
                 100 * robot.charge()[2]);
+    std::printf("    bus: %s\n", emulator::describe(robots[r].nodes->bus_report()).c_str());
     if (robots[r].faults) {
       for (const auto& c : robots[r].faults->counts()) {
         std::printf("    fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());

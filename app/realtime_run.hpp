@@ -14,6 +14,9 @@ struct RealtimeOptions {
   vision_emu::VisionParams vision;
   double duration_s = 0;  ///< 0: until Ctrl-C
   std::uint32_t bit_rate = 1'000'000;
+  /// Each node socket's receive buffer (SO_RCVBUFFORCE as root): room for a
+  /// burst of other traffic while the emulator is busy; overflow is counted.
+  int receive_buffer_bytes = 1 << 20;
   bool quiet = false;
 };
 

@@ -5,14 +5,26 @@
 namespace canhil::can_nodes {
 
 Node::Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet> set)
-    : name_(std::move(name)), bus_(bus), set_(std::move(set)) {}
+    : name_(std::move(name)),
+      bus_(bus),
+      set_(std::move(set)),
+      tm_id_(set_->tm.message().id()),
+      tm_length_(static_cast<std::uint8_t>(set_->tm.message().def().length)) {}
 
-std::size_t Node::poll() {
+std::size_t Node::poll() { return poll(~std::size_t{0}); }
+
+std::size_t Node::poll(std::size_t max_frames) {
   std::size_t n = 0;
-  while (auto f = bus_.receive()) {
+  while (n < max_frames) {
+    auto f = bus_.receive();
+    if (!f) break;
     ++n;
     if (!enabled_) continue;  // switched off: hears nothing
     ++counters_.received;
+    const frames::CanFrame& frame = f->frame;
+    if (frame.kind == frames::FrameKind::kData && frame.id == tm_id_ && !frame.extended && frame.len == tm_length_) {
+      ++counters_.triggers;
+    }
     on_frame(*f);
   }
   return n;

@@ -326,6 +326,12 @@ SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet>
       bad_frames_(std::move(bad_frames)),
       state_(std::move(state)) {
   last_seen_.fill(kLongAgo);
+  static constexpr std::array<const char*, 6> kWatched = {"Pic_base", "Motor1",   "Motor2",
+                                                          "Motor3",   "Pic_odom", "Compass"};
+  for (const frames::MessageCodec& m : messages().codec().messages()) {
+    const auto at = std::find(kWatched.begin(), kWatched.end(), m.def().transmitter);
+    watched_.push_back(at == kWatched.end() ? kNotWatched : static_cast<std::uint8_t>(at - kWatched.begin()));
+  }
   const Filter all[] = {Filter::all()};
   bus.set_filters(all);  // watches the whole bus
 }
@@ -346,11 +352,8 @@ void SystemMonitor::on_frame(const TimedFrame& tf) {
     count_unknown();
     return;
   }
-  static constexpr std::array<const char*, 6> kNodes = {"Pic_base", "Motor1",   "Motor2",
-                                                        "Motor3",   "Pic_odom", "Compass"};
-  for (std::size_t i = 0; i < kNodes.size(); ++i) {
-    if (m->def().transmitter == kNodes[i]) last_seen_[i] = tf.time;
-  }
+  const std::uint8_t from = watched_[static_cast<std::size_t>(m - messages().codec().messages().data())];
+  if (from != kNotWatched) last_seen_[from] = tf.time;  // a watched node is alive
   if (is(f, messages().tm.message())) {
     const Nanos at = async_slot(messages(), messages().m10.message(), params_, tf.time, last_m10_);
     if (at != kNever) {

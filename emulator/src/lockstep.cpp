@@ -24,7 +24,11 @@ void Participants::deliver() {
   }
 }
 
-void Participants::tick_due(const can_nodes::Clock& clock) {
+void Participants::deliver_some(std::size_t budget) {
+  for (Participant* p : list_) p->poll_some(budget);
+}
+
+void Participants::tick_due(const can_nodes::Clock& clock, std::size_t budget) {
   for (int round = 0; round < 64; ++round) {
     const Nanos now = clock.now();
     bool any = false;
@@ -34,7 +38,11 @@ void Participants::tick_due(const can_nodes::Clock& clock) {
         any = true;
       }
     }
-    deliver();
+    if (budget == kUnlimited) {
+      deliver();
+    } else {
+      deliver_some(budget);
+    }
     if (!any) return;
   }
 }

@@ -1,5 +1,9 @@
 #include "canhil/emulator/robot_nodes.hpp"
 
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
 namespace canhil::emulator {
 
 can_nodes::KickOutcome PhysicsRobotIo::kick(bool low, int power) {
@@ -50,7 +54,12 @@ RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, con
   nodes_.push_back(std::make_unique<can_nodes::CompassNode>(bus(NodeId::kCompass), set, params, robot));
   auto* base = static_cast<can_nodes::PicBase*>(nodes_[1].get());
   nodes_.push_back(std::make_unique<can_nodes::SystemMonitor>(
-      bus(NodeId::kSysMon), set, params, [this] { return bad_frames(); },
+      bus(NodeId::kSysMon), set, params,
+      [this] {  // the others' bad frames; it adds its own
+        std::uint64_t n = 0;
+        for (std::size_t i = 0; i + 1 < nodes_.size(); ++i) n += nodes_[i]->counters().bad_frames();
+        return n;
+      },
       [this, base](Nanos now) {
         // bit0: Pic_base braking (no M6); bit1: some node switched off.
         std::uint8_t state = base->watchdog_tripped(now) ? 1 : 0;
@@ -69,8 +78,57 @@ std::vector<can_nodes::Node*> RobotNodes::nodes() {
 
 std::uint64_t RobotNodes::bad_frames() const {
   std::uint64_t n = 0;
-  for (std::size_t i = 0; i + 1 < nodes_.size(); ++i) n += nodes_[i]->counters().bad_frames();  // all but SysMon
+  for (const auto& node : nodes_) n += node->counters().bad_frames();
   return n;
+}
+
+BusReport RobotNodes::bus_report() const {
+  BusReport r;
+  r.fewest_triggers = ~0ULL;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    const can_nodes::Node& n = *nodes_[i];
+    const can_nodes::NodeCounters& c = n.counters();
+    const can_nodes::BusStats s = n.bus().stats();
+    r.sent += c.sent;
+    r.unknown_id += c.unknown_id;
+    r.wrong_length += c.wrong_length;
+    r.out_of_range += c.out_of_range;
+    const auto id = static_cast<NodeId>(i);
+    if (id == NodeId::kSysMon) {
+      r.monitor_sent = c.sent;
+      r.monitor_heard = s.received;
+      r.monitor_overflow = s.rx_overflow;
+      r.monitor_triggers = c.triggers;
+    } else {
+      r.other_overflow += s.rx_overflow;
+    }
+    if (id == NodeId::kMaster) {
+      r.tms_sent = c.sent;
+      const std::uint64_t ecs = static_cast<const can_nodes::FttMaster&>(n).ec_count();
+      r.ecs_skipped = ecs - std::min(ecs, c.sent + c.fault_dropped);
+    } else if (id != NodeId::kSysMon && c.triggers < r.fewest_triggers) {
+      r.fewest_triggers = c.triggers;
+      r.fewest_node = node_name(id);
+    }
+  }
+  return r;
+}
+
+std::string describe(const BusReport& r) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "nodes sent %llu frames (SysMon %llu); SysMon heard %llu (%llu lost to overflow, %llu in other nodes); "
+                "bad: %llu "
+                "unknown id, %llu wrong length, %llu out of range; TMs: %llu sent, fewest handled %llu (%s), SysMon "
+                "%llu, %llu ECs skipped",
+                static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.monitor_sent),
+                static_cast<unsigned long long>(r.monitor_heard), static_cast<unsigned long long>(r.monitor_overflow),
+                static_cast<unsigned long long>(r.other_overflow), static_cast<unsigned long long>(r.unknown_id),
+                static_cast<unsigned long long>(r.wrong_length), static_cast<unsigned long long>(r.out_of_range),
+                static_cast<unsigned long long>(r.tms_sent), static_cast<unsigned long long>(r.fewest_triggers),
+                r.fewest_node, static_cast<unsigned long long>(r.monitor_triggers),
+                static_cast<unsigned long long>(r.ecs_skipped));
+  return line;
 }
 
 void RobotNodes::set_fault_hook(can_nodes::FaultHook* hook) {

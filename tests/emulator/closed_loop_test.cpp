@@ -137,6 +137,28 @@ TEST(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
   EXPECT_LT(std::fabs(r.world.robot(0).twist().vy_mps), 0.01) << "stopped";
 }
 
+TEST(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) {
+  Rig r;
+  r.run.run_until(100ms);
+  // 6 000 frames in one instant: more than the system monitor's queue holds (4 096).
+  auto junk = r.bus.attach("junk");
+  for (int k = 0; k < 6000; ++k) {
+    frames::CanFrame f = frames::make_data_frame(static_cast<std::uint32_t>(0x7F0 + k % 8), {1, 2, 3});  // unknown ids
+    if (k % 3 == 0) f = frames::make_data_frame(r.set->tm.message().id(), {9});  // a TM of the wrong length
+    ASSERT_EQ(junk->send(f), can_nodes::SendStatus::kOk);
+  }
+  r.run.run_until(1s);
+  const BusReport b = r.nodes.bus_report();
+  EXPECT_EQ(b.monitor_heard + b.monitor_overflow, 6000 + b.sent - b.monitor_sent)
+      << "everything on the bus but its own reached the monitor or was counted lost";
+  EXPECT_EQ(b.monitor_overflow, 6000u - 4096u);
+  EXPECT_GE(b.tms_sent, 100u) << "one TM per 10 ms EC over 1 s";
+  EXPECT_EQ(b.fewest_triggers, b.tms_sent) << b.fewest_node << " missed a TM: " << describe(b);
+  EXPECT_EQ(b.ecs_skipped, 0u);
+  EXPECT_GE(b.wrong_length, 2000u) << "the short TMs, counted by the nodes that take TMs";
+  EXPECT_EQ(describe(b).rfind("nodes sent ", 0), 0u);
+}
+
 TEST(ClosedLoop, VirtualTimeRunsAreDeterministic) {
   auto trace = [] {
     Rig r;

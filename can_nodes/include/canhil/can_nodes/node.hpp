@@ -38,6 +38,7 @@ struct NodeCounters {
   std::uint64_t unknown_id = 0;     ///< an id the message set does not know (counted by listeners of all ids)
   std::uint64_t fault_dropped = 0;  ///< outgoing frames a fault hook dropped
   std::uint64_t error_frames = 0;   ///< error frames a fault hook put on the bus
+  std::uint64_t triggers = 0;       ///< well-formed trigger messages handled
   std::uint64_t bad_frames() const noexcept { return wrong_length + out_of_range + unknown_id; }
 };
 
@@ -69,6 +70,8 @@ class Node {
   const std::string& name() const noexcept { return name_; }
   /// Handles every frame waiting on the bus; returns how many.
   std::size_t poll();
+  /// Handles at most `max_frames` waiting frames; the rest stay queued.
+  std::size_t poll(std::size_t max_frames);
   /// Acts at `now` (call when now >= next_wakeup()).
   void tick(Nanos now);
   /// The earliest time the node wants tick(); kNever when none.
@@ -80,6 +83,7 @@ class Node {
   void set_fault_hook(FaultHook* hook) noexcept { hook_ = hook; }
   const NodeCounters& counters() const noexcept { return counters_; }
   Bus& bus() noexcept { return bus_; }
+  const Bus& bus() const noexcept { return bus_; }
 
  protected:
   virtual void on_frame(const frames::TimedFrame& frame) = 0;
@@ -117,6 +121,8 @@ class Node {
   NodeCounters counters_;
   bool enabled_ = true;
   FaultHook* hook_ = nullptr;
+  std::uint32_t tm_id_;
+  std::uint8_t tm_length_;
   std::vector<Nanos> wakes_;                                // requested wake-ups, ascending
   std::deque<std::pair<Nanos, frames::CanFrame>> delayed_;  // by due time (fault delays)
 };

@@ -177,7 +177,9 @@ class SystemMonitor final : public Node {
   const NodeParams& params_;
   std::function<std::uint64_t()> bad_frames_;
   std::function<std::uint8_t(Nanos)> state_;
-  std::array<Nanos, 6> last_seen_;  // Pic_base, Motor1..3, Pic_odom, Compass
+  std::array<Nanos, 6> last_seen_;     // Pic_base, Motor1..3, Pic_odom, Compass
+  std::vector<std::uint8_t> watched_;  // per message of the codec: its transmitter's index above, or kNotWatched
+  static constexpr std::uint8_t kNotWatched = 0xFF;
   Nanos async_at_ = kNever;
   Nanos last_m10_ = kLongAgo;
 };

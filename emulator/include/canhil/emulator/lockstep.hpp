@@ -27,6 +27,12 @@ class Participant {
   virtual ~Participant() = default;
   /// Handles waiting frames; returns how many.
   virtual std::size_t poll() = 0;
+  /// Handles at most `budget` waiting frames (real time: a flooded socket must
+  /// not hold up deadlines); the rest stay queued. Returns how many.
+  virtual std::size_t poll_some(std::size_t budget) {
+    (void)budget;
+    return poll();
+  }
   virtual void tick(Nanos now) = 0;
   virtual Nanos next_wakeup() const = 0;
 };
@@ -36,6 +42,7 @@ class NodeParticipant final : public Participant {
  public:
   explicit NodeParticipant(can_nodes::Node& node) : node_(node) {}
   std::size_t poll() override { return node_.poll(); }
+  std::size_t poll_some(std::size_t budget) override { return node_.poll(budget); }
   void tick(Nanos now) override { node_.tick(now); }
   Nanos next_wakeup() const override { return node_.next_wakeup(); }
 
@@ -51,9 +58,13 @@ class Participants {
   /// Delivers frames round after round until nobody has any left (frames sent
   /// while handling frames arrive in the same instant).
   void deliver();
+  /// One round, each participant handling at most `budget` frames.
+  void deliver_some(std::size_t budget);
   /// Ticks everyone due at now(), delivers, and repeats while anyone is due
-  /// (a participant may ask to be woken again at once). now() is re-read each round.
-  void tick_due(const can_nodes::Clock& clock);
+  /// (a participant may ask to be woken again at once). now() is re-read each
+  /// round. With a `budget`, each delivery is one deliver_some(budget).
+  void tick_due(const can_nodes::Clock& clock, std::size_t budget = kUnlimited);
+  static constexpr std::size_t kUnlimited = ~std::size_t{0};
   Nanos next_wakeup() const;
 
  private:

@@ -45,6 +45,28 @@ enum class NodeId : std::uint8_t { kMaster, kPicBase, kMotor1, kMotor2, kMotor3,
 inline constexpr std::size_t kNodeCount = 8;
 const char* node_name(NodeId id) noexcept;
 
+/// What one robot's nodes saw and did on their bus: the run summaries' line.
+struct BusReport {
+  std::uint64_t sent = 0;              ///< frames all nodes handed to the bus
+  std::uint64_t monitor_sent = 0;      ///< of those, the system monitor's (it does not hear its own)
+  std::uint64_t monitor_heard = 0;     ///< every other frame the system monitor (all ids) read
+  std::uint64_t monitor_overflow = 0;  ///< frames its receive queue dropped
+  std::uint64_t other_overflow = 0;    ///< frames the other nodes' queues dropped
+  std::uint64_t unknown_id = 0, wrong_length = 0, out_of_range = 0;  ///< bad frames, all nodes
+  std::uint64_t tms_sent = 0;                                        ///< by the FTT master
+  std::uint64_t ecs_skipped = 0;  ///< ECs the master let pass without a TM (the emulator fell behind)
+  /// TMs handled by the synchronous node (Pic_base, motors, Pic_odom, compass:
+  /// each must answer every TM) that handled fewest.
+  std::uint64_t fewest_triggers = 0;
+  const char* fewest_node = "";
+  /// TMs the system monitor handled: it listens to every id, so under a flood
+  /// its queue overflows (counted) and it loses TMs too, delaying its sporadic M10.
+  std::uint64_t monitor_triggers = 0;
+};
+/// One line: "nodes sent S frames (SysMon M); SysMon heard H (O lost to overflow, X in other nodes); bad: ...; TMs
+/// ...".
+std::string describe(const BusReport& report);
+
 class RobotNodes {
  public:
   /// Makes one bus endpoint per node.
@@ -64,6 +86,7 @@ class RobotNodes {
   can_nodes::SystemMonitor& system_monitor() { return static_cast<can_nodes::SystemMonitor&>(node(NodeId::kSysMon)); }
   /// Bad frames counted by all nodes.
   std::uint64_t bad_frames() const;
+  BusReport bus_report() const;
   /// Sets the fault hook of every node (nullptr removes it).
   void set_fault_hook(can_nodes::FaultHook* hook);
 
