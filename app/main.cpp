@@ -31,11 +31,15 @@ usage:
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
                                               scenarios in emulator/scenarios/
   canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B]
-             [--rx-buffer-kb 1024] [--quiet]
+             [--rx-buffer-kb 1024] [--priority 40] [--quiet]
                                               real time: every robot's nodes on its interface (vcan0, ...),
                                               vision into its agent's RTDB; run your handler and agent
                                               (or canhil-hwcomm, canhil-agent) with AGENT=N next to it
-  canhil bench [--seconds 20] [--config S]    real-time factor of the five-robot scenario in virtual time
+  canhil bench [--part virtual,jitter,vcan] [--seconds 20] [--config S] [--iface vcan0] [--rt-seconds 10]
+               [--frames 200000] [--priority 40]
+                                              the figures against their targets: the five-robot real-time
+                                              factor in virtual time; release jitter against a bare
+                                              clock_nanosleep loop; lossless vcan rate against cangen -g 0
   canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
                                               periods, jitter, missing/late frames, FTT compliance and
                                               bus load of a candump log or a live interface; exit 1 if violated

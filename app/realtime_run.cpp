@@ -4,19 +4,27 @@
 // DB_signal_frame), faults on the nodes' frames. The team's own handler and
 // agent (or canhil-hwcomm and canhil-agent) run next to it, one per robot with
 // AGENT set. It reports when it falls behind, an interface going down and up,
-// goals, and ends (duration, Ctrl-C) with a summary.
+// goals, and ends (duration, Ctrl-C) with a summary. The FTT masters run on a
+// thread of their own at the highest priority, the other nodes on this one,
+// the physics (with vision) on a third, so that neither a physics step nor
+// the slaves' work delays a trigger message (emulator/realtime_physics.hpp).
 #include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
+#include <thread>
 
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/realtime.hpp"
+#include "canhil/emulator/realtime_physics.hpp"
 #include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/shared_robot_io.hpp"
 #include "canhil/emulator/virtual_run.hpp"
 #include "canhil/rtdb/rtdb.h"
 #include "canhil/vision_emu/runner.hpp"
+#include "fifo_scheduling.hpp"
 #include "realtime_run.hpp"
 #include "wall_waiter.hpp"
 
@@ -27,7 +35,7 @@ std::atomic<bool> g_stop{false};
 extern "C" void stop_realtime(int) { g_stop = true; }
 
 struct Robot {
-  std::unique_ptr<emulator::PhysicsRobotIo> io;
+  std::unique_ptr<emulator::SharedRobotIo> io;
   std::vector<can_nodes::SocketCanBus*> sockets;
   std::unique_ptr<emulator::RobotNodes> nodes;
   std::unique_ptr<can_nodes::FaultInjector> faults;
@@ -42,6 +50,14 @@ bool is_virtual_interface(const std::string& iface) {
 }  // namespace
 
 int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
+  struct Output {
+    FILE* file;
+    ~Output() {
+      if (file != stdout) std::fclose(file);
+    }
+  } output{opt.silent ? std::fopen("/dev/null", "w") : stdout};
+  if (output.file == nullptr) output.file = stdout;
+  FILE* out = output.file;
   physics::World world(sc.world);
   const std::size_t n = sc.world.robots.size();
   can_nodes::FttConfig ftt;
@@ -64,7 +80,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   }
   for (std::size_t r = 0; r < n; ++r) {
     Robot& robot = robots[r];
-    robot.io = std::make_unique<emulator::PhysicsRobotIo>(world.robot(r));
+    robot.io = std::make_unique<emulator::SharedRobotIo>(world.robot(r));
     const std::string& iface = sc.interfaces[r];
     robot.nodes = std::make_unique<emulator::RobotNodes>(
         opt.messages, params, *robot.io,
@@ -79,7 +95,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     if (robot.sockets.front()->state() != can_nodes::BusState::kUp) {
       throw can_nodes::SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
     }
-    for (auto* s : robot.sockets) fds.push_back(s->fd());
+    for (std::size_t k = 1; k < robot.sockets.size(); ++k) fds.push_back(robot.sockets[k]->fd());  // not the master's
     if (!sc.faults.empty()) {
       std::vector<std::string> names;
       for (can_nodes::Node* node : robot.nodes->nodes()) names.push_back(node->name());
@@ -97,88 +113,125 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   for (std::size_t r = 0; r < n; ++r) vision.emplace_back(opt.vision, world.markings());
   vision_emu::VisionRunner vision_runner(std::move(vision), vision_emu::rtdb_sink(sc.agents));
   emulator::GoalWatcher goals(sc.world);
+  std::mutex goal_mutex;
+  std::vector<can_nodes::Nanos> goal_times;  // copied out of the physics thread
 
+  // Threads: this one runs the nodes (but the masters, below) on the sockets
+  // and never waits for a physics step; the physics (with vision, goals and battery faults) steps on
+  // its own, exchanging commands and sensor values through SharedRobotIo.
   WallWaiter waiter(fds);
-  emulator::Realtime loop(clock, &world, [&](can_nodes::Nanos d) { waiter.wait(d); });
+  emulator::Realtime loop(clock, nullptr, [&](can_nodes::Nanos d) { waiter.wait(d); });
+  // The FTT masters on a third thread, above the other nodes: a trigger message
+  // goes out at its EC boundary whatever the slaves are busy with (on a robot
+  // the master is a microcontroller of its own too). The masters only send.
+  emulator::Realtime masters(clock, nullptr, [](can_nodes::Nanos d) { can_nodes::WallClock::sleep_until(d); });
+  std::vector<emulator::SharedRobotIo*> shared;
   for (Robot& robot : robots) {
-    for (can_nodes::Node* node : robot.nodes->nodes()) loop.add(*node);
+    for (can_nodes::Node* node : robot.nodes->nodes()) {
+      if (node == &robot.nodes->node(emulator::NodeId::kMaster)) {
+        masters.add(*node);
+      } else {
+        loop.add(*node);
+      }
+    }
+    shared.push_back(robot.io.get());
   }
-  loop.on_physics_step([&](can_nodes::Nanos now) {
+  emulator::RealtimePhysics physics(world, shared);
+  physics.on_step([&](can_nodes::Nanos now) {
     for (std::size_t r = 0; r < n; ++r) {
       if (robots[r].faults) world.robot(r).drain(robots[r].faults->battery_drain_until(now));
     }
     vision_runner.on_step(world);
+    const std::size_t before = goals.goals().size();
     goals.step(world, now);
+    if (goals.goals().size() != before) {
+      const std::lock_guard lock(goal_mutex);
+      goal_times.push_back(goals.goals().back().time);
+    }
   });
 
   std::signal(SIGINT, stop_realtime);
   std::signal(SIGTERM, stop_realtime);
   char length[32] = "until Ctrl-C";
   if (opt.duration_s > 0) std::snprintf(length, sizeof length, "%g s", opt.duration_s);
-  std::printf("canhil run: %zu robot(s), real time, %s, seed %llu, %zu fault rule(s)\n", n, length,
-              static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  std::fprintf(out, "canhil run: %zu robot(s), real time, %s, seed %llu, %zu fault rule(s)\n", n, length,
+               static_cast<unsigned long long>(sc.seed), sc.faults.size());
   for (std::size_t r = 0; r < n; ++r) {
-    std::printf("  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,
-                sc.interfaces[r].c_str(), sc.agents[r], sc.agents[r]);
+    std::fprintf(out, "  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,
+                 sc.interfaces[r].c_str(), sc.agents[r], sc.agents[r]);
   }
-  std::fflush(stdout);
+  std::fflush(out);
   const can_nodes::Nanos end =
       opt.duration_s > 0
           ? start + std::chrono::duration_cast<can_nodes::Nanos>(std::chrono::duration<double>(opt.duration_s))
           : can_nodes::kNever;
   can_nodes::Nanos next_report = start + std::chrono::seconds(1);
   std::size_t goals_reported = 0;
+  physics.start(start);  // before the priority: the physics thread keeps the normal scheduler
+  std::atomic<bool> masters_stop{false};
+  std::thread master_thread([&] {
+    const FifoScheduling fifo(opt.priority > 0 ? std::min(99, opt.priority + 1) : 0);
+    masters.run_until(can_nodes::kNever, masters_stop);
+  });
+  const FifoScheduling fifo(opt.priority);
+  if (!fifo.problem.empty()) std::fprintf(out, "canhil run: %s\n", fifo.problem.c_str());
   while (!g_stop && clock.now() < end) {
     loop.run_until(std::min(end, clock.now() + std::chrono::milliseconds(200)), g_stop);
     for (std::size_t r = 0; r < n; ++r) {
-      const can_nodes::BusState state = robots[r].sockets.front()->refresh_state();
+      const can_nodes::BusState state = robots[r].sockets.back()->refresh_state();  // SysMon's: this thread's
       if (state != robots[r].state) {
-        std::printf("canhil run: %s is %s\n", sc.interfaces[r].c_str(), bus_state_text(state));
+        std::fprintf(out, "canhil run: %s is %s\n", sc.interfaces[r].c_str(), bus_state_text(state));
         robots[r].state = state;
       }
     }
-    for (; goals_reported < goals.goals().size(); ++goals_reported) {
-      std::printf("  GOAL at %.2f s\n",
-                  std::chrono::duration<double>(goals.goals()[goals_reported].time - start).count());
+    {
+      const std::lock_guard lock(goal_mutex);
+      for (; goals_reported < goal_times.size(); ++goals_reported) {
+        std::fprintf(out, "  GOAL at %.2f s\n",
+                     std::chrono::duration<double>(goal_times[goals_reported] - start).count());
+      }
     }
     if (!opt.quiet && clock.now() >= next_report) {
-      const Eigen::Vector3d b = world.ball_position();
-      std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", std::chrono::duration<double>(clock.now() - start).count(), b.x(),
-                  b.y());
+      const emulator::RealtimePhysics::View view = physics.view();
+      std::fprintf(out, "  t=%5.1f s  ball (%6.2f, %5.2f)", std::chrono::duration<double>(clock.now() - start).count(),
+                   view.ball.x(), view.ball.y());
       for (std::size_t r = 0; r < n; ++r) {
-        const kinematics::Pose p = world.robot(r).pose();
-        std::printf("  %s (%5.2f, %5.2f)", sc.interfaces[r].c_str(), p.x_m, p.y_m);
+        std::fprintf(out, "  %s (%5.2f, %5.2f)", sc.interfaces[r].c_str(), view.robots[r].x_m, view.robots[r].y_m);
       }
-      std::printf("  late steps %llu\n", static_cast<unsigned long long>(loop.stats().late_steps));
+      std::fprintf(out, "  late steps %llu\n", static_cast<unsigned long long>(physics.stats().late_steps));
       next_report += std::chrono::seconds(1);
     }
-    std::fflush(stdout);
+    std::fflush(out);
   }
+  masters_stop = true;
+  master_thread.join();
+  physics.stop();  // the world is this thread's again
   // What is still queued is read and counted, so the summary covers every frame
   // that reached the emulator (bounded: a flood may still be going on).
   for (Robot& robot : robots) {
     for (can_nodes::Node* node : robot.nodes->nodes()) node->poll(std::size_t{1} << 16);
   }
-  const auto& st = loop.stats();
+  const emulator::RealtimeStats st = physics.stats();
   const Eigen::Vector3d b = world.ball_position();
-  std::printf("canhil run: %s after %.2f s; physics steps %llu, late %llu, skipped %llu, worst lateness %.1f ms\n",
-              g_stop ? "stopped" : "done", std::chrono::duration<double>(clock.now() - start).count(),
-              static_cast<unsigned long long>(st.physics_steps), static_cast<unsigned long long>(st.late_steps),
-              static_cast<unsigned long long>(st.skipped_steps),
-              std::chrono::duration<double, std::milli>(st.worst_lateness).count());
-  std::printf("  ball at (%.2f, %.2f); %zu goal(s)\n", b.x(), b.y(), goals.goals().size());
+  std::fprintf(out,
+               "canhil run: %s after %.2f s; physics steps %llu, late %llu, skipped %llu, worst lateness %.1f ms\n",
+               g_stop ? "stopped" : "done", std::chrono::duration<double>(clock.now() - start).count(),
+               static_cast<unsigned long long>(st.physics_steps), static_cast<unsigned long long>(st.late_steps),
+               static_cast<unsigned long long>(st.skipped_steps),
+               std::chrono::duration<double, std::milli>(st.worst_lateness).count());
+  std::fprintf(out, "  ball at (%.2f, %.2f); %zu goal(s)\n", b.x(), b.y(), goals.goals().size());
   for (std::size_t r = 0; r < n; ++r) {
     const kinematics::Pose p = world.robot(r).pose();
     const auto& tm = robots[r].nodes->node(emulator::NodeId::kMaster).counters();
     const physics::Robot& robot = world.robot(r);
-    std::printf("  %s agent %d: at (%.2f, %.2f), %llu TMs sent, %llu bad frames, 24 V pack %.1f V (%.0f %%)\n",
-                sc.interfaces[r].c_str(), sc.agents[r], p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
-                static_cast<unsigned long long>(robots[r].nodes->bad_frames()), robot.battery().power24_v,
-                100 * robot.charge()[2]);
-    std::printf("    bus: %s\n", emulator::describe(robots[r].nodes->bus_report()).c_str());
+    std::fprintf(out, "  %s agent %d: at (%.2f, %.2f), %llu TMs sent, %llu bad frames, 24 V pack %.1f V (%.0f %%)\n",
+                 sc.interfaces[r].c_str(), sc.agents[r], p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
+                 static_cast<unsigned long long>(robots[r].nodes->bad_frames()), robot.battery().power24_v,
+                 100 * robot.charge()[2]);
+    std::fprintf(out, "    bus: %s\n", emulator::describe(robots[r].nodes->bus_report()).c_str());
     if (robots[r].faults) {
       for (const auto& c : robots[r].faults->counts()) {
-        std::printf("    fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
+        std::fprintf(out, "    fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
       }
     }
   }

@@ -17,7 +17,11 @@ struct RealtimeOptions {
   /// Each node socket's receive buffer (SO_RCVBUFFORCE as root): room for a
   /// burst of other traffic while the emulator is busy; overflow is counted.
   int receive_buffer_bytes = 1 << 20;
-  bool quiet = false;
+  /// SCHED_FIFO priority of the thread that runs the nodes (1..99; 0 leaves
+  /// the scheduler alone). Needs root or CAP_SYS_NICE; without, a warning.
+  int priority = 40;
+  bool quiet = false;   ///< no progress lines
+  bool silent = false;  ///< nothing at all (a benchmark runs it)
 };
 
 /// Runs until the duration ends or Ctrl-C; returns the exit status (130 after Ctrl-C).

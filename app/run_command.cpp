@@ -53,6 +53,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const std::optional<double> duration_given = optional_number(args, "--duration");
   const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
   const double rx_buffer_kb = number_option(args, "--rx-buffer-kb", 1024);
+  const double priority = number_option(args, "--priority", 40);
   const double duration = duration_given.value_or(scenario.duration_s);
   const double log_period = number_option(args, "--world-log-period", 0.05);
   scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
@@ -83,11 +84,15 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     }
     if (!(bit_rate >= 10'000 && bit_rate <= 1'000'000)) throw UsageError("--bit-rate takes 10000..1000000 bit/s");
     if (!(rx_buffer_kb >= 16 && rx_buffer_kb <= 65536)) throw UsageError("--rx-buffer-kb takes 16..65536 KiB");
+    if (!(priority >= 0 && priority <= 99 && priority == static_cast<int>(priority))) {
+      throw UsageError("--priority takes a SCHED_FIFO priority 1..99, or 0 for the normal scheduler");
+    }
     RealtimeOptions opt;
     opt.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
     opt.duration_s = duration_given.value_or(0);  // none: until Ctrl-C
     opt.bit_rate = static_cast<std::uint32_t>(bit_rate);
     opt.receive_buffer_bytes = static_cast<int>(rx_buffer_kb * 1024);
+    opt.priority = static_cast<int>(priority);
     opt.quiet = quiet;
     return run_realtime(scenario, opt);
   }

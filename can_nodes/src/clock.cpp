@@ -2,9 +2,21 @@
 
 #include <time.h>
 
+#include <algorithm>
+#include <cerrno>
+
 #include "canhil/frames/demand.hpp"
 
 namespace canhil::can_nodes {
+
+void WallClock::sleep_until(Nanos t, Nanos at_most) noexcept {
+  const Nanos until = std::min(t, WallClock{}.now() + at_most);
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(until.count() / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(until.count() % 1'000'000'000);
+  while (clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
 
 Nanos WallClock::now() const noexcept {
   timespec ts{};

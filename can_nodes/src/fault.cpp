@@ -194,6 +194,7 @@ double FaultInjector::uniform() {
 }
 
 FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanFrame& frame, Nanos now) {
+  const std::lock_guard lock(mutex_);
   FaultDecision d;
   for (std::size_t k = 0; k < rules_.size(); ++k) {
     const FaultRule& rule = rules_[k];
@@ -233,6 +234,7 @@ FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanF
 }
 
 std::array<double, 3> FaultInjector::battery_drain_until(Nanos now) {
+  const std::lock_guard lock(mutex_);
   std::array<double, 3> drain{};
   const Nanos since = drained_until_;
   drained_until_ = std::max(drained_until_, now);

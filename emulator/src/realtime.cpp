@@ -26,9 +26,11 @@ void Realtime::run_until(Nanos end, const std::atomic<bool>& stop) {
         std::min({end, world_ != nullptr ? next_step_ : can_nodes::kNever, participants_.next_wakeup()});
     wait_(deadline);
     ++stats_.wakeups;
+    // Timers first: a frame due goes out before the sockets are read (each
+    // read is a system call, and a flooded socket has many). Bounded reads:
+    // under a flood the loop comes straight back (the socket stays readable).
+    participants_.tick_due(clock_, kPollBudget);
     const Nanos now = clock_.now();
-    // Bounded: under a flood the loop comes straight back (the socket stays
-    // readable) after serving the physics step and whoever is due.
     participants_.deliver_some(kPollBudget);
     if (world_ != nullptr && now >= next_step_) {
       const Nanos late = now - next_step_;

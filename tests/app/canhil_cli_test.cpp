@@ -233,12 +233,16 @@ TEST(CanhilRun, MistakesExitTwoWithAReason) {
 
 TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   // The figure is wall-clock: printed, never judged here (the exit status says met or missed).
-  const CliRun r = canhil("bench --seconds 1");
+  const CliRun r = canhil("bench --part virtual --seconds 1");
   EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
   EXPECT_TRUE(has(r, "5 robot(s), 5 obstacle(s)")) << r.out;
-  EXPECT_TRUE(has(r, "real-time factor, virtual time, everything on:")) << r.out;
+  EXPECT_TRUE(has(r, "real-time factor, everything on:")) << r.out;
   EXPECT_TRUE(has(r, "target >= 100x")) << r.out;
+  EXPECT_FALSE(has(r, "release jitter")) << "only the part asked for\n" << r.out;
   EXPECT_EQ(canhil("bench --seconds -1").status, 2);
+  const CliRun bad = canhil("bench --part speed");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_TRUE(has(bad, "--part takes virtual, jitter and vcan, comma-separated; got 'speed'")) << bad.out;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <thread>
 #include <vector>
@@ -263,6 +264,48 @@ TEST(VcanFlood, AMillionMalformedAndRandomFramesAreCountedAndNoTriggerMessageIsM
   // VM) its queue overflows, counted above, and TMs are among what it loses.
   EXPECT_GT(b.tms, 100u) << out;
   EXPECT_EQ(b.fewest, b.tms) << b.fewest_node << " missed trigger messages\n" << out;
+}
+
+TEST(VcanBench, MeasuresJitterAndFrameRateAgainstTheirReferences) {
+  // The figures are wall-clock: printed and parsed, never judged here (the
+  // exit status says met or missed). What is checked is that each was
+  // measured: releases seen, every frame of both rates sent (a missing release
+  // or a lost frame is a figure, as is the jitter).
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8) + 0xE0).c_str(), 1);
+  canhil::test::ChildProcess bench(
+      canhil::test::build_dir() + "/app/canhil bench --part jitter,vcan --rt-seconds 3 --frames 20000",
+      "/tmp/canhil_vcan_bench.log");
+  ASSERT_TRUE(wait_for(bench, 240s, [](const std::string& out) {
+    return out.find("lossless rate") != std::string::npos;
+  })) << bench.output();
+  std::this_thread::sleep_for(200ms);
+  const int status = bench.stop();
+  const std::string out = bench.output();
+  std::printf("%s", out.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 1)) << out;
+  for (const char* what :
+       {"bare loop, a frame every 10 ms:", "canhil run, trigger messages:", "bare loop beside canhil run:"}) {
+    const auto at = out.find(what);
+    ASSERT_NE(at, std::string::npos) << what << "\n" << out;
+    unsigned long releases = 0, missing = 0;
+    ASSERT_EQ(std::sscanf(out.c_str() + at + std::strlen(what), " %lu releases, %lu missing", &releases, &missing), 2)
+        << out;
+    EXPECT_GE(releases, 100u) << what;  // 250 (150 beside canhil run) after the warm-up
+  }
+  EXPECT_NE(out.find("release jitter p99, canhil / bare loop:"), std::string::npos) << out;
+  for (const char* what : {"canhil, highest rate with no loss:", "cangen -g 0:"}) {
+    const auto at = out.find(what);
+    ASSERT_NE(at, std::string::npos) << what << "\n" << out;
+    double rate = 0;
+    unsigned long sent = 0, received = 0, lost = 0;
+    ASSERT_EQ(std::sscanf(out.c_str() + at + std::strlen(what), " %lf frames/s (%lu sent, %lu received, %lu lost)",
+                          &rate, &sent, &received, &lost),
+              4)
+        << out;
+    EXPECT_EQ(sent, 20000u) << what;
+    EXPECT_GT(rate, 0.0) << what;
+  }
+  EXPECT_NE(out.find("lossless rate, canhil / cangen:"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -15,6 +15,7 @@ namespace canhil::test {
 class ChildProcess {
  public:
   ChildProcess(const std::string& command, std::string log_file) : log_(std::move(log_file)) {
+    std::remove(log_.c_str());  // a previous run's output must never be read as this one's
     pid_ = fork();
     if (pid_ == 0) {
       const std::string full = "exec " + command + " > " + log_ + " 2>&1";  // exec: the signal reaches it

@@ -23,6 +23,9 @@ class Clock {
 class WallClock final : public Clock {
  public:
   Nanos now() const noexcept override;
+  /// Sleeps until the absolute time `t` on this clock (clock_nanosleep,
+  /// TIMER_ABSTIME), or at most `at_most` (so a loop notices a stop request).
+  static void sleep_until(Nanos t, Nanos at_most = std::chrono::milliseconds(100)) noexcept;
 };
 
 /// A clock that moves only when told. Not thread-safe: one owner advances it.

@@ -23,6 +23,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -99,6 +100,7 @@ class FaultInjector final : public FaultHook {
   std::vector<FaultCount> counts_;
   std::uint64_t state_;
   std::uint32_t bit_rate_;
+  std::mutex mutex_;  // on_send comes from the node threads, battery_drain_until from the physics
   Nanos start_{0};
   Nanos drained_until_{0};
 };

@@ -1,0 +1,47 @@
+// app/fifo_scheduling.hpp — real-time scheduling for the thread that sends
+// frames on time (canhil run's node loop, canhil bench's bare loop).
+#pragma once
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <cstring>
+#include <string>
+
+namespace canhil::app {
+
+// SCHED_FIFO for the calling thread (the nodes' loop) while it lives: a frame
+// due is sent as soon as its timer fires, ahead of the physics thread and
+// anything else on the machine. `problem` says why not, when it could not.
+class FifoScheduling {
+ public:
+  explicit FifoScheduling(int priority) {
+    if (priority <= 0) return;
+    pthread_getschedparam(pthread_self(), &old_policy_, &old_param_);
+    sched_param param{};
+    param.sched_priority = priority;
+    if (const int err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param); err != 0) {
+      problem = std::string("cannot run the nodes at SCHED_FIFO priority ") + std::to_string(priority) + " (" +
+                std::strerror(err) + "; needs root or CAP_SYS_NICE): frame timing will follow the machine's load";
+      return;
+    }
+    changed_ = true;
+    locked_ = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;  // no page faults in the loop; best effort
+  }
+  ~FifoScheduling() {
+    if (locked_) munlockall();
+    if (changed_) pthread_setschedparam(pthread_self(), old_policy_, &old_param_);
+  }
+  FifoScheduling(const FifoScheduling&) = delete;
+  FifoScheduling& operator=(const FifoScheduling&) = delete;
+  std::string problem;
+
+ private:
+  int old_policy_ = SCHED_OTHER;
+  sched_param old_param_{};
+  bool changed_ = false;
+  bool locked_ = false;
+};
+
+}  // namespace canhil::app
