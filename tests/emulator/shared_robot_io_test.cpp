@@ -1,0 +1,97 @@
+// The real-time run's exchange between the node thread and the physics
+// thread: nodes read what the last step published and their commands take
+// effect at the next step; kicks are decided as the physics decides them.
+#include "canhil/emulator/shared_robot_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "canhil/emulator/realtime_physics.hpp"
+#include "canhil/emulator/robot_nodes.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+using namespace std::chrono_literals;
+
+physics::WorldParams one_robot(double ball_x, double ball_y = 0.2) {
+  physics::WorldParams p;
+  p.robots = {physics::Placement{0, 0, 0}};  // front along world +y
+  p.ball_start = {ball_x, ball_y, p.ball.radius_m};
+  return p;
+}
+
+TEST(SharedRobotIo, NodesSeeTheLastPublishedStepAndCommandActAtTheNext) {
+  physics::World world(one_robot(4));
+  SharedRobotIo io(world.robot(0));
+  const PhysicsRobotIo direct(world.robot(0));
+  io.set_wheel_speed(0, 20.0);
+  for (int k = 0; k < 20; ++k) world.step();  // not applied yet: the physics thread applies at its step
+  EXPECT_EQ(world.robot(0).encoder_count(0), 0) << "no command reached the world";
+  EXPECT_EQ(io.encoder_count(0), 0);
+  for (int k = 0; k < 20; ++k) {
+    io.apply_commands();
+    world.step();
+  }
+  EXPECT_GT(direct.encoder_count(0), 1000) << "the wheel turned";
+  EXPECT_EQ(io.encoder_count(0), 0) << "nothing published yet";
+  io.publish();
+  EXPECT_EQ(io.encoder_count(0), direct.encoder_count(0));
+  EXPECT_DOUBLE_EQ(io.compass_heading_deg(), direct.compass_heading_deg());
+  EXPECT_DOUBLE_EQ(io.battery().power24_v, direct.battery().power24_v);
+  EXPECT_EQ(io.ball_engaged(), direct.ball_engaged());
+}
+
+TEST(SharedRobotIo, KicksAreDecidedOnThePublishedStateAndFireAtTheNextStep) {
+  physics::World far(one_robot(4));
+  SharedRobotIo away(far.robot(0));
+  EXPECT_EQ(away.kick(true, 0), can_nodes::KickOutcome::kNoPower);
+  EXPECT_EQ(away.kick(true, 50), can_nodes::KickOutcome::kNotEngaged) << "the ball is 4 m away";
+  // The ball in the mouth (grabber on), the capacitor charged: the kick fires at the next step.
+  physics::World near(one_robot(0, 0.42));  // just in front of the mouth
+  SharedRobotIo io(near.robot(0));
+  io.set_grabber(100);
+  for (int k = 0; k < 300 && !near.robot(0).ball_engaged(); ++k) {
+    io.apply_commands();
+    near.step();
+  }
+  ASSERT_TRUE(near.robot(0).ball_engaged()) << "the grabber pulled the ball in";
+  io.publish();
+  ASSERT_TRUE(io.ball_engaged());
+  EXPECT_EQ(io.kick(true, 60), can_nodes::KickOutcome::kFired);
+  EXPECT_LT(near.robot(0).last_kick_time_s(), 0) << "not fired before the physics step";
+  io.apply_commands();
+  near.step();
+  EXPECT_GT(near.robot(0).last_kick_time_s(), 0) << "fired";
+  for (int k = 0; k < 10; ++k) near.step();
+  io.publish();
+  EXPECT_LT(io.kicker_voltage_v(), near.robot(0).params().kicker.full_voltage_v) << "the capacitor gave its charge";
+  EXPECT_EQ(io.kick(true, 60), can_nodes::KickOutcome::kNotEngaged) << "the ball has left";
+}
+
+TEST(RealtimePhysics, StepsOnItsOwnThreadAndPublishesAView) {
+  physics::World world(one_robot(4));
+  SharedRobotIo io(world.robot(0));
+  RealtimePhysics physics(world, {&io});
+  int hooked = 0;
+  physics.on_step([&](Nanos) { ++hooked; });
+  io.set_wheel_speed(0, 20.0);
+  io.set_wheel_speed(1, -20.0);
+  physics.start(can_nodes::WallClock{}.now());
+  // Counts, not rates: wait until some steps have run, however slowly.
+  for (int k = 0; k < 500 && physics.stats().physics_steps < 20; ++k) std::this_thread::sleep_for(10ms);
+  physics.stop();
+  const RealtimeStats st = physics.stats();
+  EXPECT_GE(st.physics_steps, 20u);
+  EXPECT_EQ(static_cast<std::uint64_t>(hooked), st.physics_steps) << "the hook ran once a step";
+  EXPECT_NE(io.encoder_count(0), 0) << "commands applied and sensors published";
+  const RealtimePhysics::View view = physics.view();
+  ASSERT_EQ(view.robots.size(), 1u);
+  EXPECT_DOUBLE_EQ(view.robots[0].x_m, world.robot(0).pose().x_m) << "the view is the last step's";
+  EXPECT_DOUBLE_EQ(view.ball.x(), world.ball_position().x());
+}
+
+}  // namespace
+}  // namespace canhil::emulator
