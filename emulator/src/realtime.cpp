@@ -19,6 +19,18 @@ Realtime::Realtime(const can_nodes::Clock& clock, physics::World* world, Wait wa
   }
 }
 
+void book_step(RealtimeStats& stats, Nanos now, Nanos& due, Nanos step, Nanos max_behind) noexcept {
+  const Nanos late = now - due;
+  stats.worst_lateness = std::max(stats.worst_lateness, late);
+  if (late > step) ++stats.late_steps;
+  if (late > max_behind) {
+    // Stalled (debugger, overloaded machine): drop the missed steps.
+    const auto missed = late / step;
+    stats.skipped_steps += static_cast<std::uint64_t>(missed);
+    due += step * missed;
+  }
+}
+
 void Realtime::run_until(Nanos end, const std::atomic<bool>& stop) {
   if (world_ != nullptr && next_step_ == can_nodes::kNever) next_step_ = clock_.now() + step_;
   while (!stop.load(std::memory_order_relaxed)) {
@@ -33,15 +45,7 @@ void Realtime::run_until(Nanos end, const std::atomic<bool>& stop) {
     const Nanos now = clock_.now();
     participants_.deliver_some(kPollBudget);
     if (world_ != nullptr && now >= next_step_) {
-      const Nanos late = now - next_step_;
-      stats_.worst_lateness = std::max(stats_.worst_lateness, late);
-      if (late > step_) ++stats_.late_steps;
-      if (late > max_behind_) {
-        // Stalled (debugger, overloaded machine): drop the missed steps.
-        const auto missed = late / step_;
-        stats_.skipped_steps += static_cast<std::uint64_t>(missed);
-        next_step_ += step_ * missed;
-      }
+      book_step(stats_, now, next_step_, step_, max_behind_);
       world_->step();
       ++stats_.physics_steps;
       next_step_ += step_;

@@ -50,15 +50,7 @@ void RealtimePhysics::loop(Nanos start) {
       continue;
     }
     const Nanos now = realtime_now();
-    const Nanos late = now - next;
-    stats.worst_lateness = std::max(stats.worst_lateness, late);
-    if (late > step_) ++stats.late_steps;
-    if (late > max_behind_) {
-      // Stalled (debugger, overloaded machine): drop the missed steps.
-      const auto missed = late / step_;
-      stats.skipped_steps += static_cast<std::uint64_t>(missed);
-      next += step_ * missed;
-    }
+    book_step(stats, now, next, step_, max_behind_);
     for (SharedRobotIo* io : io_) io->apply_commands();
     world_.step();
     ++stats.physics_steps;

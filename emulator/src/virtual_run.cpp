@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "canhil/emulator/handler_participant.hpp"
 #include "canhil/frames/candump.hpp"
 #include "canhil/laptop/agent.hpp"
 #include "canhil/laptop/agent_io.hpp"
@@ -17,32 +18,6 @@
 
 namespace canhil::emulator {
 namespace {
-
-// The reference handler on a robot's bus, serving its agent's database.
-class HandlerParticipant final : public Participant {
- public:
-  HandlerParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, Nanos ec,
-                     const can_nodes::Clock& clock, int agent)
-      : ep_(bus.attach("handler", 1 << 16)),
-        hw_(
-            std::move(set), ec,
-            [this](const frames::CanFrame& f) { return ep_->send(f) == can_nodes::SendStatus::kOk; },
-            [&clock] { return clock.now(); }, agent) {}
-  std::size_t poll() override {
-    std::size_t n = 0;
-    while (auto f = ep_->receive()) {
-      ++n;
-      hw_.on_frame(f->frame, f->time);
-    }
-    return n;
-  }
-  void tick(Nanos now) override { hw_.on_time(now); }
-  Nanos next_wakeup() const override { return hw_.next_deadline(); }
-
- private:
-  std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
-  laptop::HwComm hw_;
-};
 
 // The reference agent, woken after each of its vision frames.
 class AgentParticipant final : public Participant {

@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/handler_participant.hpp"
 #include "canhil/emulator/lockstep.hpp"
 #include "canhil/emulator/robot_nodes.hpp"
 #include "canhil/rtdb/cambada_types.h"
@@ -21,37 +22,8 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// HwComm as a participant of the lockstep runner, on a memory endpoint.
-class HwCommParticipant final : public emulator::Participant {
- public:
-  HwCommParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set,
-                    const can_nodes::SimulatedClock& clock)
-      : ep_(bus.attach("laptop", 1 << 16)),
-        hw_(
-            std::move(set), 10ms, [this](const frames::CanFrame& f) { return send(f); },
-            [&clock] { return clock.now(); }) {}
-  std::size_t poll() override {
-    std::size_t n = 0;
-    while (auto f = ep_->receive()) {
-      ++n;
-      hw_.on_frame(f->frame, f->time);
-    }
-    return n;
-  }
-  void tick(can_nodes::Nanos now) override { hw_.on_time(now); }
-  can_nodes::Nanos next_wakeup() const override { return hw_.next_deadline(); }
-  bool send(const frames::CanFrame& f) {
-    sent_.push_back(f);
-    return ep_->send(f) == can_nodes::SendStatus::kOk;
-  }
-  HwComm& hw() { return hw_; }
-  std::vector<frames::CanFrame> sent_;
-
- private:
-  std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
-  HwComm hw_;
-};
-
+// HwComm as a participant of the lockstep runner (emulator::HandlerParticipant,
+// as the virtual run uses it), on a memory endpoint.
 class HwCommTest : public ::testing::Test {
  protected:
   HwCommTest() {
@@ -69,7 +41,7 @@ class HwCommTest : public ::testing::Test {
     nodes_ = std::make_unique<emulator::RobotNodes>(
         set_, params_, *io_, [this](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus_->attach(n)); },
         can_nodes::Nanos{0});
-    laptop_ = std::make_unique<HwCommParticipant>(*bus_, set_, clock_);
+    laptop_ = std::make_unique<emulator::HandlerParticipant>(*bus_, set_, 10ms, clock_, -1, true);
     run_ = std::make_unique<emulator::Lockstep>(clock_, world_.get());
     for (can_nodes::Node* n : nodes_->nodes()) run_->add(*n);
     run_->add(*laptop_);
@@ -77,7 +49,7 @@ class HwCommTest : public ::testing::Test {
   ~HwCommTest() override { DB_free(); }
   int count_sent(std::uint32_t id) const {
     int n = 0;
-    for (const auto& f : laptop_->sent_) n += f.id == id ? 1 : 0;
+    for (const auto& f : laptop_->sent()) n += f.id == id ? 1 : 0;
     return n;
   }
 
@@ -88,7 +60,7 @@ class HwCommTest : public ::testing::Test {
   can_nodes::NodeParams params_;
   std::unique_ptr<can_nodes::MemoryBus> bus_;
   std::unique_ptr<emulator::RobotNodes> nodes_;
-  std::unique_ptr<HwCommParticipant> laptop_;
+  std::unique_ptr<emulator::HandlerParticipant> laptop_;
   std::unique_ptr<emulator::Lockstep> run_;
 };
 

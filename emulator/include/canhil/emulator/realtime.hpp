@@ -26,6 +26,11 @@ struct RealtimeStats {
   std::uint64_t wakeups = 0;
 };
 
+/// Books a physics step due at `due` and taken at `now` in `stats` (its
+/// lateness; a late step; past `max_behind`, the missed steps skipped, `due`
+/// moved past them rather than running them as a burst).
+void book_step(RealtimeStats& stats, Nanos now, Nanos& due, Nanos step, Nanos max_behind) noexcept;
+
 class Realtime {
  public:
   using Wait = std::function<void(Nanos deadline)>;

@@ -1,0 +1,54 @@
+// canhil/emulator/handler_participant.hpp — the reference low-level handler
+// (laptop::HwComm) as a virtual-time participant on a memory bus: what the
+// virtual run gives every robot, and what the handler's own tests drive.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/lockstep.hpp"
+#include "canhil/laptop/hwcomm.hpp"
+
+namespace canhil::emulator {
+
+class HandlerParticipant final : public Participant {
+ public:
+  /// `agent` as laptop::HwComm takes it (-1: from AGENT); `keep_sent` keeps a
+  /// copy of every frame it sends (tests), otherwise nothing grows.
+  HandlerParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, Nanos ec,
+                     const can_nodes::Clock& clock, int agent = -1, bool keep_sent = false)
+      : ep_(bus.attach("handler", 1 << 16)),
+        keep_sent_(keep_sent),
+        hw_(
+            std::move(set), ec, [this](const frames::CanFrame& f) { return send(f); }, [&clock] { return clock.now(); },
+            agent) {}
+
+  std::size_t poll() override {
+    std::size_t n = 0;
+    while (auto f = ep_->receive()) {
+      ++n;
+      hw_.on_frame(f->frame, f->time);
+    }
+    return n;
+  }
+  void tick(Nanos now) override { hw_.on_time(now); }
+  Nanos next_wakeup() const override { return hw_.next_deadline(); }
+
+  laptop::HwComm& hw() noexcept { return hw_; }
+  /// Every frame sent, when kept.
+  const std::vector<frames::CanFrame>& sent() const noexcept { return sent_; }
+
+ private:
+  bool send(const frames::CanFrame& f) {
+    if (keep_sent_) sent_.push_back(f);
+    return ep_->send(f) == can_nodes::SendStatus::kOk;
+  }
+
+  std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
+  bool keep_sent_;
+  std::vector<frames::CanFrame> sent_;
+  laptop::HwComm hw_;
+};
+
+}  // namespace canhil::emulator
