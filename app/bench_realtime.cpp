@@ -33,8 +33,8 @@ class Listener {
   Listener(const std::string& iface, std::span<const can_nodes::Filter> filters) {
     can_nodes::SocketCanOptions options;
     options.receive_buffer_bytes = 16 << 20;
+    options.filters.assign(filters.begin(), filters.end());
     bus_ = can_nodes::SocketCanBus::open(iface, options);
-    bus_->set_filters(filters);
     thread_ = std::thread([this] { loop(); });
   }
   ~Listener() { stop(); }

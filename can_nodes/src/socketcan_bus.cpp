@@ -105,11 +105,15 @@ std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const
   }
   const can_err_mask_t no_errors = 0;
   if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &no_errors, sizeof no_errors) < 0) fail("CAN_RAW_ERR_FILTER");
+  auto bus = std::unique_ptr<SocketCanBus>(new SocketCanBus(fd, iface, static_cast<int>(ifindex), options));
+  if (!options.filters.empty()) bus->set_filters(options.filters);  // before bind: nothing else gets in
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(ifindex);
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) < 0) fail("bind");
-  auto bus = std::unique_ptr<SocketCanBus>(new SocketCanBus(fd, iface, static_cast<int>(ifindex), options));
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) < 0) {
+    const int err = errno;
+    throw SetupError("cannot set up CAN socket on " + iface + ": bind: " + errno_text(err));  // ~SocketCanBus closes fd
+  }
   bus->refresh_state();
   bus->stats_.state_changes = 0;
   return bus;

@@ -87,6 +87,28 @@ TEST(SocketCan, KernelFiltersPassOnlyWhatWasAskedFor) {
   EXPECT_EQ(got, (std::vector<std::uint32_t>{0x111, 0x112, 0x131, 0x131}));
 }
 
+TEST(SocketCan, FiltersGivenAtOpenAreInPlaceBeforeAnyFrameArrives) {
+  auto tx = SocketCanBus::open("vcan0");
+  // A sender busy before and while the socket opens: with the filters set
+  // before bind, no other id is ever queued (set_filters() after open() lets
+  // in what came in between).
+  std::atomic<bool> stop{false};
+  std::thread noise([&] {
+    while (!stop) tx->send(make_data_frame(0x100, {1}));
+  });
+  SocketCanOptions options;
+  options.filters = {Filter::exact(0x131)};
+  auto rx = SocketCanBus::open("vcan0", options);
+  std::this_thread::sleep_for(20ms);
+  stop = true;
+  noise.join();
+  tx->send(make_data_frame(0x131, {0xEE}));
+  const auto got = receive_n(*rx, 1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].frame.id, 0x131u) << "the first frame queued is the one asked for";
+  EXPECT_GT(tx->stats().sent, 1u) << "the noise was on the bus";
+}
+
 TEST(SocketCan, ErrorFramesReachOnlySocketsWhoseMaskAsks) {
   auto tx = SocketCanBus::open("vcan0");
   auto none = SocketCanBus::open("vcan0");

@@ -135,9 +135,9 @@ TEST(VcanDemo, InterfaceDownAndUpIsReportedAndTheRunResumesWithoutABurst) {
   ASSERT_EQ(std::system("ip link set vcan0 up"), 0);
   const canhil::can_nodes::WallClock clock;
   const canhil::can_nodes::Nanos up = clock.now();
-  auto bus = canhil::can_nodes::SocketCanBus::open("vcan0");  // only what is sent from now on
-  const canhil::can_nodes::Filter tm[] = {canhil::can_nodes::Filter::exact(0x010)};
-  bus->set_filters(tm);
+  canhil::can_nodes::SocketCanOptions only_tms;
+  only_tms.filters = {canhil::can_nodes::Filter::exact(0x010)};
+  auto bus = canhil::can_nodes::SocketCanBus::open("vcan0", only_tms);  // TMs sent from now on
   std::vector<canhil::can_nodes::Nanos> tms;
   while (clock.now() < up + 2s) {
     if (bus->wait_readable(50ms)) {

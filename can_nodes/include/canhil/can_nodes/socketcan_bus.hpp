@@ -12,6 +12,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "canhil/can_nodes/bus.hpp"
 #include "canhil/can_nodes/setup_error.hpp"
@@ -23,6 +24,10 @@ struct SocketCanOptions {
   bool receive_own = false;
   /// Receive buffer size in bytes (SO_RCVBUF); 0 keeps the kernel default.
   int receive_buffer_bytes = 0;
+  /// Receive filters set before the socket is bound, so that nothing else is
+  /// ever queued (set_filters() after open() lets in what came in between).
+  /// Empty: every frame, as the kernel's default.
+  std::vector<Filter> filters;
   /// Attempts after a full transmit queue before a frame is dropped.
   int send_retries = 50;
   /// Longest wait for the queue to drain per retry.

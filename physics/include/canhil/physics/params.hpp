@@ -17,7 +17,7 @@ namespace canhil::physics {
 
 struct SimulationParams {
   double step_s = 0.010;  ///< one world step (the nodes' and vision's clock ticks at this)
-  int substeps = 2;       ///< ODE steps per world step (5 ms each by default; see docs/physics.md)
+  int substeps = 1;       ///< ODE steps per world step (one of 10 ms by default; see docs/physics.md)
   double gravity_mps2 = 9.81;
   double cfm = 1e-5;  ///< global constraint force mixing
   double erp = 0.8;   ///< global error reduction
