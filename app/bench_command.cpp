@@ -51,7 +51,7 @@ std::filesystem::path shipped_scenario(const std::string& name) {
 }
 
 int run_bench(Args& args, const std::optional<std::string>& dbc) {
-  const double seconds = number_option(args, "--seconds", 20);
+  const double seconds = number_option(args, "--seconds", 60);
   const double rt_seconds = number_option(args, "--rt-seconds", 10);
   const double rate_frames = number_option(args, "--frames", 200'000);
   const std::string iface = args.option("--iface").value_or("vcan0");

@@ -35,7 +35,7 @@ usage:
                                               real time: every robot's nodes on its interface (vcan0, ...),
                                               vision into its agent's RTDB; run your handler and agent
                                               (or canhil-hwcomm, canhil-agent) with AGENT=N next to it
-  canhil bench [--part virtual,jitter,vcan] [--seconds 20] [--config S] [--iface vcan0] [--rt-seconds 10]
+  canhil bench [--part virtual,jitter,vcan] [--seconds 60] [--config S] [--iface vcan0] [--rt-seconds 10]
                [--frames 200000] [--priority 40]
                                               the figures against their targets: the five-robot real-time
                                               factor in virtual time; release jitter against a bare
