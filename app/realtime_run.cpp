@@ -117,8 +117,9 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   std::vector<can_nodes::Nanos> goal_times;  // copied out of the physics thread
 
   // Threads: this one runs the nodes (but the masters, below) on the sockets
-  // and never waits for a physics step; the physics (with vision, goals and battery faults) steps on
-  // its own, exchanging commands and sensor values through SharedRobotIo.
+  // and never waits for a physics step; the physics (with vision, goals and
+  // battery faults) steps on its own, exchanging commands and sensor values
+  // through SharedRobotIo.
   WallWaiter waiter(fds);
   emulator::Realtime loop(clock, nullptr, [&](can_nodes::Nanos d) { waiter.wait(d); });
   // The FTT masters on a third thread, above the other nodes: a trigger message
@@ -168,10 +169,18 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   can_nodes::Nanos next_report = start + std::chrono::seconds(1);
   std::size_t goals_reported = 0;
   physics.start(start);  // before the priority: the physics thread keeps the normal scheduler
-  std::atomic<bool> masters_stop{false};
-  std::thread master_thread([&] {
+  struct MasterThread {  // joined on every way out, an exception included
+    std::atomic<bool> stop{false};
+    std::thread thread;
+    void join() {
+      stop = true;
+      if (thread.joinable()) thread.join();
+    }
+    ~MasterThread() { join(); }
+  } master;
+  master.thread = std::thread([&] {
     const FifoScheduling fifo(opt.priority > 0 ? std::min(99, opt.priority + 1) : 0);
-    masters.run_until(can_nodes::kNever, masters_stop);
+    masters.run_until(can_nodes::kNever, master.stop);
   });
   const FifoScheduling fifo(opt.priority);
   if (!fifo.problem.empty()) std::fprintf(out, "canhil run: %s\n", fifo.problem.c_str());
@@ -203,8 +212,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     }
     std::fflush(out);
   }
-  masters_stop = true;
-  master_thread.join();
+  master.join();
   physics.stop();  // the world is this thread's again
   // What is still queued is read and counted, so the summary covers every frame
   // that reached the emulator (bounded: a flood may still be going on).
