@@ -26,12 +26,13 @@ usage:
                                               one robot's emulated nodes with physics, real time
   canhil run --virtual-time [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]...
              [--trace FILE] [--world-log FILE.csv] [--world-log-period 0.05] [--kick-power P] [--quiet]
+             [--save-world FILE] [--restore-world FILE]
                                               the whole loop in virtual time: nodes, physics, vision,
                                               the reference handler and agent per robot; a candump trace
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
                                               scenarios in emulator/scenarios/
   canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B]
-             [--rx-buffer-kb 1024] [--priority 40] [--quiet]
+             [--rx-buffer-kb 1024] [--priority 40] [--save-world FILE] [--restore-world FILE] [--quiet]
                                               real time: every robot's nodes on its interface (vcan0, ...),
                                               vision into its agent's RTDB; run your handler and agent
                                               (or canhil-hwcomm, canhil-agent) with AGENT=N next to it

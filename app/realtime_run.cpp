@@ -59,6 +59,13 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   if (output.file == nullptr) output.file = stdout;
   FILE* out = output.file;
   physics::World world(sc.world);
+  if (opt.initial_state) {
+    try {
+      world.restore(*opt.initial_state);
+    } catch (const std::invalid_argument& e) {
+      throw can_nodes::SetupError(std::string("the saved world does not fit the scenario: ") + e.what());
+    }
+  }
   const std::size_t n = sc.world.robots.size();
   can_nodes::FttConfig ftt;
   ftt.bit_rate = opt.bit_rate;
@@ -228,6 +235,10 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
                static_cast<unsigned long long>(st.skipped_steps),
                std::chrono::duration<double, std::milli>(st.worst_lateness).count());
   std::fprintf(out, "  ball at (%.2f, %.2f); %zu goal(s)\n", b.x(), b.y(), goals.goals().size());
+  if (opt.save_world) {
+    physics::save_state(world.save(), *opt.save_world);
+    std::fprintf(out, "  world saved to %s (start a run from it with --restore-world)\n", opt.save_world->c_str());
+  }
   for (std::size_t r = 0; r < n; ++r) {
     const kinematics::Pose p = world.robot(r).pose();
     const auto& tm = robots[r].nodes->node(emulator::NodeId::kMaster).counters();

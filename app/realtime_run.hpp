@@ -2,9 +2,12 @@
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <string>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/frames/messages.hpp"
+#include "canhil/physics/world.hpp"
 #include "canhil/vision_emu/vision.hpp"
 
 namespace canhil::app {
@@ -20,8 +23,10 @@ struct RealtimeOptions {
   /// SCHED_FIFO priority of the thread that runs the nodes (1..99; 0 leaves
   /// the scheduler alone). Needs root or CAP_SYS_NICE; without, a warning.
   int priority = 40;
-  bool quiet = false;   ///< no progress lines
-  bool silent = false;  ///< nothing at all (a benchmark runs it)
+  std::optional<physics::WorldState> initial_state;  ///< a saved world to start from
+  std::optional<std::string> save_world;             ///< where to save the world at the end
+  bool quiet = false;                                ///< no progress lines
+  bool silent = false;                               ///< nothing at all (a benchmark runs it)
 };
 
 /// Runs until the duration ends or Ctrl-C; returns the exit status (130 after Ctrl-C).

@@ -29,6 +29,24 @@ void write_file(const std::string& path, const std::string& text, const char* wh
   if (!out) throw UsageError("cannot write the " + std::string(what) + " to " + path);
 }
 
+// A saved world (--restore-world), or a usage error naming the file and what is wrong.
+physics::WorldState load_world(const std::string& path) {
+  try {
+    return physics::load_state(path);
+  } catch (const std::exception& e) {
+    throw UsageError("--restore-world " + path + ": " + e.what() +
+                     "; give a file written by `canhil run --save-world FILE`");
+  }
+}
+
+void save_world_to(const physics::WorldState& state, const std::string& path) {
+  try {
+    physics::save_state(state, path);
+  } catch (const std::exception& e) {
+    throw UsageError("--save-world " + path + ": " + e.what());
+  }
+}
+
 }  // namespace
 
 int run_run(Args& args, const std::optional<std::string>& dbc) {
@@ -36,6 +54,8 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const auto config = args.option("--config");
   const auto trace = args.option("--trace");
   const auto world_log = args.option("--world-log");
+  const auto save_world = args.option("--save-world");
+  const auto restore_world = args.option("--restore-world");
   std::vector<std::string> fault_texts;
   while (auto f = args.option("--fault")) fault_texts.push_back(*f);
   const auto seed_text = args.option("--seed");
@@ -93,6 +113,8 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     opt.bit_rate = static_cast<std::uint32_t>(bit_rate);
     opt.receive_buffer_bytes = static_cast<int>(rx_buffer_kb * 1024);
     opt.priority = static_cast<int>(priority);
+    if (restore_world) opt.initial_state = load_world(*restore_world);
+    opt.save_world = save_world;
     opt.quiet = quiet;
     return run_realtime(scenario, opt);
   }
@@ -103,13 +125,16 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   emulator::VirtualRunConfig cfg =
       emulator::virtual_run_config(scenario, frames::MessageSet::create(load_chosen_dbc(dbc)));
   cfg.record_trace = trace.has_value();  // a long run without --trace keeps no frames
+  if (restore_world) cfg.initial_state = load_world(*restore_world);
   if (world_log)
     cfg.world_log_period = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(log_period));
   std::unique_ptr<emulator::VirtualRun> run;
   try {
     run = std::make_unique<emulator::VirtualRun>(cfg);
   } catch (const std::invalid_argument& e) {
-    throw UsageError((config ? *config + ": " : std::string()) + e.what());
+    const std::string where =
+        restore_world ? "--restore-world " + *restore_world + " does not fit the scenario: " : std::string();
+    throw UsageError((config ? *config + ": " : std::string()) + where + e.what());
   }
   std::printf("canhil run: %zu robot(s), virtual time, %g s, seed %llu, %zu fault rule(s)\n", cfg.world.robots.size(),
               duration, static_cast<unsigned long long>(cfg.seed), cfg.faults.size());
@@ -135,6 +160,10 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     write_file(*trace, run->trace(), "trace");
     std::printf("trace written to %s (candump log; check it with `canhil timing %s`)\n", trace->c_str(),
                 trace->c_str());
+  }
+  if (save_world) {
+    save_world_to(run->world().save(), *save_world);
+    std::printf("world saved to %s (start a run from it with --restore-world)\n", save_world->c_str());
   }
   if (world_log) {
     write_file(*world_log, run->world_log(), "world log");

@@ -131,6 +131,7 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     }
   }
   s.world = std::make_unique<physics::World>(s.config.world);
+  if (s.config.initial_state) s.world->restore(*s.config.initial_state);  // std::invalid_argument on a mismatch
   s.goals = std::make_unique<GoalWatcher>(s.config.world);
   if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
   s.rtdb = true;
@@ -150,9 +151,8 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
       DB_put_in(agent, agent, item, zero.data(), 0);
     }
     // The agent asks the handler to put the odometry where the robot stands.
-    const physics::Placement& at = s.config.world.robots[r];
-    CMD_SetPose pose{static_cast<float>(at.x_m), static_cast<float>(at.y_m),
-                     static_cast<float>(at.heading_deg * M_PI / 180.0), 0, 1};
+    const kinematics::Pose at = s.world->robot(r).pose();
+    CMD_SetPose pose{static_cast<float>(at.x_m), static_cast<float>(at.y_m), static_cast<float>(at.heading_rad), 0, 1};
     DB_put_in(agent, agent, CMD_SETPOSE, &pose, 0);
     s.io.push_back(std::make_unique<PhysicsRobotIo>(s.world->robot(r)));
     s.params.push_back(node_params_for(s.config.world.robot, s.config.ftt));

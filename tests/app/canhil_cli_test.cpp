@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -214,6 +215,45 @@ TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
   EXPECT_FALSE(has(r, " 0 error frames")) << "the error frames are in the trace\n" << r.out;
   std::remove(trace.c_str());
   std::remove(world.c_str());
+}
+
+TEST(CanhilRun, ASavedWorldStartsTheNextRunWhereTheLastEnded) {
+  const std::string state = "/tmp/canhil_cli_world.state";
+  const std::string log = "/tmp/canhil_cli_world.csv";
+  CliRun r = canhil("run --virtual-time --config emulator/scenarios/one_robot.toml --duration 3 --quiet --save-world " +
+                    state);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "world saved to " + state)) << r.out;
+  const auto at = r.out.find("vcan0 agent 1: at (");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  float x = 0, y = 0;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + at, "vcan0 agent 1: at (%f, %f)", &x, &y), 2) << r.out;
+  ASSERT_GT(std::hypot(x - (-3.0F), y), 0.5F) << "the robot moved in the first run";
+  r = canhil("run --virtual-time --config emulator/scenarios/one_robot.toml --duration 0.2 --quiet --restore-world " +
+             state + " --world-log " + log);
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::ifstream csv(log);
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  double t = 0, bx = 0, by = 0, bz = 0, rx = 0, ry = 0, rh = 0, ox = 0, oy = 0;
+  ASSERT_EQ(
+      std::sscanf(first.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &t, &bx, &by, &bz, &rx, &ry, &rh, &ox, &oy), 9)
+      << first;
+  EXPECT_NEAR(rx, x, 0.02) << "the robot starts where the saved run left it";
+  EXPECT_NEAR(ry, y, 0.02);
+  EXPECT_NEAR(ox, rx, 0.02) << "and its handler's odometry with it";
+  EXPECT_NEAR(oy, ry, 0.02);
+  // A saved world that does not fit, a file that is not one.
+  r = canhil("run --virtual-time --config emulator/scenarios/five_robots.toml --duration 0.1 --restore-world " + state);
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_TRUE(has(r, "does not fit the scenario")) << r.out;
+  r = canhil("run --virtual-time --duration 0.1 --restore-world emulator/scenarios/one_robot.toml");
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_TRUE(has(r, "--restore-world emulator/scenarios/one_robot.toml:")) << r.out;
+  EXPECT_TRUE(has(r, "written by `canhil run --save-world FILE`")) << r.out;
+  std::remove(state.c_str());
+  std::remove(log.c_str());
 }
 
 TEST(CanhilRun, MistakesExitTwoWithAReason) {

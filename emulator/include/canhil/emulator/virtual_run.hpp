@@ -15,6 +15,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,9 @@ struct VirtualRunConfig {
   std::uint64_t seed = 1;     ///< fault draws (robot r uses seed + r)
   Nanos world_log_period{0};  ///< 0: no world log
   bool record_trace = true;   ///< false: frames are counted, not kept (trace() is then empty)
+  /// A saved world (physics::load_state) to start from instead of the
+  /// placements; each handler's odometry is set to its robot's restored pose.
+  std::optional<physics::WorldState> initial_state;
 };
 
 struct RobotOutcome {
