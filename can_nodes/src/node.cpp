@@ -27,7 +27,7 @@ std::size_t Node::poll(std::size_t max_frames) {
     }
     on_frame(*f);
   }
-  return n;
+  return n + poll_more(max_frames);
 }
 
 Nanos Node::next_wakeup() const noexcept {

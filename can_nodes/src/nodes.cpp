@@ -320,9 +320,11 @@ void CompassNode::step(Nanos now) {
 // --- SystemMonitor -------------------------------------------------------------
 
 SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
-                             std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state)
+                             std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state,
+                             Bus* watch)
     : Node("SysMon", bus, std::move(set)),
       params_(params),
+      watch_(watch),
       bad_frames_(std::move(bad_frames)),
       state_(std::move(state)) {
   last_seen_.fill(kLongAgo);
@@ -333,7 +335,25 @@ SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet>
     watched_.push_back(at == kWatched.end() ? kNotWatched : static_cast<std::uint8_t>(at - kWatched.begin()));
   }
   const Filter all[] = {Filter::all()};
-  bus.set_filters(all);  // watches the whole bus
+  if (watch_ != nullptr) {
+    const Filter tm[] = {Filter::exact(messages().tm.message().id())};
+    bus.set_filters(tm);
+    watch_->set_filters(all);
+  } else {
+    bus.set_filters(all);  // watches the whole bus
+  }
+}
+
+std::size_t SystemMonitor::poll_more(std::size_t max_frames) {
+  if (watch_ == nullptr) return 0;
+  std::size_t n = 0;
+  while (n < max_frames) {
+    auto f = watch_->receive();
+    if (!f) break;
+    ++n;
+    if (enabled()) observe(*f);
+  }
+  return n;
 }
 
 std::uint8_t SystemMonitor::alive(Nanos now) const noexcept {
@@ -344,7 +364,7 @@ std::uint8_t SystemMonitor::alive(Nanos now) const noexcept {
   return bits;
 }
 
-void SystemMonitor::on_frame(const TimedFrame& tf) {
+void SystemMonitor::observe(const TimedFrame& tf) {
   const CanFrame& f = tf.frame;
   if (f.kind != frames::FrameKind::kData) return;
   const frames::MessageCodec* m = messages().codec().find(f.id, f.extended);
@@ -354,6 +374,11 @@ void SystemMonitor::on_frame(const TimedFrame& tf) {
   }
   const std::uint8_t from = watched_[static_cast<std::size_t>(m - messages().codec().messages().data())];
   if (from != kNotWatched) last_seen_[from] = tf.time;  // a watched node is alive
+}
+
+void SystemMonitor::on_frame(const TimedFrame& tf) {
+  const CanFrame& f = tf.frame;
+  if (watch_ == nullptr) observe(tf);
   if (is(f, messages().tm.message())) {
     const Nanos at = async_slot(messages(), messages().m10.message(), params_, tf.time, last_m10_);
     if (at != kNever) {

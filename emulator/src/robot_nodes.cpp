@@ -43,6 +43,7 @@ RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, con
                        can_nodes::RobotIo& robot, const EndpointFactory& endpoints, Nanos start)
     : schedule_(*set, params.ftt) {
   for (std::size_t i = 0; i < kNodeCount; ++i) buses_.push_back(endpoints(node_name(static_cast<NodeId>(i))));
+  watch_bus_ = endpoints("SysMon watch");
   auto bus = [&](NodeId id) -> can_nodes::Bus& { return *buses_[static_cast<std::size_t>(id)]; };
   nodes_.push_back(std::make_unique<can_nodes::FttMaster>(bus(NodeId::kMaster), set, schedule_, start));
   nodes_.push_back(std::make_unique<can_nodes::PicBase>(bus(NodeId::kPicBase), set, params, robot));
@@ -67,7 +68,8 @@ RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, con
           if (!n->enabled()) state |= 2;
         }
         return state;
-      }));
+      },
+      watch_bus_.get()));
 }
 
 std::vector<can_nodes::Node*> RobotNodes::nodes() {
@@ -85,6 +87,9 @@ std::uint64_t RobotNodes::bad_frames() const {
 BusReport RobotNodes::bus_report() const {
   BusReport r;
   r.fewest_triggers = ~0ULL;
+  const can_nodes::BusStats watch = watch_bus_->stats();
+  r.monitor_heard = watch.received;
+  r.monitor_overflow = watch.rx_overflow;
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     const can_nodes::Node& n = *nodes_[i];
     const can_nodes::NodeCounters& c = n.counters();
@@ -94,13 +99,10 @@ BusReport RobotNodes::bus_report() const {
     r.wrong_length += c.wrong_length;
     r.out_of_range += c.out_of_range;
     const auto id = static_cast<NodeId>(i);
+    r.other_overflow += s.rx_overflow;  // the monitor's own endpoint takes only TMs
     if (id == NodeId::kSysMon) {
       r.monitor_sent = c.sent;
-      r.monitor_heard = s.received;
-      r.monitor_overflow = s.rx_overflow;
       r.monitor_triggers = c.triggers;
-    } else {
-      r.other_overflow += s.rx_overflow;
     }
     if (id == NodeId::kMaster) {
       r.tms_sent = c.sent;

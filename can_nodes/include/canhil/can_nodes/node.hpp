@@ -88,6 +88,11 @@ class Node {
  protected:
   virtual void on_frame(const frames::TimedFrame& frame) = 0;
   virtual void step(Nanos now) = 0;
+  /// A node with a second socket reads it here, at most `max_frames`; returns how many.
+  virtual std::size_t poll_more(std::size_t max_frames) {
+    (void)max_frames;
+    return 0;
+  }
 
   /// Asks for a tick at `t`. Every request is kept until served (a node may
   /// want its motor tick and its synchronous window); one tick serves all due.

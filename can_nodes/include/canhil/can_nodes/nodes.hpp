@@ -163,18 +163,25 @@ class CompassNode final : public Node {
 class SystemMonitor final : public Node {
  public:
   /// `bad_frames` reports the bad frames the other nodes have counted;
-  /// `state` the node_state byte (see docs/nodes.md).
+  /// `state` the node_state byte (see docs/nodes.md). With a `watch` bus the
+  /// node takes only TMs on `bus` and watches the whole bus on `watch`, so
+  /// that a flood of other frames (counted, and lost to overflow if need be)
+  /// never costs it a TM; without, `bus` does both.
   SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
-                std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state);
+                std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state,
+                Bus* watch = nullptr);
   /// alive bitmap as M10 reports it now.
   std::uint8_t alive(Nanos now) const noexcept;
 
  protected:
   void on_frame(const frames::TimedFrame& frame) override;
   void step(Nanos now) override;
+  std::size_t poll_more(std::size_t max_frames) override;
 
  private:
+  void observe(const frames::TimedFrame& frame);  // bad frames and who is alive
   const NodeParams& params_;
+  Bus* watch_;
   std::function<std::uint64_t()> bad_frames_;
   std::function<std::uint8_t(Nanos)> state_;
   std::array<Nanos, 6> last_seen_;     // Pic_base, Motor1..3, Pic_odom, Compass
