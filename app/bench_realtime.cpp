@@ -112,12 +112,6 @@ timespec to_timespec(Nanos t) {
   return ts;
 }
 
-Nanos realtime_now() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return Nanos{static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec};
-}
-
 // Runs `send`, then waits until the listener has everything or nothing more comes.
 RateFigures measure_rate(const std::string& iface, std::uint64_t frames, const std::function<std::uint64_t()>& send,
                          bool check_sequence) {
@@ -151,9 +145,10 @@ JitterFigures bare_loop_jitter(const std::string& iface, double seconds, Nanos p
   const can_nodes::Filter only[] = {can_nodes::Filter::exact(kBareLoopId)};
   Listener listener(iface, only);
   auto tx = can_nodes::SocketCanBus::open(iface);
+  const MemoryLock memory(priority > 0);
   const FifoScheduling fifo(priority);
   const auto n = static_cast<std::uint32_t>(seconds / std::chrono::duration<double>(period).count());
-  Nanos deadline = (realtime_now() / period + 2) * period;
+  Nanos deadline = (can_nodes::WallClock{}.now() / period + 2) * period;
   for (std::uint32_t k = 0; k < n; ++k, deadline += period) {
     const timespec at = to_timespec(deadline);
     while (clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &at, nullptr) != 0) {
@@ -199,7 +194,7 @@ RateFigures canhil_rate(const std::string& iface, std::uint64_t frames) {
         iface, frames,
         [&] {
           auto tx = can_nodes::SocketCanBus::open(iface);
-          const Nanos start = realtime_now();
+          const Nanos start = can_nodes::WallClock{}.now();
           for (std::uint64_t i = 0; i < frames; ++i) {
             if (pace > 0 && i % 64 == 0) {
               const timespec at = to_timespec(start + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(

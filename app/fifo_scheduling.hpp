@@ -1,5 +1,6 @@
-// app/fifo_scheduling.hpp — real-time scheduling for the thread that sends
-// frames on time (canhil run's node loop, canhil bench's bare loop).
+// app/fifo_scheduling.hpp — real-time scheduling for the threads that send
+// frames on time (canhil run's masters and nodes, canhil bench's bare loop),
+// and locked memory for their process.
 #pragma once
 
 #include <pthread.h>
@@ -27,10 +28,8 @@ class FifoScheduling {
       return;
     }
     changed_ = true;
-    locked_ = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;  // no page faults in the loop; best effort
   }
   ~FifoScheduling() {
-    if (locked_) munlockall();
     if (changed_) pthread_setschedparam(pthread_self(), old_policy_, &old_param_);
   }
   FifoScheduling(const FifoScheduling&) = delete;
@@ -41,7 +40,21 @@ class FifoScheduling {
   int old_policy_ = SCHED_OTHER;
   sched_param old_param_{};
   bool changed_ = false;
-  bool locked_ = false;
+};
+
+// The whole process's memory locked while it lives (mlockall is per process,
+// not per thread): no page faults in a real-time loop. Best effort.
+class MemoryLock {
+ public:
+  explicit MemoryLock(bool on) : locked_(on && mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {}
+  ~MemoryLock() {
+    if (locked_) munlockall();
+  }
+  MemoryLock(const MemoryLock&) = delete;
+  MemoryLock& operator=(const MemoryLock&) = delete;
+
+ private:
+  bool locked_;
 };
 
 }  // namespace canhil::app

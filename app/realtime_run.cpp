@@ -175,6 +175,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
           : can_nodes::kNever;
   can_nodes::Nanos next_report = start + std::chrono::seconds(1);
   std::size_t goals_reported = 0;
+  const MemoryLock memory(opt.priority > 0);
   physics.start(start);  // before the priority: the physics thread keeps the normal scheduler
   struct MasterThread {  // joined on every way out, an exception included
     std::atomic<bool> stop{false};

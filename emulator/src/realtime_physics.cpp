@@ -3,11 +3,6 @@
 #include <algorithm>
 
 namespace canhil::emulator {
-namespace {
-
-Nanos realtime_now() { return can_nodes::WallClock{}.now(); }
-
-}  // namespace
 
 RealtimePhysics::RealtimePhysics(physics::World& world, std::vector<SharedRobotIo*> io, Nanos max_behind)
     : world_(world),
@@ -45,11 +40,11 @@ void RealtimePhysics::loop(Nanos start) {
   RealtimeStats stats;
   View view = view_;
   while (!stop_.load(std::memory_order_relaxed)) {
-    if (realtime_now() < next) {
+    if (can_nodes::WallClock{}.now() < next) {
       can_nodes::WallClock::sleep_until(next);
       continue;
     }
-    const Nanos now = realtime_now();
+    const Nanos now = can_nodes::WallClock{}.now();
     book_step(stats, now, next, step_, max_behind_);
     for (SharedRobotIo* io : io_) io->apply_commands();
     world_.step();
