@@ -7,7 +7,7 @@
 
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/lockstep.hpp"
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/robot_rig.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace {
@@ -48,21 +48,12 @@ class Laptop final : public emulator::Participant {
 };
 
 void BM_OneRobotVirtualTime(benchmark::State& state) {
-  auto set = frames::MessageSet::load(CANHIL_BENCH_DBC);
   physics::WorldParams wp;
   wp.robots = {physics::Placement{0, 0, 0}};
   wp.ball_start = {2, 2, wp.ball.radius_m};
-  physics::World world(wp);
-  emulator::PhysicsRobotIo io(world.robot(0));
-  const can_nodes::NodeParams params = emulator::node_params_for(wp.robot);
-  can_nodes::SimulatedClock clock;
-  can_nodes::MemoryBus bus(clock);
-  emulator::RobotNodes nodes(
-      set, params, io, [&](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
-      can_nodes::Nanos{0});
-  Laptop laptop(bus, set);
-  emulator::Lockstep run(clock, &world);
-  for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
+  emulator::RobotRig rig(frames::MessageSet::load(CANHIL_BENCH_DBC), wp);
+  Laptop laptop(rig.bus, rig.set);
+  emulator::Lockstep& run = rig.run;
   run.add(laptop);
   std::int64_t simulated_s = 0;
   for (auto _ : state) {

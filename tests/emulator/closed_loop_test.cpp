@@ -6,6 +6,7 @@
 
 #include "canhil/emulator/lockstep.hpp"
 #include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/robot_rig.hpp"
 #include "support/laptop_endpoint.hpp"
 #include "support/test_paths.hpp"
 
@@ -14,19 +15,10 @@ namespace {
 
 using namespace std::chrono_literals;
 
-struct Rig {
+struct Rig : RobotRig {
   explicit Rig(physics::WorldParams wp = default_world())
-      : set(frames::MessageSet::load(test::shipped_dbc())),
-        world(std::move(wp)),
-        io(world.robot(0)),
-        params(node_params_for(world.params().robot)),
-        bus(clock),
-        nodes(
-            set, params, io, [this](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
-            Nanos{0}),
-        laptop(bus, set, params.ftt.elementary_cycle),
-        run(clock, &world) {
-    for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
+      : RobotRig(frames::MessageSet::load(test::shipped_dbc()), std::move(wp)),
+        laptop(bus, set, params.ftt.elementary_cycle) {
     run.add(laptop);
   }
   static physics::WorldParams default_world() {
@@ -38,15 +30,7 @@ struct Rig {
   frames::M4_1 last_m4_1() const { return laptop.decoded(set->m4_1).back(); }
   frames::M4_2 last_m4_2() const { return laptop.decoded(set->m4_2).back(); }
 
-  std::shared_ptr<const frames::MessageSet> set;
-  can_nodes::SimulatedClock clock;
-  physics::World world;
-  PhysicsRobotIo io;
-  can_nodes::NodeParams params;
-  can_nodes::MemoryBus bus;
-  RobotNodes nodes;
   test::LaptopEndpoint laptop;
-  Lockstep run;
 };
 
 TEST(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {

@@ -8,10 +8,8 @@
 
 #include <cstdlib>
 
-#include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/handler_participant.hpp"
-#include "canhil/emulator/lockstep.hpp"
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/robot_rig.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
@@ -34,17 +32,9 @@ class HwCommTest : public ::testing::Test {
     physics::WorldParams wp;
     wp.robots = {physics::Placement{0, 0, 0}};
     wp.ball_start = {0, 0.26, wp.ball.radius_m};  // in the mouth
-    world_ = std::make_unique<physics::World>(wp);
-    io_ = std::make_unique<emulator::PhysicsRobotIo>(world_->robot(0));
-    params_ = emulator::node_params_for(wp.robot);
-    bus_ = std::make_unique<can_nodes::MemoryBus>(clock_);
-    nodes_ = std::make_unique<emulator::RobotNodes>(
-        set_, params_, *io_, [this](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus_->attach(n)); },
-        can_nodes::Nanos{0});
-    laptop_ = std::make_unique<emulator::HandlerParticipant>(*bus_, set_, 10ms, clock_, -1, true);
-    run_ = std::make_unique<emulator::Lockstep>(clock_, world_.get());
-    for (can_nodes::Node* n : nodes_->nodes()) run_->add(*n);
-    run_->add(*laptop_);
+    rig_ = std::make_unique<emulator::RobotRig>(set_, wp);
+    laptop_ = std::make_unique<emulator::HandlerParticipant>(rig_->bus, set_, 10ms, rig_->clock, -1, true);
+    rig_->run.add(*laptop_);
   }
   ~HwCommTest() override { DB_free(); }
   int count_sent(std::uint32_t id) const {
@@ -54,23 +44,17 @@ class HwCommTest : public ::testing::Test {
   }
 
   std::shared_ptr<const frames::MessageSet> set_;
-  can_nodes::SimulatedClock clock_;
-  std::unique_ptr<physics::World> world_;
-  std::unique_ptr<emulator::PhysicsRobotIo> io_;
-  can_nodes::NodeParams params_;
-  std::unique_ptr<can_nodes::MemoryBus> bus_;
-  std::unique_ptr<emulator::RobotNodes> nodes_;
+  std::unique_ptr<emulator::RobotRig> rig_;
   std::unique_ptr<emulator::HandlerParticipant> laptop_;
-  std::unique_ptr<emulator::Lockstep> run_;
 };
 
 TEST_F(HwCommTest, CmdVelMovesCmdPos) {
   CMD_Vel v{0, 0.5f, 0, false};
   DB_put(CMD_VEL, &v);
-  run_->run_until(2s);
+  rig_->run.run_until(2s);
   CMD_Vel stop{0, 0, 0, false};
   DB_put(CMD_VEL, &stop);
-  run_->run_for(600ms);
+  rig_->run.run_for(600ms);
   CMD_Pos p{};
   const int age = DB_get(CAMBADA_1, CMD_POS, &p);
   EXPECT_GE(age, 0);
@@ -78,13 +62,13 @@ TEST_F(HwCommTest, CmdVelMovesCmdPos) {
   EXPECT_NEAR(p.px, 0.0, 0.02);
   EXPECT_EQ(count_sent(0x131), count_sent(0x132));
   EXPECT_GE(count_sent(0x131), 85) << "M6 in every third EC: about 87 in 2.6 s";
-  EXPECT_EQ(nodes_->bad_frames(), 0u);
+  EXPECT_EQ(rig_->nodes.bad_frames(), 0u);
 }
 
 TEST_F(HwCommTest, KickerCommandIsSentExactlyOnceAndReset) {
   CMD_Grabber g{100};
   DB_put(CMD_GRABBER, &g);
-  run_->run_until(1200ms);  // the grabber M7 went out; its minimum gap has passed
+  rig_->run.run_until(1200ms);  // the grabber M7 went out; its minimum gap has passed
   const int m7_before = count_sent(0x0B0);
   EXPECT_EQ(m7_before, 1) << "one M7 for the grabber change";
   CMD_Grabber_Info gi{};
@@ -92,26 +76,26 @@ TEST_F(HwCommTest, KickerCommandIsSentExactlyOnceAndReset) {
   ASSERT_EQ(gi.ballEngaged, 1);
   CMD_Kicker k{static_cast<unsigned char>(0x80 | 40), 0, 0};
   DB_put(CMD_KICKER, &k);
-  run_->run_for(3s);
+  rig_->run.run_for(3s);
   EXPECT_EQ(count_sent(0x0B0), m7_before + 1) << "exactly one M7 for the kick";
   EXPECT_EQ(laptop_->hw().stats().kicks_sent, 1u);
   CMD_Kicker after{};
   DB_get(CAMBADA_1, CMD_KICKER, &after);
   EXPECT_EQ(after.power, 0) << "power reset once sent";
-  EXPECT_GT(world_->ball_position().y(), 2.0) << "the ball was kicked";
+  EXPECT_GT(rig_->world.ball_position().y(), 2.0) << "the ball was kicked";
 }
 
 TEST_F(HwCommTest, BusToRtdbItemsAreWritten) {
   CMD_Vel v{0, 0.3f, 0.2f, false};
   DB_put(CMD_VEL, &v);
-  run_->run_until(1500ms);
+  rig_->run.run_until(1500ms);
   CMD_Info info{};
   EXPECT_GE(DB_get(CAMBADA_1, CMD_INFO, &info), 0);
   EXPECT_NEAR(info.Voltage_power24 / 100.0, 25.0, 1.0);
   EXPECT_NEAR(info.Kicker_voltage / 100.0, 180.0, 1.0);
   CMD_Imu imu{};
   DB_get(CAMBADA_1, CMD_IMU, &imu);
-  const double heading = world_->robot(0).compass_heading_deg();
+  const double heading = rig_->world.robot(0).compass_heading_deg();
   EXPECT_NEAR(imu.yaw / 100.0, heading, 2.0);
   CMD_HWerrors e{};
   DB_get(CAMBADA_1, CMD_HWERRORS, &e);
@@ -123,7 +107,7 @@ TEST_F(HwCommTest, BusToRtdbItemsAreWritten) {
 TEST_F(HwCommTest, SetPoseAndResetThroughM5) {
   CMD_SetPose sp{1.5f, -2.0f, 0.75f, 0, 1};
   DB_put(CMD_SETPOSE, &sp);
-  run_->run_until(300ms);
+  rig_->run.run_until(300ms);
   CMD_Pos p{};
   DB_get(CAMBADA_1, CMD_POS, &p);
   EXPECT_NEAR(p.px, 1.5, 1e-3);

@@ -4,9 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "canhil/can_nodes/memory_bus.hpp"
-#include "canhil/emulator/lockstep.hpp"
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/robot_rig.hpp"
 #include "canhil/frames/wire.hpp"
 #include "support/laptop_endpoint.hpp"
 #include "support/test_paths.hpp"
@@ -22,21 +20,12 @@ std::vector<frames::TimedFrame> clean_trace(const std::shared_ptr<const frames::
   physics::WorldParams wp;
   wp.robots = {physics::Placement{0, 0, 0}};
   wp.ball_start = {2, 2, wp.ball.radius_m};
-  physics::World world(wp);
-  emulator::PhysicsRobotIo io(world.robot(0));
-  const can_nodes::NodeParams params = emulator::node_params_for(wp.robot);
-  can_nodes::SimulatedClock clock;
-  can_nodes::MemoryBus bus(clock);
-  emulator::RobotNodes nodes(
-      set, params, io, [&](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
-      can_nodes::Nanos{0});
-  test::LaptopEndpoint laptop(bus, set, 10ms);
+  emulator::RobotRig rig(set, wp);
+  test::LaptopEndpoint laptop(rig.bus, set, 10ms);
   laptop.m6_1 = frames::M6_1{0, 0.4};
-  auto listener = bus.attach("listener", 1 << 20);
-  emulator::Lockstep run(clock, &world);
-  for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
-  run.add(laptop);
-  run.run_until(3s);
+  auto listener = rig.bus.attach("listener", 1 << 20);
+  rig.run.add(laptop);
+  rig.run.run_until(3s);
   std::vector<frames::TimedFrame> out;
   while (auto f = listener->receive()) out.push_back(*f);
   return out;
