@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "bench_realtime.hpp"
+#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
@@ -37,8 +38,7 @@ double cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
-}  // namespace
-
+// The scenario installed with canhil, or in the source tree.
 std::filesystem::path shipped_scenario(const std::string& name) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -49,6 +49,92 @@ std::filesystem::path shipped_scenario(const std::string& name) {
   }
   return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
 }
+
+// The five-robot scenario (or `config`) in virtual time, everything on: true when at least 100x.
+bool bench_virtual(const std::optional<std::string>& config, double seconds,
+                   const std::shared_ptr<const frames::MessageSet>& messages) {
+  const std::filesystem::path path = config ? std::filesystem::path(*config) : shipped_scenario("five_robots.toml");
+  const emulator::Scenario sc = emulator::load_scenario(path);
+  const emulator::VirtualRunConfig cfg = emulator::virtual_run_config(sc, messages);
+  std::printf("canhil bench: virtual time: %s, %zu robot(s), %zu obstacle(s), %g s of virtual time\n",
+              path.string().c_str(), sc.world.robots.size(), sc.world.obstacles.size(), seconds);
+  const double cpu0 = cpu_seconds();
+  const auto wall0 = std::chrono::steady_clock::now();
+  emulator::VirtualRun run(cfg);
+  run.run_for(std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(seconds)));
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const double cpu = cpu_seconds() - cpu0;
+  std::uint64_t frames = 0;
+  for (const auto& o : run.outcomes()) frames += o.frames;
+  const double factor = seconds / wall;
+  std::printf(
+      "  real-time factor, everything on: %.0fx (wall %.3f s, CPU %.3f s = %.0fx of one core)  target >= 100x: %s\n",
+      factor, wall, cpu, seconds / cpu, factor >= 100 ? "met" : "MISSED");
+  std::printf("  frames on the buses: %llu (%.0f per simulated second)\n", static_cast<unsigned long long>(frames),
+              static_cast<double>(frames) / seconds);
+  return factor >= 100;
+}
+
+// TM release jitter of canhil run against a bare loop on the same period: true when p99 <= 1.2x.
+bool bench_jitter(const std::string& iface, double seconds, int priority,
+                  const std::shared_ptr<const frames::MessageSet>& messages) {
+  const frames::Nanos ec = can_nodes::FttConfig{}.elementary_cycle;  // canhil run's
+  std::printf(
+      "canhil bench: real time on %s, %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then both\n",
+      iface.c_str(), seconds, priority);
+  RealtimeOptions opt;
+  opt.messages = messages;
+  opt.priority = priority;
+  const JitterFigures bare = bare_loop_jitter(iface, seconds, ec, priority);
+  const emulator::Scenario one = emulator::load_scenario(shipped_scenario("one_robot.toml"));
+  const JitterFigures emu = emulator_jitter(iface, seconds, one, opt);
+  // The same bare loop while canhil run runs: what the machine itself does
+  // under that load (a diagnostic, not the target's reference).
+  JitterFigures loaded;
+  std::thread beside([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    loaded = bare_loop_jitter(iface, seconds - 1, ec, priority);
+  });
+  emulator_jitter(iface, seconds, one, opt);
+  beside.join();
+  const auto line = [](const char* what, const JitterFigures& j) {
+    std::printf("  %-34s %6zu releases, %4llu missing  p50 %8.1f us  p99 %8.1f us  max %8.1f us\n", what, j.releases,
+                static_cast<unsigned long long>(j.missing), j.p50_us, j.p99_us, j.max_us);
+  };
+  line("bare loop, a frame every 10 ms:", bare);
+  line("canhil run, trigger messages:", emu);
+  line("bare loop beside canhil run:", loaded);
+  const bool measured = bare.releases > 0 && emu.releases > 0;
+  const double ratio = bare.p99_us > 0 ? emu.p99_us / bare.p99_us : 0;
+  const bool met = measured && ratio <= 1.2;
+  std::printf("  release jitter p99, canhil / bare loop: %.2fx  target <= 1.2x: %s\n", ratio, met ? "met" : "MISSED");
+  if (!met && loaded.p99_us > 1.2 * bare.p99_us) {
+    std::printf("  (the machine itself: the bare loop's p99 is %.1fx its idle figure while canhil run runs)\n",
+                loaded.p99_us / bare.p99_us);
+  }
+  return met;
+}
+
+// The highest lossless frame rate through the interface against cangen -g 0: true when at least 0.8x.
+bool bench_vcan(const std::string& iface, std::uint64_t frames) {
+  std::printf("canhil bench: frame rate through %s, %llu frames at full speed, one listening socket\n", iface.c_str(),
+              static_cast<unsigned long long>(frames));
+  const RateFigures ours = canhil_rate(iface, frames);
+  const RateFigures reference = cangen_rate(iface, frames);
+  const auto line = [](const char* what, const RateFigures& r) {
+    std::printf("  %-34s %9.0f frames/s  (%llu sent, %llu received, %llu lost)\n", what, r.frames_per_s,
+                static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
+                static_cast<unsigned long long>(r.lost));
+  };
+  line("canhil, highest rate with no loss:", ours);
+  line("cangen -g 0:", reference);
+  const double ratio = reference.frames_per_s > 0 ? ours.frames_per_s / reference.frames_per_s : 0;
+  const bool met = ours.lost == 0 && ratio >= 0.8;
+  std::printf("  lossless rate, canhil / cangen: %.2fx  target >= 0.8x: %s\n", ratio, met ? "met" : "MISSED");
+  return met;
+}
+
+}  // namespace
 
 int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const double seconds = number_option(args, "--seconds", 60);
@@ -84,29 +170,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   }
   const auto messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   bool all_met = true;
-  if (want_virtual) {
-    const std::filesystem::path path = config ? std::filesystem::path(*config) : shipped_scenario("five_robots.toml");
-    const emulator::Scenario sc = emulator::load_scenario(path);
-    const emulator::VirtualRunConfig cfg = emulator::virtual_run_config(sc, messages);
-    std::printf("canhil bench: virtual time: %s, %zu robot(s), %zu obstacle(s), %g s of virtual time\n",
-                path.string().c_str(), sc.world.robots.size(), sc.world.obstacles.size(), seconds);
-    const double cpu0 = cpu_seconds();
-    const auto wall0 = std::chrono::steady_clock::now();
-    emulator::VirtualRun run(cfg);
-    run.run_for(std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(seconds)));
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    const double cpu = cpu_seconds() - cpu0;
-    std::uint64_t frames = 0;
-    for (const auto& o : run.outcomes()) frames += o.frames;
-    const double factor = seconds / wall;
-    std::printf(
-        "  real-time factor, everything on: %.0fx (wall %.3f s, CPU %.3f s = %.0fx of one core)  target >= 100x: "
-        "%s\n",
-        factor, wall, cpu, seconds / cpu, factor >= 100 ? "met" : "MISSED");
-    std::printf("  frames on the buses: %llu (%.0f per simulated second)\n", static_cast<unsigned long long>(frames),
-                static_cast<double>(frames) / seconds);
-    all_met = all_met && factor >= 100;
-  }
+  if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;
   if (!want_jitter && !want_vcan) return all_met ? 0 : 1;
   if (!can_nodes::kernel_has_can()) {
     std::printf(
@@ -114,61 +178,8 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
         "`vcan_setup/with-vcan.sh -- canhil bench` (or --part virtual)\n");
     return 1;
   }
-  if (want_jitter) {
-    std::printf(
-        "canhil bench: real time on %s, %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then "
-        "both\n",
-        iface.c_str(), rt_seconds, priority);
-    RealtimeOptions opt;
-    opt.messages = messages;
-    opt.priority = priority;
-    const JitterFigures bare = bare_loop_jitter(iface, rt_seconds, std::chrono::milliseconds(10), priority);
-    const emulator::Scenario one = emulator::load_scenario(shipped_scenario("one_robot.toml"));
-    const JitterFigures emu = emulator_jitter(iface, rt_seconds, one, opt);
-    // The same bare loop while canhil run runs: what the machine itself does
-    // under that load (a diagnostic, not the target's reference).
-    JitterFigures loaded;
-    std::thread beside([&] {
-      std::this_thread::sleep_for(std::chrono::milliseconds(500));
-      loaded = bare_loop_jitter(iface, rt_seconds - 1, std::chrono::milliseconds(10), priority);
-    });
-    emulator_jitter(iface, rt_seconds, one, opt);
-    beside.join();
-    const auto line = [](const char* what, const JitterFigures& j) {
-      std::printf("  %-34s %6zu releases, %4llu missing  p50 %8.1f us  p99 %8.1f us  max %8.1f us\n", what, j.releases,
-                  static_cast<unsigned long long>(j.missing), j.p50_us, j.p99_us, j.max_us);
-    };
-    line("bare loop, a frame every 10 ms:", bare);
-    line("canhil run, trigger messages:", emu);
-    line("bare loop beside canhil run:", loaded);
-    const bool measured = bare.releases > 0 && emu.releases > 0;
-    const double ratio = bare.p99_us > 0 ? emu.p99_us / bare.p99_us : 0;
-    const bool met = measured && ratio <= 1.2;
-    std::printf("  release jitter p99, canhil / bare loop: %.2fx  target <= 1.2x: %s\n", ratio, met ? "met" : "MISSED");
-    if (!met && loaded.p99_us > 1.2 * bare.p99_us) {
-      std::printf("  (the machine itself: the bare loop's p99 is %.1fx its idle figure while canhil run runs)\n",
-                  loaded.p99_us / bare.p99_us);
-    }
-    all_met = all_met && met;
-  }
-  if (want_vcan) {
-    const auto n = static_cast<std::uint64_t>(rate_frames);
-    std::printf("canhil bench: frame rate through %s, %llu frames at full speed, one listening socket\n", iface.c_str(),
-                static_cast<unsigned long long>(n));
-    const RateFigures ours = canhil_rate(iface, n);
-    const RateFigures reference = cangen_rate(iface, n);
-    const auto line = [](const char* what, const RateFigures& r) {
-      std::printf("  %-34s %9.0f frames/s  (%llu sent, %llu received, %llu lost)\n", what, r.frames_per_s,
-                  static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
-                  static_cast<unsigned long long>(r.lost));
-    };
-    line("canhil, highest rate with no loss:", ours);
-    line("cangen -g 0:", reference);
-    const double ratio = reference.frames_per_s > 0 ? ours.frames_per_s / reference.frames_per_s : 0;
-    const bool met = ours.lost == 0 && ratio >= 0.8;
-    std::printf("  lossless rate, canhil / cangen: %.2fx  target >= 0.8x: %s\n", ratio, met ? "met" : "MISSED");
-    all_met = all_met && met;
-  }
+  if (want_jitter) all_met = bench_jitter(iface, rt_seconds, priority, messages) && all_met;
+  if (want_vcan) all_met = bench_vcan(iface, static_cast<std::uint64_t>(rate_frames)) && all_met;
   return all_met ? 0 : 1;
 }
 

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "fifo_scheduling.hpp"
@@ -183,7 +184,7 @@ JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator
     previous = tm.ec_counter;
     releases.emplace_back(k, f.time);
   }
-  return jitter_of(std::move(releases), std::chrono::milliseconds(10));
+  return jitter_of(std::move(releases), can_nodes::FttConfig{}.elementary_cycle);
 }
 
 RateFigures canhil_rate(const std::string& iface, std::uint64_t frames) {
