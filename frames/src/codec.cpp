@@ -24,11 +24,21 @@ std::int64_t sign_extend(std::uint64_t raw, unsigned length) noexcept {
   return static_cast<std::int64_t>((raw ^ sign) - sign);
 }
 
+// A double as int64, saturated at both ends; NaN reads as 0. (A plain cast of
+// a value outside int64's range is undefined, and a DBC's numbers are user input.)
+std::int64_t saturate_int64(double v) noexcept {
+  constexpr double kTwo63 = 9223372036854775808.0;  // 2^63, exact in double
+  if (std::isnan(v)) return 0;
+  if (v >= kTwo63) return std::numeric_limits<std::int64_t>::max();
+  if (v < -kTwo63) return std::numeric_limits<std::int64_t>::min();
+  return static_cast<std::int64_t>(v);
+}
+
 std::int64_t read_start_value(const SignalDef& s) {
   const auto it = s.attributes.find("GenSigStartValue");
   if (it == s.attributes.end()) return 0;
   if (const auto* i = std::get_if<std::int64_t>(&it->second)) return *i;
-  if (const auto* d = std::get_if<double>(&it->second)) return static_cast<std::int64_t>(*d);
+  if (const auto* d = std::get_if<double>(&it->second)) return saturate_int64(*d);
   return 0;
 }
 
@@ -76,9 +86,11 @@ MessageCodec::MessageCodec(const MessageDef& def) : def_(&def) {
         lo = std::max(lo, std::ceil(a - eps_a));
         hi = std::min(hi, std::floor(b + eps_b));
       }
-      // 64-bit extremes are not exact in double; clamp conversions.
-      l.raw_min = lo <= -9.2e18 ? std::numeric_limits<std::int64_t>::min() : static_cast<std::int64_t>(lo);
-      l.raw_max = hi >= 9.2e18 ? std::numeric_limits<std::int64_t>::max() : static_cast<std::int64_t>(hi);
+      // 64-bit extremes are not exact in double: saturate. A declared range
+      // that misses the representable one (the parser refuses it) would leave
+      // lo > hi: then nothing is in range, and encoding saturates to lo.
+      l.raw_min = saturate_int64(lo);
+      l.raw_max = std::max(l.raw_min, saturate_int64(hi));
       if (l.type == ValueType::kUnsigned && s.length == 64) l.raw_max = std::numeric_limits<std::int64_t>::max();
     }
     l.initial = static_cast<double>(read_start_value(s)) * s.factor + s.offset;
@@ -175,14 +187,14 @@ EncodeResult MessageCodec::encode(std::span<const double> values, CanFrame& out)
       const double unscaled = l.divisor != 0.0 ? (phys - l.offset) * l.divisor : (phys - l.offset) / l.factor;
       const double scaled = std::nearbyint(unscaled);
       std::int64_t v = 0;
-      if (scaled < static_cast<double>(l.raw_min)) {
+      if (!(scaled >= static_cast<double>(l.raw_min))) {  // NaN too
         v = l.raw_min;
         r.saturated |= std::uint64_t{1} << i;
       } else if (scaled > static_cast<double>(l.raw_max)) {
         v = l.raw_max;
         r.saturated |= std::uint64_t{1} << i;
       } else {
-        v = static_cast<std::int64_t>(scaled);
+        v = saturate_int64(scaled);
       }
       raw = static_cast<std::uint64_t>(v);
     }

@@ -213,6 +213,7 @@ class Parser {
   AttributeValue attribute_value(const AttributeDef& def, int line);
   void check_database();
   void check_message(const MessageDef& m);
+  void check_range(const MessageDef& m, const SignalDef& s);
   void fill_attribute_defaults();
 
   std::string_view text_;
@@ -717,6 +718,30 @@ void Parser::check_message(const MessageDef& m) {
       }
       o = &s;
     }
+    check_range(m, s);
+  }
+}
+
+// An integer signal's declared physical range, mapped through its factor and
+// offset, must meet the raw values its bits can hold; otherwise every value
+// would be out of range (a factor, offset or range typed wrong).
+void Parser::check_range(const MessageDef& m, const SignalDef& s) {
+  if (s.value_type == ValueType::kFloat32 || s.value_type == ValueType::kFloat64 || !s.has_range()) return;
+  const double bits_lo = s.value_type == ValueType::kSigned ? -std::ldexp(1.0, s.length - 1) : 0.0;
+  const double bits_hi =
+      s.value_type == ValueType::kSigned ? std::ldexp(1.0, s.length - 1) - 1 : std::ldexp(1.0, s.length) - 1;
+  double a = (s.minimum - s.offset) / s.factor;
+  double b = (s.maximum - s.offset) / s.factor;
+  if (a > b) std::swap(a, b);
+  const double slack = 1e-6 * std::max({1.0, std::fabs(a), std::fabs(b)});
+  if (!std::isfinite(a) || !std::isfinite(b) || b + slack < bits_lo || a - slack > bits_hi) {
+    char range[160];
+    std::snprintf(range, sizeof range, "[%g|%g] with factor %g and offset %g", s.minimum, s.maximum, s.factor,
+                  s.offset);
+    error("signal " + s.name + " of " + m.name + ": its range " + range + " lies outside what its " +
+              std::to_string(s.length) + (s.value_type == ValueType::kSigned ? " signed" : " unsigned") +
+              " bits can hold; fix the factor, the offset or the range",
+          s.line);
   }
 }
 

@@ -246,5 +246,51 @@ TEST(MixedCodec, MotorolaFloatAndOffsetMatchHandWorkedBytes) {
   EXPECT_EQ(out[0], -2.0);
 }
 
+// A database made in code skips the parser's checks: the codec itself must
+// stay defined for any numbers (the fuzzer found a huge offset turning the raw
+// range's bound into an out-of-range cast).
+TEST(HostileNumbers, CodecStaysDefinedWhenTheRangeMissesTheBits) {
+  Database db;
+  MessageDef m;
+  m.name = "H";
+  m.id = 1;
+  m.length = 8;
+  for (const double offset : {3.3e68, -3.3e68, 1e300}) {
+    SignalDef s;
+    s.name = "s" + std::to_string(m.signals.size());
+    s.start_bit = static_cast<std::uint16_t>(16 * m.signals.size());
+    s.length = 16;
+    s.value_type = ValueType::kSigned;
+    s.factor = 1e-300;
+    s.offset = offset;
+    s.minimum = -32768;
+    s.maximum = 32767;
+    s.attributes["GenSigStartValue"] = 1e300;
+    m.signals.push_back(s);
+  }
+  db.messages.push_back(m);
+  const Codec codec(std::move(db));
+  const MessageCodec& c = codec.messages().front();
+  for (std::size_t i = 0; i < c.signal_count(); ++i) EXPECT_LE(c.layout(i).raw_min, c.layout(i).raw_max);
+  std::array<double, kMaxSignals> in{};
+  CanFrame f;
+  const EncodeResult e = c.encode(std::span<const double>(in.data(), 3), f);
+  EXPECT_EQ(e.saturated, 0b111u);  // 0 is nowhere near any of these ranges
+  std::array<double, kMaxSignals> out{};
+  const DecodeResult d = c.decode(f, out);
+  EXPECT_EQ(d.status, DecodeStatus::kOk);
+}
+
+TEST(HostileNumbers, TheFuzzersFindingIsRefusedWithItsLine) {
+  const std::string path = std::string(CANHIL_TEST_SOURCE_DIR) + "/fuzz/corpus/dbc/regression-codec-raw-range-ub.dbc";
+  try {
+    load_dbc(path);
+    FAIL() << "accepted";
+  } catch (const DbcError& e) {
+    EXPECT_EQ(e.line(), 26) << e.what();
+    EXPECT_NE(std::string(e.what()).find("signal encoder of M3_3"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace canhil::frames
