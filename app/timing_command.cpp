@@ -1,5 +1,7 @@
 // `canhil timing SOURCE`: timing and FTT compliance of a candump log or a live
-// interface. Exit status 1 when anything is violated (for a team's own CI).
+// interface. Exit status 1 when anything is violated (for a team's own CI), and
+// when the capture cannot show the timing (no frames, no trigger message,
+// shorter than the longest period) unless --allow-empty.
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -37,6 +39,7 @@ double number(const std::optional<std::string>& v, const char* name, double fall
 
 int run_timing(Args& args, const std::optional<std::string>& dbc) {
   const bool json = args.flag("--json");
+  const bool allow_empty = args.flag("--allow-empty");
   const auto svg = args.option("--svg");
   timing::TimingConfig cfg;
   cfg.elementary_cycle = std::chrono::duration_cast<frames::Nanos>(
@@ -98,6 +101,14 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
     }
     std::ofstream out(*svg);
     out << svg_plots({plot});
+  }
+  if (!report.capture_ok() && !allow_empty) {
+    // Its own message and status: a team's CI must not read a broken capture as clean timing.
+    for (const auto& [kind, text] : report.capture_problems) {
+      std::fprintf(stderr, "canhil timing: %s: %s\n", source.c_str(), text.c_str());
+    }
+    std::fprintf(stderr, "canhil timing: no timing verdict on this capture (--allow-empty accepts it)\n");
+    return 1;
   }
   return report.ok() ? 0 : 1;
 }

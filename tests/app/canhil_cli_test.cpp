@@ -280,6 +280,40 @@ TEST(CanhilRun, MistakesExitTwoWithAReason) {
   EXPECT_TRUE(has(r, "/nonexistent.toml")) << r.out;
 }
 
+TEST(CanhilTiming, ABrokenCaptureIsAnErrorNotAPass) {
+  CliRun r = canhil("timing /dev/null");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r, "canhil timing: /dev/null: the capture has no frames")) << r.out;
+  EXPECT_TRUE(has(r, "--allow-empty")) << r.out;
+  r = canhil("timing --allow-empty /dev/null");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "capture problem: the capture has no frames")) << r.out;
+
+  const std::string no_tm = canhil::test::build_dir() + "/cli_timing_no_tm.log";
+  {
+    std::ifstream in(canhil::test::source_dir() + "/frames/samples/one_robot.log");
+    std::ofstream out(no_tm);
+    for (std::string line; std::getline(in, line);) {
+      if (line.find(" 010#") == std::string::npos) out << line << "\n";
+    }
+  }
+  r = canhil("timing " + no_tm);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r, "no trigger message (TM)")) << r.out;
+
+  const std::string short_log = canhil::test::build_dir() + "/cli_timing_short.log";
+  {
+    std::ifstream in(canhil::test::source_dir() + "/frames/samples/one_robot.log");
+    std::ofstream out(short_log);
+    int n = 0;
+    for (std::string line; std::getline(in, line) && n < 10; ++n) out << line << "\n";
+  }
+  r = canhil("timing " + short_log);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r, "shorter than the longest period")) << r.out;
+  EXPECT_EQ(canhil("timing frames/samples/one_robot.log").status, 0);
+}
+
 TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   // The figure is wall-clock: printed, never judged here (the exit status says met or missed).
   const CliRun r = canhil("bench --part virtual --seconds 1");

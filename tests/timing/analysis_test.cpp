@@ -158,5 +158,52 @@ TEST_F(Timing, AnUnscheduledDuplicateIsFound) {
   EXPECT_TRUE(unscheduled) << format_table(r);
 }
 
+bool has_problem(const TimingReport& r, CaptureProblem p) {
+  for (const auto& [kind, text] : r.capture_problems) {
+    if (kind == p) return true;
+  }
+  return false;
+}
+
+TEST_F(Timing, ACleanCaptureHasNoCaptureProblem) {
+  const TimingReport r = analyse(*trace_);
+  EXPECT_TRUE(r.capture_ok()) << format_table(r);
+  EXPECT_EQ(r.longest_period, 50ms);  // M4_1, M4_2, M8
+}
+
+TEST_F(Timing, AnEmptyCaptureIsAProblemNotAPass) {
+  const TimingReport r = analyse({});
+  EXPECT_TRUE(r.ok());  // nothing violated ...
+  EXPECT_FALSE(r.capture_ok());  // ... because nothing was there
+  EXPECT_TRUE(has_problem(r, CaptureProblem::kNoFrames));
+  EXPECT_NE(format_table(r).find("capture problem: the capture has no frames"), std::string::npos);
+  EXPECT_NE(format_json(r).find("\"capture_ok\":false"), std::string::npos);
+}
+
+TEST_F(Timing, FramesWithoutATriggerMessageAreAProblem) {
+  std::vector<frames::TimedFrame> no_tm;
+  for (const auto& f : *trace_) {
+    if (f.frame.id != set_->tm.message().id()) no_tm.push_back(f);
+  }
+  const TimingReport r = analyse(no_tm);
+  EXPECT_TRUE(has_problem(r, CaptureProblem::kNoTrigger)) << format_table(r);
+  EXPECT_FALSE(has_problem(r, CaptureProblem::kTooShort));
+}
+
+TEST_F(Timing, ACaptureShorterThanTheLongestPeriodIsAProblem) {
+  // Both sides of the boundary: 49.9 ms of capture is too short, 50 ms is not.
+  const Nanos t0 = trace_->front().time;
+  for (const auto& [length, too_short] : {std::pair{49'900us, true}, std::pair{50'000us, false}}) {
+    std::vector<frames::TimedFrame> part;
+    for (const auto& f : *trace_) {
+      if (f.time - t0 < length) part.push_back(f);
+    }
+    part.push_back({part.back().frame, t0 + length});  // the capture ends exactly there
+    const TimingReport r = analyse(part);
+    EXPECT_EQ(has_problem(r, CaptureProblem::kTooShort), too_short) << length.count() << "\n" << format_table(r);
+    EXPECT_FALSE(has_problem(r, CaptureProblem::kNoTrigger));
+  }
+}
+
 }  // namespace
 }  // namespace canhil::timing

@@ -162,7 +162,38 @@ TimingReport TimingAnalyzer::finish() const {
     }
     r.messages.push_back(std::move(out));
   }
+  check_capture(r);
   return r;
+}
+
+void TimingAnalyzer::check_capture(TimingReport& r) const {
+  const MessageTiming* longest = nullptr;
+  std::uint64_t triggers = 0;
+  for (const MessageTiming& m : r.messages) {
+    if (m.kind == frames::FttKind::kTrigger) triggers += m.count;
+    if (m.kind != frames::FttKind::kAsync && (longest == nullptr || m.spec > longest->spec)) longest = &m;
+  }
+  if (longest != nullptr) r.longest_period = longest->spec;
+  char text[320];
+  if (r.frames == 0 && r.error_frames == 0) {
+    r.capture_problems.emplace_back(CaptureProblem::kNoFrames,
+                                    "the capture has no frames: check the log's path or that the interface carries "
+                                    "traffic (is the emulator or the robot running?)");
+    return;
+  }
+  if (triggers == 0) {
+    std::snprintf(text, sizeof text,
+                  "the capture has %llu frames but no trigger message (TM): nothing says where the ECs are; is the "
+                  "FTT master running, and is this the right interface or DBC?",
+                  static_cast<unsigned long long>(r.frames));
+    r.capture_problems.emplace_back(CaptureProblem::kNoTrigger, text);
+  }
+  if (longest != nullptr && r.end - r.start < longest->spec) {
+    std::snprintf(text, sizeof text,
+                  "the capture is %.1f ms long, shorter than the longest period (%s, %.0f ms): capture for longer",
+                  ms(r.end - r.start), longest->name.c_str(), ms(longest->spec));
+    r.capture_problems.emplace_back(CaptureProblem::kTooShort, text);
+  }
 }
 
 std::string format_table(const TimingReport& r) {
@@ -190,6 +221,7 @@ std::string format_table(const TimingReport& r) {
                 static_cast<unsigned long long>(r.unknown), static_cast<unsigned long long>(r.error_frames),
                 100 * r.bus_load, static_cast<unsigned long long>(r.bits));
   os << line;
+  for (const auto& [kind, text] : r.capture_problems) os << "capture problem: " << text << "\n";
   if (r.ok()) {
     os << "FTT compliance: no violations\n";
   } else {
@@ -211,7 +243,12 @@ std::string format_json(const TimingReport& r) {
   os << "{\"frames\":" << r.frames << ",\"unknown\":" << r.unknown << ",\"error_frames\":" << r.error_frames
      << ",\"duration_s\":" << std::chrono::duration<double>(r.end - r.start).count() << ",\"bits\":" << r.bits
      << ",\"bus_load\":" << r.bus_load << ",\"ok\":" << (r.ok() ? "true" : "false")
-     << ",\"violation_count\":" << r.violation_count << ",\"messages\":[";
+     << ",\"violation_count\":" << r.violation_count << ",\"capture_ok\":" << (r.capture_ok() ? "true" : "false")
+     << ",\"capture_problems\":[";
+  for (std::size_t i = 0; i < r.capture_problems.size(); ++i) {
+    os << (i ? "," : "") << frames::json_quote(r.capture_problems[i].second);
+  }
+  os << "],\"messages\":[";
   for (std::size_t i = 0; i < r.messages.size(); ++i) {
     const MessageTiming& m = r.messages[i];
     os << (i ? "," : "") << "{\"name\":" << frames::json_quote(m.name) << ",\"id\":" << m.id

@@ -57,6 +57,14 @@ struct MessageTiming {
   std::vector<Nanos> intervals;
 };
 
+/// What makes a capture unfit to judge timing by: a team's CI must not pass on
+/// a broken capture (a wrong interface, an empty log, a master not running).
+enum class CaptureProblem : std::uint8_t {
+  kNoFrames,   ///< nothing at all
+  kNoTrigger,  ///< frames, but no trigger message: no EC to judge them by
+  kTooShort,   ///< shorter than the longest period of the message set
+};
+
 struct TimingReport {
   Nanos start{0}, end{0};
   std::uint64_t frames = 0;
@@ -68,7 +76,12 @@ struct TimingReport {
   std::vector<Violation> violations;  ///< the first kMaxListed, in time order
   std::uint64_t violation_count = 0;
   static constexpr std::size_t kMaxListed = 1000;
+  /// Why the capture cannot show the timing (none: it can); with text saying what to do.
+  std::vector<std::pair<CaptureProblem, std::string>> capture_problems;
+  Nanos longest_period{0};  ///< the message set's longest synchronous period
+  /// No violations (the capture's own problems are apart: see capture_problems).
   bool ok() const noexcept { return violation_count == 0; }
+  bool capture_ok() const noexcept { return capture_problems.empty(); }
 };
 
 class TimingAnalyzer {
@@ -89,6 +102,7 @@ class TimingAnalyzer {
     std::map<ViolationKind, std::uint64_t> violations;
   };
   void violate(PerMessage& m, Nanos t, ViolationKind k, std::string detail);
+  void check_capture(TimingReport& r) const;
 
   std::shared_ptr<const frames::MessageSet> set_;
   TimingConfig config_;
