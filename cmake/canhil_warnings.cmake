@@ -1,4 +1,5 @@
-# Strict warnings and the optional sanitizer build, applied per target with
+# Strict warnings and the optional sanitizer builds (CANHIL_SANITIZE: ON for
+# ASan + UBSan, thread for TSan), applied per target with
 # canhil_target_defaults(<target>) so that third-party code is not affected
 # and installed targets carry no build-only dependency.
 
@@ -19,7 +20,10 @@ endif()
 
 function(canhil_target_defaults target)
   target_compile_options(${target} PRIVATE ${CANHIL_WARNINGS} $<$<COMPILE_LANGUAGE:CXX>:${CANHIL_CXX_WARNINGS}>)
-  if(CANHIL_SANITIZE)
+  if(CANHIL_SANITIZE STREQUAL "thread")
+    target_compile_options(${target} PRIVATE -fsanitize=thread -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=thread)
+  elseif(CANHIL_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
   endif()

@@ -10,6 +10,15 @@
 namespace canhil::frames {
 namespace {
 
+// An attribute's bound as written in a message: whole numbers without a
+// fraction, any magnitude (a DBC's numbers are user input: no cast to an
+// integer type that might not hold them).
+std::string bound_text(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, std::fabs(v) < 1e15 && v == std::trunc(v) ? "%.0f" : "%g", v);
+  return buf;
+}
+
 constexpr std::uint32_t kDbcExtendedFlag = 0x8000'0000u;
 // Vector tools park signals that belong to no message in this pseudo-message.
 constexpr std::uint32_t kIndependentSignalsId = 0xC000'0000u;
@@ -545,8 +554,8 @@ AttributeValue Parser::attribute_value(const AttributeDef& def, int line) {
     case AttributeType::kFloat: {
       const double v = number("the attribute value");
       if ((def.minimum != 0 || def.maximum != 0) && (v < def.minimum || v > def.maximum)) {
-        error("value of attribute \"" + def.name + "\" is outside its range [" + std::to_string(def.minimum) + ", " +
-                  std::to_string(def.maximum) + "]",
+        error("value of attribute \"" + def.name + "\" is outside its range [" + bound_text(def.minimum) + ", " +
+                  bound_text(def.maximum) + "]",
               line);
       }
       return v;
@@ -557,8 +566,7 @@ AttributeValue Parser::attribute_value(const AttributeDef& def, int line) {
       if ((def.minimum != 0 || def.maximum != 0) &&
           (static_cast<double>(v) < def.minimum || static_cast<double>(v) > def.maximum)) {
         error("value " + std::to_string(v) + " of attribute \"" + def.name + "\" is outside its range [" +
-                  std::to_string(static_cast<std::int64_t>(def.minimum)) + ", " +
-                  std::to_string(static_cast<std::int64_t>(def.maximum)) + "]",
+                  bound_text(def.minimum) + ", " + bound_text(def.maximum) + "]",
               line);
       }
       return v;
