@@ -24,11 +24,13 @@ extern "C" void on_signal(int) { g_stop = true; }
 /// Prints frames as they come and keeps the counts for the summary.
 class Printer {
  public:
-  Printer(const Codec& codec, bool json) : codec_(codec), json_(json) {}
+  /// `head` >= 0: print only that many frames (all are counted).
+  Printer(const Codec& codec, bool json, long long head = -1) : codec_(codec), json_(json), head_(head) {}
 
   void print(Nanos time, const std::string& iface, const CanFrame& frame) {
     const Described d = describe(codec_, frame);
     ++frames_;
+    const bool shown = head_ < 0 || static_cast<long long>(frames_) <= head_;
     if (frame.kind == FrameKind::kError) {
       ++error_frames_;
     } else if (d.message == nullptr) {
@@ -38,6 +40,7 @@ class Printer {
       if (d.result.status == DecodeStatus::kWrongLength) ++wrong_length_;
       if (d.result.status == DecodeStatus::kOk && d.result.out_of_range != 0u) ++out_of_range_;
     }
+    if (!shown) return;
     if (json_) {
       std::string obj = describe_json(frame, d);
       char stamp[48];
@@ -54,6 +57,11 @@ class Printer {
   }
 
   void summary(const char* source) const {
+    std::fflush(stdout);  // the frames first, also when both go to one file
+    if (head_ >= 0 && static_cast<long long>(frames_) > head_) {
+      std::fprintf(stderr, "canhil dump: ... %llu more frames not shown (--head %lld)\n",
+                   static_cast<unsigned long long>(frames_) - static_cast<unsigned long long>(head_), head_);
+    }
     std::fprintf(stderr, "canhil dump: %llu frames from %s", static_cast<unsigned long long>(frames_), source);
     for (const auto& [name, n] : per_message_)
       std::fprintf(stderr, "%s %s %llu", name == per_message_.begin()->first ? ";" : ",", name.c_str(),
@@ -68,6 +76,7 @@ class Printer {
  private:
   const Codec& codec_;
   bool json_;
+  long long head_;
   std::uint64_t frames_ = 0;
   std::uint64_t unknown_ = 0;
   std::uint64_t wrong_length_ = 0;
@@ -76,7 +85,7 @@ class Printer {
   std::map<std::string, std::uint64_t> per_message_;
 };
 
-int dump_log(const Codec& codec, const std::string& path, bool json) {
+int dump_log(const Codec& codec, const std::string& path, bool json, long long head) {
   std::ifstream file;
   std::istream* in = &std::cin;
   if (path != "-") {
@@ -84,7 +93,7 @@ int dump_log(const Codec& codec, const std::string& path, bool json) {
     if (!file) throw can_nodes::SetupError("cannot read log file " + path);
     in = &file;
   }
-  Printer printer(codec, json);
+  Printer printer(codec, json, head);
   std::string line;
   int line_no = 0;
   std::uint64_t bad_lines = 0;
@@ -162,12 +171,17 @@ int run_dump(Args& args, const std::optional<std::string>& dbc) {
   const auto log = args.option("--log");
   const auto count_text = args.option("--count");
   const auto seconds_text = args.option("--seconds");
+  const auto head = optional_number(args, "--head");
   const std::vector<std::string> words = args.positionals();
+  if (head && !(*head >= 0 && *head == static_cast<double>(static_cast<long long>(*head)))) {
+    throw UsageError("--head takes a number of frames, 0 or more");
+  }
   const Codec codec(load_chosen_dbc(dbc));
   if (log) {
     if (words.size() != 1) throw UsageError("dump --log FILE takes no interface");
-    return dump_log(codec, *log, json);
+    return dump_log(codec, *log, json, head ? static_cast<long long>(*head) : -1);
   }
+  if (head) throw UsageError("--head is for --log; a live dump takes --count N");
   if (words.size() != 2) throw UsageError("dump needs one interface (e.g. canhil dump vcan0) or --log FILE");
   long long count = -1;
   double seconds = 0;

@@ -1,7 +1,10 @@
 // canhil — command-line entry point. The only place that reads the wall clock.
+//
+// Each command has its own usage text: a mistake prints the error, that
+// command's usage and a pointer to `canhil help`; `canhil COMMAND --help` and
+// `canhil help COMMAND` print one command's usage, `canhil help` all of them.
 #include <cstdio>
 #include <cstring>
-#include <iostream>
 #include <string>
 #include <vector>
 
@@ -13,18 +16,40 @@
 
 namespace {
 
-constexpr const char* kUsage = R"(canhil — hardware-in-the-loop emulator for a CAMBADA-style robot's CAN network
+using canhil::app::Args;
+using DbcOption = std::optional<std::string>;
 
-usage:
-  canhil frames list [--json]                 messages, ids, periods, kinds
+struct Command {
+  const char* name;
+  const char* summary;  ///< one line for the overview
+  const char* usage;    ///< the command's own usage, options and examples
+  int (*run)(Args&, const DbcOption&);
+};
+
+int run_experiment(Args& args, const DbcOption&) { return canhil::app::run_experiment(args); }
+int run_rtdb(Args& args, const DbcOption&) { return canhil::app::run_rtdb(args); }
+
+const Command kCommands[] = {
+    {"frames", "the message set: list, encode and decode frames",
+     R"(  canhil frames list [--json]                 messages, ids, periods, kinds
   canhil frames encode MESSAGE SIGNAL=VALUE...  print the frame (candump compact form)
   canhil frames decode FRAME... [--json]      decode frames like 131#F401000000000000
-  canhil dump IFACE [--count N] [--seconds S] [--json]
+)",
+     canhil::app::run_frames},
+    {"dump", "decode a live interface or a candump log",
+     R"(  canhil dump IFACE [--count N] [--seconds S] [--json]
                                               live, decoded, with kernel timestamps
-  canhil dump --log FILE [--json]             decode a candump log file (- for stdin)
-  canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
+  canhil dump --log FILE [--head N] [--json]  decode a candump log file (- for stdin); --head N
+                                              prints the first N frames, then the summary
+)",
+     canhil::app::run_dump},
+    {"nodes", "one robot's emulated nodes with physics on an interface, real time",
+     R"(  canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
                                               one robot's emulated nodes with physics, real time
-  canhil run --virtual-time [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]...
+)",
+     canhil::app::run_nodes},
+    {"run", "a scenario: the whole loop in virtual time, or real time on SocketCAN",
+     R"(  canhil run --virtual-time [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]...
              [--trace FILE] [--world-log FILE.csv] [--world-log-period 0.05] [--kick-power P] [--quiet]
              [--save-world FILE] [--restore-world FILE]
                                               the whole loop in virtual time: nodes, physics, vision,
@@ -36,62 +61,131 @@ usage:
                                               real time: every robot's nodes on its interface (vcan0, ...),
                                               vision into its agent's RTDB; run your handler and agent
                                               (or canhil-hwcomm, canhil-agent) with AGENT=N next to it
-  canhil bench [--part virtual,jitter,vcan] [--seconds 60] [--config S] [--iface vcan0] [--rt-seconds 10]
+)",
+     canhil::app::run_run},
+    {"bench", "the performance figures against their targets",
+     R"(  canhil bench [--part virtual,jitter,vcan] [--seconds 60] [--config S] [--iface vcan0] [--rt-seconds 10]
                [--frames 200000] [--priority 40]
                                               the figures against their targets: the five-robot real-time
                                               factor in virtual time; release jitter against a bare
                                               clock_nanosleep loop; lossless vcan rate against cangen -g 0
-  canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
+)",
+     canhil::app::run_bench},
+    {"timing", "periods, jitter and FTT compliance of a log or a live interface",
+     R"(  canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
+                [--allow-empty]
                                               periods, jitter, missing/late frames, FTT compliance and
-                                              bus load of a candump log or a live interface; exit 1 if violated
-  canhil rtdb list                            agents and items of the RTDB on this machine, with ages
+                                              bus load of a candump log or a live interface; exit 1 if
+                                              violated, or if the capture has no frames, no trigger
+                                              message or is shorter than the longest period (unless
+                                              --allow-empty)
+)",
+     canhil::app::run_timing},
+    {"rtdb", "the real-time database on this machine",
+     R"(  canhil rtdb list                            agents and items of the RTDB on this machine, with ages
   canhil rtdb dump|watch ITEM [--agent A] [--from B]
                                               one item (known types decoded, others in hex); watch repeats
   canhil rtdb replicate [--period-ms 100] [--delay-ms 0] [--loss 0] [--seed 1]
                                               copy shared items between agents (the team's wireless)
-  canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
+)",
+     run_rtdb},
+    {"experiment", "physics calibration experiments and a vision frame",
+     R"(  canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],
                                               ball-roll [--speed MPS], kick [--low|--high] [--power P],
                                               drive [--vx --vy --va], tour; exit 1 if a target is missed;
                                               vision [--robot N] [--noise M] [--svg FILE]: one frame, drawn
+)",
+     run_experiment},
+};
 
+constexpr const char* kHead = "canhil — hardware-in-the-loop emulator for a CAMBADA-style robot's CAN network\n";
+constexpr const char* kCommon = R"(
 common options:
   --dbc FILE    use another message set (default: the shipped canhil.dbc; CANHIL_DBC also works)
-  --help        this text
+  --help        the usage of the command (canhil COMMAND --help), or of all
   --version     canhil's version
 
 exit status: 0 ok, 1 the input had problems (unknown ids, bad lengths), 2 usage or set-up error.
 )";
 
+const Command* find_command(const std::string& name) {
+  for (const Command& c : kCommands) {
+    if (name == c.name) return &c;
+  }
+  return nullptr;
+}
+
+void print_all(FILE* out) {
+  std::fprintf(out, "%s\ncommands:\n", kHead);
+  for (const Command& c : kCommands) std::fprintf(out, "  %-12s %s\n", c.name, c.summary);
+  std::fprintf(out, "\nusage:\n");
+  for (const Command& c : kCommands) std::fputs(c.usage, out);
+  std::fputs(kCommon, out);
+}
+
+void print_one(FILE* out, const Command& c) {
+  std::fprintf(out, "usage:\n%s", c.usage);
+  std::fprintf(out, "(--dbc FILE picks another message set; `canhil help` lists every command)\n");
+}
+
+// `canhil help [COMMAND]`.
+int run_help(const std::vector<std::string>& words) {
+  if (words.size() <= 1) {
+    print_all(stdout);
+    return 0;
+  }
+  if (const Command* c = find_command(words[1])) {
+    print_one(stdout, *c);
+    return 0;
+  }
+  std::fprintf(stderr, "canhil: no command \"%s\"; `canhil help` lists them\n", words[1].c_str());
+  return 2;
+}
+
+// A mistake: the message, then what the command takes (or the command list).
+int usage_error(const char* what, const Command* command) {
+  std::fprintf(stderr, "canhil: %s\n\n", what);
+  if (command != nullptr) {
+    print_one(stderr, *command);
+  } else {
+    std::fprintf(stderr, "commands:");
+    for (const Command& c : kCommands) std::fprintf(stderr, " %s", c.name);
+    std::fprintf(stderr, "\n`canhil help` shows how to use each, `canhil COMMAND --help` one of them\n");
+  }
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> words(argv + 1, argv + argc);
-  canhil::app::Args args(words);
+  Args args(words);
+  const Command* command = nullptr;
   try {
-    if (words.empty() || args.flag("--help") || args.flag("-h")) {
-      std::fputs(kUsage, words.empty() ? stderr : stdout);
-      return words.empty() ? 2 : 0;
-    }
+    if (words.empty()) return usage_error("no command given", nullptr);
     if (args.flag("--version")) {
       std::puts("canhil " CANHIL_VERSION);
       return 0;
     }
-    const auto dbc = args.option("--dbc");
-    const std::string command = args.command();
-    if (command.empty()) throw canhil::app::UsageError("no command given");
-    if (command == "frames") return canhil::app::run_frames(args, dbc);
-    if (command == "dump") return canhil::app::run_dump(args, dbc);
-    if (command == "experiment") return canhil::app::run_experiment(args);
-    if (command == "nodes") return canhil::app::run_nodes(args, dbc);
-    if (command == "rtdb") return canhil::app::run_rtdb(args);
-    if (command == "timing") return canhil::app::run_timing(args, dbc);
-    if (command == "run") return canhil::app::run_run(args, dbc);
-    if (command == "bench") return canhil::app::run_bench(args, dbc);
-    throw canhil::app::UsageError("unknown command \"" + command + "\"");
+    const bool help = args.flag("--help") || args.flag("-h");
+    const auto dbc = args.option("--dbc");  // before the command: it may stand in front of it
+    const std::string name = args.command();
+    if (name == "help") return run_help(args.positionals());
+    command = find_command(name);
+    if (help) {
+      if (command != nullptr) {
+        print_one(stdout, *command);
+      } else {
+        print_all(stdout);
+      }
+      return 0;
+    }
+    if (name.empty()) return usage_error("no command given", nullptr);
+    if (command == nullptr) return usage_error(("unknown command \"" + name + "\"").c_str(), nullptr);
+    return command->run(args, dbc);
   } catch (const canhil::app::UsageError& e) {
-    std::fprintf(stderr, "canhil: %s\n\n%s", e.what(), kUsage);
-    return 2;
+    return usage_error(e.what(), command);
   } catch (const canhil::frames::DbcError& e) {
     std::fprintf(stderr, "canhil: %s\n", e.what());
     return 2;

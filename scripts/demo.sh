@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # demo.sh — the README demo in real time on vcan0: the emulator (`canhil run`
 # with the one-robot scenario), the reference handler and the reference agent,
-# each its own process as on a robot, for SECONDS (default 20); `canhil timing`
+# each its own process as on a robot, for SECONDS (default 20; BUILD_DIR default
+# build/plain); `canhil timing`
 # listens to the bus meanwhile and prints its report at the end.
 #
 # Needs vcan0: run it through vcan_setup/with-vcan.sh (scripts/main.sh does),
@@ -9,7 +10,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-20}"
-bin=build/plain
+bin="${2:-build/plain}"
 export AGENT=1
 export RTDB_KEY="${RTDB_KEY:-$((0x5E000000 + (($$ & 0xFFF) << 8)))}"
 log=$(mktemp -d /tmp/canhil-demo.XXXXXX)

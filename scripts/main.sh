@@ -1,37 +1,59 @@
 #!/usr/bin/env bash
-# main.sh — the main job of the README: set everything up, build canhil and
-# show it working on the shipped message set and a sample trace of one robot's
-# bus (the full emulator demo grows here as the project does).
+# main.sh — the main job of the README: set everything up, build canhil, then
+# show it working, one short section each: the message set, a recorded bus
+# decoded, physics calibration, a vision frame, and the demo (one robot's whole
+# loop) in virtual time with its timing report and in real time on vcan. Every
+# file it writes is under build/plain/main/.
+#   bash scripts/main.sh                  everything (installs packages and builds first)
+#   bash scripts/main.sh --no-realtime    without the real-time demo on vcan
+# CANHIL_BUILD=DIR uses an existing build (no install, no build): what the test does.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-bash scripts/install-deps.sh
-bash scripts/build.sh plain >/dev/null
-canhil=build/plain/app/canhil
-echo "== the message set (frames/canhil.dbc)"
+realtime=1
+for a in "$@"; do
+  case "$a" in
+    --no-realtime) realtime=0 ;;
+    *) echo "main.sh: unknown argument $a (takes --no-realtime)" >&2; exit 2 ;;
+  esac
+done
+if [[ -z "${CANHIL_BUILD:-}" ]]; then
+  bash scripts/install-deps.sh
+  echo "== building canhil (build/plain; the full log in build/plain/main-build.log)"
+  mkdir -p build/plain
+  bash scripts/build.sh plain >build/plain/main-build.log 2>&1 || { tail -20 build/plain/main-build.log; exit 1; }
+fi
+bin=${CANHIL_BUILD:-build/plain}
+canhil=$bin/app/canhil
+out=$bin/main
+mkdir -p "$out"
+section() { printf '\n== %s\n' "$*"; }
+
+section "1. the message set: what each frame on a robot's bus carries (frames/canhil.dbc; canhil frames list)"
 "$canhil" frames list
-echo
-echo "== a shipped trace of one robot's bus, decoded (frames/samples/one_robot.log)"
-"$canhil" dump --log frames/samples/one_robot.log
-echo
-echo "== its timing and FTT compliance (canhil timing)"
-"$canhil" timing frames/samples/one_robot.log
-echo
-echo "== physics: the ball-drop and drive calibration experiments (docs/physics.md)"
+
+section "2. a recorded robot bus, decoded: the first frames and the summary (frames/samples/one_robot.log; canhil dump)"
+"$canhil" dump --log frames/samples/one_robot.log --head 6 2>&1
+
+section "3. physics against the reference figures: a ball dropped from 1 m, a robot driving (docs/physics.md)"
 "$canhil" experiment ball-drop
-echo
 "$canhil" experiment drive
-echo
-echo "== vision: one frame of one robot among five, drawn in build/plain/vision.svg"
-"$canhil" experiment vision --svg build/plain/vision.svg
-echo
-echo "== the demo: one robot, the whole loop in virtual time (emulated nodes, physics, vision,"
-echo "   the reference handler and agent); the robot drives to the ball and kicks it toward the goal"
-"$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --trace build/plain/demo.log \
-  --world-log build/plain/demo.csv
-echo
-echo "== the demo's timing report (canhil timing build/plain/demo.log)"
-"$canhil" timing build/plain/demo.log
-echo
-echo "== the demo in real time on vcan (this machine's, or the VM runner's where the kernel has no CAN):"
-echo "   canhil run, canhil-hwcomm and canhil-agent as three processes; timing of the live bus at the end"
-bash vcan_setup/with-vcan.sh -- bash scripts/demo.sh 20
+
+section "4. emulated vision: one frame of one robot among five, drawn in $out/vision.svg (docs/vision.md)"
+"$canhil" experiment vision --svg "$out/vision.svg"
+
+section "5. the demo in virtual time: one robot's whole loop, which drives to the ball and scores ($out/demo.log, demo.csv)"
+"$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --quiet --trace "$out/demo.log" \
+  --world-log "$out/demo.csv" | tee "$out/demo.txt"
+
+section "6. the demo's bus: periods, jitter and FTT compliance of every frame (canhil timing $out/demo.log)"
+"$canhil" timing "$out/demo.log"
+
+if [[ $realtime -eq 1 ]]; then
+  section "7. the same demo in real time on vcan0: emulator, handler and agent as three processes (scripts/demo.sh)"
+  bash vcan_setup/with-vcan.sh -- bash scripts/demo.sh 20 "$bin"
+fi
+
+section "what happened"
+goal=$(grep -m1 "GOAL" "$out/demo.txt" | sed 's/^ *//' || true)
+echo "   virtual time: ${goal:-no goal}; $(grep -m1 'real time)' "$out/demo.txt" | sed 's/^canhil run: //')"
+echo "   files: $out/ (demo.log: candump trace, demo.csv: world log, vision.svg); docs/user-guide.md goes on from here"

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -133,6 +134,54 @@ TEST(Canhil, UsageErrorsExitTwo) {
   EXPECT_EQ(canhil("fly").status, 2);
   EXPECT_EQ(canhil("frames decode --bogus 131#00").status, 2);
   EXPECT_EQ(canhil("--help").status, 0);
+}
+
+std::size_t lines_of(const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); }
+
+TEST(Canhil, AWrongOptionShowsTheErrorAndThatCommandsUsageOnly) {
+  const CliRun r = canhil("timing --bogus frames/samples/one_robot.log");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.out.rfind("canhil: unknown option --bogus\n", 0), 0u) << r.out;
+  EXPECT_TRUE(has(r, "canhil timing SOURCE")) << r.out;
+  EXPECT_TRUE(has(r, "`canhil help`")) << r.out;
+  EXPECT_FALSE(has(r, "canhil frames encode")) << "another command's usage\n" << r.out;
+  EXPECT_FALSE(has(r, "canhil run --virtual-time")) << r.out;
+  EXPECT_LT(lines_of(r.out), 15u) << r.out;
+}
+
+TEST(Canhil, EveryCommandHasItsOwnHelp) {
+  const CliRun all = canhil("help");
+  EXPECT_EQ(all.status, 0);
+  for (const char* c : {"frames", "dump", "nodes", "run", "bench", "timing", "rtdb", "experiment"}) {
+    const CliRun one = canhil(std::string(c) + " --help");
+    EXPECT_EQ(one.status, 0) << c;
+    EXPECT_TRUE(has(one, std::string("canhil ") + c + " ")) << c << "\n" << one.out;
+    EXPECT_LT(lines_of(one.out), lines_of(all.out) / 2) << c << ": only its own usage\n" << one.out;
+    const CliRun via_help = canhil(std::string("help ") + c);
+    EXPECT_EQ(via_help.out, one.out) << c;
+    EXPECT_TRUE(has(all, std::string("  ") + c + " ")) << "the overview lists " << c;
+  }
+  const CliRun unknown = canhil("help fly");
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_TRUE(has(unknown, "no command \"fly\"")) << unknown.out;
+  const CliRun bad = canhil("fly");
+  EXPECT_TRUE(has(bad, "canhil: unknown command \"fly\"")) << bad.out;
+  EXPECT_TRUE(has(bad, "commands: frames dump")) << bad.out;
+}
+
+TEST(Canhil, TheDbcOptionMayStandBeforeTheCommand) {
+  const CliRun r = canhil("--dbc frames/canhil.dbc frames encode M6_1 vx=0.5 vy=0");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out, "131#F401000000000000\n");
+}
+
+TEST(CanhilDump, HeadShowsTheFirstFramesAndTheWholeSummary) {
+  const CliRun r = canhil("dump --log frames/samples/one_robot.log --head 3");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(lines_of(r.out), 3u + 3u) << r.out;  // three frames, "... more", two summary lines
+  EXPECT_TRUE(has(r, "... 180 more frames not shown (--head 3)")) << r.out;
+  EXPECT_TRUE(has(r, "canhil dump: 183 frames from frames/samples/one_robot.log")) << r.out;
+  EXPECT_EQ(canhil("dump --log frames/samples/one_robot.log --head -1").status, 2);
 }
 
 }  // namespace

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# main_job_test.sh BUILD_DIR — the README's main job (without its real-time
+# part) tells its story without drowning it: a few lines of the sample trace
+# and its summary, the demo's outcome and its timing report, every section
+# headed by one line that says what it shows and where its files are.
+set -euo pipefail
+build=$1
+cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+out=$(CANHIL_BUILD="$build" bash scripts/main.sh --no-realtime 2>&1)
+fail() { echo "FAIL: $*"; echo "$out"; exit 1; }
+lines=$(echo "$out" | wc -l)
+[[ $lines -le 110 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
+trace_lines=$(echo "$out" | grep -c '^(1700000000' || true)
+[[ $trace_lines -le 8 ]] || fail "$trace_lines lines of the sample trace (a few are enough)"
+echo "$out" | grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log' || fail "no decode summary"
+echo "$out" | grep -q 'GOAL at' || fail "the demo's outcome is missing"
+echo "$out" | grep -q 'FTT compliance: no violations' || fail "the demo's timing report is missing"
+echo "$out" | grep -q '^   virtual time: GOAL at' || fail "no closing line with the outcome"
+while IFS= read -r header; do
+  [[ "$header" == *"("*")"* ]] || fail "section header without where its files are: $header"
+done < <(echo "$out" | grep '^== [0-9]')
+sections=$(echo "$out" | grep -c '^== [0-9]')
+[[ $sections -ge 6 ]] || fail "only $sections sections"
+echo "main job: $lines lines, $sections sections, $trace_lines trace lines, outcome and timing shown"
