@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # test.sh — the test command of the README: installs what is missing, then
-# builds and runs the whole suite twice, plainly and with ASan + UBSan.
+# builds and runs the whole suite three times: plainly (g++ Release), with
+# ASan + UBSan (clang, with libFuzzer smoke runs) and with ThreadSanitizer
+# (clang), then the lint step.
 # SocketCAN tests run on this machine's vcan or, where the kernel has no CAN,
 # inside the VM runner; they never skip.
-#   scripts/test.sh            both flavours, then the lint step
-#   scripts/test.sh plain      one flavour (also: sanitize, lint)
+#   scripts/test.sh            every flavour, then the lint step
+#   scripts/test.sh plain      one flavour (also: sanitize, tsan, lint)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
 flavours=("$@")
-[[ ${#flavours[@]} -gt 0 ]] || flavours=(plain sanitize lint)
+[[ ${#flavours[@]} -gt 0 ]] || flavours=(plain sanitize tsan lint)
 for flavour in "${flavours[@]}"; do
   if [[ "$flavour" == lint ]]; then
     echo "== canhil lint: clang-format, clang-tidy"

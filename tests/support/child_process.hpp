@@ -1,7 +1,11 @@
 // tests/support/child_process.hpp — a program run in the background for the
 // vcan tests (the emulator, the handler), its output captured to a file;
-// stop() sends SIGINT (its Ctrl-C) and waits.
+// stop() sends SIGINT (its Ctrl-C) and waits. A sanitizer's report in the
+// child's output (ASan, UBSan, TSan builds) fails the test that ran it, so a
+// finding in a child process is never lost behind an unchecked exit status.
 #pragma once
+
+#include <gtest/gtest.h>
 
 #include <signal.h>
 #include <sys/wait.h>
@@ -28,14 +32,7 @@ class ChildProcess {
   ChildProcess& operator=(const ChildProcess&) = delete;
 
   /// SIGINT, then waits; returns the wait status (or -1 if already stopped).
-  int stop() {
-    if (pid_ <= 0) return -1;
-    kill(pid_, SIGINT);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return status;
-  }
+  int stop() { return kill_with(SIGINT); }
   /// Sends `sig` (e.g. SIGKILL: the process dies without cleaning up) and reaps it.
   int kill_with(int sig) {
     if (pid_ <= 0) return -1;
@@ -43,7 +40,15 @@ class ChildProcess {
     int status = 0;
     waitpid(pid_, &status, 0);
     pid_ = -1;
+    check_sanitizers();
     return status;
+  }
+  void check_sanitizers() const {
+    const std::string out = output();
+    for (const char* report : {"WARNING: ThreadSanitizer", "ERROR: AddressSanitizer", "ERROR: LeakSanitizer",
+                               "runtime error:"}) {
+      if (out.find(report) != std::string::npos) ADD_FAILURE() << log_ << " has a sanitizer report:\n" << out;
+    }
   }
   std::string output() const {
     std::string out;
