@@ -6,12 +6,14 @@
 #include <string>
 #include <vector>
 
+#include "canhil/base/setup_error.hpp"
+
 namespace canhil::app {
 
-/// A command-line mistake; main prints it with the usage and exits 2.
-class UsageError : public std::runtime_error {
+/// A command-line mistake; main prints it with the command's usage and exits 2.
+class UsageError : public SetupError {
  public:
-  using std::runtime_error::runtime_error;
+  using SetupError::SetupError;
 };
 
 class Args {

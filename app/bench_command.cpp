@@ -22,7 +22,7 @@
 
 #include "bench_realtime.hpp"
 #include "canhil/can_nodes/ftt.hpp"
-#include "canhil/can_nodes/setup_error.hpp"
+#include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_run.hpp"
@@ -61,7 +61,7 @@ bool bench_virtual(const std::optional<std::string>& config, double seconds,
   const double cpu0 = cpu_seconds();
   const auto wall0 = std::chrono::steady_clock::now();
   emulator::VirtualRun run(cfg);
-  run.run_for(std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(seconds)));
+  run.run_for(std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds)));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   const double cpu = cpu_seconds() - cpu0;
   std::uint64_t frames = 0;
@@ -78,7 +78,7 @@ bool bench_virtual(const std::optional<std::string>& config, double seconds,
 // TM release jitter of canhil run against a bare loop on the same period: true when p99 <= 1.2x.
 bool bench_jitter(const std::string& iface, double seconds, int priority,
                   const std::shared_ptr<const frames::MessageSet>& messages) {
-  const frames::Nanos ec = can_nodes::FttConfig{}.elementary_cycle;  // canhil run's
+  const Nanos ec = can_nodes::FttConfig{}.elementary_cycle;  // canhil run's
   std::printf(
       "canhil bench: real time on %s, %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then both\n",
       iface.c_str(), seconds, priority);

@@ -14,14 +14,13 @@
 #include <vector>
 
 #include "canhil/can_nodes/ftt.hpp"
-#include "canhil/can_nodes/setup_error.hpp"
+#include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "fifo_scheduling.hpp"
 
 namespace canhil::app {
 namespace {
 
-using can_nodes::Nanos;
 using namespace std::chrono_literals;
 
 constexpr std::uint32_t kBareLoopId = 0x7FE;
@@ -89,7 +88,7 @@ JitterFigures jitter_of(std::vector<std::pair<std::int64_t, Nanos>> releases, Na
   JitterFigures j;
   if (releases.size() <= kWarmup + 1) return j;
   releases.erase(releases.begin(), releases.begin() + kWarmup);
-  Nanos phase = Nanos::max();
+  Nanos phase = kNever;
   for (const auto& [k, t] : releases) phase = std::min(phase, t - period * k);
   std::vector<double> late;
   late.reserve(releases.size());
@@ -218,7 +217,7 @@ RateFigures canhil_rate(const std::string& iface, std::uint64_t frames) {
 
 RateFigures cangen_rate(const std::string& iface, std::uint64_t frames) {
   if (std::system("command -v cangen > /dev/null 2>&1") != 0) {
-    throw can_nodes::SetupError("cangen (can-utils) is not installed: apt-get install can-utils");
+    throw SetupError("cangen (can-utils) is not installed: apt-get install can-utils");
   }
   char id[8];
   std::snprintf(id, sizeof id, "%X", kRateId);
@@ -227,7 +226,7 @@ RateFigures cangen_rate(const std::string& iface, std::uint64_t frames) {
   return measure_rate(
       iface, frames,
       [&]() -> std::uint64_t {
-        if (std::system(command.c_str()) != 0) throw can_nodes::SetupError("`" + command + "` failed");
+        if (std::system(command.c_str()) != 0) throw SetupError("`" + command + "` failed");
         return frames;
       },
       false);

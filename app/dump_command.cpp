@@ -90,7 +90,7 @@ int dump_log(const Codec& codec, const std::string& path, bool json, long long h
   std::istream* in = &std::cin;
   if (path != "-") {
     file.open(path);
-    if (!file) throw can_nodes::SetupError("cannot read log file " + path);
+    if (!file) throw SetupError("cannot read log file " + path);
     in = &file;
   }
   Printer printer(codec, json, head);
@@ -135,7 +135,7 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   const can_nodes::WallClock clock;
   const Nanos deadline = seconds > 0
                              ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds))
-                             : Nanos::max();
+                             : kNever;
   Printer printer(codec, json);
   can_nodes::BusState last = bus->state();
   if (last != can_nodes::BusState::kUp)

@@ -148,12 +148,7 @@ int run_experiment(Args& args) {
     if (robot < 0) throw UsageError("--robot takes a robot number, 0 or more");
     return vision_experiment(params, robot, svg, json, noise_text ? to_number("--noise", *noise_text) : 0.0);
   }
-  physics::ExperimentResult result;
-  try {
-    result = physics::run_experiment(words[1], params, options);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
+  const physics::ExperimentResult result = physics::run_experiment(words[1], params, options);
   if (json) {
     print_json(result);
   } else {

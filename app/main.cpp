@@ -9,9 +9,7 @@
 #include <vector>
 
 #include "args.hpp"
-#include "canhil/can_nodes/socketcan_bus.hpp"
-#include "canhil/frames/dbc.hpp"
-#include "canhil/physics/config.hpp"
+#include "canhil/base/setup_error.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -186,16 +184,7 @@ int main(int argc, char** argv) {
     return command->run(args, dbc);
   } catch (const canhil::app::UsageError& e) {
     return usage_error(e.what(), command);
-  } catch (const canhil::frames::DbcError& e) {
-    std::fprintf(stderr, "canhil: %s\n", e.what());
-    return 2;
-  } catch (const canhil::physics::ConfigError& e) {
-    std::fprintf(stderr, "canhil: %s\n", e.what());
-    return 2;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "canhil: %s\n", e.what());
-    return 2;
-  } catch (const canhil::can_nodes::SetupError& e) {
+  } catch (const canhil::SetupError& e) {  // every other mistake a user can fix says what to do
     std::fprintf(stderr, "canhil: %s\n", e.what());
     return 2;
   }

@@ -45,7 +45,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   physics::World world(wp);
   emulator::PhysicsRobotIo io(world.robot(0));
   can_nodes::FttConfig ftt;
-  ftt.elementary_cycle = std::chrono::duration_cast<can_nodes::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
+  ftt.elementary_cycle = std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
   ftt.bit_rate = static_cast<std::uint32_t>(bit_rate);
   const can_nodes::NodeParams params = emulator::node_params_for(wp.robot, ftt);
 
@@ -53,7 +53,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   const can_nodes::WallClock clock;
   // Start on a whole EC of the wall clock, a little ahead, so TMs are easy to read in traces.
   const auto ec = params.ftt.elementary_cycle;
-  const can_nodes::Nanos start = (clock.now() / ec + 10) * ec;
+  const Nanos start = (clock.now() / ec + 10) * ec;
   emulator::RobotNodes nodes(
       set, params, io,
       [&](const std::string&) {
@@ -63,13 +63,13 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
       },
       start);
   if (sockets.front()->state() != can_nodes::BusState::kUp) {
-    throw can_nodes::SetupError(*iface + " is down; bring it up with `ip link set " + *iface + " up`");
+    throw SetupError(*iface + " is down; bring it up with `ip link set " + *iface + " up`");
   }
   std::vector<int> fds;
   fds.reserve(sockets.size());
   for (auto* s : sockets) fds.push_back(s->fd());
   WallWaiter waiter(fds);
-  emulator::Realtime loop(clock, &world, [&](can_nodes::Nanos d) { waiter.wait(d); });
+  emulator::Realtime loop(clock, &world, [&](Nanos d) { waiter.wait(d); });
   for (can_nodes::Node* n : nodes.nodes()) loop.add(*n);
 
   std::signal(SIGINT, stop_on_signal);
@@ -80,13 +80,13 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
       iface->c_str(), ec_ms, ftt.bit_rate, wp.simulation.step_s * 1000);
   std::fflush(stdout);
 
-  const can_nodes::Nanos end =
-      duration_s > 0 ? start + std::chrono::duration_cast<can_nodes::Nanos>(std::chrono::duration<double>(duration_s))
-                     : can_nodes::kNever;
+  const Nanos end =
+      duration_s > 0 ? start + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(duration_s))
+                     : kNever;
   can_nodes::BusState last_state = can_nodes::BusState::kUp;
-  can_nodes::Nanos next_report = start + std::chrono::seconds(5);
+  Nanos next_report = start + std::chrono::seconds(5);
   while (!g_stop && clock.now() < end) {
-    const can_nodes::Nanos slice = std::min(end, clock.now() + std::chrono::seconds(1));
+    const Nanos slice = std::min(end, clock.now() + std::chrono::seconds(1));
     loop.run_until(slice, g_stop);
     const can_nodes::BusState state = sockets.front()->refresh_state();
     if (state != last_state) {

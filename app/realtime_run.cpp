@@ -62,8 +62,8 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   if (opt.initial_state) {
     try {
       world.restore(*opt.initial_state);
-    } catch (const std::invalid_argument& e) {
-      throw can_nodes::SetupError(std::string("the saved world does not fit the scenario: ") + e.what());
+    } catch (const SetupError& e) {
+      throw SetupError(std::string("the saved world does not fit the scenario: ") + e.what());
     }
   }
   const std::size_t n = sc.world.robots.size();
@@ -72,7 +72,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   const can_nodes::NodeParams params = emulator::node_params_for(sc.world.robot, ftt);
   const can_nodes::WallClock clock;
   const auto ec = params.ftt.elementary_cycle;
-  const can_nodes::Nanos start = (clock.now() / ec + 10) * ec;  // on a whole EC, a little ahead
+  const Nanos start = (clock.now() / ec + 10) * ec;  // on a whole EC, a little ahead
   std::vector<Robot> robots(n);
   std::vector<int> fds;
   const bool error_frames = std::any_of(sc.faults.begin(), sc.faults.end(), [](const can_nodes::FaultRule& f) {
@@ -81,7 +81,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   for (std::size_t r = 0; r < n && error_frames; ++r) {
     if (!is_virtual_interface(sc.interfaces[r])) {
       // A controller cannot be told to send an error frame: the flag would be masked and a data frame go out.
-      throw can_nodes::SetupError("error-frame faults need a virtual interface; " + sc.interfaces[r] +
+      throw SetupError("error-frame faults need a virtual interface; " + sc.interfaces[r] +
                                   " is a CAN adapter. Use a bus disturber on a real bus, or run on vcan");
     }
   }
@@ -100,7 +100,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
         },
         start);
     if (robot.sockets.front()->state() != can_nodes::BusState::kUp) {
-      throw can_nodes::SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
+      throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
     }
     for (std::size_t k = 1; k < robot.sockets.size(); ++k) fds.push_back(robot.sockets[k]->fd());  // not the master's
     if (!sc.faults.empty()) {
@@ -112,7 +112,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
       for (can_nodes::Node* node : robot.nodes->nodes()) node->set_fault_hook(robot.faults.get());
     }
   }
-  if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
+  if (DB_init_all(0) != 0) throw SetupError("cannot attach to the RTDB (see above)");
   struct RtdbGuard {
     ~RtdbGuard() { DB_free_all(0); }
   } rtdb_guard;
@@ -121,18 +121,18 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   vision_emu::VisionRunner vision_runner(std::move(vision), vision_emu::rtdb_sink(sc.agents));
   emulator::GoalWatcher goals(sc.world);
   std::mutex goal_mutex;
-  std::vector<can_nodes::Nanos> goal_times;  // copied out of the physics thread
+  std::vector<Nanos> goal_times;  // copied out of the physics thread
 
   // Threads: this one runs the nodes (but the masters, below) on the sockets
   // and never waits for a physics step; the physics (with vision, goals and
   // battery faults) steps on its own, exchanging commands and sensor values
   // through SharedRobotIo.
   WallWaiter waiter(fds);
-  emulator::Realtime loop(clock, nullptr, [&](can_nodes::Nanos d) { waiter.wait(d); });
+  emulator::Realtime loop(clock, nullptr, [&](Nanos d) { waiter.wait(d); });
   // The FTT masters on a third thread, above the other nodes: a trigger message
   // goes out at its EC boundary whatever the slaves are busy with (on a robot
   // the master is a microcontroller of its own too). The masters only send.
-  emulator::Realtime masters(clock, nullptr, [](can_nodes::Nanos d) { can_nodes::WallClock::sleep_until(d); });
+  emulator::Realtime masters(clock, nullptr, [](Nanos d) { can_nodes::WallClock::sleep_until(d); });
   std::vector<emulator::SharedRobotIo*> shared;
   for (Robot& robot : robots) {
     for (can_nodes::Node* node : robot.nodes->nodes()) {
@@ -145,7 +145,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
     shared.push_back(robot.io.get());
   }
   emulator::RealtimePhysics physics(world, shared);
-  physics.on_step([&](can_nodes::Nanos now) {
+  physics.on_step([&](Nanos now) {
     for (std::size_t r = 0; r < n; ++r) {
       if (robots[r].faults) world.robot(r).drain(robots[r].faults->battery_drain_until(now));
     }
@@ -169,11 +169,11 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
                  sc.interfaces[r].c_str(), sc.agents[r], sc.agents[r]);
   }
   std::fflush(out);
-  const can_nodes::Nanos end =
+  const Nanos end =
       opt.duration_s > 0
-          ? start + std::chrono::duration_cast<can_nodes::Nanos>(std::chrono::duration<double>(opt.duration_s))
-          : can_nodes::kNever;
-  can_nodes::Nanos next_report = start + std::chrono::seconds(1);
+          ? start + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(opt.duration_s))
+          : kNever;
+  Nanos next_report = start + std::chrono::seconds(1);
   std::size_t goals_reported = 0;
   const MemoryLock memory(opt.priority > 0);
   physics.start(start);  // before the priority: the physics thread keeps the normal scheduler
@@ -188,7 +188,7 @@ int run_realtime(const emulator::Scenario& sc, const RealtimeOptions& opt) {
   } master;
   master.thread = std::thread([&] {
     const FifoScheduling fifo(opt.priority > 0 ? std::min(99, opt.priority + 1) : 0);
-    masters.run_until(can_nodes::kNever, master.stop);
+    masters.run_until(kNever, master.stop);
   });
   const FifoScheduling fifo(opt.priority);
   if (!fifo.problem.empty()) std::fprintf(out, "canhil run: %s\n", fifo.problem.c_str());

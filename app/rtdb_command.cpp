@@ -28,7 +28,7 @@ int item_by_name(const std::string& name) {
   }
   std::string names;
   for (int i = 0; i < DB_item_count(); ++i) names += std::string(names.empty() ? "" : ", ") + DB_item_name(i);
-  throw std::invalid_argument("no RTDB item named " + name + "; the items are " + names);
+  throw SetupError("no RTDB item named " + name + "; the items are " + names);
 }
 
 int agent_option(const std::optional<std::string>& v, const char* option, int fallback) {
@@ -192,7 +192,7 @@ int run_rtdb(Args& args) {
   do {
     const int age = DB_get_from(agent, from, item, raw.data());
     if (age < 0) {
-      throw std::invalid_argument(std::string("agent ") + DB_agent_name(agent) + "'s database has no " + words[2] +
+      throw SetupError(std::string("agent ") + DB_agent_name(agent) + "'s database has no " + words[2] +
                                   " of " + DB_agent_name(from));
     }
     std::printf("%s[%s] %s age %s: %s\n", DB_agent_name(agent), DB_agent_name(from), words[2].c_str(),

@@ -92,7 +92,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   for (const auto& f : fault_texts) {
     try {
       scenario.faults.push_back(can_nodes::parse_fault(f));
-    } catch (const std::invalid_argument& e) {
+    } catch (const SetupError& e) {
       throw UsageError(std::string("--fault: ") + e.what());
     }
   }
@@ -127,11 +127,11 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   cfg.record_trace = trace.has_value();  // a long run without --trace keeps no frames
   if (restore_world) cfg.initial_state = load_world(*restore_world);
   if (world_log)
-    cfg.world_log_period = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(log_period));
+    cfg.world_log_period = std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(log_period));
   std::unique_ptr<emulator::VirtualRun> run;
   try {
     run = std::make_unique<emulator::VirtualRun>(cfg);
-  } catch (const std::invalid_argument& e) {
+  } catch (const SetupError& e) {
     const std::string where =
         restore_world ? "--restore-world " + *restore_world + " does not fit the scenario: " : std::string();
     throw UsageError((config ? *config + ": " : std::string()) + where + e.what());
@@ -141,10 +141,10 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   std::signal(SIGINT, stop_run);
   std::signal(SIGTERM, stop_run);
   const auto step = std::chrono::seconds(1);
-  const auto total = std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(duration));
+  const auto total = std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(duration));
   const auto wall_start = std::chrono::steady_clock::now();
   while (run->now() < total && !g_stop) {
-    run->run_for(std::min<frames::Nanos>(step, total - run->now()));
+    run->run_for(std::min<Nanos>(step, total - run->now()));
     if (quiet) continue;
     const Eigen::Vector3d b = run->world().ball_position();
     const auto o = run->outcomes();

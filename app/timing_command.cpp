@@ -42,10 +42,10 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
   const bool allow_empty = args.flag("--allow-empty");
   const auto svg = args.option("--svg");
   timing::TimingConfig cfg;
-  cfg.elementary_cycle = std::chrono::duration_cast<frames::Nanos>(
+  cfg.elementary_cycle = std::chrono::duration_cast<Nanos>(
       std::chrono::duration<double, std::milli>(number(args.option("--ec-ms"), "--ec-ms", 10)));
   cfg.bit_rate = static_cast<std::uint32_t>(number(args.option("--bit-rate"), "--bit-rate", 1'000'000));
-  cfg.window_slack = std::chrono::duration_cast<frames::Nanos>(
+  cfg.window_slack = std::chrono::duration_cast<Nanos>(
       std::chrono::duration<double, std::micro>(number(args.option("--slack-us"), "--slack-us", 0)));
   const double seconds = number(args.option("--seconds"), "--seconds", 10);
   const std::vector<std::string> words = args.positionals();
@@ -63,15 +63,15 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
       frames::LogEntry e;
       std::string error;
       if (!frames::parse_log_line(line, e, &error))
-        throw std::invalid_argument(source + ":" + std::to_string(n) + ": " + error);
+        throw SetupError(source + ":" + std::to_string(n) + ": " + error);
       analyzer.add({e.frame, e.time});
     }
   } else {
     auto bus = can_nodes::SocketCanBus::open(source);
     bus->set_error_mask(can_nodes::kErrAll);  // error frames count toward the load and the report
     const can_nodes::WallClock clock;
-    const frames::Nanos end =
-        clock.now() + std::chrono::duration_cast<frames::Nanos>(std::chrono::duration<double>(seconds));
+    const Nanos end =
+        clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds));
     std::signal(SIGINT, stop_timing);
     if (!json)
       std::fprintf(stderr, "canhil timing: listening on %s for %.0f s (Ctrl-C stops early)\n", source.c_str(), seconds);

@@ -20,19 +20,19 @@ class WallWaiter {
  public:
   explicit WallWaiter(std::vector<int> fds) : fds_(std::move(fds)) {
     timer_ = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
-    if (timer_ < 0) throw can_nodes::SetupError("timerfd_create failed");
+    if (timer_ < 0) throw SetupError("timerfd_create failed");
   }
   ~WallWaiter() { ::close(timer_); }
   WallWaiter(const WallWaiter&) = delete;
   WallWaiter& operator=(const WallWaiter&) = delete;
 
-  void wait(can_nodes::Nanos deadline) {
+  void wait(Nanos deadline) {
     std::vector<pollfd>& p = polled_;  // reused: no allocation per wait
     p.clear();
     for (int fd : fds_) p.push_back(pollfd{fd, POLLIN, 0});
     timespec timeout{0, 100'000'000};  // at most 100 ms, to notice Ctrl-C
     timespec* to = &timeout;
-    if (deadline != can_nodes::kNever) {
+    if (deadline != kNever) {
       itimerspec spec{};
       const auto ns = deadline.count();
       spec.it_value.tv_sec = static_cast<time_t>(ns / 1'000'000'000);
@@ -43,7 +43,7 @@ class WallWaiter {
       to = nullptr;
     }
     const int r = ::ppoll(p.data(), p.size(), to, nullptr);
-    if (r > 0 && deadline != can_nodes::kNever && (p.back().revents & POLLIN) != 0) {
+    if (r > 0 && deadline != kNever && (p.back().revents & POLLIN) != 0) {
       std::uint64_t expirations = 0;
       [[maybe_unused]] const auto n = ::read(timer_, &expirations, sizeof expirations);
     }

@@ -32,19 +32,19 @@ class Laptop final : public emulator::Participant {
     heard_ += n;
     return n;
   }
-  void tick(can_nodes::Nanos now) override {
-    slot_ = can_nodes::kNever;
+  void tick(Nanos now) override {
+    slot_ = kNever;
     const double t = std::chrono::duration<double>(now).count();
     ep_->send(set_->m6_1.encode(frames::M6_1{0.3 * std::sin(t), 0.8 * std::cos(0.5 * t)}));
     ep_->send(set_->m6_2.encode(frames::M6_2{0.5, 0, 0}));
   }
-  can_nodes::Nanos next_wakeup() const override { return slot_; }
+  Nanos next_wakeup() const override { return slot_; }
   std::uint64_t heard_ = 0;
 
  private:
   std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
   std::shared_ptr<const frames::MessageSet> set_;
-  can_nodes::Nanos slot_ = can_nodes::kNever;
+  Nanos slot_ = kNever;
 };
 
 void BM_OneRobotVirtualTime(benchmark::State& state) {

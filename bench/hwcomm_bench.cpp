@@ -24,7 +24,7 @@ void BM_HwCommUpdate(benchmark::State& state) {
     return;
   }
   auto set = frames::MessageSet::load(CANHIL_BENCH_DBC);
-  laptop::Nanos now{0};
+  Nanos now{0};
   laptop::HwComm hw(
       set, std::chrono::milliseconds(10), [](const frames::CanFrame&) { return true; }, [&] { return now; });
   // One EC's worth of bus->RTDB traffic: M4_1 + M4_2 (CMD_POS), M8 (CMD_IMU), M9 (CMD_INFO, CMD_GRABBER_INFO), M2.

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 
-#include "canhil/frames/demand.hpp"
+#include "canhil/base/demand.hpp"
 
 namespace canhil::can_nodes {
 

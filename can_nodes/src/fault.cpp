@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/frames/wire.hpp"
 
 namespace canhil::can_nodes {
@@ -17,7 +18,7 @@ constexpr const char* kSyntax =
     "battery:power24:2 (see docs/faults.md)";
 
 [[noreturn]] void bad(std::string_view text, const std::string& what) {
-  throw std::invalid_argument("fault '" + std::string(text) + "': " + what + kSyntax);
+  throw SetupError("fault '" + std::string(text) + "': " + what + kSyntax);
 }
 
 std::vector<std::string_view> split(std::string_view s, char sep) {
@@ -167,7 +168,7 @@ FaultInjector::FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const
         if (!node) {
           std::string known;
           for (const std::string& n : node_names) known += " " + fault_node_name(n);
-          throw std::invalid_argument("fault '" + rule.text + "': '" + rule.target +
+          throw SetupError("fault '" + rule.text + "': '" + rule.target +
                                       "' is neither a message of the message set nor a node; the nodes are" + known);
         }
       }

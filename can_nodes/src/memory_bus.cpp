@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "canhil/frames/demand.hpp"
+#include "canhil/base/demand.hpp"
 
 namespace canhil::can_nodes {
 

@@ -48,14 +48,14 @@ void Participants::tick_due(const can_nodes::Clock& clock, std::size_t budget) {
 }
 
 Nanos Participants::next_wakeup() const {
-  Nanos t = can_nodes::kNever;
+  Nanos t = kNever;
   for (const Participant* p : list_) t = std::min(t, p->next_wakeup());
   return t;
 }
 
 void Lockstep::run_until(Nanos end) {
   while (true) {
-    const Nanos next = std::min(world_ != nullptr ? next_step_ : can_nodes::kNever, participants_.next_wakeup());
+    const Nanos next = std::min(world_ != nullptr ? next_step_ : kNever, participants_.next_wakeup());
     if (next > end) break;
     clock_.set(std::max(next, clock_.now()));
     const Nanos now = clock_.now();

@@ -32,10 +32,10 @@ void book_step(RealtimeStats& stats, Nanos now, Nanos& due, Nanos step, Nanos ma
 }
 
 void Realtime::run_until(Nanos end, const std::atomic<bool>& stop) {
-  if (world_ != nullptr && next_step_ == can_nodes::kNever) next_step_ = clock_.now() + step_;
+  if (world_ != nullptr && next_step_ == kNever) next_step_ = clock_.now() + step_;
   while (!stop.load(std::memory_order_relaxed)) {
     const Nanos deadline =
-        std::min({end, world_ != nullptr ? next_step_ : can_nodes::kNever, participants_.next_wakeup()});
+        std::min({end, world_ != nullptr ? next_step_ : kNever, participants_.next_wakeup()});
     wait_(deadline);
     ++stats_.wakeups;
     // Timers first: a frame due goes out before the sockets are read (each

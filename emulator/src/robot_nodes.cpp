@@ -6,24 +6,9 @@
 
 namespace canhil::emulator {
 
-can_nodes::KickOutcome PhysicsRobotIo::kick(bool low, int power) {
-  switch (robot_.kick(low, power).outcome) {
-    case physics::KickResult::Outcome::kFired:
-      return can_nodes::KickOutcome::kFired;
-    case physics::KickResult::Outcome::kNotEngaged:
-      return can_nodes::KickOutcome::kNotEngaged;
-    case physics::KickResult::Outcome::kLowVoltage:
-      return can_nodes::KickOutcome::kLowVoltage;
-    case physics::KickResult::Outcome::kNoPower:
-      return can_nodes::KickOutcome::kNoPower;
-  }
-  return can_nodes::KickOutcome::kNoPower;
-}
+KickOutcome PhysicsRobotIo::kick(bool low, int power) { return robot_.kick(low, power).outcome; }
 
-can_nodes::BatteryVolts PhysicsRobotIo::battery() const {
-  const physics::BatteryReading b = robot_.battery();
-  return {b.logic_v, b.power12_v, b.power24_v};
-}
+
 
 can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const can_nodes::FttConfig& ftt) {
   can_nodes::NodeParams p;

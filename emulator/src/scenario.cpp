@@ -92,7 +92,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
         if (!v) r.fail(e, "faults", "must be a list of fault texts such as \"drop:M4_1:0.1\"");
         try {
           s.faults.push_back(can_nodes::parse_fault(*v));
-        } catch (const std::invalid_argument& err) {
+        } catch (const SetupError& err) {
           r.fail(e, "faults", err.what());
         }
       }

@@ -7,9 +7,7 @@
 namespace canhil::emulator {
 
 SharedRobotIo::SharedRobotIo(physics::Robot& robot)
-    : robot_(robot),
-      max_power_(robot.params().kicker.max_power),
-      min_fire_voltage_v_(robot.params().kicker.min_fire_voltage_v) {
+    : robot_(robot), kicker_(robot.params().kicker) {
   publish();
 }
 
@@ -33,14 +31,12 @@ bool SharedRobotIo::over_current(int wheel) const {
   return sensors_.over_current.at(static_cast<std::size_t>(wheel));
 }
 
-can_nodes::KickOutcome SharedRobotIo::kick(bool low, int power) {
+KickOutcome SharedRobotIo::kick(bool low, int power) {
   const std::lock_guard lock(mutex_);
-  // As physics::Robot::kick decides, on the state of the last step.
-  if (std::clamp(power, 0, max_power_) == 0) return can_nodes::KickOutcome::kNoPower;
-  if (!sensors_.engaged) return can_nodes::KickOutcome::kNotEngaged;
-  if (sensors_.kicker_v < min_fire_voltage_v_) return can_nodes::KickOutcome::kLowVoltage;
-  kicks_.emplace_back(low, power);
-  return can_nodes::KickOutcome::kFired;
+  // The physics' own rule, on the state its last step published.
+  const KickOutcome outcome = physics::kick_outcome(kicker_, power, sensors_.engaged, sensors_.kicker_v);
+  if (outcome == KickOutcome::kFired) kicks_.emplace_back(low, power);
+  return outcome;
 }
 
 void SharedRobotIo::set_grabber(int mode) {
@@ -63,7 +59,7 @@ double SharedRobotIo::compass_heading_deg() const {
   return sensors_.heading_deg;
 }
 
-can_nodes::BatteryVolts SharedRobotIo::battery() const {
+BatteryVolts SharedRobotIo::battery() const {
   const std::lock_guard lock(mutex_);
   return sensors_.battery;
 }

@@ -27,8 +27,8 @@ class AgentParticipant final : public Participant {
   std::size_t poll() override { return 0; }
   Nanos next_wakeup() const override { return wake_; }
   void tick(Nanos now) override {
-    wake_ = can_nodes::kNever;
-    const double dt = last_ == can_nodes::kNever ? 1.0 / 30 : std::chrono::duration<double>(now - last_).count();
+    wake_ = kNever;
+    const double dt = last_ == kNever ? 1.0 / 30 : std::chrono::duration<double>(now - last_).count();
     last_ = now;
     io_.write(logic_.decide(io_.read(dt)));
   }
@@ -37,8 +37,8 @@ class AgentParticipant final : public Participant {
  private:
   laptop::AgentIo io_;
   laptop::Agent logic_;
-  Nanos wake_ = can_nodes::kNever;
-  Nanos last_ = can_nodes::kNever;
+  Nanos wake_ = kNever;
+  Nanos last_ = kNever;
 };
 
 }  // namespace
@@ -111,9 +111,9 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
   if (s.config.world.robots.empty()) s.config.world.robots.push_back(physics::Placement{-3.0, 0, -90});
   const std::size_t n = s.config.world.robots.size();
   if (n > 6)
-    throw std::invalid_argument("a virtual run takes at most 6 robots (agents CAMBADA_1..6); this one has " +
+    throw SetupError("a virtual run takes at most 6 robots (agents CAMBADA_1..6); this one has " +
                                 std::to_string(n));
-  if (!s.config.messages) throw std::invalid_argument("no message set");
+  if (!s.config.messages) throw SetupError("no message set");
   if (s.config.interfaces.empty()) {
     for (std::size_t r = 0; r < n; ++r) s.config.interfaces.push_back("vcan" + std::to_string(r));
   }
@@ -121,19 +121,19 @@ VirtualRun::VirtualRun(const VirtualRunConfig& config) : impl_(std::make_unique<
     for (std::size_t r = 0; r < n; ++r) s.config.agents.push_back(static_cast<int>(r) + 1);
   }
   if (s.config.interfaces.size() != n || s.config.agents.size() != n) {
-    throw std::invalid_argument("give one interface and one agent number per robot (" + std::to_string(n) + " robots)");
+    throw SetupError("give one interface and one agent number per robot (" + std::to_string(n) + " robots)");
   }
   for (std::size_t r = 0; r < n; ++r) {
     const int a = s.config.agents[r];
-    if (a < 1 || a > 6) throw std::invalid_argument("agent numbers are 1..6, got " + std::to_string(a));
+    if (a < 1 || a > 6) throw SetupError("agent numbers are 1..6, got " + std::to_string(a));
     if (std::count(s.config.agents.begin(), s.config.agents.end(), a) > 1) {
-      throw std::invalid_argument("agent " + std::to_string(a) + " is given to two robots");
+      throw SetupError("agent " + std::to_string(a) + " is given to two robots");
     }
   }
   s.world = std::make_unique<physics::World>(s.config.world);
   if (s.config.initial_state) s.world->restore(*s.config.initial_state);  // std::invalid_argument on a mismatch
   s.goals = std::make_unique<GoalWatcher>(s.config.world);
-  if (DB_init_all(0) != 0) throw can_nodes::SetupError("cannot attach to the RTDB (see above)");
+  if (DB_init_all(0) != 0) throw SetupError("cannot attach to the RTDB (see above)");
   s.rtdb = true;
   laptop::AgentConfig agent_cfg;
   agent_cfg.goal_x_m = s.config.world.field.length_m / 2;

@@ -760,7 +760,7 @@ void Parser::check_database() {
 }  // namespace
 
 DbcError::DbcError(std::string file, int line, const std::string& message)
-    : std::runtime_error(format_error(file, line, message)), file_(std::move(file)), line_(line) {}
+    : SetupError(format_error(file, line, message)), file_(std::move(file)), line_(line) {}
 
 const SignalDef* MessageDef::find_signal(std::string_view signal_name) const noexcept {
   for (const auto& s : signals) {

@@ -4,11 +4,13 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "canhil/base/setup_error.hpp"
+
 namespace canhil::kinematics {
 
 OmniKinematics::OmniKinematics(const OmniGeometry& geometry) : geometry_(geometry) {
   if (!(geometry.wheel_radius_m > 0) || !(geometry.wheel_distance_m > 0)) {
-    throw std::invalid_argument("wheel radius and wheel distance must be positive");
+    throw SetupError("wheel radius and wheel distance must be positive");
   }
   const double r = geometry.wheel_radius_m;
   const double b = geometry.wheel_distance_m;
@@ -22,7 +24,7 @@ OmniKinematics::OmniKinematics(const OmniGeometry& geometry) : geometry_(geometr
   const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
                      a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
                      a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-  if (std::fabs(det) < 1e-9) throw std::invalid_argument("wheel angles do not span the plane (singular kinematics)");
+  if (std::fabs(det) < 1e-9) throw SetupError("wheel angles do not span the plane (singular kinematics)");
   // Adjugate / determinant.
   for (std::size_t i = 0; i < 3; ++i) {
     for (std::size_t j = 0; j < 3; ++j) {

@@ -191,7 +191,7 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
 
 void HwComm::on_time(Nanos now) {
   if (now < m6_slot_) return;
-  m6_slot_ = Nanos::max();
+  m6_slot_ = kNever;
   CMD_Vel v;
   get(CMD_VEL, &v);
   const frames::MessageSet& s = *set_;

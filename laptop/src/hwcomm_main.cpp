@@ -28,10 +28,10 @@ namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop = true; }
 
-canhil::laptop::Nanos wall_now() {
+canhil::Nanos wall_now() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
-  return std::chrono::seconds(ts.tv_sec) + canhil::laptop::Nanos(ts.tv_nsec);
+  return std::chrono::seconds(ts.tv_sec) + canhil::Nanos(ts.tv_nsec);
 }
 
 int usage(const char* why) {
@@ -89,23 +89,23 @@ int main(int argc, char** argv) {
     auto set = canhil::frames::MessageSet::load(dbc);
     canhil::laptop::RawCan can(iface);
     if (DB_init() != 0) return 2;
-    const auto ec = std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
+    const auto ec = std::chrono::duration_cast<canhil::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
     canhil::laptop::HwComm hw(
         set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const int timer = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
-    const canhil::laptop::Nanos end =
+    const canhil::Nanos end =
         duration_s > 0
-            ? wall_now() + std::chrono::duration_cast<canhil::laptop::Nanos>(std::chrono::duration<double>(duration_s))
-            : canhil::laptop::Nanos::max();
+            ? wall_now() + std::chrono::duration_cast<canhil::Nanos>(std::chrono::duration<double>(duration_s))
+            : canhil::kNever;
     std::printf("canhil-hwcomm: agent %d (%s) on %s\n", Whoami(), DB_agent_name(Whoami()), iface.c_str());
     std::fflush(stdout);
     while (!g_stop && wall_now() < end) {
       pollfd p[2] = {{can.fd(), POLLIN, 0}, {timer, POLLIN, 0}};
-      const canhil::laptop::Nanos deadline = hw.next_deadline();
+      const canhil::Nanos deadline = hw.next_deadline();
       timespec timeout{0, 100'000'000};
-      if (deadline != canhil::laptop::Nanos::max()) {
+      if (deadline != canhil::kNever) {
         itimerspec spec{};
         spec.it_value.tv_sec = static_cast<time_t>(deadline.count() / 1'000'000'000);
         spec.it_value.tv_nsec = static_cast<long>(deadline.count() % 1'000'000'000);

@@ -69,7 +69,7 @@ std::optional<frames::TimedFrame> RawCan::receive() {
     if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMPNS) {
       timespec ts{};
       std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-      out.time = std::chrono::seconds(ts.tv_sec) + frames::Nanos(ts.tv_nsec);
+      out.time = std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
     }
   }
   return out;

@@ -343,7 +343,7 @@ void read_all(Reader& root, WorldParams& w) {
 }  // namespace
 
 ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& message)
-    : std::runtime_error(format(file, line, field, message)),
+    : SetupError(format(file, line, field, message)),
       file_(std::move(file)),
       line_(line),
       field_(std::move(field)) {}

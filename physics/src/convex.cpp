@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "canhil/frames/demand.hpp"
+#include "canhil/base/demand.hpp"
 
 namespace canhil::physics {
 namespace {

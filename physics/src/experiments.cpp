@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/kinematics/omni.hpp"
 #include "canhil/physics/world.hpp"
 
@@ -382,7 +383,7 @@ ExperimentResult run_experiment(const std::string& name, const WorldParams& base
   if (name == "tour") return tour(base, options);
   std::string names;
   for (const auto& n : experiment_names()) names += (names.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("unknown experiment \"" + name + "\"; the experiments are " + names);
+  throw SetupError("unknown experiment \"" + name + "\"; the experiments are " + names);
 }
 
 }  // namespace canhil::physics

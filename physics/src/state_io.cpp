@@ -1,8 +1,9 @@
 // WorldState to text and back. Every double is written in C99 hexadecimal
 // floating point (%a), so that the round trip is exact; one record per line:
-//   canhil-world-state 1
+//   canhil-world-state 2
 //   time <t>  seed <s>  ball <13 numbers>
 //   robots <n>, then per robot: chassis <13>, wheel <13> x3, motors <...>, kick <...>
+// (version 1, still read, had a wheel mode before each motor's target speed).
 //   obstacles <m>, then obstacle <13> each
 #include <cinttypes>
 #include <cstdio>
@@ -70,7 +71,7 @@ class LineReader {
     return b;
   }
   [[noreturn]] void fail(const std::string& what) const {
-    throw std::runtime_error(file_ + ":" + std::to_string(line_no_) + ": world state " + what);
+    throw SetupError(file_ + ":" + std::to_string(line_no_) + ": world state " + what + "; give a file written by --save-world");
   }
 
  private:
@@ -83,8 +84,8 @@ class LineReader {
 
 void save_state(const WorldState& s, const std::filesystem::path& path) {
   std::ofstream os(path);
-  if (!os) throw std::runtime_error("cannot write world state to " + path.string());
-  os << "canhil-world-state 1\n";
+  if (!os) throw SetupError("cannot write the world state to " + path.string() + "; give a path in a writable folder");
+  os << "canhil-world-state 2\n";
   os << "time";
   put(os, s.time_s);
   os << "\nseed " << s.seed << '\n';
@@ -97,8 +98,7 @@ void save_state(const WorldState& s, const std::filesystem::path& path) {
     for (std::size_t n = 0; n < 3; ++n) {
       put(os, r.wheel_angle_rad[n]);
       put(os, r.hinge_angle_rad[n]);
-      os << ' ' << static_cast<int>(r.wheel_mode[n]);
-      put(os, r.wheel_command[n]);
+      put(os, r.wheel_target_radps[n]);
       put(os, r.motor_current_a[n]);
     }
     os << "\nkick";
@@ -114,17 +114,19 @@ void save_state(const WorldState& s, const std::filesystem::path& path) {
     put_body(os, "obstacle", s.obstacles[i]);
     os << "idle " << (i < s.obstacle_idle_steps.size() ? s.obstacle_idle_steps[i] : 0) << '\n';
   }
-  if (!os) throw std::runtime_error("cannot write world state to " + path.string());
+  if (!os) throw SetupError("cannot write the world state to " + path.string() + "; give a path in a writable folder");
 }
 
 WorldState load_state(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read world state from " + path.string());
+  if (!in) throw SetupError("cannot read a world state from " + path.string() + "; does the file exist?");
   LineReader r(in, path.string());
   WorldState s;
+  long long version = 0;
   {
     auto is = r.expect("canhil-world-state");
-    if (r.integer(is) != 1) r.fail("has an unknown version; this canhil reads version 1");
+    version = r.integer(is);
+    if (version != 1 && version != 2) r.fail("has an unknown version; this canhil reads versions 1 and 2");
   }
   {
     auto is = r.expect("time");
@@ -146,10 +148,9 @@ WorldState load_state(const std::filesystem::path& path) {
     for (std::size_t n = 0; n < 3; ++n) {
       rs.wheel_angle_rad[n] = r.number(m);
       rs.hinge_angle_rad[n] = r.number(m);
-      const long long mode = r.integer(m);
-      if (mode != 0 && mode != 1) r.fail("has an unknown wheel mode");
-      rs.wheel_mode[n] = static_cast<WheelMode>(mode);
-      rs.wheel_command[n] = r.number(m);
+      // Version 1 had a wheel mode before the target; only speed control (0) was ever written.
+      if (version == 1 && r.integer(m) != 0) r.fail("has a wheel mode this canhil no longer has (speed control only)");
+      rs.wheel_target_radps[n] = r.number(m);
       rs.motor_current_a[n] = r.number(m);
     }
     auto k = r.expect("kick");

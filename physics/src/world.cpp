@@ -10,7 +10,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "canhil/frames/demand.hpp"
+#include "canhil/base/setup_error.hpp"
+#include "canhil/base/demand.hpp"
 #include "convex.hpp"
 
 namespace canhil::physics {
@@ -195,7 +196,7 @@ struct World::Impl {
 World::Impl::Impl(WorldParams p) : params(std::move(p)), markings(field_markings(params.field)) {
   init_ode_once();
   const SimulationParams& s = params.simulation;
-  if (!(s.step_s > 0) || s.substeps < 1) throw std::invalid_argument("simulation step and substeps must be positive");
+  if (!(s.step_s > 0) || s.substeps < 1) throw SetupError("simulation step and substeps must be positive");
   seed = s.seed;
   world = dWorldCreate();
   dWorldSetGravity(world, 0, 0, -s.gravity_mps2);
@@ -376,24 +377,14 @@ void World::Impl::apply_robot_inputs(RobotImpl& r) {
   for (std::size_t n = 0; n < 3; ++n) {
     const double w = dJointGetHingeAngleRate(r.hinge[n]);
     const double w_motor = w * gear;
-    if (r.state.wheel_mode[n] == WheelMode::kSpeed) {
-      // The controller reaches the target within what the motor can give:
-      // current limit, and the supply minus back-EMF when driving.
-      const double target = r.state.wheel_command[n];
-      const bool driving = (target - w) * w > 0;
-      double i_max = mp.current_limit_a;
-      if (driving)
-        i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
-      dJointSetHingeParam(r.hinge[n], dParamVel, target);
-      dJointSetHingeParam(r.hinge[n], dParamFMax, i_max * k * gear * mp.gear_efficiency);
-    } else {
-      const double volts = std::clamp(r.state.wheel_command[n], -v_supply, v_supply);
-      const double i =
-          std::clamp((volts - k * w_motor) / mp.terminal_resistance_ohm, -mp.current_limit_a, mp.current_limit_a);
-      dJointSetHingeParam(r.hinge[n], dParamFMax, 0);
-      dJointAddHingeTorque(r.hinge[n], i * k * gear * mp.gear_efficiency);
-      r.state.motor_current_a[n] = i;
-    }
+    // The controller reaches the target within what the motor can give:
+    // current limit, and the supply minus back-EMF when driving.
+    const double target = r.state.wheel_target_radps[n];
+    const bool driving = (target - w) * w > 0;
+    double i_max = mp.current_limit_a;
+    if (driving) i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
+    dJointSetHingeParam(r.hinge[n], dParamVel, target);
+    dJointSetHingeParam(r.hinge[n], dParamFMax, i_max * k * gear * mp.gear_efficiency);
   }
   apply_grabber(r);
 }
@@ -433,12 +424,10 @@ void World::Impl::update_robot_after(RobotImpl& r, double h) {
     const double angle = dJointGetHingeAngle(r.hinge[n]);
     r.state.wheel_angle_rad[n] += kinematics::wrap_pi(angle - r.state.hinge_angle_rad[n]);
     r.state.hinge_angle_rad[n] = angle;
-    if (r.state.wheel_mode[n] == WheelMode::kSpeed) {
-      // Motor torque from the hinge's feedback, about the axle (in world coordinates).
-      const Eigen::Vector3d axle = r.axle_world(n);
-      const Eigen::Vector3d t1(r.feedback[n].t1[0], r.feedback[n].t1[1], r.feedback[n].t1[2]);
-      r.state.motor_current_a[n] = t1.dot(axle) / (k * gear * mp.gear_efficiency);
-    }
+    // Motor torque from the hinge's feedback, about the axle (in world coordinates).
+    const Eigen::Vector3d axle = r.axle_world(n);
+    const Eigen::Vector3d t1(r.feedback[n].t1[0], r.feedback[n].t1[1], r.feedback[n].t1[2]);
+    r.state.motor_current_a[n] = t1.dot(axle) / (k * gear * mp.gear_efficiency);
     motor_current += std::fabs(r.state.motor_current_a[n]);
   }
   // Kicker recharge and the grabber's release after a kick.
@@ -605,14 +594,14 @@ void check_start_positions(const WorldParams& p) {
     const bool held = i < p.robots.size() && in_mouth(i);
     if (p.ball_start.z_m < 1.0 && !held &&
         std::hypot(a.x - p.ball_start.x_m, a.y - p.ball_start.y_m) < a.r + ball_r - 1e-9) {
-      throw std::invalid_argument("ball_start (" + std::to_string(p.ball_start.x_m) + ", " +
+      throw SetupError("ball_start (" + std::to_string(p.ball_start.x_m) + ", " +
                                   std::to_string(p.ball_start.y_m) + ") is inside " + a.what +
                                   "; move the ball or the " + a.what.substr(0, a.what.find(' ')));
     }
     for (std::size_t j = i + 1; j < discs.size(); ++j) {
       const Disc& b = discs[j];
       if (std::hypot(a.x - b.x, a.y - b.y) < a.r + b.r - 1e-9) {
-        throw std::invalid_argument(a.what + " and " + b.what + " start overlapping; place them further apart");
+        throw SetupError(a.what + " and " + b.what + " start overlapping; place them further apart");
       }
     }
   }
@@ -700,7 +689,7 @@ WorldState World::save() const {
 void World::restore(const WorldState& s) {
   if (s.robots.size() != impl_->robots.size() || s.obstacles.size() != impl_->obstacle_geoms.size() ||
       s.obstacle_idle_steps.size() != impl_->obstacle_geoms.size()) {
-    throw std::invalid_argument("the saved state has " + std::to_string(s.robots.size()) + " robots and " +
+    throw SetupError("the saved state has " + std::to_string(s.robots.size()) + " robots and " +
                                 std::to_string(s.obstacles.size()) + " obstacles; this world has " +
                                 std::to_string(impl_->robots.size()) + " and " +
                                 std::to_string(impl_->obstacle_geoms.size()));
@@ -736,13 +725,7 @@ std::size_t wheel_index(int wheel) {
 
 void Robot::set_wheel_speed(int wheel, double radps) {
   const std::size_t n = wheel_index(wheel);
-  impl_->state.wheel_mode[n] = WheelMode::kSpeed;
-  impl_->state.wheel_command[n] = std::isfinite(radps) ? radps : 0.0;
-}
-void Robot::set_wheel_voltage(int wheel, double volts) {
-  const std::size_t n = wheel_index(wheel);
-  impl_->state.wheel_mode[n] = WheelMode::kVoltage;
-  impl_->state.wheel_command[n] = std::isfinite(volts) ? volts : 0.0;
+  impl_->state.wheel_target_radps[n] = std::isfinite(radps) ? radps : 0.0;
 }
 void Robot::brake() {
   for (int n = 0; n < 3; ++n) set_wheel_speed(n, 0.0);
@@ -759,9 +742,7 @@ bool Robot::over_current(int wheel) const {
 bool Robot::wheel_stalled(int wheel) const {
   const std::size_t n = wheel_index(wheel);
   const double stall = impl_->params->motor.stall_speed_radps;
-  const bool commanded = impl_->state.wheel_mode[n] == WheelMode::kSpeed
-                             ? std::fabs(impl_->state.wheel_command[n]) > stall
-                             : std::fabs(impl_->state.wheel_command[n]) > 0.5;
+  const bool commanded = std::fabs(impl_->state.wheel_target_radps[n]) > stall;
   return commanded && std::fabs(wheel_speed_radps(wheel)) < stall && over_current(wheel);
 }
 
@@ -778,20 +759,20 @@ bool Robot::ball_engaged() const {
   return bearing <= b.half_angle_deg * kPi / 180.0;
 }
 
+KickOutcome kick_outcome(const KickerParams& kicker, int power, bool ball_engaged, double kicker_voltage_v) noexcept {
+  if (std::clamp(power, 0, kicker.max_power) == 0) return KickOutcome::kNoPower;
+  if (!ball_engaged) return KickOutcome::kNotEngaged;
+  if (kicker_voltage_v < kicker.min_fire_voltage_v) return KickOutcome::kLowVoltage;
+  return KickOutcome::kFired;
+}
+
 KickResult Robot::kick(bool low, int power) {
   const KickerParams& k = impl_->params->kicker;
   KickResult result;
-  const int p = std::clamp(power, 0, k.max_power);
-  if (p == 0) return result;
-  if (!ball_engaged()) {
-    result.outcome = KickResult::Outcome::kNotEngaged;
-    return result;
-  }
   RobotState& st = impl_->state;
-  if (st.kicker_voltage_v < k.min_fire_voltage_v) {
-    result.outcome = KickResult::Outcome::kLowVoltage;
-    return result;
-  }
+  result.outcome = kick_outcome(k, power, ball_engaged(), st.kicker_voltage_v);
+  if (!result.fired()) return result;
+  const int p = std::clamp(power, 0, k.max_power);
   const double g = impl_->world->params.simulation.gravity_mps2;
   const double theta = k.lob_angle_deg * kPi / 180.0;
   const double v_max = std::sqrt(k.max_lob_range_m * g / std::sin(2.0 * theta));
@@ -810,7 +791,6 @@ KickResult Robot::kick(bool low, int power) {
   st.kicker_voltage_v *= std::sqrt(std::max(0.0, 1.0 - k.energy_per_full_kick * p / k.max_power));
   st.grabber_release_left_s = k.grabber_release_s;
   st.last_kick_time_s = impl_->world->time;
-  result.outcome = KickResult::Outcome::kFired;
   result.speed_mps = speed;
   return result;
 }
@@ -827,7 +807,7 @@ double Robot::compass_heading_deg() const {
   return h >= 360.0 ? 0.0 : h;
 }
 
-BatteryReading Robot::battery() const {
+BatteryVolts Robot::battery() const {
   const BatteryParams& bp = impl_->params->battery;
   const RobotState& st = impl_->state;
   double motors = 0;
@@ -835,7 +815,7 @@ BatteryReading Robot::battery() const {
   auto volts = [&](const RailParams& r, double charge, double current) {
     return std::max(0.0, r.empty_v + (r.full_v - r.empty_v) * charge - current * r.internal_resistance_ohm);
   };
-  return BatteryReading{volts(bp.logic, st.charge[0], bp.logic.base_current_a),
+  return BatteryVolts{volts(bp.logic, st.charge[0], bp.logic.base_current_a),
                         volts(bp.power12, st.charge[1], bp.power12.base_current_a),
                         volts(bp.power24, st.charge[2], bp.power24.base_current_a + motors)};
 }

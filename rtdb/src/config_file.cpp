@@ -234,7 +234,7 @@ class Parser {
 }  // namespace
 
 RtdbConfigError::RtdbConfigError(const std::string& file, int line, const std::string& message)
-    : std::runtime_error(where(file, line) + message), line_(line) {}
+    : SetupError(where(file, line) + message), line_(line) {}
 
 RtdbConfig parse_rtdb_config(const std::string& text, const std::string& file) {
   return Parser(tokenize(text, file), file).parse();

@@ -65,7 +65,7 @@ TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
     try {
       parse_fault(text);
       ADD_FAILURE() << text << " was accepted";
-    } catch (const std::invalid_argument& e) {
+    } catch (const SetupError& e) {
       const std::string what = e.what();
       EXPECT_NE(what.find(text), std::string::npos) << what;
       EXPECT_NE(what.find("KIND:TARGET"), std::string::npos) << what;
@@ -74,7 +74,7 @@ TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
   try {
     injector({"drop:Motor9"});
     ADD_FAILURE() << "an unknown target was accepted";
-  } catch (const std::invalid_argument& e) {
+  } catch (const SetupError& e) {
     EXPECT_NE(std::string(e.what()).find("FTT_master"), std::string::npos) << e.what();
   }
 }

@@ -48,8 +48,8 @@ TEST(SharedRobotIo, NodesSeeTheLastPublishedStepAndCommandActAtTheNext) {
 TEST(SharedRobotIo, KicksAreDecidedOnThePublishedStateAndFireAtTheNextStep) {
   physics::World far(one_robot(4));
   SharedRobotIo away(far.robot(0));
-  EXPECT_EQ(away.kick(true, 0), can_nodes::KickOutcome::kNoPower);
-  EXPECT_EQ(away.kick(true, 50), can_nodes::KickOutcome::kNotEngaged) << "the ball is 4 m away";
+  EXPECT_EQ(away.kick(true, 0), KickOutcome::kNoPower);
+  EXPECT_EQ(away.kick(true, 50), KickOutcome::kNotEngaged) << "the ball is 4 m away";
   // The ball in the mouth (grabber on), the capacitor charged: the kick fires at the next step.
   physics::World near(one_robot(0, 0.42));  // just in front of the mouth
   SharedRobotIo io(near.robot(0));
@@ -61,7 +61,7 @@ TEST(SharedRobotIo, KicksAreDecidedOnThePublishedStateAndFireAtTheNextStep) {
   ASSERT_TRUE(near.robot(0).ball_engaged()) << "the grabber pulled the ball in";
   io.publish();
   ASSERT_TRUE(io.ball_engaged());
-  EXPECT_EQ(io.kick(true, 60), can_nodes::KickOutcome::kFired);
+  EXPECT_EQ(io.kick(true, 60), KickOutcome::kFired);
   EXPECT_LT(near.robot(0).last_kick_time_s(), 0) << "not fired before the physics step";
   io.apply_commands();
   near.step();
@@ -69,7 +69,7 @@ TEST(SharedRobotIo, KicksAreDecidedOnThePublishedStateAndFireAtTheNextStep) {
   for (int k = 0; k < 10; ++k) near.step();
   io.publish();
   EXPECT_LT(io.kicker_voltage_v(), near.robot(0).params().kicker.full_voltage_v) << "the capacitor gave its charge";
-  EXPECT_EQ(io.kick(true, 60), can_nodes::KickOutcome::kNotEngaged) << "the ball has left";
+  EXPECT_EQ(io.kick(true, 60), KickOutcome::kNotEngaged) << "the ball has left";
 }
 
 TEST(RealtimePhysics, StepsOnItsOwnThreadAndPublishesAView) {

@@ -37,9 +37,9 @@ class Laptop {
 
   /// Handles frames for `duration` of wall time; sends M6 in reply to each TM
   /// that schedules it while `drive` is set. Returns TMs seen.
-  int run(can_nodes::Nanos duration) {
+  int run(Nanos duration) {
     const can_nodes::WallClock clock;
-    const can_nodes::Nanos end = clock.now() + duration;
+    const Nanos end = clock.now() + duration;
     int tms = 0;
     while (clock.now() < end) {
       if (!bus_->wait_readable(20ms)) continue;

@@ -134,11 +134,11 @@ TEST(VcanDemo, InterfaceDownAndUpIsReportedAndTheRunResumesWithoutABurst) {
   std::this_thread::sleep_for(1s);  // about 100 trigger messages not sent
   ASSERT_EQ(std::system("ip link set vcan0 up"), 0);
   const canhil::can_nodes::WallClock clock;
-  const canhil::can_nodes::Nanos up = clock.now();
+  const canhil::Nanos up = clock.now();
   canhil::can_nodes::SocketCanOptions only_tms;
   only_tms.filters = {canhil::can_nodes::Filter::exact(0x010)};
   auto bus = canhil::can_nodes::SocketCanBus::open("vcan0", only_tms);  // TMs sent from now on
-  std::vector<canhil::can_nodes::Nanos> tms;
+  std::vector<canhil::Nanos> tms;
   while (clock.now() < up + 2s) {
     if (bus->wait_readable(50ms)) {
       while (auto f = bus->receive()) tms.push_back(f->time);
@@ -157,7 +157,7 @@ TEST(VcanDemo, InterfaceDownAndUpIsReportedAndTheRunResumesWithoutABurst) {
   // No catch-up burst of the ECs missed while down: at most one TM per EC
   // (10 ms) over the first second back, with slack for a late wake-up.
   const auto in_first_second =
-      std::count_if(tms.begin(), tms.end(), [&](canhil::can_nodes::Nanos t) { return t < tms.front() + 1s; });
+      std::count_if(tms.begin(), tms.end(), [&](canhil::Nanos t) { return t < tms.front() + 1s; });
   std::printf("down/up: first TM %.1f ms after up; %ld TMs in the first second back\n",
               std::chrono::duration<double, std::milli>(tms.front() - up).count(), static_cast<long>(in_first_second));
   EXPECT_LE(in_first_second, 105) << out;

@@ -210,7 +210,7 @@ TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
   EXPECT_LT(counts[0].applied, counts[0].matched * 3 / 10);
   const std::uint32_t m3_1 = c.messages->codec().find("M3_1")->id();
   std::size_t errors = 0, m3_seen = 0, retransmitted = 0;
-  frames::Nanos last_error{-1};
+  Nanos last_error{-1};
   std::istringstream in(run.trace());
   std::string line;
   while (std::getline(in, line)) {
@@ -223,7 +223,7 @@ TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
     } else if (e.frame.id == m3_1) {
       ++m3_seen;
       // The retransmission follows its error frame by the frame's and the error frame's bits.
-      if (last_error >= frames::Nanos{0} && e.time - last_error < 1ms) ++retransmitted;
+      if (last_error >= Nanos{0} && e.time - last_error < 1ms) ++retransmitted;
     }
   }
   EXPECT_EQ(errors, counts[0].applied) << "every error frame is in the trace";

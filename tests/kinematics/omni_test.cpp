@@ -57,8 +57,8 @@ TEST(OmniKinematics, ForwardInvertsInverseOverManyTwists) {
 }
 
 TEST(OmniKinematics, DegenerateGeometryIsRefused) {
-  EXPECT_THROW(OmniKinematics(OmniGeometry{0.0, 0.19, {30, 150, 270}}), std::invalid_argument);
-  EXPECT_THROW(OmniKinematics(OmniGeometry{0.05, 0.19, {30, 30, 30}}), std::invalid_argument);
+  EXPECT_THROW(OmniKinematics(OmniGeometry{0.0, 0.19, {30, 150, 270}}), SetupError);
+  EXPECT_THROW(OmniKinematics(OmniGeometry{0.05, 0.19, {30, 30, 30}}), SetupError);
 }
 
 TEST(EncoderSpec, ReferenceCountsPerTurnAndTick) {

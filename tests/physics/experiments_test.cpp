@@ -39,7 +39,7 @@ TEST(Experiments, ATargetCanBeMissed) {
 }
 
 TEST(Experiments, UnknownNameIsRefused) {
-  EXPECT_THROW(run_experiment("levitate", WorldParams{}, ExperimentOptions{}), std::invalid_argument);
+  EXPECT_THROW(run_experiment("levitate", WorldParams{}, ExperimentOptions{}), SetupError);
 }
 
 }  // namespace

@@ -118,7 +118,7 @@ TEST(Kicker, DoesNothingWhenTheBallIsNotEngaged) {
   const Eigen::Vector3d before = w.ball_velocity();
   const double volts = w.robot(0).kicker_voltage_v();
   const KickResult k = w.robot(0).kick(true, 50);
-  EXPECT_EQ(k.outcome, KickResult::Outcome::kNotEngaged);
+  EXPECT_EQ(k.outcome, KickOutcome::kNotEngaged);
   EXPECT_EQ(w.ball_velocity(), before);
   EXPECT_EQ(w.robot(0).kicker_voltage_v(), volts);
   EXPECT_LT(w.robot(0).last_kick_time_s(), 0);
@@ -166,7 +166,7 @@ TEST(Kicker, RefusesBelowTheFiringVoltageAndCapsPower) {
   w.place_ball({0, 0.26, p.ball.radius_m});
   run(w, 0.3);
   ASSERT_TRUE(robot.ball_engaged());
-  EXPECT_EQ(robot.kick(false, 50).outcome, KickResult::Outcome::kLowVoltage);
+  EXPECT_EQ(robot.kick(false, 50).outcome, KickOutcome::kLowVoltage);
 }
 
 TEST(Grabber, PullsTheBallIntoTheControlAreaOnlyWhenOn) {
@@ -210,7 +210,7 @@ TEST(Battery, SagsUnderMotorCurrentAndDrains) {
   World w(one_robot());
   Robot& robot = w.robot(0);
   run(w, 0.2);
-  const BatteryReading idle = robot.battery();
+  const BatteryVolts idle = robot.battery();
   EXPECT_NEAR(idle.power24_v, 25.2 - 0.3 * 0.08, 0.01);
   for (int n = 0; n < 3; ++n) robot.set_wheel_speed(n, 40.0);  // hard acceleration
   w.step();
@@ -337,7 +337,7 @@ TEST(SaveRestore, FileRoundTripIsExactAndRestores) {
 TEST(SaveRestore, RefusesAStateOfAnotherWorldAndMalformedFiles) {
   World w(busy_scene());
   World small(one_robot());
-  EXPECT_THROW(small.restore(w.save()), std::invalid_argument);
+  EXPECT_THROW(small.restore(w.save()), SetupError);
   const auto path = std::filesystem::temp_directory_path() / "canhil_bad_state.txt";
   {
     std::ofstream out(path);
@@ -356,19 +356,19 @@ TEST(World, RefusesStartPositionsInsideEachOther) {
   WorldParams p;
   p.robots = {Placement{0, 0, 0}};
   p.ball_start = {0.1, 0, 0.11};
-  EXPECT_THROW(World{p}, std::invalid_argument) << "ball inside a robot";
+  EXPECT_THROW(World{p}, SetupError) << "ball inside a robot";
   p.ball_start = {0.5, 0, 0.11};
   EXPECT_NO_THROW(World{p});
   p.ball_start = {0, 0.26, 0.11};  // held in the mouth (the front is +y at heading 0)
   EXPECT_NO_THROW(World{p});
   p.ball_start = {0, -0.26, 0.11};  // the same distance behind: inside the body
-  EXPECT_THROW(World{p}, std::invalid_argument);
+  EXPECT_THROW(World{p}, SetupError);
   p.ball_start = {0.5, 0, 0.11};
   p.robots.push_back(Placement{0.3, 0.2, 0});
   try {
     World w(p);
     FAIL();
-  } catch (const std::invalid_argument& e) {
+  } catch (const SetupError& e) {
     EXPECT_NE(std::string(e.what()).find("robot 0 and robot 1 start overlapping"), std::string::npos) << e.what();
   }
 }

@@ -15,7 +15,7 @@ namespace canhil::test {
 
 class LaptopEndpoint final : public emulator::Participant {
  public:
-  LaptopEndpoint(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, can_nodes::Nanos ec)
+  LaptopEndpoint(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, Nanos ec)
       : endpoint_(bus.attach("laptop", 1 << 16)), set_(std::move(set)), ec_(ec) {}
 
   /// Velocity sent in the M6 slots; nullopt sends nothing (silence).
@@ -37,14 +37,14 @@ class LaptopEndpoint final : public emulator::Participant {
     }
     return n;
   }
-  void tick(can_nodes::Nanos) override {
-    slot_ = can_nodes::kNever;
+  void tick(Nanos) override {
+    slot_ = kNever;
     if (!m6_1) return;
     send(set_->m6_1.encode(*m6_1));
     m6_2.seq = seq_++;
     send(set_->m6_2.encode(m6_2));
   }
-  can_nodes::Nanos next_wakeup() const override { return slot_; }
+  Nanos next_wakeup() const override { return slot_; }
 
   void send(const frames::CanFrame& f) { endpoint_->send(f); }
   const std::vector<frames::TimedFrame>& frames() const { return frames_; }
@@ -69,8 +69,8 @@ class LaptopEndpoint final : public emulator::Participant {
  private:
   std::unique_ptr<can_nodes::MemoryEndpoint> endpoint_;
   std::shared_ptr<const frames::MessageSet> set_;
-  can_nodes::Nanos ec_;
-  can_nodes::Nanos slot_ = can_nodes::kNever;
+  Nanos ec_;
+  Nanos slot_ = kNever;
   std::uint8_t seq_ = 0;
   std::vector<frames::TimedFrame> frames_;
 };

@@ -16,7 +16,6 @@
 namespace canhil::can_nodes {
 
 using frames::CanFrame;
-using frames::Nanos;
 using frames::TimedFrame;
 
 /// SocketCAN's receive filter: a frame passes when (frame.id & mask) == (id & mask),

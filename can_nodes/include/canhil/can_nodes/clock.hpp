@@ -9,7 +9,6 @@
 
 namespace canhil::can_nodes {
 
-using frames::Nanos;
 
 class Clock {
  public:

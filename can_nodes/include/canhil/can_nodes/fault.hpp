@@ -29,6 +29,7 @@
 #include <string_view>
 #include <vector>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/node.hpp"
 
 namespace canhil::can_nodes {
@@ -47,7 +48,7 @@ struct FaultRule {
   std::string text;        ///< as written
 };
 
-/// Parses one rule; throws std::invalid_argument saying what is wrong and the syntax.
+/// Parses one rule; throws SetupError saying what is wrong and the syntax.
 FaultRule parse_fault(std::string_view text);
 
 /// What one rule did over a run.
@@ -70,7 +71,7 @@ inline constexpr const char* kBatteryPacks[3] = {"logic", "power12", "power24"};
 
 class FaultInjector final : public FaultHook {
  public:
-  /// Throws std::invalid_argument when a target is neither a message nor a node
+  /// Throws SetupError when a target is neither a message nor a node
   /// name (nor a pack, for battery rules). `bit_rate` times an error frame and
   /// the retransmission it causes.
   FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,

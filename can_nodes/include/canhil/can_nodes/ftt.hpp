@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/clock.hpp"
-#include "canhil/can_nodes/setup_error.hpp"
+#include "canhil/base/setup_error.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace canhil::can_nodes {

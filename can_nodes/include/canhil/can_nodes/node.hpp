@@ -24,10 +24,6 @@
 
 namespace canhil::can_nodes {
 
-inline constexpr Nanos kNever = Nanos::max();
-/// "Never happened" for last-seen times: far enough back that `now - kLongAgo`
-/// exceeds any timeout, close enough that it cannot overflow (100 years).
-inline constexpr Nanos kLongAgo = -std::chrono::duration_cast<Nanos>(std::chrono::hours(24 * 365 * 100));
 
 struct NodeCounters {
   std::uint64_t received = 0;       ///< frames handled

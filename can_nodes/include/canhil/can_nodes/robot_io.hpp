@@ -9,15 +9,9 @@
 
 #include <cstdint>
 
+#include "canhil/base/robot.hpp"
+
 namespace canhil::can_nodes {
-
-enum class KickOutcome : std::uint8_t { kFired, kNotEngaged, kLowVoltage, kNoPower };
-
-struct BatteryVolts {
-  double logic_v = 0;
-  double power12_v = 0;
-  double power24_v = 0;
-};
 
 class RobotIo {
  public:

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/bus.hpp"
-#include "canhil/can_nodes/setup_error.hpp"
+#include "canhil/base/setup_error.hpp"
 
 namespace canhil::can_nodes {
 

@@ -19,7 +19,6 @@
 
 namespace canhil::emulator {
 
-using can_nodes::Nanos;
 
 /// Anything the runner drives: nodes, test endpoints, a handler.
 class Participant {

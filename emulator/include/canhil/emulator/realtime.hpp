@@ -51,7 +51,7 @@ class Realtime {
   Wait wait_;
   Nanos max_behind_;
   Nanos step_{0};
-  Nanos next_step_ = can_nodes::kNever;
+  Nanos next_step_ = kNever;
   Participants participants_;
   RealtimeStats stats_;
   std::function<void(Nanos)> after_step_;

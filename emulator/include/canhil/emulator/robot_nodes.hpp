@@ -17,7 +17,6 @@
 
 namespace canhil::emulator {
 
-using can_nodes::Nanos;
 
 class PhysicsRobotIo final : public can_nodes::RobotIo {
  public:
@@ -26,12 +25,12 @@ class PhysicsRobotIo final : public can_nodes::RobotIo {
   std::int64_t encoder_count(int wheel) const override { return robot_.encoder_count(wheel); }
   bool wheel_stalled(int wheel) const override { return robot_.wheel_stalled(wheel); }
   bool over_current(int wheel) const override { return robot_.over_current(wheel); }
-  can_nodes::KickOutcome kick(bool low, int power) override;
+  KickOutcome kick(bool low, int power) override;
   void set_grabber(int mode) override { robot_.set_grabber(mode); }
   bool ball_engaged() const override { return robot_.ball_engaged(); }
   double kicker_voltage_v() const override { return robot_.kicker_voltage_v(); }
   double compass_heading_deg() const override { return robot_.compass_heading_deg(); }
-  can_nodes::BatteryVolts battery() const override;
+  BatteryVolts battery() const override { return robot_.battery(); }
 
  private:
   physics::Robot& robot_;
@@ -74,7 +73,7 @@ class RobotNodes {
   using EndpointFactory = std::function<std::unique_ptr<can_nodes::Bus>(const std::string& node_name)>;
 
   /// Builds the set. `params` and `robot` must outlive it. Throws
-  /// can_nodes::SetupError when the schedule does not fit the EC.
+  /// SetupError when the schedule does not fit the EC.
   RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const can_nodes::NodeParams& params,
              can_nodes::RobotIo& robot, const EndpointFactory& endpoints, Nanos start);
 

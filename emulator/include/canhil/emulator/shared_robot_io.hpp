@@ -31,12 +31,12 @@ class SharedRobotIo final : public can_nodes::RobotIo {
   std::int64_t encoder_count(int wheel) const override;
   bool wheel_stalled(int wheel) const override;
   bool over_current(int wheel) const override;
-  can_nodes::KickOutcome kick(bool low, int power) override;
+  KickOutcome kick(bool low, int power) override;
   void set_grabber(int mode) override;
   bool ball_engaged() const override;
   double kicker_voltage_v() const override;
   double compass_heading_deg() const override;
-  can_nodes::BatteryVolts battery() const override;
+  BatteryVolts battery() const override;
 
   // The physics thread.
   /// Before a step: the latest wheel speeds and grabber mode, and the kicks asked for since.
@@ -51,11 +51,10 @@ class SharedRobotIo final : public can_nodes::RobotIo {
     bool engaged = false;
     double kicker_v = 0;
     double heading_deg = 0;
-    can_nodes::BatteryVolts battery;
+    BatteryVolts battery;
   };
   physics::Robot& robot_;
-  const int max_power_;
-  const double min_fire_voltage_v_;
+  const physics::KickerParams kicker_;
   mutable std::mutex mutex_;
   Sensors sensors_;
   std::array<std::optional<double>, 3> wheel_;

@@ -50,7 +50,7 @@ struct RobotOutcome {
   int kicks = 0;             ///< kicks the agent asked for
   std::uint64_t frames = 0;  ///< on its bus
   std::uint64_t bad_frames = 0;
-  physics::BatteryReading battery;  ///< the packs' voltages at the end
+  BatteryVolts battery;  ///< the packs' voltages at the end
   std::array<double, 3> charge{};   ///< their state of charge, 0..1
 };
 

@@ -21,9 +21,11 @@
 #include <variant>
 #include <vector>
 
+#include "canhil/base/setup_error.hpp"
+
 namespace canhil::frames {
 
-class DbcError : public std::runtime_error {
+class DbcError : public SetupError {
  public:
   DbcError(std::string file, int line, const std::string& message);
   const std::string& file() const noexcept { return file_; }

@@ -9,12 +9,10 @@
 #include <cstdint>
 #include <initializer_list>
 
+#include "canhil/base/time.hpp"
+
 namespace canhil::frames {
 
-/// Time on a canhil clock: nanoseconds since that clock's epoch. For the wall
-/// clock the epoch is the Unix epoch; for a simulated clock it is the start of
-/// the run. Received frames carry their time in this unit.
-using Nanos = std::chrono::nanoseconds;
 
 inline constexpr std::uint32_t kStandardIdMask = 0x7FFu;
 inline constexpr std::uint32_t kExtendedIdMask = 0x1FFF'FFFFu;

@@ -13,6 +13,8 @@
 #include <array>
 #include <cstdint>
 
+#include "canhil/base/setup_error.hpp"
+
 namespace canhil::kinematics {
 
 /// Velocity of the base in its own frame.
@@ -35,7 +37,7 @@ struct OmniGeometry {
 /// The base's inverse and forward kinematics; immutable once built.
 class OmniKinematics {
  public:
-  /// Throws std::invalid_argument if the geometry is degenerate (radius or
+  /// Throws SetupError if the geometry is degenerate (radius or
   /// distance not positive, wheels not spanning the plane).
   explicit OmniKinematics(const OmniGeometry& geometry = {});
 

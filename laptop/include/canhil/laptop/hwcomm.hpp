@@ -22,7 +22,6 @@
 
 namespace canhil::laptop {
 
-using Nanos = frames::Nanos;
 inline constexpr std::size_t kMaxLatencySamples = 1'000'000;
 
 struct HwCommStats {
@@ -49,7 +48,7 @@ class HwComm {
 
   /// A received frame with its receive timestamp.
   void on_frame(const frames::CanFrame& frame, Nanos rx_time);
-  /// When the handler must act next (its M6 slot), or Nanos::max().
+  /// When the handler must act next (its M6 slot), or kNever.
   Nanos next_deadline() const noexcept { return m6_slot_; }
   /// Acts at `now` (call at or after next_deadline()).
   void on_time(Nanos now);
@@ -71,15 +70,15 @@ class HwComm {
   Send send_;
   Clock clock_;
   HwCommStats stats_;
-  Nanos m6_slot_ = Nanos::max();
+  Nanos m6_slot_ = kNever;
   bool have_tm_ = false;
   std::uint16_t last_ec_ = 0;
   bool have_m4_1_ = false;
   frames::M4_1 m4_1_{};
   bool have_pose_ = false;
   float last_px_ = 0, last_py_ = 0, last_pa_ = 0;
-  Nanos last_m7_ = -Nanos(std::chrono::hours(24 * 365));
-  Nanos last_m5_ = -Nanos(std::chrono::hours(24 * 365));
+  Nanos last_m7_ = kLongAgo;
+  Nanos last_m5_ = kLongAgo;
   int last_grabber_ = -1;
   std::uint8_t m6_seq_ = 0;
   frames::M10 m10_{};

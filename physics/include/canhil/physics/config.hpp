@@ -15,11 +15,12 @@
 #include <string_view>
 #include <vector>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::physics {
 
-class ConfigError : public std::runtime_error {
+class ConfigError : public SetupError {
  public:
   ConfigError(std::string file, int line, std::string field, const std::string& message);
   const std::string& file() const noexcept { return file_; }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::physics {
@@ -55,7 +56,7 @@ struct ExperimentOptions {
 
 /// Names: ball-drop, ball-roll, kick, drive, tour.
 std::vector<std::string> experiment_names();
-/// Throws std::invalid_argument for an unknown name.
+/// Throws SetupError for an unknown name.
 ExperimentResult run_experiment(const std::string& name, const WorldParams& base, const ExperimentOptions& options);
 
 }  // namespace canhil::physics

@@ -19,6 +19,8 @@
 #include <memory>
 #include <vector>
 
+#include "canhil/base/robot.hpp"
+#include "canhil/base/setup_error.hpp"
 #include "canhil/kinematics/omni.hpp"
 #include "canhil/physics/field.hpp"
 #include "canhil/physics/params.hpp"
@@ -35,18 +37,13 @@ struct BodyState {
   friend bool operator==(const BodyState&, const BodyState&) = default;
 };
 
-enum class WheelMode : std::uint8_t {
-  kSpeed,    ///< the motor controller holds a wheel speed (firmware speed loop), within the motor's torque
-  kVoltage,  ///< open loop: a voltage across the motor, DC motor model
-};
-
 struct RobotState {
   BodyState chassis;
   std::array<BodyState, 3> wheels;
   std::array<double, 3> wheel_angle_rad{};  ///< unwrapped since start
   std::array<double, 3> hinge_angle_rad{};  ///< ODE's wrapped hinge angle at the last substep
-  std::array<WheelMode, 3> wheel_mode{};
-  std::array<double, 3> wheel_command{};  ///< rad/s (kSpeed) or V (kVoltage)
+  /// The motor controllers' target speeds (the firmware's speed loop holds them within the motor's torque).
+  std::array<double, 3> wheel_target_radps{};
   std::array<double, 3> motor_current_a{};
   double kicker_voltage_v = 0;
   int grabber_mode = 0;
@@ -67,23 +64,21 @@ struct WorldState {
 };
 
 /// Writes a state as text with every double in hexadecimal floating point, so
-/// that reading it back is exact. Throws std::runtime_error on I/O failure.
+/// that reading it back is exact. Throws SetupError when the file cannot be written.
 void save_state(const WorldState& state, const std::filesystem::path& path);
-/// Reads what save_state wrote; throws std::runtime_error naming the line on a malformed file.
+/// Reads what save_state wrote; throws SetupError naming the line on a malformed file.
 WorldState load_state(const std::filesystem::path& path);
 
 struct KickResult {
-  enum class Outcome : std::uint8_t { kFired, kNotEngaged, kLowVoltage, kNoPower };
-  Outcome outcome = Outcome::kNoPower;
+  KickOutcome outcome = KickOutcome::kNoPower;
   double speed_mps = 0;  ///< launch speed relative to the robot, when fired
-  bool fired() const noexcept { return outcome == Outcome::kFired; }
+  bool fired() const noexcept { return outcome == KickOutcome::kFired; }
 };
 
-struct BatteryReading {
-  double logic_v = 0;
-  double power12_v = 0;
-  double power24_v = 0;
-};
+/// The kick rule, written once: what a kick of `power` does with the barrier
+/// and the capacitor in this state (Robot::kick fires by it; the real-time
+/// path asks it on the state the physics published).
+KickOutcome kick_outcome(const KickerParams& kicker, int power, bool ball_engaged, double kicker_voltage_v) noexcept;
 
 class World;
 struct RobotImpl;
@@ -96,8 +91,6 @@ class Robot {
   // --- motors and encoders (the motor nodes) ---------------------------------
   /// Speed control of wheel n (0..2) in rad/s, positive driving the base along F_n.
   void set_wheel_speed(int wheel, double radps);
-  /// Open-loop voltage across wheel n's motor (clamped to the 24 V rail).
-  void set_wheel_voltage(int wheel, double volts);
   /// All wheels held at zero speed (the firmware's brake).
   void brake();
   double wheel_angle_rad(int wheel) const;
@@ -127,7 +120,7 @@ class Robot {
   // --- compass and battery ------------------------------------------------------
   /// Heading of the robot's front, clockwise from magnetic north, [0, 360).
   double compass_heading_deg() const;
-  BatteryReading battery() const;
+  BatteryVolts battery() const;
   /// State of charge of the logic, 12 V and 24 V packs, 0..1.
   std::array<double, 3> charge() const;
   /// Takes these fractions of a full pack from each pack on top of what the
@@ -154,7 +147,7 @@ class Robot {
 
 class World {
  public:
-  /// Builds the world; throws std::invalid_argument for impossible parameters.
+  /// Builds the world; throws SetupError for impossible parameters.
   explicit World(WorldParams params);
   ~World();
   World(const World&) = delete;
@@ -185,7 +178,7 @@ class World {
 
   WorldState save() const;
   /// Restores a state saved from a world with the same parameters (same robot
-  /// and obstacle count); throws std::invalid_argument otherwise.
+  /// and obstacle count); throws SetupError otherwise.
   void restore(const WorldState& state);
 
   struct Impl;

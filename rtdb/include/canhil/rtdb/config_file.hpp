@@ -8,9 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "canhil/base/setup_error.hpp"
+
 namespace canhil::rtdb {
 
-class RtdbConfigError : public std::runtime_error {
+class RtdbConfigError : public SetupError {
  public:
   RtdbConfigError(const std::string& file, int line, const std::string& message);
   int line() const noexcept { return line_; }

@@ -18,7 +18,6 @@
 
 namespace canhil::timing {
 
-using frames::Nanos;
 
 struct TimingConfig {
   Nanos elementary_cycle = std::chrono::milliseconds(10);

@@ -1,8 +1,8 @@
-// canhil/frames/demand.hpp — always-on invariant checks.
+// canhil/base/demand.hpp — always-on invariant checks.
 //
 // CANHIL_DEMAND(cond, message): a broken invariant (a bug, not bad input)
 // prints file:line and the message and aborts, in every build type. Bad input
-// and set-up mistakes use exceptions or counters instead (see docs/errors.md).
+// and set-up mistakes use SetupError or counters instead (docs/errors.md).
 #pragma once
 
 #include <cstdio>

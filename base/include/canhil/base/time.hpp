@@ -1,0 +1,42 @@
+// canhil/base/time.hpp — time as canhil counts it.
+//
+// Nanos is nanoseconds since a clock's epoch: the Unix epoch for the wall
+// clock, the start of the run for a simulated one. Received frames carry
+// their time in it. kNever and kLongAgo are the two ends nobody reaches;
+// seconds and milliseconds as doubles are for reports and parameters only
+// (they convert once, here, not in ad-hoc casts).
+#pragma once
+
+#include <chrono>
+#include <cmath>
+
+namespace canhil {
+
+using Nanos = std::chrono::nanoseconds;
+
+/// "No wake-up wanted", "no deadline": later than any time a run reaches.
+inline constexpr Nanos kNever = Nanos::max();
+/// "Never happened" for last-seen times: far enough back that `now - kLongAgo`
+/// exceeds any timeout, close enough that it cannot overflow (100 years).
+inline constexpr Nanos kLongAgo = -std::chrono::duration_cast<Nanos>(std::chrono::hours(24 * 365 * 100));
+
+/// Seconds as a double (reports, physics parameters).
+constexpr double to_seconds(Nanos t) noexcept { return std::chrono::duration<double>(t).count(); }
+/// Milliseconds as a double (reports).
+constexpr double to_ms(Nanos t) noexcept { return std::chrono::duration<double, std::milli>(t).count(); }
+/// Microseconds as a double (reports).
+constexpr double to_us(Nanos t) noexcept { return std::chrono::duration<double, std::micro>(t).count(); }
+/// A number of seconds as Nanos, rounded toward zero (as duration_cast does).
+constexpr Nanos from_seconds(double s) noexcept {
+  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
+}
+/// A number of milliseconds as Nanos, rounded toward zero.
+constexpr Nanos from_ms(double ms) noexcept {
+  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::milli>(ms));
+}
+/// A number of microseconds as Nanos, rounded toward zero.
+constexpr Nanos from_us(double us) noexcept {
+  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::micro>(us));
+}
+
+}  // namespace canhil
