@@ -25,7 +25,7 @@
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
-#include "canhil/emulator/virtual_run.hpp"
+#include "canhil/emulator/virtual_driver.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 
@@ -38,30 +38,23 @@ double cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
-// The scenario installed with canhil, or in the source tree.
-std::filesystem::path shipped_scenario(const std::string& name) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "scenarios" / name;
-    if (fs::exists(installed, ec)) return installed;
-  }
-  return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
-}
-
 // The five-robot scenario (or `config`) in virtual time, everything on: true when at least 100x.
 bool bench_virtual(const std::optional<std::string>& config, double seconds,
                    const std::shared_ptr<const frames::MessageSet>& messages) {
-  const std::filesystem::path path = config ? std::filesystem::path(*config) : shipped_scenario("five_robots.toml");
+  const std::filesystem::path path =
+      config ? std::filesystem::path(*config) : emulator::shipped_scenario("five_robots.toml");
   const emulator::Scenario sc = emulator::load_scenario(path);
-  const emulator::VirtualRunConfig cfg = emulator::virtual_run_config(sc, messages);
   std::printf("canhil bench: virtual time: %s, %zu robot(s), %zu obstacle(s), %g s of virtual time\n",
               path.string().c_str(), sc.world.robots.size(), sc.world.obstacles.size(), seconds);
+  emulator::SessionOptions options;
+  options.messages = messages;
   const double cpu0 = cpu_seconds();
   const auto wall0 = std::chrono::steady_clock::now();
-  emulator::VirtualRun run(cfg);
-  run.run_for(std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds)));
+  emulator::Session session(sc, options);
+  emulator::VirtualOptions virtual_options;
+  virtual_options.record_trace = false;  // as canhil run without --trace: frames counted
+  emulator::VirtualDriver run(session, virtual_options);
+  run.run_for(from_seconds(seconds));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   const double cpu = cpu_seconds() - cpu0;
   std::uint64_t frames = 0;
@@ -82,12 +75,13 @@ bool bench_jitter(const std::string& iface, double seconds, int priority,
   std::printf(
       "canhil bench: real time on %s, %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then both\n",
       iface.c_str(), seconds, priority);
-  RealtimeOptions opt;
-  opt.messages = messages;
+  emulator::SessionOptions session;
+  session.messages = messages;
+  emulator::RealtimeOptions opt;
   opt.priority = priority;
   const JitterFigures bare = bare_loop_jitter(iface, seconds, ec, priority);
-  const emulator::Scenario one = emulator::load_scenario(shipped_scenario("one_robot.toml"));
-  const JitterFigures emu = emulator_jitter(iface, seconds, one, opt);
+  const emulator::Scenario one = emulator::load_scenario(emulator::shipped_scenario("one_robot.toml"));
+  const JitterFigures emu = emulator_jitter(iface, seconds, one, session, opt);
   // The same bare loop while canhil run runs: what the machine itself does
   // under that load (a diagnostic, not the target's reference).
   JitterFigures loaded;
@@ -95,7 +89,7 @@ bool bench_jitter(const std::string& iface, double seconds, int priority,
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     loaded = bare_loop_jitter(iface, seconds - 1, ec, priority);
   });
-  emulator_jitter(iface, seconds, one, opt);
+  emulator_jitter(iface, seconds, one, session, opt);
   beside.join();
   const auto line = [](const char* what, const JitterFigures& j) {
     std::printf("  %-34s %6zu releases, %4llu missing  p50 %8.1f us  p99 %8.1f us  max %8.1f us\n", what, j.releases,

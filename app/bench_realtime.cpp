@@ -16,7 +16,8 @@
 #include "canhil/can_nodes/ftt.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
-#include "fifo_scheduling.hpp"
+#include "canhil/emulator/fifo_scheduling.hpp"
+#include "run_realtime.hpp"
 
 namespace canhil::app {
 namespace {
@@ -145,8 +146,8 @@ JitterFigures bare_loop_jitter(const std::string& iface, double seconds, Nanos p
   const can_nodes::Filter only[] = {can_nodes::Filter::exact(kBareLoopId)};
   Listener listener(iface, only);
   auto tx = can_nodes::SocketCanBus::open(iface);
-  const MemoryLock memory(priority > 0);
-  const FifoScheduling fifo(priority);
+  const emulator::MemoryLock memory(priority > 0);
+  const emulator::FifoScheduling fifo(priority);
   const auto n = static_cast<std::uint32_t>(seconds / std::chrono::duration<double>(period).count());
   Nanos deadline = (can_nodes::WallClock{}.now() / period + 2) * period;
   for (std::uint32_t k = 0; k < n; ++k, deadline += period) {
@@ -164,15 +165,24 @@ JitterFigures bare_loop_jitter(const std::string& iface, double seconds, Nanos p
 }
 
 JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator::Scenario scenario,
-                              const RealtimeOptions& options) {
-  const frames::MessageSet& set = *options.messages;
+                              const emulator::SessionOptions& session, const emulator::RealtimeOptions& options) {
+  const frames::MessageSet& set = *session.messages;
   const can_nodes::Filter only[] = {can_nodes::Filter::exact(set.tm.message().id())};
   scenario.interfaces.at(0) = iface;
   Listener listener(iface, only);
-  RealtimeOptions run = options;
-  run.duration_s = seconds;
-  run.silent = true;
-  run_realtime(scenario, run);
+  {
+    emulator::Session run(scenario, session);
+    struct Null {
+      FILE* file = std::fopen("/dev/null", "w");
+      ~Null() {
+        if (file != nullptr) std::fclose(file);
+      }
+    } null;
+    RealtimeOutput output;
+    output.duration_s = seconds;
+    output.out = null.file != nullptr ? null.file : stdout;
+    run_realtime(run, options, output);
+  }
   std::vector<std::pair<std::int64_t, Nanos>> releases;
   std::int64_t k = 0;
   std::uint16_t previous = 0;

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "canhil/emulator/scenario.hpp"
-#include "realtime_run.hpp"
+#include "canhil/emulator/realtime_driver.hpp"
 
 namespace canhil::app {
 
@@ -27,7 +27,7 @@ struct JitterFigures {
 JitterFigures bare_loop_jitter(const std::string& iface, double seconds, std::chrono::nanoseconds period, int priority);
 /// `canhil run` of the scenario (its first robot on `iface`, everything on), its TMs.
 JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator::Scenario scenario,
-                              const RealtimeOptions& options);
+                              const emulator::SessionOptions& session, const emulator::RealtimeOptions& options);
 
 struct RateFigures {
   std::uint64_t sent = 0;      ///< frames the sender handed to the kernel

@@ -115,21 +115,9 @@ int dump_log(const Codec& codec, const std::string& path, bool json, long long h
   return printer.clean() && bad_lines == 0 ? 0 : 1;
 }
 
-const char* state_name(can_nodes::BusState s) {
-  switch (s) {
-    case can_nodes::BusState::kUp:
-      return "up";
-    case can_nodes::BusState::kDown:
-      return "down";
-    case can_nodes::BusState::kGone:
-      return "gone";
-  }
-  return "?";
-}
-
 int dump_live(const Codec& codec, const std::string& iface, bool json, long long count, double seconds) {
   auto bus = can_nodes::SocketCanBus::open(iface);
-  bus->set_error_mask(can_nodes::kErrAll);
+  bus->set_error_mask(frames::kErrorClassMask);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   const can_nodes::WallClock clock;
@@ -139,7 +127,7 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   Printer printer(codec, json);
   can_nodes::BusState last = bus->state();
   if (last != can_nodes::BusState::kUp)
-    std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), state_name(last));
+    std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), can_nodes::state_name(last));
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   while (!g_stop && (count < 0 || static_cast<long long>(printer.frames()) < count) && clock.now() < deadline) {
     if (!bus->wait_readable(std::chrono::milliseconds(100))) {
@@ -151,7 +139,7 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
     }
     if (bus->state() != last) {
       last = bus->state();
-      std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), state_name(last));
+      std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), can_nodes::state_name(last));
       if (last == can_nodes::BusState::kGone) break;
     }
   }

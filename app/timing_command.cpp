@@ -68,7 +68,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
     }
   } else {
     auto bus = can_nodes::SocketCanBus::open(source);
-    bus->set_error_mask(can_nodes::kErrAll);  // error frames count toward the load and the report
+    bus->set_error_mask(frames::kErrorClassMask);  // error frames count toward the load and the report
     const can_nodes::WallClock clock;
     const Nanos end =
         clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds));

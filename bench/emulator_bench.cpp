@@ -6,8 +6,9 @@
 #include <cmath>
 
 #include "canhil/can_nodes/memory_bus.hpp"
-#include "canhil/emulator/lockstep.hpp"
+#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/emulator/robot_rig.hpp"
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace {
@@ -16,7 +17,7 @@ using namespace canhil;
 using namespace std::chrono_literals;
 
 // Sends M6 in its slots (like the laptop's handler) and counts what it hears.
-class Laptop final : public emulator::Participant {
+class Laptop final : public can_nodes::Participant {
  public:
   Laptop(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set)
       : ep_(bus.attach("laptop", 1 << 16)), set_(std::move(set)) {}
@@ -25,8 +26,9 @@ class Laptop final : public emulator::Participant {
     while (auto f = ep_->receive()) {
       ++n;
       frames::Tm tm;
-      if (f->frame.id == 0x010 && set_->tm.decode(f->frame, tm).ok() && (tm.sync_bitmap & (1u << 6)) != 0) {
-        slot_ = f->time + 10ms - std::chrono::microseconds(tm.sync_window_us);
+      const std::uint32_t m6 = 1u << set_->ftt(set_->m6_1.message()).index;
+      if (f->frame.id == set_->tm.message().id() && set_->tm.decode(f->frame, tm).ok()) {
+        if (const auto start = sync_.on_tm(tm, f->time, 10ms, m6)) slot_ = *start;
       }
     }
     heard_ += n;
@@ -34,7 +36,7 @@ class Laptop final : public emulator::Participant {
   }
   void tick(Nanos now) override {
     slot_ = kNever;
-    const double t = std::chrono::duration<double>(now).count();
+    const double t = to_seconds(now);
     ep_->send(set_->m6_1.encode(frames::M6_1{0.3 * std::sin(t), 0.8 * std::cos(0.5 * t)}));
     ep_->send(set_->m6_2.encode(frames::M6_2{0.5, 0, 0}));
   }
@@ -44,6 +46,7 @@ class Laptop final : public emulator::Participant {
  private:
   std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
   std::shared_ptr<const frames::MessageSet> set_;
+  frames::SyncSlot sync_;
   Nanos slot_ = kNever;
 };
 
@@ -52,12 +55,11 @@ void BM_OneRobotVirtualTime(benchmark::State& state) {
   wp.robots = {physics::Placement{0, 0, 0}};
   wp.ball_start = {2, 2, wp.ball.radius_m};
   emulator::RobotRig rig(frames::MessageSet::load(CANHIL_BENCH_DBC), wp);
-  Laptop laptop(rig.bus, rig.set);
-  emulator::Lockstep& run = rig.run;
-  run.add(laptop);
+  Laptop laptop(rig.bus(), rig.messages());
+  rig.add(laptop);
   std::int64_t simulated_s = 0;
   for (auto _ : state) {
-    run.run_for(1s);
+    rig.run_for(1s);
     ++simulated_s;
   }
   state.counters["realtime_factor"] = benchmark::Counter(static_cast<double>(simulated_s), benchmark::Counter::kIsRate);

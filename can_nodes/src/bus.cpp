@@ -15,4 +15,16 @@ bool Filter::matches(const CanFrame& frame) const noexcept {
   return hit != invert;
 }
 
+const char* state_name(BusState state) noexcept {
+  switch (state) {
+    case BusState::kUp:
+      return "up";
+    case BusState::kDown:
+      return "down";
+    case BusState::kGone:
+      return "gone";
+  }
+  return "?";
+}
+
 }  // namespace canhil::can_nodes

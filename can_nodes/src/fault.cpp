@@ -156,26 +156,39 @@ std::string describe(const FaultCount& c) {
 
 FaultInjector::FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,
                              const std::vector<std::string>& node_names, std::uint64_t seed, std::uint32_t bit_rate)
-    : rules_(std::move(rules)), set_(std::move(set)), state_(seed), bit_rate_(bit_rate) {
-  for (const FaultRule& rule : rules_) {
-    std::uint32_t id = kNoId;
-    if (rule.target != "*" && rule.kind != FaultKind::kBattery) {
-      if (const frames::MessageCodec* m = set_->codec().find(rule.target)) {
-        id = m->id();
-      } else {
-        const bool node = std::any_of(node_names.begin(), node_names.end(),
-                                      [&](const std::string& n) { return names_node(rule.target, n); });
-        if (!node) {
-          std::string known;
-          for (const std::string& n : node_names) known += " " + fault_node_name(n);
-          throw SetupError("fault '" + rule.text + "': '" + rule.target +
-                                      "' is neither a message of the message set nor a node; the nodes are" + known);
-        }
-      }
+    : set_(std::move(set)), node_names_(node_names), state_(seed), bit_rate_(bit_rate) {
+  for (const FaultRule& rule : rules) add_rule(rule);
+}
+
+std::uint32_t FaultInjector::target_id(const FaultRule& rule) const {
+  if (rule.target == "*" || rule.kind == FaultKind::kBattery) return kNoId;
+  if (const frames::MessageCodec* m = set_->codec().find(rule.target)) return m->id();
+  const bool node = std::any_of(node_names_.begin(), node_names_.end(),
+                                [&](const std::string& n) { return names_node(rule.target, n); });
+  if (!node) {
+    std::string known;
+    for (const std::string& n : node_names_) {
+      known += ' ';
+      known += fault_node_name(n);
     }
-    rule_ids_.push_back(id);
-    counts_.push_back({rule.text, rule.kind, 0, 0, Nanos{0}});
+    throw SetupError("fault '" + rule.text + "': '" + rule.target +
+                     "' is neither a message of the message set nor a node; the nodes are" + known);
   }
+  return kNoId;
+}
+
+void FaultInjector::add_rule(const FaultRule& rule) {
+  const std::uint32_t id = target_id(rule);  // before the lock: it may throw
+  const std::lock_guard lock(mutex_);
+  rules_.push_back(rule);
+  rule_ids_.push_back(id);
+  counts_.push_back({rule.text, rule.kind, 0, 0, Nanos{0}});
+  rule_count_.store(rules_.size(), std::memory_order_release);
+}
+
+std::vector<FaultCount> FaultInjector::counts() const {
+  const std::lock_guard lock(mutex_);
+  return counts_;
 }
 
 bool FaultInjector::matches(std::size_t k, const std::string& node, std::uint32_t id) const {
@@ -195,8 +208,9 @@ double FaultInjector::uniform() {
 }
 
 FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanFrame& frame, Nanos now) {
-  const std::lock_guard lock(mutex_);
   FaultDecision d;
+  if (rule_count_.load(std::memory_order_acquire) == 0) return d;
+  const std::lock_guard lock(mutex_);
   for (std::size_t k = 0; k < rules_.size(); ++k) {
     const FaultRule& rule = rules_[k];
     if (rule.kind == FaultKind::kBattery || now - start_ < rule.from || !matches(k, node, frame.id)) continue;
@@ -235,10 +249,13 @@ FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanF
 }
 
 std::array<double, 3> FaultInjector::battery_drain_until(Nanos now) {
-  const std::lock_guard lock(mutex_);
   std::array<double, 3> drain{};
+  // drained_until_ is this thread's alone (the physics'): kept current even
+  // without rules, so a rule added later drains from then on, not from the start.
   const Nanos since = drained_until_;
   drained_until_ = std::max(drained_until_, now);
+  if (rule_count_.load(std::memory_order_acquire) == 0) return drain;
+  const std::lock_guard lock(mutex_);
   for (std::size_t k = 0; k < rules_.size(); ++k) {
     const FaultRule& rule = rules_[k];
     if (rule.kind != FaultKind::kBattery) continue;

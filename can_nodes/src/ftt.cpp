@@ -13,12 +13,14 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   if (config.bit_rate == 0) throw SetupError("the bit rate must be positive");
   auto us = [](Nanos t) { return std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(t).count()); };
   Nanos longest_async{0};
+  Nanos tm_time{0};  // the TM's worst-case wire time
+  std::uint32_t cycle = 1;  // ECs after which the schedule repeats
   for (const frames::MessageCodec& m : set.codec().messages()) {
     const frames::FttInfo& info = set.ftt(m);
     const Nanos wire =
         frames::bits_to_time(frames::worst_case_frame_bits(m.def().length, m.def().extended), config.bit_rate);
     if (info.kind == frames::FttKind::kTrigger) {
-      tm_time_ = wire;
+      tm_time = wire;
       if (info.period != ec) {
         throw SetupError("the trigger message " + m.def().name + " has period " + us(info.period) +
                          " us but the elementary cycle is " + us(ec) +
@@ -35,23 +37,24 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
       const auto i = static_cast<std::size_t>(info.index);
       period_ecs_[i] = static_cast<std::uint32_t>(info.period.count() / ec.count());
       frame_time_[i] = wire;
-      cycle_ = std::lcm(cycle_, period_ecs_[i]);
+      cycle = std::lcm(cycle, period_ecs_[i]);
     }
   }
   std::uint64_t worst_ec = 0;
-  for (std::uint64_t k = 0; k < cycle_; ++k) {
+  Nanos longest{0};  // the longest synchronous window of the cycle
+  for (std::uint64_t k = 0; k < cycle; ++k) {
     const Nanos w = sync_window(bitmap(k));
-    if (w > longest_) {
-      longest_ = w;
+    if (w > longest) {
+      longest = w;
       worst_ec = k;
     }
   }
-  const Nanos needed = tm_time_ + longest_async + longest_;
+  const Nanos needed = tm_time + longest_async + longest;
   if (needed > ec) {
     std::ostringstream os;
     os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message ("
-       << us(tm_time_) << " us), one asynchronous frame (" << us(longest_async)
-       << " us) and the synchronous window of EC " << worst_ec << " (" << us(longest_) << " us, messages";
+       << us(tm_time) << " us), one asynchronous frame (" << us(longest_async)
+       << " us) and the synchronous window of EC " << worst_ec << " (" << us(longest) << " us, messages";
     const std::uint32_t b = bitmap(worst_ec);
     for (int i = 0; i < 32; ++i) {
       if ((b >> i) & 1u) os << ' ' << set.sync_message(i)->name();
@@ -75,10 +78,6 @@ Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
     if ((b >> i) & 1u) w += frame_time_[i];
   }
   return w == Nanos{0} ? w : w + config_.sync_window_guard;
-}
-
-std::uint32_t FttSchedule::period_ecs(int ftt_index) const noexcept {
-  return ftt_index < 0 || ftt_index > 31 ? 0 : period_ecs_[static_cast<std::size_t>(ftt_index)];
 }
 
 }  // namespace canhil::can_nodes

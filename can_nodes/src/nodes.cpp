@@ -38,18 +38,11 @@ Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, c
 
 }  // namespace
 
-std::optional<Nanos> SyncSlot::on_tm(const frames::Tm& tm, Nanos tm_time, Nanos ec, std::uint32_t mine) noexcept {
-  due_ = tm.sync_bitmap & mine;
-  start_ = tm_time + ec - std::chrono::microseconds(tm.sync_window_us);
-  if (due_ == 0) return std::nullopt;
-  return start_;
-}
-
 // --- FttMaster -----------------------------------------------------------------
 
 FttMaster::FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const FttSchedule& schedule,
                      Nanos first_ec)
-    : Node("FTT master", bus, std::move(set)), schedule_(schedule), first_ec_(first_ec) {
+    : Node(node_name(NodeId::kMaster), bus, std::move(set)), schedule_(schedule), first_ec_(first_ec) {
   bus.set_filters({});  // hears nothing
   wake_at(first_ec_);
 }
@@ -73,7 +66,7 @@ void FttMaster::step(Nanos now) {
 // --- PicBase -------------------------------------------------------------------
 
 PicBase::PicBase(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot)
-    : Node("Pic_base", bus, std::move(set)), params_(params), robot_(robot), kinematics_(params.geometry) {
+    : Node(node_name(NodeId::kPicBase), bus, std::move(set)), params_(params), robot_(robot), kinematics_(params.geometry) {
   const auto f = filters_for(messages(), {"TM", "M6_1", "M6_2", "M7"});
   bus.set_filters(f);
 }
@@ -160,7 +153,7 @@ void PicBase::step(Nanos now) {
 
 MotorNode::MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
                      int wheel, Nanos first_tick)
-    : Node("Motor" + std::to_string(wheel + 1), bus, std::move(set)),
+    : Node(node_name(motor_node(wheel)), bus, std::move(set)),
       params_(params),
       robot_(robot),
       wheel_(wheel),
@@ -217,7 +210,7 @@ void MotorNode::step(Nanos now) {
 // --- PicOdom -------------------------------------------------------------------
 
 PicOdom::PicOdom(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params)
-    : Node("Pic_odom", bus, std::move(set)), params_(params), kinematics_(params.geometry) {
+    : Node(node_name(NodeId::kPicOdom), bus, std::move(set)), params_(params), kinematics_(params.geometry) {
   const auto f = filters_for(messages(), {"TM", "M3_1", "M3_2", "M3_3", "M5_1", "M5_2"});
   bus.set_filters(f);
 }
@@ -292,7 +285,7 @@ void PicOdom::step(Nanos now) {
 
 CompassNode::CompassNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
                          RobotIo& robot)
-    : Node("Compass", bus, std::move(set)), params_(params), robot_(robot) {
+    : Node(node_name(NodeId::kCompass), bus, std::move(set)), params_(params), robot_(robot) {
   const auto f = filters_for(messages(), {"TM"});
   bus.set_filters(f);
 }
@@ -322,7 +315,7 @@ void CompassNode::step(Nanos now) {
 SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
                              std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state,
                              Bus* watch)
-    : Node("SysMon", bus, std::move(set)),
+    : Node(node_name(NodeId::kSysMon), bus, std::move(set)),
       params_(params),
       watch_(watch),
       bad_frames_(std::move(bad_frames)),

@@ -4,14 +4,19 @@
 
 namespace canhil::emulator {
 
-RealtimePhysics::RealtimePhysics(physics::World& world, std::vector<SharedRobotIo*> io, Nanos max_behind)
-    : world_(world),
-      io_(std::move(io)),
-      max_behind_(max_behind),
-      step_(std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(world.params().simulation.step_s))) {
-  view_.ball = world_.ball_position();
-  for (std::size_t r = 0; r < world_.robot_count(); ++r) view_.robots.push_back(world_.robot(r).pose());
+void book_step(RealtimeStats& stats, Nanos now, Nanos& due, Nanos step, Nanos max_behind) noexcept {
+  const Nanos late = now - due;
+  stats.worst_lateness = std::max(stats.worst_lateness, late);
+  if (late > step) ++stats.late_steps;
+  if (late > max_behind) {
+    // Stalled (debugger, overloaded machine): drop the missed steps.
+    const auto missed = late / step;
+    stats.skipped_steps += static_cast<std::uint64_t>(missed);
+    due += step * missed;
+  }
 }
+
+RealtimePhysics::RealtimePhysics(Session& session, Nanos max_behind) : session_(session), max_behind_(max_behind) {}
 
 RealtimePhysics::~RealtimePhysics() { stop(); }
 
@@ -30,33 +35,24 @@ RealtimeStats RealtimePhysics::stats() const {
   return stats_;
 }
 
-RealtimePhysics::View RealtimePhysics::view() const {
-  const std::lock_guard lock(mutex_);
-  return view_;
-}
-
 void RealtimePhysics::loop(Nanos start) {
-  Nanos next = start + step_;
+  const Nanos step = session_.step_period();
+  Nanos next = start + step;
   RealtimeStats stats;
-  View view = view_;
   while (!stop_.load(std::memory_order_relaxed)) {
     if (can_nodes::WallClock{}.now() < next) {
       can_nodes::WallClock::sleep_until(next);
       continue;
     }
     const Nanos now = can_nodes::WallClock{}.now();
-    book_step(stats, now, next, step_, max_behind_);
-    for (SharedRobotIo* io : io_) io->apply_commands();
-    world_.step();
+    book_step(stats, now, next, step, max_behind_);
+    session_.before_step();
+    session_.world().step();
     ++stats.physics_steps;
-    next += step_;
-    for (SharedRobotIo* io : io_) io->publish();
-    if (after_step_) after_step_(now);
-    view.ball = world_.ball_position();
-    for (std::size_t r = 0; r < view.robots.size(); ++r) view.robots[r] = world_.robot(r).pose();
+    next += step;
+    session_.after_step(now);
     const std::lock_guard lock(mutex_);
     stats_ = stats;
-    view_ = view;
   }
 }
 

@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 #include <algorithm>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
 
 namespace canhil::emulator {
@@ -33,6 +34,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   Scenario s;
   s.world = physics::parse_world_params(toml_text, file_name, {"run"});
   const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
+  if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
   if (const toml::table* run = root["run"].as_table()) {
     const RunReader r(*run, file_name);
@@ -75,7 +77,9 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
     if (const toml::array* a = r.array("agents")) {
       for (const toml::node& e : *a) {
         const auto v = e.value<std::int64_t>();
-        if (!v || !e.is_integer() || *v < 1 || *v > 6) r.fail(e, "agents", "agent numbers are whole numbers 1..6");
+        if (!v || !e.is_integer() || *v < kFirstAgent || *v > kLastAgent) {
+          r.fail(e, "agents", "agent numbers are whole numbers 1..6");
+        }
         if (std::count(s.agents.begin(), s.agents.end(), *v) != 0) {
           r.fail(e, "agents", "agent " + std::to_string(*v) + " appears twice; give each robot its own");
         }
@@ -98,25 +102,52 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
       }
     }
   }
-  for (std::size_t k = s.interfaces.size(); k < robots; ++k) s.interfaces.push_back("vcan" + std::to_string(k));
-  for (std::size_t k = s.agents.size(); k < robots; ++k) s.agents.push_back(static_cast<int>(k) + 1);
+  complete(s);
   return s;
+}
+
+void complete(Scenario& s) {
+  if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
+  const std::size_t robots = s.world.robots.size();
+  if (robots > static_cast<std::size_t>(kLastAgent - kFirstAgent + 1)) {
+    throw SetupError("a run takes at most " + std::to_string(kLastAgent - kFirstAgent + 1) +
+                     " robots (agents CAMBADA_1..6); this one places " + std::to_string(robots));
+  }
+  if (s.interfaces.empty()) {
+    for (std::size_t k = 0; k < robots; ++k) s.interfaces.push_back("vcan" + std::to_string(k));
+  }
+  if (s.agents.empty()) {
+    for (std::size_t k = 0; k < robots; ++k) s.agents.push_back(kFirstAgent + static_cast<int>(k));
+  }
+  if (s.interfaces.size() != robots || s.agents.size() != robots) {
+    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) +
+                     " robots, " + std::to_string(s.interfaces.size()) + " interfaces, " +
+                     std::to_string(s.agents.size()) + " agents)");
+  }
+  for (const int a : s.agents) {
+    if (a < kFirstAgent || a > kLastAgent) {
+      throw SetupError("agent numbers are " + std::to_string(kFirstAgent) + ".." + std::to_string(kLastAgent) +
+                       ", got " + std::to_string(a));
+    }
+    if (std::count(s.agents.begin(), s.agents.end(), a) > 1) {
+      throw SetupError("agent " + std::to_string(a) + " is given to two robots; give each robot its own");
+    }
+  }
+}
+
+std::filesystem::path shipped_scenario(const std::string& name) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "scenarios" / name;
+    if (fs::exists(installed, ec)) return installed;
+  }
+  return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
 }
 
 Scenario load_scenario(const std::filesystem::path& path) {
   return parse_scenario(physics::read_config_file(path), path.string());
-}
-
-VirtualRunConfig virtual_run_config(const Scenario& scenario, std::shared_ptr<const frames::MessageSet> messages) {
-  VirtualRunConfig cfg;
-  cfg.messages = std::move(messages);
-  cfg.world = scenario.world;
-  cfg.kick_power = scenario.kick_power;
-  cfg.interfaces = scenario.interfaces;
-  cfg.agents = scenario.agents;
-  cfg.faults = scenario.faults;
-  cfg.seed = scenario.seed;
-  return cfg;
 }
 
 }  // namespace canhil::emulator

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/physics_robot_io.hpp"
 
 namespace canhil::emulator {
 

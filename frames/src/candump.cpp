@@ -6,7 +6,6 @@
 namespace canhil::frames {
 namespace {
 
-constexpr std::uint32_t kErrFlagBit = 0x2000'0000u;  // CAN_ERR_FLAG in a printed 8-digit id
 
 int hex_value(char c) {
   if (c >= '0' && c <= '9') return c - '0';
@@ -46,7 +45,7 @@ bool parse_compact(std::string_view text, CanFrame& out, std::string* error) {
   if (hash == 3) {
     if (id > kStandardIdMask) return fail(error, "standard identifier above 7FF", text);
     out.id = id;
-  } else if ((id & kErrFlagBit) != 0u) {
+  } else if ((id & kErrorFlag) != 0u) {
     out.kind = FrameKind::kError;
     out.id = id & kErrorClassMask;
   } else {
@@ -107,7 +106,7 @@ std::size_t format_compact(const CanFrame& frame, char (&buf)[kCompactMaxChars])
     }
   };
   if (frame.kind == FrameKind::kError) {
-    put_hex((frame.id & kErrorClassMask) | kErrFlagBit, 8);
+    put_hex((frame.id & kErrorClassMask) | kErrorFlag, 8);
   } else if (frame.extended) {
     put_hex(frame.id & kExtendedIdMask, 8);
   } else {

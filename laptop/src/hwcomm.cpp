@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <sstream>
 
 #include "canhil/rtdb/cambada_types.h"
@@ -21,7 +22,24 @@ unsigned short sat16(double v) { return static_cast<unsigned short>(std::clamp(s
 }  // namespace
 
 HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, int agent)
-    : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)), agent_(agent) {}
+    : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)), agent_(agent) {
+  stats_.received.assign(set_->codec().messages().size(), 0);
+  stats_.sent.assign(set_->codec().messages().size(), 0);
+}
+
+std::size_t HwComm::index_of(const frames::MessageCodec& m) const noexcept {
+  return static_cast<std::size_t>(&m - set_->codec().messages().data());
+}
+
+std::uint64_t HwComm::received(std::string_view name) const noexcept {
+  const frames::MessageCodec* m = set_->codec().find(name);
+  return m == nullptr ? 0 : stats_.received[index_of(*m)];
+}
+
+std::uint64_t HwComm::sent(std::string_view name) const noexcept {
+  const frames::MessageCodec* m = set_->codec().find(name);
+  return m == nullptr ? 0 : stats_.sent[index_of(*m)];
+}
 
 int HwComm::get(int id, void* value) const {
   return agent_ < 0 ? DB_get(Whoami(), id, value) : DB_get_from(agent_, agent_, id, value);
@@ -35,9 +53,9 @@ void HwComm::put(int id, void* value) const {
   }
 }
 
-void HwComm::send(const frames::CanFrame& f, const char* name) {
+void HwComm::send(const frames::CanFrame& f, const frames::MessageCodec& message) {
   if (send_(f)) {
-    ++stats_.sent[name];
+    ++stats_.sent[index_of(message)];
   } else {
     ++stats_.send_failed;
   }
@@ -69,7 +87,7 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
     ++stats_.unknown_id;
     return;
   }
-  ++stats_.received[std::string(m->name())];
+  ++stats_.received[index_of(*m)];
   const frames::MessageSet& s = *set_;
   if (is(f, s.tm.message())) {
     frames::Tm tm;
@@ -154,7 +172,7 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
   last_ec_ = tm.ec_counter;
   const frames::MessageSet& s = *set_;
   const std::uint32_t m6 = (1u << s.ftt(s.m6_1.message()).index) | (1u << s.ftt(s.m6_2.message()).index);
-  if ((tm.sync_bitmap & m6) != 0) m6_slot_ = rx + ec_ - std::chrono::microseconds(tm.sync_window_us);
+  if (const auto start = m6_slot_.on_tm(tm, rx, ec_, m6)) m6_at_ = *start;
   // The asynchronous window opens now: kicker and grabber, pose.
   const Nanos now = rx;
   CMD_Kicker kick;
@@ -169,7 +187,7 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
     m7.grabber_mode = std::min<std::uint8_t>(grab.mode, 100);
     m7.eng_lvl_high = kick.engLvlHigh;
     m7.eng_lvl_low = kick.engLvlLow;
-    send(s.m7.encode(m7), "M7");
+    send(s.m7.encode(m7), s.m7.message());
     last_m7_ = now;
     last_grabber_ = grab.mode;
     if (kick_wanted) {
@@ -181,8 +199,8 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
   CMD_SetPose pose;
   get(CMD_SETPOSE, &pose);
   if (pose.pending != 0 && now - last_m5_ >= s.ftt(s.m5_1.message()).min_gap) {
-    send(s.m5_1.encode(frames::M5_1{pose.px, pose.py}), "M5_1");
-    send(s.m5_2.encode(frames::M5_2{pose.pa, pose.command}), "M5_2");
+    send(s.m5_1.encode(frames::M5_1{pose.px, pose.py}), s.m5_1.message());
+    send(s.m5_2.encode(frames::M5_2{pose.pa, pose.command}), s.m5_2.message());
     last_m5_ = now;
     pose.pending = 0;
     put(CMD_SETPOSE, &pose);
@@ -190,21 +208,32 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
 }
 
 void HwComm::on_time(Nanos now) {
-  if (now < m6_slot_) return;
-  m6_slot_ = kNever;
+  if (now < m6_at_) return;
+  m6_at_ = kNever;
+  m6_slot_.done();
   CMD_Vel v;
   get(CMD_VEL, &v);
   const frames::MessageSet& s = *set_;
-  send(s.m6_1.encode(frames::M6_1{v.vx, v.vy}), "M6_1");
-  send(s.m6_2.encode(frames::M6_2{v.va, static_cast<std::uint8_t>(v.smallAdjustment ? 1 : 0), m6_seq_++}), "M6_2");
+  send(s.m6_1.encode(frames::M6_1{v.vx, v.vy}), s.m6_1.message());
+  send(s.m6_2.encode(frames::M6_2{v.va, static_cast<std::uint8_t>(v.smallAdjustment ? 1 : 0), m6_seq_++}),
+       s.m6_2.message());
 }
 
 std::string HwComm::summary() const {
   std::ostringstream os;
+  // By name, as before: the names are looked up here, once, not per frame.
+  const auto by_name = [this](const std::vector<std::uint64_t>& counts) {
+    std::map<std::string_view, std::uint64_t> out;
+    const auto messages = set_->codec().messages();
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      if (counts[i] != 0) out[messages[i].name()] = counts[i];
+    }
+    return out;
+  };
   os << "  received:";
-  for (const auto& [name, n] : stats_.received) os << ' ' << name << ' ' << n;
+  for (const auto& [name, n] : by_name(stats_.received)) os << ' ' << name << ' ' << n;
   os << "\n  sent:";
-  for (const auto& [name, n] : stats_.sent) os << ' ' << name << ' ' << n;
+  for (const auto& [name, n] : by_name(stats_.sent)) os << ' ' << name << ' ' << n;
   os << "\n  kicks sent " << stats_.kicks_sent << ", missed TMs " << stats_.missed_tms << ", wrong length "
      << stats_.wrong_length << ", out of range " << stats_.out_of_range << ", unknown ids " << stats_.unknown_id
      << ", send failures " << stats_.send_failed << "\n";

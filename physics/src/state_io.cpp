@@ -71,7 +71,8 @@ class LineReader {
     return b;
   }
   [[noreturn]] void fail(const std::string& what) const {
-    throw SetupError(file_ + ":" + std::to_string(line_no_) + ": world state " + what + "; give a file written by --save-world");
+    throw SetupError(file_ + ":" + std::to_string(line_no_) + ": world state " + what +
+                     "; give a file written by `canhil run --save-world FILE`");
   }
 
  private:

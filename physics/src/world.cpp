@@ -660,6 +660,22 @@ void World::place_ball(const Eigen::Vector3d& p, const Eigen::Vector3d& v, const
   dBodySetTorque(impl_->ball, 0, 0, 0);
 }
 
+void World::place_obstacle(std::size_t index, double x_m, double y_m) {
+  CANHIL_DEMAND(index < impl_->obstacle_geoms.size(), "no such obstacle");
+  if (dBodyID b = impl_->obstacle_bodies[index]) {
+    const dReal* p = dBodyGetPosition(b);
+    dBodySetPosition(b, x_m, y_m, p[2]);
+    dBodySetLinearVel(b, 0, 0, 0);
+    dBodySetAngularVel(b, 0, 0, 0);
+    dBodyEnable(b);
+    impl_->obstacle_idle[index] = 0;
+    impl_->canon_of(b).capture();
+  } else {
+    const dReal* p = dGeomGetPosition(impl_->obstacle_geoms[index]);
+    dGeomSetPosition(impl_->obstacle_geoms[index], x_m, y_m, p[2]);
+  }
+}
+
 WorldState World::save() const {
   WorldState s;
   s.time_s = impl_->time;
@@ -704,7 +720,12 @@ void World::restore(const WorldState& s) {
     for (std::size_t n = 0; n < 3; ++n) write_body(impl_->canon_of(r.wheel[n]), s.robots[i].wheels[n]);
   }
   for (std::size_t i = 0; i < s.obstacles.size(); ++i) {
-    if (dBodyID b = impl_->obstacle_bodies[i]) write_body(impl_->canon_of(b), s.obstacles[i]);
+    if (dBodyID b = impl_->obstacle_bodies[i]) {
+      write_body(impl_->canon_of(b), s.obstacles[i]);
+    } else {  // a static obstacle moves only by hand (place_obstacle)
+      const auto& p = s.obstacles[i].position;
+      dGeomSetPosition(impl_->obstacle_geoms[i], p[0], p[1], p[2]);
+    }
   }
   impl_->obstacle_idle = s.obstacle_idle_steps;
 }

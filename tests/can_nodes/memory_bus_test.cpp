@@ -85,14 +85,14 @@ TEST(MemoryBus, ErrorFramesOnlyWhereTheMaskAsks) {
   MemoryBus bus(clock);
   auto quiet = bus.attach("quiet");
   auto watcher = bus.attach("watcher");
-  watcher->set_error_mask(kErrBusOff | kErrController);
-  bus.inject_error(kErrBusOff);
-  bus.inject_error(kErrNoAck);
+  watcher->set_error_mask(frames::kErrorClassBusOff | frames::kErrorClassController);
+  bus.inject_error(frames::kErrorClassBusOff);
+  bus.inject_error(frames::kErrorClassNoAck);
   EXPECT_FALSE(quiet->receive());
   const auto f = watcher->receive();
   ASSERT_TRUE(f);
   EXPECT_EQ(f->frame.kind, frames::FrameKind::kError);
-  EXPECT_EQ(f->frame.id, kErrBusOff);
+  EXPECT_EQ(f->frame.id, frames::kErrorClassBusOff);
   EXPECT_FALSE(watcher->receive());
   EXPECT_EQ(watcher->stats().errors, 1u);
 }

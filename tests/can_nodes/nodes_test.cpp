@@ -7,8 +7,10 @@
 #include <bit>
 #include <map>
 
-#include "canhil/emulator/lockstep.hpp"
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/robot_nodes.hpp"
+#include "support/counter_watch.hpp"
+#include "support/fake_robot.hpp"
 #include "support/laptop_endpoint.hpp"
 #include "support/test_paths.hpp"
 
@@ -17,30 +19,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class FakeRobot final : public RobotIo {
- public:
-  std::array<double, 3> speed{};
-  std::array<std::int64_t, 3> encoder{};
-  bool engaged = false;
-  int kicks = 0;
-  int grabber = -1;
-  void set_wheel_speed(int w, double radps) override { speed[static_cast<std::size_t>(w)] = radps; }
-  std::int64_t encoder_count(int w) const override { return encoder[static_cast<std::size_t>(w)]; }
-  bool wheel_stalled(int) const override { return false; }
-  bool over_current(int) const override { return false; }
-  KickOutcome kick(bool, int) override {
-    if (!engaged) return KickOutcome::kNotEngaged;
-    ++kicks;
-    return KickOutcome::kFired;
-  }
-  void set_grabber(int mode) override { grabber = mode; }
-  bool ball_engaged() const override { return engaged; }
-  double kicker_voltage_v() const override { return 180.0; }
-  double compass_heading_deg() const override { return 42.0; }
-  BatteryVolts battery() const override { return {12.5, 12.4, 25.0}; }
-};
+using test::FakeRobot;
 
-class NodesTest : public ::testing::Test {
+class NodesTest : public test::WatchedTest {
  protected:
   NodesTest()
       : set_(frames::MessageSet::load(test::shipped_dbc())),
@@ -49,9 +30,10 @@ class NodesTest : public ::testing::Test {
             set_, params_, robot_, [this](const std::string& name) { return std::unique_ptr<Bus>(bus_.attach(name)); },
             Nanos{0}),
         laptop_(bus_, set_, params_.ftt.elementary_cycle),
-        run_(clock_, nullptr) {
+        run_(clock_) {
     for (Node* n : nodes_.nodes()) run_.add(*n);
     run_.add(laptop_);
+    counters.watch_nodes(nodes_);
   }
   std::vector<frames::Tm> tms() const { return laptop_.decoded(set_->tm); }
   Nanos window_start(std::size_t ec) const {
@@ -66,9 +48,9 @@ class NodesTest : public ::testing::Test {
   FakeRobot robot_;
   SimulatedClock clock_;
   MemoryBus bus_;
-  emulator::RobotNodes nodes_;
+  RobotNodes nodes_;
   test::LaptopEndpoint laptop_;
-  emulator::Lockstep run_;
+  Lockstep run_;
 };
 
 TEST_F(NodesTest, TriggerMessageExactlyEveryElementaryCycle) {
@@ -254,11 +236,12 @@ TEST_F(NodesTest, MalformedFramesAreCountedAndChangeNothing) {
     laptop_.send(frames::make_data_frame(0x7FF, {1, 2, 3}));
     run_.run_for(10ms);
   }
-  EXPECT_EQ(nodes_.node(emulator::NodeId::kPicBase).counters().wrong_length, 5u);
-  for (auto id : {emulator::NodeId::kMotor1, emulator::NodeId::kMotor2, emulator::NodeId::kMotor3}) {
-    EXPECT_EQ(nodes_.node(id).counters().out_of_range, 5u) << "each motor consumes M1";
+  // Exactly these, and no other error counter (the fixture checks at the end).
+  counters.expect("Pic_base.wrong_length", 5);
+  for (const char* motor : {"Motor1", "Motor2", "Motor3"}) {
+    counters.expect(std::string(motor) + ".out_of_range", 5);  // each motor consumes M1
   }
-  EXPECT_EQ(nodes_.node(emulator::NodeId::kSysMon).counters().unknown_id, 5u);
+  counters.expect("SysMon.unknown_id", 5);
   EXPECT_EQ(nodes_.pic_base().setpoints()[0], before) << "the short M6 changed nothing";
   EXPECT_NEAR(robot_.speed[0], params_.encoder.wheel_radps(before), 1e-9) << "the bad M1 changed nothing";
   run_.run_for(1s);
@@ -274,7 +257,7 @@ TEST_F(NodesTest, SystemMonitorReportsWhoIsAliveAndASwitchedOffNode) {
   ASSERT_FALSE(m10.empty());
   EXPECT_EQ(m10.back().alive, 0x3F) << "all six nodes seen";
   EXPECT_EQ(m10.back().node_state, 0);
-  nodes_.node(emulator::NodeId::kCompass).set_enabled(false);
+  nodes_.node(NodeId::kCompass).set_enabled(false);
   run_.run_until(2050ms);
   m10 = laptop_.decoded(set_->m10);
   EXPECT_EQ(m10.back().alive, 0x3F & ~0x20) << "the compass is silent";
@@ -299,7 +282,7 @@ TEST_F(NodesTest, FaultHookDropsDelaysCorruptsAndDuplicates) {
   nodes_.set_fault_hook(&hook);
   run_.run_until(100ms - 1ns);  // ECs 0..9; EC 9's delayed M3_2 falls after the cut
   EXPECT_TRUE(laptop_.with_id(0x141).empty()) << "dropped";
-  EXPECT_EQ(nodes_.node(emulator::NodeId::kCompass).counters().fault_dropped, 2u);
+  counters.expect("Compass.fault_dropped", 2);
   const auto m3_2 = laptop_.with_id(0x112);
   ASSERT_EQ(m3_2.size(), 9u);
   for (std::size_t k = 0; k < m3_2.size(); ++k) EXPECT_EQ(m3_2[k].time, window_start(k) + 1ms) << "delayed, EC " << k;
@@ -307,22 +290,6 @@ TEST_F(NodesTest, FaultHookDropsDelaysCorruptsAndDuplicates) {
   frames::M3 m3;
   ASSERT_TRUE(set_->m3[0].decode(laptop_.with_id(0x111)[0].frame, m3).ok());
   EXPECT_EQ(m3.seq, 0x80) << "seq byte corrupted";
-}
-
-TEST(FttScheduleChecks, RefusesAScheduleThatDoesNotFit) {
-  auto set = frames::MessageSet::load(test::shipped_dbc());
-  FttConfig slow;
-  slow.bit_rate = 125'000;
-  try {
-    FttSchedule s(*set, slow);
-    FAIL();
-  } catch (const SetupError& e) {
-    EXPECT_NE(std::string(e.what()).find("does not fit the 10000 us elementary cycle"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("raise the bit rate"), std::string::npos);
-  }
-  FttConfig odd;
-  odd.elementary_cycle = 7ms;
-  EXPECT_THROW(FttSchedule(*set, odd), SetupError);
 }
 
 }  // namespace

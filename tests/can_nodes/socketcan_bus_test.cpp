@@ -114,18 +114,18 @@ TEST(SocketCan, ErrorFramesReachOnlySocketsWhoseMaskAsks) {
   auto none = SocketCanBus::open("vcan0");
   auto controller = SocketCanBus::open("vcan0");
   auto bus_off_only = SocketCanBus::open("vcan0");
-  controller->set_error_mask(kErrController | kErrBusOff);
-  bus_off_only->set_error_mask(kErrBusOff);
+  controller->set_error_mask(frames::kErrorClassController | frames::kErrorClassBusOff);
+  bus_off_only->set_error_mask(frames::kErrorClassBusOff);
   frames::CanFrame err;
   err.kind = frames::FrameKind::kError;
-  err.id = kErrController;
+  err.id = frames::kErrorClassController;
   err.len = 8;
   ASSERT_EQ(tx->send(err), SendStatus::kOk);
   ASSERT_EQ(tx->send(make_data_frame(0x131, {})), SendStatus::kOk);  // marks the end
   const auto got = receive_n(*controller, 2);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].frame.kind, frames::FrameKind::kError);
-  EXPECT_EQ(got[0].frame.id, kErrController);
+  EXPECT_EQ(got[0].frame.id, frames::kErrorClassController);
   EXPECT_EQ(controller->stats().errors, 1u);
   for (auto* other : {none.get(), bus_off_only.get()}) {
     const auto only = receive_n(*other, 1);

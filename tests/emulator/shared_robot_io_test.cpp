@@ -10,7 +10,10 @@
 #include <thread>
 
 #include "canhil/emulator/realtime_physics.hpp"
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/physics_robot_io.hpp"
+#include "canhil/emulator/session.hpp"
+#include "support/test_paths.hpp"
 
 namespace canhil::emulator {
 namespace {
@@ -72,12 +75,20 @@ TEST(SharedRobotIo, KicksAreDecidedOnThePublishedStateAndFireAtTheNextStep) {
   EXPECT_EQ(io.kick(true, 60), KickOutcome::kNotEngaged) << "the ball has left";
 }
 
-TEST(RealtimePhysics, StepsOnItsOwnThreadAndPublishesAView) {
-  physics::World world(one_robot(4));
-  SharedRobotIo io(world.robot(0));
-  RealtimePhysics physics(world, {&io});
-  int hooked = 0;
-  physics.on_step([&](Nanos) { ++hooked; });
+TEST(RealtimePhysics, StepsTheSessionOnItsOwnThread) {
+  Scenario scenario;
+  scenario.world = one_robot(4);
+  SessionOptions options;
+  options.messages = frames::MessageSet::load(test::shipped_dbc());
+  options.vision_on = false;
+  Session session(scenario, options);
+  can_nodes::SimulatedClock unused;
+  can_nodes::MemoryBus bus(unused);
+  session.build_nodes(
+      [&](std::size_t, const std::string& node) { return std::unique_ptr<can_nodes::Bus>(bus.attach(node)); },
+      Session::IoMode::kShared, Nanos{0});
+  SharedRobotIo& io = *session.rig(0).shared;
+  RealtimePhysics physics(session);
   io.set_wheel_speed(0, 20.0);
   io.set_wheel_speed(1, -20.0);
   physics.start(can_nodes::WallClock{}.now());
@@ -86,12 +97,12 @@ TEST(RealtimePhysics, StepsOnItsOwnThreadAndPublishesAView) {
   physics.stop();
   const RealtimeStats st = physics.stats();
   EXPECT_GE(st.physics_steps, 20u);
-  EXPECT_EQ(static_cast<std::uint64_t>(hooked), st.physics_steps) << "the hook ran once a step";
   EXPECT_NE(io.encoder_count(0), 0) << "commands applied and sensors published";
-  const RealtimePhysics::View view = physics.view();
+  const WorldSnapshot view = session.snapshot();
+  EXPECT_EQ(view.steps, st.physics_steps) << "the session's after-step ran once a step";
   ASSERT_EQ(view.robots.size(), 1u);
-  EXPECT_DOUBLE_EQ(view.robots[0].x_m, world.robot(0).pose().x_m) << "the view is the last step's";
-  EXPECT_DOUBLE_EQ(view.ball.x(), world.ball_position().x());
+  EXPECT_DOUBLE_EQ(view.robots[0].x_m, session.world().robot(0).pose().x_m) << "the snapshot is the last step's";
+  EXPECT_DOUBLE_EQ(view.ball.x(), session.world().ball_position().x());
 }
 
 }  // namespace

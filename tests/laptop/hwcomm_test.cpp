@@ -1,15 +1,14 @@
-// The reference handler in virtual time: HwComm on the memory bus against the
-// emulated nodes and the physics, with a real RTDB.
+// The reference handler alone: HwComm fed frames by hand, with its own RTDB
+// and a clock the test sets. What it writes for each frame, what it sends in
+// which slot, and what it counts. (In the loop with the emulated nodes:
+// tests/emulator/handler_participant_test.cpp.)
 #include "canhil/laptop/hwcomm.hpp"
 
 #include <gtest/gtest.h>
-#include <sys/shm.h>
 #include <unistd.h>
 
 #include <cstdlib>
 
-#include "canhil/emulator/handler_participant.hpp"
-#include "canhil/emulator/robot_rig.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
@@ -20,104 +19,127 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// HwComm as a participant of the lockstep runner (emulator::HandlerParticipant,
-// as the virtual run uses it), on a memory endpoint.
-class HwCommTest : public ::testing::Test {
+class HwCommUnit : public ::testing::Test {
  protected:
-  HwCommTest() {
-    setenv("RTDB_KEY", std::to_string(0x5B000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  HwCommUnit() {
+    static int counter = 0;
+    setenv("RTDB_KEY", std::to_string(0x5C000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6)).c_str(), 1);
     setenv("AGENT", "1", 1);
     EXPECT_EQ(DB_init(), 0);
-    set_ = frames::MessageSet::load(test::shipped_dbc());
-    physics::WorldParams wp;
-    wp.robots = {physics::Placement{0, 0, 0}};
-    wp.ball_start = {0, 0.26, wp.ball.radius_m};  // in the mouth
-    rig_ = std::make_unique<emulator::RobotRig>(set_, wp);
-    laptop_ = std::make_unique<emulator::HandlerParticipant>(rig_->bus, set_, 10ms, rig_->clock, -1, true);
-    rig_->run.add(*laptop_);
   }
-  ~HwCommTest() override { DB_free(); }
-  int count_sent(std::uint32_t id) const {
-    int n = 0;
-    for (const auto& f : laptop_->sent()) n += f.id == id ? 1 : 0;
-    return n;
+  ~HwCommUnit() override { DB_free(); }
+
+  // A TM of EC `ec` at `t`, scheduling `bitmap`, with a 1 ms synchronous window.
+  void tm(std::uint16_t ec, Nanos t, std::uint32_t bitmap) {
+    now_ = t;
+    hw_.on_frame(set_->tm.encode(frames::Tm{ec, bitmap, 1000}), t);
+  }
+  std::uint32_t bit(const char* name) const { return 1u << set_->ftt(*set_->codec().find(name)).index; }
+  std::vector<frames::CanFrame> sent_with(std::uint32_t id) const {
+    std::vector<frames::CanFrame> out;
+    for (const auto& f : sent_) {
+      if (f.id == id) out.push_back(f);
+    }
+    return out;
   }
 
-  std::shared_ptr<const frames::MessageSet> set_;
-  std::unique_ptr<emulator::RobotRig> rig_;
-  std::unique_ptr<emulator::HandlerParticipant> laptop_;
+  std::shared_ptr<const frames::MessageSet> set_ = frames::MessageSet::load(test::shipped_dbc());
+  std::vector<frames::CanFrame> sent_;
+  Nanos now_{0};
+  HwComm hw_{set_, 10ms,
+             [this](const frames::CanFrame& f) {
+               sent_.push_back(f);
+               return true;
+             },
+             [this] { return now_; }};
 };
 
-TEST_F(HwCommTest, CmdVelMovesCmdPos) {
-  CMD_Vel v{0, 0.5f, 0, false};
+TEST_F(HwCommUnit, SendsCmdVelInTheM6SlotOfTheTmThatSchedulesIt) {
+  CMD_Vel v{0.25f, -0.5f, 1.5f, true};
   DB_put(CMD_VEL, &v);
-  rig_->run.run_until(2s);
-  CMD_Vel stop{0, 0, 0, false};
-  DB_put(CMD_VEL, &stop);
-  rig_->run.run_for(600ms);
-  CMD_Pos p{};
-  const int age = DB_get(CAMBADA_1, CMD_POS, &p);
-  EXPECT_GE(age, 0);
-  EXPECT_NEAR(p.py, 1.0, 0.1);
-  EXPECT_NEAR(p.px, 0.0, 0.02);
-  EXPECT_EQ(count_sent(0x131), count_sent(0x132));
-  EXPECT_GE(count_sent(0x131), 85) << "M6 in every third EC: about 87 in 2.6 s";
-  EXPECT_EQ(rig_->nodes.bad_frames(), 0u);
+  tm(1, 10ms, bit("M3_1"));
+  EXPECT_EQ(hw_.next_deadline(), kNever) << "M6 not due in this EC";
+  tm(3, 30ms, bit("M6_1") | bit("M6_2"));
+  EXPECT_EQ(hw_.next_deadline(), 30ms + 10ms - 1ms) << "the window's start: TM + EC - window";
+  now_ = 39ms - 1ns;
+  hw_.on_time(now_);
+  EXPECT_TRUE(sent_with(set_->m6_1.message().id()).empty()) << "not before the slot";
+  EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u) << "the grabber's first state, once, in the first asynchronous window";
+  now_ = 39ms;
+  hw_.on_time(now_);
+  const auto m6_1s = sent_with(set_->m6_1.message().id());
+  const auto m6_2s = sent_with(set_->m6_2.message().id());
+  ASSERT_EQ(m6_1s.size(), 1u);
+  ASSERT_EQ(m6_2s.size(), 1u);
+  frames::M6_1 m6_1;
+  frames::M6_2 m6_2;
+  ASSERT_TRUE(set_->m6_1.decode(m6_1s[0], m6_1).ok());
+  ASSERT_TRUE(set_->m6_2.decode(m6_2s[0], m6_2).ok());
+  EXPECT_DOUBLE_EQ(m6_1.vx, 0.25);
+  EXPECT_DOUBLE_EQ(m6_1.vy, -0.5);
+  EXPECT_DOUBLE_EQ(m6_2.va, 1.5);
+  EXPECT_EQ(m6_2.small_adjustment, 1);
+  EXPECT_EQ(hw_.next_deadline(), kNever);
+  EXPECT_EQ(hw_.sent("M6_1"), 1u);
+  EXPECT_EQ(hw_.received("TM"), 2u);
 }
 
-TEST_F(HwCommTest, KickerCommandIsSentExactlyOnceAndReset) {
-  CMD_Grabber g{100};
-  DB_put(CMD_GRABBER, &g);
-  rig_->run.run_until(1200ms);  // the grabber M7 went out; its minimum gap has passed
-  const int m7_before = count_sent(0x0B0);
-  EXPECT_EQ(m7_before, 1) << "one M7 for the grabber change";
-  CMD_Grabber_Info gi{};
-  DB_get(CAMBADA_1, CMD_GRABBER_INFO, &gi);
-  ASSERT_EQ(gi.ballEngaged, 1);
-  CMD_Kicker k{static_cast<unsigned char>(0x80 | 40), 0, 0};
+TEST_F(HwCommUnit, OdometryBecomesCmdPosWithTheChangeSinceTheLast) {
+  hw_.on_frame(set_->m4_2.encode(frames::M4_2{0.5, 0}), 0ms);
+  CMD_Pos p{};
+  DB_get(Whoami(), CMD_POS, &p);
+  EXPECT_EQ(p.pa, 0.0f) << "an M4_2 without its M4_1 is not a pose";
+  hw_.on_frame(set_->m4_1.encode(frames::M4_1{1.0, 2.0}), 50ms);
+  hw_.on_frame(set_->m4_2.encode(frames::M4_2{0.5, 1}), 50ms);
+  DB_get(Whoami(), CMD_POS, &p);
+  EXPECT_FLOAT_EQ(p.px, 1.0f);
+  EXPECT_FLOAT_EQ(p.py, 2.0f);
+  EXPECT_FLOAT_EQ(p.pa, 0.5f);
+  EXPECT_EQ(p.dx, 0.0f) << "the first pose has no change";
+  hw_.on_frame(set_->m4_1.encode(frames::M4_1{1.25, 1.5}), 100ms);
+  hw_.on_frame(set_->m4_2.encode(frames::M4_2{-3.0, 2}), 100ms);
+  DB_get(Whoami(), CMD_POS, &p);
+  EXPECT_NEAR(p.dx, 0.25, 1e-6);
+  EXPECT_NEAR(p.dy, -0.5, 1e-6);
+  EXPECT_NEAR(p.da, -3.0 - 0.5 + 2 * M_PI, 1e-5) << "the heading change wrapped to (-pi, pi]";
+}
+
+TEST_F(HwCommUnit, AKickGoesOutOnceInTheAsynchronousWindowAndItsPowerIsReset) {
+  CMD_Kicker k{static_cast<unsigned char>(0x80 | 30), 70, 35};
   DB_put(CMD_KICKER, &k);
-  rig_->run.run_for(3s);
-  EXPECT_EQ(count_sent(0x0B0), m7_before + 1) << "exactly one M7 for the kick";
-  EXPECT_EQ(laptop_->hw().stats().kicks_sent, 1u);
+  tm(0, 0ms, 0);
+  const auto m7 = sent_with(set_->m7.message().id());
+  ASSERT_EQ(m7.size(), 1u) << "right after the TM that opens the asynchronous window";
+  frames::M7 decoded;
+  ASSERT_TRUE(set_->m7.decode(m7[0], decoded).ok());
+  EXPECT_EQ(decoded.kick, 0x80 | 30);
+  EXPECT_EQ(decoded.eng_lvl_high, 70);
   CMD_Kicker after{};
-  DB_get(CAMBADA_1, CMD_KICKER, &after);
-  EXPECT_EQ(after.power, 0) << "power reset once sent";
-  EXPECT_GT(rig_->world.ball_position().y(), 2.0) << "the ball was kicked";
+  DB_get(Whoami(), CMD_KICKER, &after);
+  EXPECT_EQ(after.power, 0) << "sent once: the agent asks again for another kick";
+  DB_put(CMD_KICKER, &k);
+  tm(1, 990ms, 0);
+  EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u) << "not within M7's minimum gap (1000 ms)";
+  tm(2, 1000ms, 0);
+  EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 2u) << "at the gap";
+  EXPECT_EQ(hw_.stats().kicks_sent, 2u);
 }
 
-TEST_F(HwCommTest, BusToRtdbItemsAreWritten) {
-  CMD_Vel v{0, 0.3f, 0.2f, false};
-  DB_put(CMD_VEL, &v);
-  rig_->run.run_until(1500ms);
-  CMD_Info info{};
-  EXPECT_GE(DB_get(CAMBADA_1, CMD_INFO, &info), 0);
-  EXPECT_NEAR(info.Voltage_power24 / 100.0, 25.0, 1.0);
-  EXPECT_NEAR(info.Kicker_voltage / 100.0, 180.0, 1.0);
+TEST_F(HwCommUnit, BadTrafficIsCountedAndWritesNothing) {
+  frames::CanFrame short_m8 = set_->m8.encode(frames::M8{90, 0});
+  short_m8.len = 4;
+  hw_.on_frame(short_m8, 0ms);
+  hw_.on_frame(frames::make_data_frame(0x7FF, {1, 2}), 0ms);
   CMD_Imu imu{};
-  DB_get(CAMBADA_1, CMD_IMU, &imu);
-  const double heading = rig_->world.robot(0).compass_heading_deg();
-  EXPECT_NEAR(imu.yaw / 100.0, heading, 2.0);
-  CMD_HWerrors e{};
-  DB_get(CAMBADA_1, CMD_HWERRORS, &e);
-  EXPECT_EQ(e.error_count[0][1], 0x3F) << "all nodes alive, from M10";
-  EXPECT_EQ(e.error_count[0][0], 0) << "no bad frames";
-  EXPECT_FALSE(laptop_->hw().stats().latencies.empty());
-}
-
-TEST_F(HwCommTest, SetPoseAndResetThroughM5) {
-  CMD_SetPose sp{1.5f, -2.0f, 0.75f, 0, 1};
-  DB_put(CMD_SETPOSE, &sp);
-  rig_->run.run_until(300ms);
-  CMD_Pos p{};
-  DB_get(CAMBADA_1, CMD_POS, &p);
-  EXPECT_NEAR(p.px, 1.5, 1e-3);
-  EXPECT_NEAR(p.py, -2.0, 1e-3);
-  EXPECT_NEAR(p.pa, 0.75, 1e-4);
-  CMD_SetPose after{};
-  DB_get(CAMBADA_1, CMD_SETPOSE, &after);
-  EXPECT_EQ(after.pending, 0);
-  EXPECT_EQ(count_sent(0x0A1), 1);
-  EXPECT_EQ(count_sent(0x0A2), 1);
+  DB_get(Whoami(), CMD_IMU, &imu);
+  EXPECT_EQ(imu.yaw, 0);
+  tm(10, 0ms, 0);
+  tm(13, 30ms, 0);  // ECs 11 and 12 were never heard
+  EXPECT_EQ(hw_.stats().wrong_length, 1u);
+  EXPECT_EQ(hw_.stats().unknown_id, 1u);
+  EXPECT_EQ(hw_.stats().missed_tms, 2u);
+  EXPECT_NE(hw_.summary().find("missed TMs 2, wrong length 1"), std::string::npos) << hw_.summary();
+  EXPECT_NE(hw_.summary().find("received: M8 1 TM 2"), std::string::npos) << hw_.summary();
 }
 
 }  // namespace

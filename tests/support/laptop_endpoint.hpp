@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "canhil/can_nodes/memory_bus.hpp"
-#include "canhil/emulator/lockstep.hpp"
+#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace canhil::test {
 
-class LaptopEndpoint final : public emulator::Participant {
+class LaptopEndpoint final : public can_nodes::Participant {
  public:
   LaptopEndpoint(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, Nanos ec)
       : endpoint_(bus.attach("laptop", 1 << 16)), set_(std::move(set)), ec_(ec) {}
@@ -29,10 +30,9 @@ class LaptopEndpoint final : public emulator::Participant {
       frames_.push_back(*f);
       frames::Tm tm;
       if (f->frame.id == set_->tm.message().id() && set_->tm.decode(f->frame, tm).ok()) {
-        const std::uint32_t mine = (1u << 6) | (1u << 7);
-        if ((tm.sync_bitmap & mine) != 0 && m6_1) {
-          slot_ = f->time + ec_ - std::chrono::microseconds(tm.sync_window_us);
-        }
+        const std::uint32_t mine =
+            (1u << set_->ftt(set_->m6_1.message()).index) | (1u << set_->ftt(set_->m6_2.message()).index);
+        if (const auto start = sync_.on_tm(tm, f->time, ec_, mine); start && m6_1) slot_ = *start;
       }
     }
     return n;
@@ -46,7 +46,11 @@ class LaptopEndpoint final : public emulator::Participant {
   }
   Nanos next_wakeup() const override { return slot_; }
 
-  void send(const frames::CanFrame& f) { endpoint_->send(f); }
+  void send(const frames::CanFrame& f) {
+    endpoint_->send(f);
+    ++sent_;
+  }
+  std::uint64_t sent_count() const { return sent_; }
   const std::vector<frames::TimedFrame>& frames() const { return frames_; }
   /// Frames with this id, in order.
   std::vector<frames::TimedFrame> with_id(std::uint32_t id) const {
@@ -70,8 +74,10 @@ class LaptopEndpoint final : public emulator::Participant {
   std::unique_ptr<can_nodes::MemoryEndpoint> endpoint_;
   std::shared_ptr<const frames::MessageSet> set_;
   Nanos ec_;
+  frames::SyncSlot sync_;
   Nanos slot_ = kNever;
   std::uint8_t seq_ = 0;
+  std::uint64_t sent_ = 0;
   std::vector<frames::TimedFrame> frames_;
 };
 

@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
-#include "canhil/emulator/robot_rig.hpp"
+#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/frames/wire.hpp"
+#include "support/fake_robot.hpp"
 #include "support/laptop_endpoint.hpp"
 #include "support/test_paths.hpp"
 
@@ -15,17 +17,23 @@ namespace {
 using namespace std::chrono_literals;
 
 // 3 s of one robot's bus in virtual time, the laptop sending M6 in its slots,
-// plus the laptop's own frames (a listener hears everyone but itself).
+// plus the laptop's own frames (a listener hears everyone but itself). The
+// nodes drive a fake robot: timing needs the bus, not the physics.
 std::vector<frames::TimedFrame> clean_trace(const std::shared_ptr<const frames::MessageSet>& set) {
-  physics::WorldParams wp;
-  wp.robots = {physics::Placement{0, 0, 0}};
-  wp.ball_start = {2, 2, wp.ball.radius_m};
-  emulator::RobotRig rig(set, wp);
-  test::LaptopEndpoint laptop(rig.bus, set, 10ms);
+  can_nodes::SimulatedClock clock;
+  can_nodes::MemoryBus bus(clock);
+  test::FakeRobot robot;
+  const can_nodes::NodeParams params;
+  can_nodes::RobotNodes nodes(
+      set, params, robot, [&](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
+      Nanos{0});
+  test::LaptopEndpoint laptop(bus, set, 10ms);
   laptop.m6_1 = frames::M6_1{0, 0.4};
-  auto listener = rig.bus.attach("listener", 1 << 20);
-  rig.run.add(laptop);
-  rig.run.run_until(3s);
+  auto listener = bus.attach("listener", 1 << 20);
+  can_nodes::Lockstep run(clock);
+  for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
+  run.add(laptop);
+  run.run_until(3s);
   std::vector<frames::TimedFrame> out;
   while (auto f = listener->receive()) out.push_back(*f);
   return out;

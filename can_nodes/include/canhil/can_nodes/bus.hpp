@@ -37,18 +37,6 @@ struct Filter {
   bool matches(const CanFrame& frame) const noexcept;
 };
 
-/// SocketCAN's CAN_ERR_* classes (linux/can/error.h), for the error mask.
-inline constexpr std::uint32_t kErrTxTimeout = 0x001;
-inline constexpr std::uint32_t kErrLostArbitration = 0x002;
-inline constexpr std::uint32_t kErrController = 0x004;
-inline constexpr std::uint32_t kErrProtocol = 0x008;
-inline constexpr std::uint32_t kErrTransceiver = 0x010;
-inline constexpr std::uint32_t kErrNoAck = 0x020;
-inline constexpr std::uint32_t kErrBusOff = 0x040;
-inline constexpr std::uint32_t kErrBusError = 0x080;
-inline constexpr std::uint32_t kErrRestarted = 0x100;
-inline constexpr std::uint32_t kErrAll = 0x1FFF'FFFF;
-
 enum class SendStatus : std::uint8_t {
   kOk,       ///< handed to the bus
   kDropped,  ///< the transmit queue stayed full through every retry; counted in stats
@@ -60,6 +48,8 @@ enum class BusState : std::uint8_t {
   kDown,  ///< interface administratively down or carrier lost; may come back
   kGone,  ///< interface removed; reopen it
 };
+/// "up", "down" or "gone", as the commands report it.
+const char* state_name(BusState state) noexcept;
 
 struct BusStats {
   std::uint64_t sent = 0;

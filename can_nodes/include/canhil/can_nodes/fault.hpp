@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -85,23 +86,32 @@ class FaultInjector final : public FaultHook {
     drained_until_ = start;
   }
 
+  /// One more rule from now on (a fault injected while the run goes on).
+  /// Throws SetupError when its target is neither a message nor a node.
+  void add_rule(const FaultRule& rule);
+
   FaultDecision on_send(const std::string& node, const frames::CanFrame& frame, Nanos now) override;
   /// The fraction of each full pack (logic, power12, power24) the battery rules
   /// take between the previous call and `now`, for the physics to remove.
   std::array<double, 3> battery_drain_until(Nanos now);
-  const std::vector<FaultCount>& counts() const noexcept { return counts_; }
+  /// What each rule did so far (a copy: the nodes' thread may be counting).
+  std::vector<FaultCount> counts() const;
 
  private:
   bool matches(std::size_t rule, const std::string& node, std::uint32_t id) const;
   double uniform();
 
+  std::uint32_t target_id(const FaultRule& rule) const;  // the message a rule targets, or kNoId
+
   std::vector<FaultRule> rules_;
+  std::atomic<std::size_t> rule_count_{0};  // read without the lock: no rules, no work per frame
   std::shared_ptr<const frames::MessageSet> set_;
+  std::vector<std::string> node_names_;
   std::vector<std::uint32_t> rule_ids_;  ///< the message id of a message rule; kNoId otherwise
   std::vector<FaultCount> counts_;
   std::uint64_t state_;
   std::uint32_t bit_rate_;
-  std::mutex mutex_;  // on_send comes from the node threads, battery_drain_until from the physics
+  mutable std::mutex mutex_;  // on_send comes from the node threads, battery_drain_until from the physics
   Nanos start_{0};
   Nanos drained_until_{0};
 };

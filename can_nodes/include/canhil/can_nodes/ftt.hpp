@@ -38,22 +38,11 @@ class FttSchedule {
   std::uint32_t bitmap(std::uint64_t ec_index) const noexcept;
   /// Length of the synchronous window for a bitmap.
   Nanos sync_window(std::uint32_t bitmap) const noexcept;
-  /// Worst-case wire time of the trigger message.
-  Nanos tm_time() const noexcept { return tm_time_; }
-  /// ECs after which the schedule repeats.
-  std::uint32_t cycle_ecs() const noexcept { return cycle_; }
-  /// Period of the synchronous message with FTT index i, in ECs (0 if none).
-  std::uint32_t period_ecs(int ftt_index) const noexcept;
-  /// Longest synchronous window over the whole cycle.
-  Nanos longest_window() const noexcept { return longest_; }
 
  private:
   FttConfig config_;
   std::array<std::uint32_t, 32> period_ecs_{};  // 0: no message at this index
   std::array<Nanos, 32> frame_time_{};
-  Nanos tm_time_{0};
-  std::uint32_t cycle_ = 1;
-  Nanos longest_{0};
 };
 
 }  // namespace canhil::can_nodes

@@ -17,7 +17,9 @@
 #include <optional>
 
 #include "canhil/can_nodes/ftt.hpp"
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/can_nodes/node.hpp"
+#include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/can_nodes/robot_io.hpp"
 #include "canhil/kinematics/omni.hpp"
 
@@ -35,20 +37,6 @@ struct NodeParams {
   double fine_wheel_accel_radps2 = 15.0;  ///< the same with M6_2.small_adjustment = 1
   Nanos just_kicked_hold = 100ms;         ///< M9.just_kicked stays 1 this long after a kick
   Nanos alive_timeout = 200ms;            ///< system monitor: a node unseen this long is not alive
-};
-
-/// When a node's synchronous messages are due, from the TMs it hears.
-class SyncSlot {
- public:
-  /// Notes the TM; returns the window start when any of `mine` (bits) is due.
-  std::optional<Nanos> on_tm(const frames::Tm& tm, Nanos tm_time, Nanos ec, std::uint32_t mine) noexcept;
-  bool due(int ftt_index) const noexcept { return ((due_ >> ftt_index) & 1u) != 0; }
-  bool pending(Nanos now) const noexcept { return due_ != 0 && now >= start_; }
-  void done() noexcept { due_ = 0; }
-
- private:
-  std::uint32_t due_ = 0;
-  Nanos start_{0};
 };
 
 class FttMaster final : public Node {
@@ -83,7 +71,7 @@ class PicBase final : public Node {
   const NodeParams& params_;
   RobotIo& robot_;
   kinematics::OmniKinematics kinematics_;
-  SyncSlot slot_;
+  frames::SyncSlot slot_;
   frames::M6_1 m6_1_{};
   frames::M6_2 m6_2_{};
   Nanos last_m6_ = kLongAgo;
@@ -113,7 +101,7 @@ class MotorNode final : public Node {
   const NodeParams& params_;
   RobotIo& robot_;
   int wheel_;
-  SyncSlot slot_;
+  frames::SyncSlot slot_;
   Nanos next_tick_;
   int setpoint_ = 0;
   bool enable_ = false;
@@ -136,7 +124,7 @@ class PicOdom final : public Node {
   void integrate();
   const NodeParams& params_;
   kinematics::OmniKinematics kinematics_;
-  SyncSlot slot_;
+  frames::SyncSlot slot_;
   kinematics::Pose pose_;
   std::array<std::int32_t, 3> last_encoder_{};
   std::array<std::int32_t, 3> encoder_{};
@@ -157,7 +145,7 @@ class CompassNode final : public Node {
  private:
   const NodeParams& params_;
   RobotIo& robot_;
-  SyncSlot slot_;
+  frames::SyncSlot slot_;
 };
 
 class SystemMonitor final : public Node {

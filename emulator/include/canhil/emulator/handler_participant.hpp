@@ -7,12 +7,12 @@
 #include <vector>
 
 #include "canhil/can_nodes/memory_bus.hpp"
-#include "canhil/emulator/lockstep.hpp"
+#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/laptop/hwcomm.hpp"
 
 namespace canhil::emulator {
 
-class HandlerParticipant final : public Participant {
+class HandlerParticipant final : public can_nodes::Participant {
  public:
   /// `agent` as laptop::HwComm takes it (-1: from AGENT); `keep_sent` keeps a
   /// copy of every frame it sends (tests), otherwise nothing grows.

@@ -1,42 +1,53 @@
-// canhil/emulator/robot_rig.hpp — one robot in virtual time: its world, its
-// node set on a memory bus and a lockstep runner that ticks them. Attach the
-// laptop side to `bus`, add it to `run` and run: what a test of a handler, a
-// node or the timing analysis, or a benchmark, needs. Not copyable.
+// canhil/emulator/robot_rig.hpp — one robot in virtual time, bare: a session
+// of one robot (no vision, no RTDB, no reference laptop) driven in virtual
+// time. Attach the laptop side to `bus()`, add() it and run: what a test of a
+// handler, a node or the timing analysis, or a benchmark, needs. Not copyable.
 #pragma once
 
 #include <memory>
-#include <string>
 #include <utility>
 
-#include "canhil/can_nodes/memory_bus.hpp"
-#include "canhil/emulator/lockstep.hpp"
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/emulator/physics_robot_io.hpp"
+#include "canhil/emulator/virtual_driver.hpp"
 
 namespace canhil::emulator {
 
-struct RobotRig {
-  /// The world's first robot gets the node set; its nodes start at time 0.
+class RobotRig {
+ public:
+  /// The world's robots (one at kDefaultPlacement if it places none) get their
+  /// node sets; the nodes start at time 0.
   RobotRig(std::shared_ptr<const frames::MessageSet> messages, physics::WorldParams world_params)
-      : set(std::move(messages)),
-        world(std::move(world_params)),
-        io(world.robot(0)),
-        params(node_params_for(world.params().robot)),
-        bus(clock),
-        nodes(
-            set, params, io, [this](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
-            Nanos{0}),
-        run(clock, &world) {
-    for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
+      : session_(scenario_of(std::move(world_params)), options_of(std::move(messages))),
+        driver_(session_, VirtualOptions{false, false, false}) {}
+
+  const std::shared_ptr<const frames::MessageSet>& messages() const { return session_.options().messages; }
+  can_nodes::MemoryBus& bus() { return driver_.bus(0); }
+  const can_nodes::Clock& clock() const { return driver_.clock(); }
+  physics::World& world() { return session_.world(); }
+  can_nodes::RobotNodes& nodes() { return *session_.rig(0).nodes; }
+  const can_nodes::NodeParams& params() const { return session_.node_params(); }
+  Session& session() { return session_; }
+
+  /// A participant (the laptop side); must outlive the rig.
+  void add(can_nodes::Participant& p) { driver_.add(p); }
+  void run_until(Nanos end) { driver_.run_until(end); }
+  void run_for(Nanos duration) { driver_.run_for(duration); }
+
+ private:
+  static Scenario scenario_of(physics::WorldParams world) {
+    Scenario s;
+    s.world = std::move(world);
+    return s;
+  }
+  static SessionOptions options_of(std::shared_ptr<const frames::MessageSet> messages) {
+    SessionOptions o;
+    o.messages = std::move(messages);
+    o.vision_on = false;
+    return o;
   }
 
-  std::shared_ptr<const frames::MessageSet> set;
-  can_nodes::SimulatedClock clock;
-  physics::World world;
-  PhysicsRobotIo io;
-  can_nodes::NodeParams params;
-  can_nodes::MemoryBus bus;
-  RobotNodes nodes;
-  Lockstep run;
+  Session session_;
+  VirtualDriver driver_;
 };
 
 }  // namespace canhil::emulator

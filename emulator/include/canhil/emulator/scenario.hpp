@@ -1,7 +1,6 @@
-// canhil/emulator/scenario.hpp — a scenario file: the world (every table of
+// canhil/emulator/scenario.hpp — what a run is: the world (every table of
 // physics/config/world.toml: field, ball, robot model, [[robots]] with their
-// start poses, [[obstacles]], ball_start) plus a [run] table for what `canhil
-// run` does with it:
+// start poses, [[obstacles]], ball_start) plus a [run] table:
 //
 //   [run]
 //   duration_s = 20                  # virtual-time runs; real time runs until Ctrl-C
@@ -11,8 +10,11 @@
 //   agents = [1]                     # one per robot, 1..6; default 1, 2, ...
 //   faults = ["drop:M4_1:0.1"]       # see can_nodes/fault.hpp
 //
-// Mistakes are physics::ConfigError: `FILE:LINE: run.FIELD: what; what to do`.
-// The shipped scenarios are in emulator/scenarios/.
+// A physics world file (no [run]) is a scenario too. The defaults are filled
+// in, and the rules checked, in one place (complete()), for files and for
+// scenarios built in code alike. Mistakes in a file are physics::ConfigError:
+// `FILE:LINE: run.FIELD: what; what to do`. The shipped scenarios are in
+// emulator/scenarios/.
 #pragma once
 
 #include <filesystem>
@@ -20,24 +22,43 @@
 #include <vector>
 
 #include "canhil/can_nodes/fault.hpp"
-#include "canhil/emulator/virtual_run.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::emulator {
+
+/// Agent numbers a robot may have: CAMBADA_1 .. CAMBADA_6 of the RTDB configuration.
+inline constexpr int kFirstAgent = 1;
+inline constexpr int kLastAgent = 6;
+
+/// Where the one robot of a world without robots stands: 3 m behind the
+/// centre spot, facing the opponent goal (+x).
+inline constexpr physics::Placement kDefaultPlacement{-3.0, 0.0, -90.0};
 
 struct Scenario {
   physics::WorldParams world;
   double duration_s = 20;
   std::uint64_t seed = 1;
   int kick_power = 40;
-  std::vector<std::string> interfaces;  ///< one per robot after loading
-  std::vector<int> agents;              ///< one per robot after loading
+  std::vector<std::string> interfaces;  ///< one per robot after complete()
+  std::vector<int> agents;              ///< one per robot after complete()
   std::vector<can_nodes::FaultRule> faults;
+
+  std::size_t robot_count() const noexcept { return world.robots.size(); }
 };
 
+/// Fills in what the scenario leaves out — one robot at kDefaultPlacement when
+/// it places none, interfaces vcan0, vcan1, ... and agents 1, 2, ... — and
+/// checks the rest: at most kLastAgent robots, one interface and one agent
+/// each, agents in range and all different. Throws SetupError saying what to
+/// change. Idempotent.
+void complete(Scenario& scenario);
+
+/// Parses and completes a scenario (or a physics world file).
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name);
 Scenario load_scenario(const std::filesystem::path& path);
-/// What a virtual-time run of the scenario takes (world log off).
-VirtualRunConfig virtual_run_config(const Scenario& scenario, std::shared_ptr<const frames::MessageSet> messages);
+
+/// The scenario installed with canhil (share/canhil/scenarios/NAME), or the
+/// one in the source tree.
+std::filesystem::path shipped_scenario(const std::string& name);
 
 }  // namespace canhil::emulator

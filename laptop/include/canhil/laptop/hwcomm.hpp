@@ -13,11 +13,11 @@
 #pragma once
 
 #include <functional>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace canhil::laptop {
@@ -25,8 +25,10 @@ namespace canhil::laptop {
 inline constexpr std::size_t kMaxLatencySamples = 1'000'000;
 
 struct HwCommStats {
-  std::map<std::string, std::uint64_t> received;  ///< per message name
-  std::map<std::string, std::uint64_t> sent;
+  /// Per message of the set, in the codec's order (MessageSet::codec().messages()):
+  /// counted by index, so a received frame costs no allocation.
+  std::vector<std::uint64_t> received;
+  std::vector<std::uint64_t> sent;
   std::uint64_t wrong_length = 0;
   std::uint64_t out_of_range = 0;
   std::uint64_t unknown_id = 0;
@@ -49,16 +51,20 @@ class HwComm {
   /// A received frame with its receive timestamp.
   void on_frame(const frames::CanFrame& frame, Nanos rx_time);
   /// When the handler must act next (its M6 slot), or kNever.
-  Nanos next_deadline() const noexcept { return m6_slot_; }
+  Nanos next_deadline() const noexcept { return m6_at_; }
   /// Acts at `now` (call at or after next_deadline()).
   void on_time(Nanos now);
 
   const HwCommStats& stats() const noexcept { return stats_; }
+  /// Frames of message `name` received and sent so far (0 for a name the set does not have).
+  std::uint64_t received(std::string_view name) const noexcept;
+  std::uint64_t sent(std::string_view name) const noexcept;
   /// Multi-line summary for the end of a run.
   std::string summary() const;
 
  private:
-  void send(const frames::CanFrame& f, const char* name);
+  void send(const frames::CanFrame& f, const frames::MessageCodec& message);
+  std::size_t index_of(const frames::MessageCodec& m) const noexcept;
   void on_tm(const frames::Tm& tm, Nanos rx_time);
   void latency(Nanos rx_time);
   void write_hwerrors();
@@ -70,7 +76,8 @@ class HwComm {
   Send send_;
   Clock clock_;
   HwCommStats stats_;
-  Nanos m6_slot_ = kNever;
+  frames::SyncSlot m6_slot_;
+  Nanos m6_at_ = kNever;  // the M6 slot to serve (the last TM's may be replaced by the next)
   bool have_tm_ = false;
   std::uint16_t last_ec_ = 0;
   bool have_m4_1_ = false;

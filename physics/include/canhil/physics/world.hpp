@@ -175,6 +175,8 @@ class World {
   std::size_t obstacle_count() const noexcept;
   Eigen::Vector3d obstacle_position(std::size_t index) const;
   const ObstacleParams& obstacle_params(std::size_t index) const;
+  /// Moves obstacle `index` (< obstacle_count()) to (x, y) on the carpet and stops it.
+  void place_obstacle(std::size_t index, double x_m, double y_m);
 
   WorldState save() const;
   /// Restores a state saved from a world with the same parameters (same robot

@@ -1,7 +1,6 @@
-// app/wall_waiter.hpp — the real-time loops' wait: until an absolute
+// canhil/emulator/wall_waiter.hpp — the real-time loops' wait: until an absolute
 // CLOCK_REALTIME deadline (a timerfd with TFD_TIMER_ABSTIME) or until one of
-// the sockets is readable, at most 100 ms so Ctrl-C is noticed; and how
-// they name a bus state.
+// the sockets is readable, at most 100 ms so Ctrl-C is noticed.
 #pragma once
 
 #include <poll.h>
@@ -10,10 +9,10 @@
 
 #include <vector>
 
-#include "canhil/can_nodes/bus.hpp"
-#include "canhil/can_nodes/node.hpp"
+#include "canhil/base/setup_error.hpp"
+#include "canhil/base/time.hpp"
 
-namespace canhil::app {
+namespace canhil::emulator {
 
 /// Waits until an absolute CLOCK_REALTIME deadline or until a socket is readable.
 class WallWaiter {
@@ -55,9 +54,4 @@ class WallWaiter {
   int timer_ = -1;
 };
 
-/// A bus state as the real-time commands report it.
-inline const char* bus_state_text(can_nodes::BusState s) {
-  return s == can_nodes::BusState::kUp ? "up" : s == can_nodes::BusState::kDown ? "down" : "gone";
-}
-
-}  // namespace canhil::app
+}  // namespace canhil::emulator

@@ -1,7 +1,8 @@
-// The whole loop in virtual time: emulated nodes and physics, the reference
-// handler and agent, the emulated vision; deterministic, FTT-clean, and the
-// robot scores its purpose: it finds the ball and kicks it towards the goal.
-#include "canhil/emulator/virtual_run.hpp"
+// A session in virtual time (the virtual driver): emulated nodes and physics,
+// the reference handler and agent, the emulated vision; deterministic,
+// FTT-clean, and the robot serves its purpose: it finds the ball and kicks it
+// towards the goal.
+#include "canhil/emulator/virtual_driver.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -24,17 +25,40 @@ namespace {
 
 using namespace std::chrono_literals;
 
+struct Config {
+  Scenario scenario;
+  SessionOptions options;
+  VirtualOptions virtual_options;
+};
+
+// A session and its virtual driver, as canhil run --virtual-time builds them.
+class Loop {
+ public:
+  explicit Loop(const Config& c) : session_(c.scenario, c.options), driver_(session_, c.virtual_options) {}
+  void run_for(Nanos d) { driver_.run_for(d); }
+  std::string trace() const { return driver_.trace(); }
+  const physics::World& world() const { return session_.world(); }
+  std::vector<RobotOutcome> outcomes() const { return driver_.outcomes(); }
+  const std::vector<Goal>& goals() const { return session_.goals(); }
+  const std::string& world_log() const { return session_.world_log(); }
+  std::vector<can_nodes::FaultCount> fault_counts() const { return session_.fault_counts(); }
+
+ private:
+  Session session_;
+  VirtualDriver driver_;
+};
+
 class VirtualRunTest : public ::testing::Test {
  protected:
   void SetUp() override {
     static int counter = 0;
     setenv("RTDB_KEY", std::to_string(0x59000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6)).c_str(), 1);
   }
-  static VirtualRunConfig one_robot() {
-    VirtualRunConfig c;
-    c.messages = frames::MessageSet::load(test::shipped_dbc());
-    c.world.robots = {physics::Placement{-3.0, 0.0, -90}};  // facing the opponent goal (+x)
-    c.world.ball_start = {-1.0, 1.0, c.world.ball.radius_m};
+  static Config one_robot() {
+    Config c;
+    c.options.messages = frames::MessageSet::load(test::shipped_dbc());
+    c.scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};  // facing the opponent goal (+x)
+    c.scenario.world.ball_start = {-1.0, 1.0, c.scenario.world.ball.radius_m};
     return c;
   }
 };
@@ -42,30 +66,30 @@ class VirtualRunTest : public ::testing::Test {
 TEST_F(VirtualRunTest, SameScenarioSameTraceByteForByte) {
   std::string first;
   {
-    VirtualRun run(one_robot());
+    Loop run(one_robot());
     run.run_for(3s);
     first = run.trace();
   }
-  VirtualRun again(one_robot());
+  Loop again(one_robot());
   again.run_for(3s);
   EXPECT_EQ(again.trace(), first);
   EXPECT_GT(first.size(), 50'000u);
 }
 
 TEST_F(VirtualRunTest, WithoutATraceFramesAreCountedNotKept) {
-  VirtualRunConfig c = one_robot();
-  c.record_trace = false;
-  VirtualRun run(c);
+  Config c = one_robot();
+  c.virtual_options.record_trace = false;
+  Loop run(c);
   run.run_for(1s);
   EXPECT_TRUE(run.trace().empty());
   EXPECT_GT(run.outcomes()[0].frames, 500u);
 }
 
 TEST_F(VirtualRunTest, TheTraceIsFttCompliant) {
-  VirtualRun run(one_robot());
+  Loop run(one_robot());
   run.run_for(4s);
-  const VirtualRunConfig cfg = one_robot();
-  timing::TimingAnalyzer analyzer(cfg.messages, timing::TimingConfig{});
+  const Config cfg = one_robot();
+  timing::TimingAnalyzer analyzer(cfg.options.messages, timing::TimingConfig{});
   std::istringstream in(run.trace());
   std::string line;
   while (std::getline(in, line)) {
@@ -80,7 +104,7 @@ TEST_F(VirtualRunTest, TheTraceIsFttCompliant) {
 }
 
 TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
-  VirtualRun run(one_robot());
+  Loop run(one_robot());
   const double start_x = run.world().ball_position().x();
   bool kicked = false;
   for (int second = 0; second < 30 && !kicked; ++second) {
@@ -116,12 +140,12 @@ TEST_F(VirtualRunTest, TheFiveRobotScenarioRunsWithEveryLoopClosed) {
   const Scenario sc = load_scenario(test::source_dir() + "/emulator/scenarios/five_robots.toml");
   ASSERT_EQ(sc.world.robots.size(), 5u);
   ASSERT_EQ(sc.world.obstacles.size(), 5u);
-  VirtualRunConfig c = one_robot();
-  c.world = sc.world;
-  c.interfaces = sc.interfaces;
-  c.agents = sc.agents;
-  c.world_log_period = 100ms;
-  VirtualRun run(c);
+  Config c = one_robot();
+  c.scenario.world = sc.world;
+  c.scenario.interfaces = sc.interfaces;
+  c.scenario.agents = sc.agents;
+  c.options.world_log_period = 100ms;
+  Loop run(c);
   run.run_for(6s);
   const auto outcomes = run.outcomes();
   const std::string trace = run.trace();
@@ -154,19 +178,19 @@ TEST_F(VirtualRunTest, TheFiveRobotScenarioRunsWithEveryLoopClosed) {
     EXPECT_LT(worst, 0.25) << "the reported pose strayed from the true one";
     EXPECT_EQ(outcomes[r].bad_frames, 0u);
     EXPECT_GT(outcomes[r].frames, 3000u);
-    const timing::TimingReport report = analyse(trace, c.messages, sc.interfaces[r]);
+    const timing::TimingReport report = analyse(trace, c.options.messages, sc.interfaces[r]);
     EXPECT_TRUE(report.ok()) << timing::format_table(report);
   }
 }
 
 TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
-  VirtualRunConfig c = one_robot();
-  c.faults = {can_nodes::parse_fault("drop:M4_1:0.5"), can_nodes::parse_fault("silence:Motor2:1")};
-  c.seed = 7;
+  Config c = one_robot();
+  c.scenario.faults = {can_nodes::parse_fault("drop:M4_1:0.5"), can_nodes::parse_fault("silence:Motor2:1")};
+  c.scenario.seed = 7;
   std::string first;
   std::vector<can_nodes::FaultCount> counts;
   {
-    VirtualRun run(c);
+    Loop run(c);
     run.run_for(2s);
     first = run.trace();
     counts = run.fault_counts();
@@ -174,7 +198,7 @@ TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
   ASSERT_EQ(counts.size(), 2u);
   EXPECT_EQ(counts[1].applied, counts[1].matched);
   EXPECT_GT(counts[1].applied, 50u);
-  const frames::MessageSet& set = *c.messages;
+  const frames::MessageSet& set = *c.options.messages;
   const std::uint32_t m4_1 = set.codec().find("M4_1")->id();
   const std::uint32_t m3_2 = set.codec().find("M3_2")->id();
   std::size_t m4_seen = 0, m3_2_before = 0, m3_2_after = 0;
@@ -192,23 +216,23 @@ TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
   EXPECT_GT(m3_2_before, 10u);
   EXPECT_EQ(m3_2_after, 0u) << "Motor2 is silent from 1 s on";
   // The timing report sees the faults: M4_1 frames missing, M3_2 missing.
-  const timing::TimingReport report = analyse(first, c.messages, "vcan0");
+  const timing::TimingReport report = analyse(first, c.options.messages, "vcan0");
   EXPECT_FALSE(report.ok());
-  VirtualRun again(c);
+  Loop again(c);
   again.run_for(2s);
   EXPECT_EQ(again.trace(), first) << "same scenario and seed, same faults";
 }
 
 TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
-  VirtualRunConfig c = one_robot();
-  c.faults = {can_nodes::parse_fault("error:M3_1:0.2")};
-  VirtualRun run(c);
+  Config c = one_robot();
+  c.scenario.faults = {can_nodes::parse_fault("error:M3_1:0.2")};
+  Loop run(c);
   run.run_for(2s);
   const auto counts = run.fault_counts();
   ASSERT_EQ(counts.size(), 1u);
   EXPECT_GT(counts[0].applied, counts[0].matched / 10);
   EXPECT_LT(counts[0].applied, counts[0].matched * 3 / 10);
-  const std::uint32_t m3_1 = c.messages->codec().find("M3_1")->id();
+  const std::uint32_t m3_1 = c.options.messages->codec().find("M3_1")->id();
   std::size_t errors = 0, m3_seen = 0, retransmitted = 0;
   Nanos last_error{-1};
   std::istringstream in(run.trace());
@@ -229,7 +253,7 @@ TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
   EXPECT_EQ(errors, counts[0].applied) << "every error frame is in the trace";
   EXPECT_EQ(m3_seen, counts[0].matched) << "no frame is lost: the controller sends it again";
   EXPECT_EQ(retransmitted, counts[0].applied);
-  const timing::TimingReport report = analyse(run.trace(), c.messages, "vcan0");
+  const timing::TimingReport report = analyse(run.trace(), c.options.messages, "vcan0");
   EXPECT_EQ(report.error_frames, errors);
   for (const timing::MessageTiming& m : report.messages) {
     EXPECT_EQ(m.violations.count(timing::ViolationKind::kMissing), 0u) << m.name << "\n"
@@ -240,11 +264,11 @@ TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
 TEST_F(VirtualRunTest, ABatteryFaultDrainsThePackTheSystemMonitorReports) {
   // M2's v_power24 over a run: full, then from 1 s on 20 % of the pack a second.
   auto power24 = [&](std::vector<std::string> rules) {
-    VirtualRunConfig c = one_robot();
-    for (const auto& r : rules) c.faults.push_back(can_nodes::parse_fault(r));
-    VirtualRun run(c);
+    Config c = one_robot();
+    for (const auto& r : rules) c.scenario.faults.push_back(can_nodes::parse_fault(r));
+    Loop run(c);
     run.run_for(5s);
-    const frames::MessageCodec& m2 = *c.messages->codec().find("M2");
+    const frames::MessageCodec& m2 = *c.options.messages->codec().find("M2");
     const std::size_t v24 = *m2.index_of("v_power24");
     std::vector<std::pair<double, double>> volts;  // (time, V)
     std::istringstream in(run.trace());
@@ -255,7 +279,7 @@ TEST_F(VirtualRunTest, ABatteryFaultDrainsThePackTheSystemMonitorReports) {
       if (e.frame.kind != frames::FrameKind::kData || e.frame.id != m2.id()) continue;
       std::vector<double> v(m2.signal_count());
       EXPECT_EQ(m2.decode(e.frame, v).status, frames::DecodeStatus::kOk);
-      volts.emplace_back(std::chrono::duration<double>(e.time).count(), v[v24]);
+      volts.emplace_back(to_seconds(e.time), v[v24]);
     }
     const auto outcome = run.outcomes().at(0);
     return std::make_tuple(volts, outcome.charge, run.fault_counts());
@@ -276,34 +300,7 @@ TEST_F(VirtualRunTest, ABatteryFaultDrainsThePackTheSystemMonitorReports) {
   EXPECT_NEAR(healthy_charge[2] - charge[2], 0.8, 0.01) << "4 s at 20 %";
   EXPECT_NEAR(charge[0], healthy_charge[0], 1e-9) << "only the 24 V pack";
   ASSERT_EQ(counts.size(), 1u);
-  EXPECT_NEAR(std::chrono::duration<double>(counts[0].active).count(), 4.0, 0.02);
-}
-
-TEST_F(VirtualRunTest, ScenarioMistakesNameTheFileTheFieldAndWhatToDo) {
-  auto error_of = [](const std::string& text) {
-    try {
-      parse_scenario(text, "bad.toml");
-    } catch (const physics::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
-  const std::string robot = "[[robots]]\nx_m = 0\n";
-  EXPECT_NE(
-      error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n").find("bad.toml:4: run.interfaces: give one"),
-      std::string::npos)
-      << error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n");
-  EXPECT_NE(error_of("[run]\nfaults = [\"drop:M1:7\"]\n").find("run.faults: fault 'drop:M1:7'"), std::string::npos);
-  EXPECT_NE(error_of("[run]\nduratoin_s = 3\n").find("run.duratoin_s: unknown field"), std::string::npos);
-  EXPECT_NE(error_of(robot + robot + "[run]\nagents = [2, 2]\n").find("appears twice"), std::string::npos);
-  EXPECT_NE(error_of("[rnu]\n").find("unknown field"), std::string::npos) << "the world's own check";
-  const Scenario ok = parse_scenario(robot + robot + "[run]\nseed = 9\nagents = [3, 1]\n", "ok.toml");
-  EXPECT_EQ(ok.seed, 9u);
-  EXPECT_EQ(ok.agents, (std::vector<int>{3, 1}));
-  EXPECT_EQ(ok.interfaces, (std::vector<std::string>{"vcan0", "vcan1"}));
-  const Scenario one = load_scenario(test::source_dir() + "/emulator/scenarios/one_robot.toml");
-  EXPECT_EQ(one.world.robots.size(), 1u);
-  EXPECT_DOUBLE_EQ(one.duration_s, 8);
+  EXPECT_NEAR(to_seconds(counts[0].active), 4.0, 0.02);
 }
 
 }  // namespace

@@ -1,12 +1,15 @@
-// canhil/emulator/lockstep.hpp — virtual time: physics, nodes and any other
-// participants (a test playing the laptop, a handler) advanced together on a
-// simulated clock, as fast as the CPU allows, deterministically.
+// canhil/can_nodes/lockstep.hpp — virtual time: nodes and any other
+// participants (a handler, a test playing the laptop) advanced together on a
+// simulated clock, as fast as the CPU allows, deterministically; optionally a
+// periodic step (the physics world's) on the same clock.
 //
-// At each instant, in this order: the physics step (if one ends now), then the
-// participants whose wake-up has come, in the order they were added; then
+// At each instant, in this order: the periodic step (if one ends now), then
+// the participants whose wake-up has come, in the order they were added; then
 // frames are delivered round after round until no participant has any left
 // (frames sent at an instant are received at that instant). Time then jumps
-// to the next wake-up or physics step.
+// to the next wake-up or step.
+//
+// Not thread-safe: one thread runs it.
 #pragma once
 
 #include <functional>
@@ -15,12 +18,10 @@
 
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/node.hpp"
-#include "canhil/physics/world.hpp"
 
-namespace canhil::emulator {
+namespace canhil::can_nodes {
 
-
-/// Anything the runner drives: nodes, test endpoints, a handler.
+/// Anything a runner drives: nodes, test endpoints, a handler, an agent.
 class Participant {
  public:
   virtual ~Participant() = default;
@@ -39,21 +40,21 @@ class Participant {
 /// A node as a participant.
 class NodeParticipant final : public Participant {
  public:
-  explicit NodeParticipant(can_nodes::Node& node) : node_(node) {}
+  explicit NodeParticipant(Node& node) : node_(node) {}
   std::size_t poll() override { return node_.poll(); }
   std::size_t poll_some(std::size_t budget) override { return node_.poll(budget); }
   void tick(Nanos now) override { node_.tick(now); }
   Nanos next_wakeup() const override { return node_.next_wakeup(); }
 
  private:
-  can_nodes::Node& node_;
+  Node& node_;
 };
 
 /// A runner's participants, in the order added (the order they are ticked).
 class Participants {
  public:
   void add(Participant& p) { list_.push_back(&p); }
-  void add(can_nodes::Node& node);
+  void add(Node& node);
   /// Delivers frames round after round until nobody has any left (frames sent
   /// while handling frames arrive in the same instant).
   void deliver();
@@ -62,7 +63,7 @@ class Participants {
   /// Ticks everyone due at now(), delivers, and repeats while anyone is due
   /// (a participant may ask to be woken again at once). now() is re-read each
   /// round. With a `budget`, each delivery is one deliver_some(budget).
-  void tick_due(const can_nodes::Clock& clock, std::size_t budget = kUnlimited);
+  void tick_due(const Clock& clock, std::size_t budget = kUnlimited);
   static constexpr std::size_t kUnlimited = ~std::size_t{0};
   Nanos next_wakeup() const;
 
@@ -73,26 +74,26 @@ class Participants {
 
 class Lockstep {
  public:
-  /// `world` may be null (nodes without physics). Both must outlive the runner.
-  Lockstep(can_nodes::SimulatedClock& clock, physics::World* world);
+  /// `clock` must outlive the runner; it starts at the clock's time.
+  explicit Lockstep(SimulatedClock& clock) : clock_(clock) {}
+  /// A step every `period` from the clock's time on (the first at now +
+  /// period), before the participants due at the same instant.
+  void set_step(Nanos period, std::function<void(Nanos now)> step);
   /// Participants are ticked in the order added; they must outlive the runner.
   void add(Participant& p) { participants_.add(p); }
-  void add(can_nodes::Node& node) { participants_.add(node); }
+  void add(Node& node) { participants_.add(node); }
   /// Runs until the clock reads `end` (inclusive of everything due at `end`).
   void run_until(Nanos end);
   void run_for(Nanos duration) { run_until(clock_.now() + duration); }
-  /// Called after every physics step (for recording).
-  void on_physics_step(std::function<void(Nanos)> f) { after_step_ = std::move(f); }
-  std::uint64_t physics_steps() const noexcept { return steps_; }
+  std::uint64_t steps() const noexcept { return steps_; }
 
  private:
-  can_nodes::SimulatedClock& clock_;
-  physics::World* world_;
-  Nanos step_{0};
-  Nanos next_step_{0};
+  SimulatedClock& clock_;
+  Nanos period_{0};
+  Nanos next_step_ = kNever;
   std::uint64_t steps_ = 0;
+  std::function<void(Nanos)> step_;
   Participants participants_;
-  std::function<void(Nanos)> after_step_;
 };
 
-}  // namespace canhil::emulator
+}  // namespace canhil::can_nodes

@@ -1,4 +1,4 @@
-// app/fifo_scheduling.hpp — real-time scheduling for the threads that send
+// canhil/emulator/fifo_scheduling.hpp — real-time scheduling for the threads that send
 // frames on time (canhil run's masters and nodes, canhil bench's bare loop),
 // and locked memory for their process.
 #pragma once
@@ -10,7 +10,7 @@
 #include <cstring>
 #include <string>
 
-namespace canhil::app {
+namespace canhil::emulator {
 
 // SCHED_FIFO for the calling thread (the nodes' loop) while it lives: a frame
 // due is sent as soon as its timer fires, ahead of the physics thread and
@@ -57,4 +57,4 @@ class MemoryLock {
   bool locked_;
 };
 
-}  // namespace canhil::app
+}  // namespace canhil::emulator

@@ -1,17 +1,10 @@
-#include "canhil/emulator/lockstep.hpp"
+#include "canhil/can_nodes/lockstep.hpp"
 
 #include <algorithm>
 
-namespace canhil::emulator {
+namespace canhil::can_nodes {
 
-Lockstep::Lockstep(can_nodes::SimulatedClock& clock, physics::World* world) : clock_(clock), world_(world) {
-  if (world_ != nullptr) {
-    step_ = std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(world_->params().simulation.step_s));
-    next_step_ = clock_.now() + step_;
-  }
-}
-
-void Participants::add(can_nodes::Node& node) {
+void Participants::add(Node& node) {
   owned_.push_back(std::make_unique<NodeParticipant>(node));
   list_.push_back(owned_.back().get());
 }
@@ -28,7 +21,7 @@ void Participants::deliver_some(std::size_t budget) {
   for (Participant* p : list_) p->poll_some(budget);
 }
 
-void Participants::tick_due(const can_nodes::Clock& clock, std::size_t budget) {
+void Participants::tick_due(const Clock& clock, std::size_t budget) {
   for (int round = 0; round < 64; ++round) {
     const Nanos now = clock.now();
     bool any = false;
@@ -53,17 +46,22 @@ Nanos Participants::next_wakeup() const {
   return t;
 }
 
+void Lockstep::set_step(Nanos period, std::function<void(Nanos now)> step) {
+  period_ = period;
+  step_ = std::move(step);
+  next_step_ = clock_.now() + period_;
+}
+
 void Lockstep::run_until(Nanos end) {
   while (true) {
-    const Nanos next = std::min(world_ != nullptr ? next_step_ : kNever, participants_.next_wakeup());
+    const Nanos next = std::min(next_step_, participants_.next_wakeup());
     if (next > end) break;
     clock_.set(std::max(next, clock_.now()));
     const Nanos now = clock_.now();
-    if (world_ != nullptr && next_step_ <= now) {
-      world_->step();
+    if (next_step_ <= now) {
+      next_step_ += period_;
       ++steps_;
-      next_step_ += step_;
-      if (after_step_) after_step_(now);
+      step_(now);
     }
     participants_.deliver();
     participants_.tick_due(clock_);
@@ -72,4 +70,4 @@ void Lockstep::run_until(Nanos end) {
   participants_.deliver();
 }
 
-}  // namespace canhil::emulator
+}  // namespace canhil::can_nodes

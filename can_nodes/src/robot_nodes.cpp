@@ -1,45 +1,27 @@
-#include "canhil/emulator/robot_nodes.hpp"
+#include "canhil/can_nodes/robot_nodes.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <string>
 
-namespace canhil::emulator {
+namespace canhil::can_nodes {
 
-KickOutcome PhysicsRobotIo::kick(bool low, int power) { return robot_.kick(low, power).outcome; }
-
-
-
-can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const can_nodes::FttConfig& ftt) {
-  can_nodes::NodeParams p;
-  p.ftt = ftt;
-  p.geometry = robot.geometry;
-  p.encoder = robot.encoder;
-  return p;
-}
-
-const char* node_name(NodeId id) noexcept {
-  static constexpr const char* kNames[] = {"FTT master", "Pic_base", "Motor1",  "Motor2",
-                                           "Motor3",     "Pic_odom", "Compass", "SysMon"};
-  return kNames[static_cast<std::size_t>(id)];
-}
-
-RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const can_nodes::NodeParams& params,
-                       can_nodes::RobotIo& robot, const EndpointFactory& endpoints, Nanos start)
-    : schedule_(*set, params.ftt) {
+RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params,
+                       RobotIo& robot, const EndpointFactory& endpoints, Nanos start)
+    : schedule_(*set, params.ftt), start_(start) {
   for (std::size_t i = 0; i < kNodeCount; ++i) buses_.push_back(endpoints(node_name(static_cast<NodeId>(i))));
   watch_bus_ = endpoints("SysMon watch");
-  auto bus = [&](NodeId id) -> can_nodes::Bus& { return *buses_[static_cast<std::size_t>(id)]; };
-  nodes_.push_back(std::make_unique<can_nodes::FttMaster>(bus(NodeId::kMaster), set, schedule_, start));
-  nodes_.push_back(std::make_unique<can_nodes::PicBase>(bus(NodeId::kPicBase), set, params, robot));
+  auto bus = [&](NodeId id) -> Bus& { return *buses_[static_cast<std::size_t>(id)]; };
+  nodes_.push_back(std::make_unique<FttMaster>(bus(NodeId::kMaster), set, schedule_, start));
+  nodes_.push_back(std::make_unique<PicBase>(bus(NodeId::kPicBase), set, params, robot));
   for (int w = 0; w < 3; ++w) {
     nodes_.push_back(
-        std::make_unique<can_nodes::MotorNode>(bus(static_cast<NodeId>(2 + w)), set, params, robot, w, start));
+        std::make_unique<MotorNode>(bus(motor_node(w)), set, params, robot, w, start));
   }
-  nodes_.push_back(std::make_unique<can_nodes::PicOdom>(bus(NodeId::kPicOdom), set, params));
-  nodes_.push_back(std::make_unique<can_nodes::CompassNode>(bus(NodeId::kCompass), set, params, robot));
-  auto* base = static_cast<can_nodes::PicBase*>(nodes_[1].get());
-  nodes_.push_back(std::make_unique<can_nodes::SystemMonitor>(
+  nodes_.push_back(std::make_unique<PicOdom>(bus(NodeId::kPicOdom), set, params));
+  nodes_.push_back(std::make_unique<CompassNode>(bus(NodeId::kCompass), set, params, robot));
+  auto* base = static_cast<PicBase*>(nodes_[1].get());
+  nodes_.push_back(std::make_unique<SystemMonitor>(
       bus(NodeId::kSysMon), set, params,
       [this] {  // the others' bad frames; it adds its own
         std::uint64_t n = 0;
@@ -57,8 +39,8 @@ RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, con
       watch_bus_.get()));
 }
 
-std::vector<can_nodes::Node*> RobotNodes::nodes() {
-  std::vector<can_nodes::Node*> out;
+std::vector<Node*> RobotNodes::nodes() {
+  std::vector<Node*> out;
   for (auto& n : nodes_) out.push_back(n.get());
   return out;
 }
@@ -72,13 +54,13 @@ std::uint64_t RobotNodes::bad_frames() const {
 BusReport RobotNodes::bus_report() const {
   BusReport r;
   r.fewest_triggers = ~0ULL;
-  const can_nodes::BusStats watch = watch_bus_->stats();
+  const BusStats watch = watch_bus_->stats();
   r.monitor_heard = watch.received;
   r.monitor_overflow = watch.rx_overflow;
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
-    const can_nodes::Node& n = *nodes_[i];
-    const can_nodes::NodeCounters& c = n.counters();
-    const can_nodes::BusStats s = n.bus().stats();
+    const Node& n = *nodes_[i];
+    const NodeCounters& c = n.counters();
+    const BusStats s = n.bus().stats();
     r.sent += c.sent;
     r.unknown_id += c.unknown_id;
     r.wrong_length += c.wrong_length;
@@ -91,7 +73,7 @@ BusReport RobotNodes::bus_report() const {
     }
     if (id == NodeId::kMaster) {
       r.tms_sent = c.sent;
-      const std::uint64_t ecs = static_cast<const can_nodes::FttMaster&>(n).ec_count();
+      const std::uint64_t ecs = static_cast<const FttMaster&>(n).ec_count();
       r.ecs_skipped = ecs - std::min(ecs, c.sent + c.fault_dropped);
     } else if (id != NodeId::kSysMon && c.triggers < r.fewest_triggers) {
       r.fewest_triggers = c.triggers;
@@ -118,8 +100,8 @@ std::string describe(const BusReport& r) {
   return line;
 }
 
-void RobotNodes::set_fault_hook(can_nodes::FaultHook* hook) {
+void RobotNodes::set_fault_hook(FaultHook* hook) {
   for (auto& n : nodes_) n->set_fault_hook(hook);
 }
 
-}  // namespace canhil::emulator
+}  // namespace canhil::can_nodes

@@ -1,0 +1,30 @@
+// canhil/emulator/goal_watcher.hpp — goals, step by step (real or virtual time).
+#pragma once
+
+#include <vector>
+
+#include "canhil/physics/world.hpp"
+
+namespace canhil::emulator {
+
+/// The ball entered a goal: wholly past the goal line, between the posts, under the bar.
+struct Goal {
+  Nanos time{0};
+  bool positive_x = true;  ///< the goal at +x (the one the reference agents attack)
+};
+
+/// Counts the ball's entries into either goal. Used by the thread that steps the world.
+class GoalWatcher {
+ public:
+  explicit GoalWatcher(const physics::WorldParams& world) : params_(world) {}
+  /// After a step at `now`; true when a goal was scored in it.
+  bool step(const physics::World& world, Nanos now);
+  const std::vector<Goal>& goals() const noexcept { return goals_; }
+
+ private:
+  physics::WorldParams params_;
+  std::vector<Goal> goals_;
+  bool in_ = false;
+};
+
+}  // namespace canhil::emulator

@@ -1,0 +1,187 @@
+// canhil/emulator/session.hpp — one run, built from a Scenario: the world,
+// one rig per robot (its RobotIo, its emulated nodes, its fault injector), the
+// vision, the goal watcher, the battery drain and the world log. Each rule of
+// a run is written here once; drivers move a session through time:
+//
+//   VirtualDriver   virtual time: lockstep, memory buses, optionally the
+//                   reference handler and agent in process (virtual_driver.hpp)
+//   RealtimeDriver  real time: threads, SocketCAN, absolute deadlines
+//                   (realtime_driver.hpp)
+//
+// A driver builds the nodes (build_nodes: its bus endpoints, direct or shared
+// robot I/O) and, around every physics step on the thread that steps the
+// world, calls before_step() and after_step(now).
+//
+// What watches or changes a run (the viewer, the coach, fault commands) uses
+// the one narrow surface, from any thread: snapshot() reads a consistent copy
+// of the world as the last step left it; apply() queues a change that takes
+// effect at the next step (world changes) or the nodes' next pass (bus
+// changes), in either driver.
+//
+// Vision writes each robot's VISION_INFO into its agent's RTDB (DB_init_all;
+// set RTDB_KEY to keep runs apart), then calls the frame hook.
+#pragma once
+
+#include <Eigen/Core>
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "canhil/can_nodes/fault.hpp"
+#include "canhil/can_nodes/robot_nodes.hpp"
+#include "canhil/emulator/goal_watcher.hpp"
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/emulator/shared_robot_io.hpp"
+#include "canhil/physics/world.hpp"
+#include "canhil/vision_emu/runner.hpp"
+
+namespace canhil::emulator {
+
+/// What a run needs beyond its scenario: chosen by the command, not the file.
+struct SessionOptions {
+  std::shared_ptr<const frames::MessageSet> messages;
+  can_nodes::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
+  vision_emu::VisionParams vision;
+  bool vision_on = true;      ///< off: no vision and no RTDB (canhil nodes)
+  Nanos world_log_period{0};  ///< 0: no world log
+  /// A saved world (physics::load_state) to start from instead of the placements.
+  std::optional<physics::WorldState> initial_state;
+};
+
+/// One robot's part of a run.
+struct Rig {
+  std::size_t index = 0;
+  int agent = 0;
+  std::string interface;
+  std::unique_ptr<can_nodes::RobotIo> io;  ///< PhysicsRobotIo or SharedRobotIo
+  SharedRobotIo* shared = nullptr;         ///< io, when the nodes run on another thread than the physics
+  std::unique_ptr<can_nodes::RobotNodes> nodes;
+  std::unique_ptr<can_nodes::FaultInjector> faults;  ///< always there (maybe without rules)
+};
+
+/// The world as the last step left it, for whoever watches the run.
+struct WorldSnapshot {
+  double time_s = 0;  ///< world time
+  std::uint64_t steps = 0;
+  Eigen::Vector3d ball = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ball_velocity = Eigen::Vector3d::Zero();
+  std::vector<kinematics::Pose> robots;
+  std::vector<Eigen::Vector3d> obstacles;
+  std::vector<Goal> goals;
+};
+
+/// Changes to a running world. A moved body is a physics state change like any
+/// other (a robot lifted and put down: its wheels stop, its odometry does not know).
+struct MoveRobot {
+  std::size_t robot = 0;
+  physics::Placement to;
+};
+struct MoveBall {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+};
+struct MoveObstacle {
+  std::size_t obstacle = 0;
+  double x_m = 0, y_m = 0;
+};
+/// A fault rule from now on (its @SECONDS, if any, counts from the run's start).
+struct InjectFault {
+  can_nodes::FaultRule rule;
+};
+using Change = std::variant<MoveRobot, MoveBall, MoveObstacle, InjectFault>;
+
+class Session {
+ public:
+  /// Completes and checks the scenario (SetupError), builds the world (from
+  /// the saved state if given: SetupError when it does not fit), the fault
+  /// injectors, the vision and the goal watcher; attaches to the RTDB when
+  /// vision is on. No nodes yet: a driver builds them.
+  Session(Scenario scenario, SessionOptions options);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  const Scenario& scenario() const noexcept { return scenario_; }
+  const SessionOptions& options() const noexcept { return options_; }
+  std::size_t robot_count() const noexcept { return rigs_.size(); }
+
+  // --- for drivers --------------------------------------------------------------
+  /// A bus endpoint for robot `robot`'s node `node` (a node name, or "SysMon watch").
+  using Endpoints = std::function<std::unique_ptr<can_nodes::Bus>(std::size_t robot, const std::string& node)>;
+  enum class IoMode : std::uint8_t {
+    kDirect,  ///< nodes on the thread that steps the world (virtual time)
+    kShared,  ///< nodes on another thread: SharedRobotIo hands commands and sensors across
+  };
+  /// Builds every robot's nodes, their clocks starting at `start` (fault rule
+  /// times count from there too). SetupError when the schedule does not fit.
+  void build_nodes(const Endpoints& endpoints, IoMode mode, Nanos start);
+  Rig& rig(std::size_t robot) { return rigs_.at(robot); }
+  const Rig& rig(std::size_t robot) const { return rigs_.at(robot); }
+  /// The world, for the thread that steps it.
+  physics::World& world() noexcept { return *world_; }
+  const physics::World& world() const noexcept { return *world_; }
+  /// The parameters the nodes were built with (build_nodes).
+  const can_nodes::NodeParams& node_params() const noexcept { return node_params_; }
+  /// The physics step period.
+  Nanos step_period() const noexcept { return step_period_; }
+  /// Before a step: the queued world changes (and, with shared I/O, the nodes' commands).
+  void before_step();
+  /// After a step at `now` on the nodes' clock: battery drain, vision, goals,
+  /// world log, the snapshot.
+  void after_step(Nanos now);
+  /// On the nodes' thread, each pass: the queued bus changes (fault rules).
+  void apply_bus_changes();
+  /// From now on, error-frame faults are refused with this reason (a driver
+  /// on CAN hardware, which no software can make send an error frame).
+  void refuse_error_frames(std::string why);
+  /// Called after robot r's VISION_INFO is written (wake its agent).
+  void on_vision_frame(std::function<void(std::size_t robot, Nanos now)> hook) { frame_hook_ = std::move(hook); }
+
+  // --- the narrow surface (any thread) ----------------------------------------
+  WorldSnapshot snapshot() const;
+  /// Queues a change for the next step; SetupError for an unknown robot or
+  /// obstacle, or a fault rule whose target does not exist.
+  void apply(Change change);
+
+  // --- results (after the run, or from the stepping thread) -------------------
+  const std::vector<Goal>& goals() const noexcept { return goals_.goals(); }
+  /// What each fault rule did, summed over the robots.
+  std::vector<can_nodes::FaultCount> fault_counts() const;
+  /// The world log (CSV with a header line); empty when world_log_period is 0.
+  const std::string& world_log() const noexcept { return world_log_; }
+  std::uint64_t vision_frames() const noexcept { return vision_ ? vision_->frames() : 0; }
+
+ private:
+  void log_world(Nanos now);
+  void publish(std::uint64_t step);
+  void apply_now(const Change& change);
+
+  Scenario scenario_;
+  SessionOptions options_;
+  std::unique_ptr<physics::World> world_;
+  Nanos step_period_{0};
+  can_nodes::NodeParams node_params_;  // the nodes keep a reference: it lives as long as they do
+  std::vector<Rig> rigs_;
+  std::unique_ptr<vision_emu::VisionRunner> vision_;
+  std::function<void(std::size_t, Nanos)> frame_hook_;
+  GoalWatcher goals_;
+  bool rtdb_ = false;
+  std::string world_log_;
+  std::string error_frames_refused_;  // empty: allowed
+  Nanos next_log_{0};
+  std::uint64_t steps_ = 0;
+  Nanos now_{0};  // the time of the step in progress (the vision's frame time)
+
+  mutable std::mutex snapshot_mutex_;
+  WorldSnapshot snapshot_;
+  std::mutex changes_mutex_;
+  std::vector<Change> world_changes_, bus_changes_;
+  std::atomic<bool> any_world_change_{false}, any_bus_change_{false};  // set under the mutex; read first without it
+};
+
+}  // namespace canhil::emulator

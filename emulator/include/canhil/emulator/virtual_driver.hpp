@@ -1,0 +1,80 @@
+// canhil/emulator/virtual_driver.hpp — a session in virtual time, in one
+// process, deterministically: per robot its emulated nodes on its own
+// in-memory bus and, optionally, the reference handler (laptop::HwComm) on
+// that bus and the reference agent on its RTDB, woken after each vision frame;
+// everything advanced in lockstep with the physics. Every bus can be recorded
+// as a candump log (one interface name per robot). `canhil run --virtual-time`,
+// `canhil bench`, RobotRig and the tests are built on this.
+//
+// Not thread-safe: one thread drives it (the session's snapshot() and apply()
+// may be used from others).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/session.hpp"
+
+namespace canhil::emulator {
+
+struct VirtualOptions {
+  /// The reference handler and agent per robot, in process (with their RTDB
+  /// cleared at start and the handler's odometry set to the robot's pose).
+  bool reference_laptop = true;
+  bool count_frames = true;  ///< a listener on every bus counts its frames (RobotOutcome::frames)
+  bool record_trace = true;  ///< and keeps them for trace(); false: trace() is empty
+};
+
+struct RobotOutcome {
+  kinematics::Pose pose;
+  int kicks = 0;             ///< kicks the reference agent asked for
+  std::uint64_t frames = 0;  ///< on its bus
+  std::uint64_t bad_frames = 0;
+  BatteryVolts battery;            ///< the packs' voltages at the end
+  std::array<double, 3> charge{};  ///< their state of charge, 0..1
+};
+
+class VirtualDriver {
+ public:
+  /// Builds the buses, the nodes (their clocks start at 0) and, if asked, the
+  /// reference laptop stack. `session` must outlive the driver.
+  VirtualDriver(Session& session, VirtualOptions options = {});
+  ~VirtualDriver();
+  VirtualDriver(const VirtualDriver&) = delete;
+  VirtualDriver& operator=(const VirtualDriver&) = delete;
+
+  void run_for(Nanos duration);
+  void run_until(Nanos end);
+  Nanos now() const noexcept { return clock_.now(); }
+
+  /// Robot r's bus, for what a test attaches (a laptop endpoint, a listener).
+  can_nodes::MemoryBus& bus(std::size_t robot) { return *buses_.at(robot); }
+  /// Another participant (ticked after the nodes and the reference laptop); must outlive the driver.
+  void add(can_nodes::Participant& p) { lockstep_.add(p); }
+  const can_nodes::SimulatedClock& clock() const noexcept { return clock_; }
+  std::uint64_t physics_steps() const noexcept { return lockstep_.steps(); }
+
+  std::vector<RobotOutcome> outcomes() const;
+  /// Every bus as a candump log, one interface name per robot, in time order (record_trace).
+  std::string trace() const;
+
+  struct Laptop;  // the reference handler and agent of one robot
+
+ private:
+  void record();
+
+  Session& session_;
+  VirtualOptions options_;
+  can_nodes::SimulatedClock clock_;
+  std::vector<std::unique_ptr<can_nodes::MemoryBus>> buses_;
+  std::vector<std::unique_ptr<can_nodes::MemoryEndpoint>> recorders_;
+  std::vector<std::vector<frames::TimedFrame>> recorded_;  // kept only when record_trace
+  std::vector<std::uint64_t> frame_counts_;
+  std::vector<std::unique_ptr<Laptop>> laptops_;
+  can_nodes::Lockstep lockstep_;
+};
+
+}  // namespace canhil::emulator

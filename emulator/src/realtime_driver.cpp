@@ -1,0 +1,126 @@
+#include "canhil/emulator/realtime_driver.hpp"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "canhil/emulator/fifo_scheduling.hpp"
+#include "canhil/rtdb/rtdb.h"
+
+namespace canhil::emulator {
+namespace {
+
+// A network device with a `device` link is hardware (a CAN adapter); vcan has none.
+bool is_virtual_interface(const std::string& iface) {
+  return !std::filesystem::exists("/sys/class/net/" + iface + "/device");
+}
+
+}  // namespace
+
+struct RealtimeDriver::Locked {
+  explicit Locked(bool on) : lock(on) {}
+  MemoryLock lock;
+};
+
+RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
+    : session_(session), options_(options), physics_(session, options.max_behind) {
+  const std::size_t n = session_.robot_count();
+  const Scenario& sc = session_.scenario();
+  const bool error_frames = std::any_of(sc.faults.begin(), sc.faults.end(), [](const can_nodes::FaultRule& f) {
+    return f.kind == can_nodes::FaultKind::kErrorFrame;
+  });
+  for (std::size_t r = 0; r < n; ++r) {
+    if (is_virtual_interface(sc.interfaces[r])) continue;
+    // A controller cannot be told to send an error frame: the flag would be masked and a data frame go out.
+    const std::string why = "error-frame faults need a virtual interface; " + sc.interfaces[r] +
+                            " is a CAN adapter. Use a bus disturber on a real bus, or run on vcan";
+    if (error_frames) throw SetupError(why);
+    session_.refuse_error_frames(why);
+  }
+  const Nanos ec = session_.options().ftt.elementary_cycle;
+  start_ = (clock_.now() / ec + 10) * ec;  // on a whole EC, a little ahead
+  sockets_.resize(n);
+  session_.build_nodes(
+      [this](std::size_t r, const std::string&) {
+        can_nodes::SocketCanOptions socket_options;
+        socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
+        auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options);
+        sockets_[r].push_back(bus.get());
+        return std::unique_ptr<can_nodes::Bus>(std::move(bus));
+      },
+      Session::IoMode::kShared, start_);
+  std::vector<int> fds;
+  for (std::size_t r = 0; r < n; ++r) {
+    if (sockets_[r].front()->state() != can_nodes::BusState::kUp) {
+      const std::string& iface = session_.rig(r).interface;
+      throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
+    }
+    states_.push_back(can_nodes::BusState::kUp);
+    for (std::size_t k = 1; k < sockets_[r].size(); ++k) fds.push_back(sockets_[r][k]->fd());  // not the master's
+  }
+  waiter_ = std::make_unique<WallWaiter>(fds);
+  loop_ = std::make_unique<can_nodes::Realtime>(clock_, [this](Nanos d) { waiter_->wait(d); });
+  masters_ = std::make_unique<can_nodes::Realtime>(clock_, [](Nanos d) { can_nodes::WallClock::sleep_until(d); });
+  for (std::size_t r = 0; r < n; ++r) {
+    const can_nodes::RobotNodes& nodes = *session_.rig(r).nodes;
+    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) {
+      if (node == &nodes.node(can_nodes::NodeId::kMaster)) {
+        masters_->add(*node);
+      } else {
+        loop_->add(*node);
+      }
+    }
+  }
+  loop_->on_pass([this] { session_.apply_bus_changes(); });
+  session_.on_vision_frame([this](std::size_t r, Nanos) { DB_signal_frame(session_.rig(r).agent); });
+}
+
+RealtimeDriver::~RealtimeDriver() {
+  stop();
+  session_.on_vision_frame(nullptr);
+}
+
+void RealtimeDriver::start() {
+  if (started_) return;
+  started_ = true;
+  memory_ = std::make_unique<Locked>(options_.priority > 0);
+  physics_.start(start_);  // before any priority: the physics thread keeps the normal scheduler
+  masters_thread_ = std::thread([this] {
+    const FifoScheduling fifo(options_.priority > 0 ? std::min(99, options_.priority + 1) : 0);
+    masters_->run_until(kNever, masters_stop_);
+  });
+}
+
+void RealtimeDriver::run_until(Nanos end, const std::atomic<bool>& stop) {
+  start();
+  const FifoScheduling fifo(options_.priority);
+  if (!fifo.problem.empty()) priority_problem_ = fifo.problem;
+  loop_->run_until(end, stop);
+}
+
+std::vector<std::pair<std::size_t, can_nodes::BusState>> RealtimeDriver::bus_state_changes() {
+  std::vector<std::pair<std::size_t, can_nodes::BusState>> changes;
+  for (std::size_t r = 0; r < sockets_.size(); ++r) {
+    const can_nodes::BusState state = sockets_[r].back()->refresh_state();  // SysMon's watch socket: this thread's
+    if (state != states_[r]) {
+      changes.emplace_back(r, state);
+      states_[r] = state;
+    }
+  }
+  return changes;
+}
+
+void RealtimeDriver::stop() {
+  if (stopped_ || !started_) return;
+  stopped_ = true;
+  masters_stop_ = true;
+  if (masters_thread_.joinable()) masters_thread_.join();
+  physics_.stop();  // the world is this thread's again
+  // What is still queued is read and counted, so the summary covers every frame
+  // that reached the emulator (bounded: a flood may still be going on).
+  for (std::size_t r = 0; r < session_.robot_count(); ++r) {
+    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) node->poll(std::size_t{1} << 16);
+  }
+  memory_.reset();
+}
+
+}  // namespace canhil::emulator

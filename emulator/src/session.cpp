@@ -1,0 +1,255 @@
+#include "canhil/emulator/session.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/physics_robot_io.hpp"
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/rtdb.h"
+#include "rtdb_user.h"
+
+namespace canhil::emulator {
+
+// A goal: the whole ball past a goal line, between the posts, under the bar.
+bool GoalWatcher::step(const physics::World& world, Nanos now) {
+  const Eigen::Vector3d b = world.ball_position();
+  const auto& f = params_.field;
+  const double r = params_.ball.radius_m;
+  const bool in = std::fabs(b.x()) > f.length_m / 2 + r && std::fabs(b.y()) < f.goal.width_m / 2 &&
+                  b.z() < f.goal.height_m && std::fabs(b.x()) < f.length_m / 2 + f.goal.depth_m + r;
+  const bool scored = in && !in_;
+  if (scored) goals_.push_back(Goal{now, b.x() > 0});
+  in_ = in;
+  return scored;
+}
+
+can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const can_nodes::FttConfig& ftt) {
+  can_nodes::NodeParams p;
+  p.ftt = ftt;
+  p.geometry = robot.geometry;
+  p.encoder = robot.encoder;
+  return p;
+}
+
+namespace {
+
+// The node names a fault rule may target, from the one table.
+std::vector<std::string> robot_node_names() { return {can_nodes::kNodeNames.begin(), can_nodes::kNodeNames.end()}; }
+
+}  // namespace
+
+Session::Session(Scenario scenario, SessionOptions options)
+    : scenario_(std::move(scenario)), options_(std::move(options)), goals_(scenario_.world) {
+  complete(scenario_);
+  if (!options_.messages) throw SetupError("a run needs a message set");
+  world_ = std::make_unique<physics::World>(scenario_.world);
+  if (options_.initial_state) {
+    try {
+      world_->restore(*options_.initial_state);
+    } catch (const SetupError& e) {
+      throw SetupError(std::string("the saved world does not fit the scenario: ") + e.what());
+    }
+  }
+  step_period_ = from_seconds(scenario_.world.simulation.step_s);
+  const std::size_t n = scenario_.robot_count();
+  rigs_.resize(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    Rig& rig = rigs_[r];
+    rig.index = r;
+    rig.agent = scenario_.agents[r];
+    rig.interface = scenario_.interfaces[r];
+    // Robot r draws from seed + r: robots' faults are independent and repeatable.
+    // Every robot has an injector, rules or not, so a fault injected later needs no new hook.
+    rig.faults = std::make_unique<can_nodes::FaultInjector>(scenario_.faults, options_.messages, robot_node_names(),
+                                                            scenario_.seed + r, options_.ftt.bit_rate);
+  }
+  if (options_.vision_on) {
+    if (DB_init_all(0) != 0) throw SetupError("cannot attach to the RTDB (see above)");
+    rtdb_ = true;
+    std::vector<vision_emu::Vision> vision;
+    for (std::size_t r = 0; r < n; ++r) vision.emplace_back(options_.vision, world_->markings());
+    vision_ = std::make_unique<vision_emu::VisionRunner>(
+        std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
+          vision_emu::write_vision_info(rigs_[r].agent, f);
+          if (frame_hook_) frame_hook_(r, now_);
+        });
+  }
+  if (options_.world_log_period > Nanos{0}) {
+    world_log_ = "time_s,ball_x_m,ball_y_m,ball_z_m";
+    for (std::size_t r = 0; r < n; ++r) {
+      const std::string p = "robot" + std::to_string(r) + "_";
+      world_log_ += "," + p + "x_m," + p + "y_m," + p + "heading_deg," + p + "reported_x_m," + p + "reported_y_m," +
+                    p + "reported_heading_deg";
+    }
+    world_log_ += '\n';
+  }
+  publish(0);
+}
+
+Session::~Session() {
+  for (Rig& rig : rigs_) rig.nodes.reset();  // before the I/O they use
+  if (rtdb_) DB_free_all(0);
+}
+
+void Session::build_nodes(const Endpoints& endpoints, IoMode mode, Nanos start) {
+  node_params_ = node_params_for(scenario_.world.robot, options_.ftt);
+  for (Rig& rig : rigs_) {
+    physics::Robot& robot = world_->robot(rig.index);
+    if (mode == IoMode::kShared) {
+      auto shared = std::make_unique<SharedRobotIo>(robot);
+      rig.shared = shared.get();
+      rig.io = std::move(shared);
+    } else {
+      rig.shared = nullptr;
+      rig.io = std::make_unique<PhysicsRobotIo>(robot);
+    }
+    const std::size_t r = rig.index;
+    rig.nodes = std::make_unique<can_nodes::RobotNodes>(
+        options_.messages, node_params_, *rig.io, [&](const std::string& node) { return endpoints(r, node); }, start);
+    rig.faults->start_at(start);  // rule times count from the run's start, not the clock's epoch
+    rig.nodes->set_fault_hook(rig.faults.get());
+  }
+}
+
+void Session::before_step() {
+  if (any_world_change_.load(std::memory_order_acquire)) {
+    std::vector<Change> changes;
+    {
+      const std::lock_guard lock(changes_mutex_);
+      changes.swap(world_changes_);
+      any_world_change_ = false;
+    }
+    for (const Change& c : changes) apply_now(c);
+  }
+  for (Rig& rig : rigs_) {
+    if (rig.shared != nullptr) rig.shared->apply_commands();
+  }
+}
+
+void Session::after_step(Nanos now) {
+  ++steps_;
+  now_ = now;
+  for (Rig& rig : rigs_) {
+    if (rig.shared != nullptr) rig.shared->publish();
+    world_->robot(rig.index).drain(rig.faults->battery_drain_until(now));
+  }
+  if (vision_) vision_->on_step(*world_);
+  log_world(now);
+  goals_.step(*world_, now);
+  publish(steps_);
+}
+
+void Session::apply_bus_changes() {
+  if (!any_bus_change_.load(std::memory_order_acquire)) return;
+  std::vector<Change> changes;
+  {
+    const std::lock_guard lock(changes_mutex_);
+    changes.swap(bus_changes_);
+    any_bus_change_ = false;
+  }
+  for (const Change& c : changes) apply_now(c);
+}
+
+void Session::apply(Change change) {
+  // Checked here, where the caller hears of a mistake; applied on the right thread.
+  if (const auto* m = std::get_if<MoveRobot>(&change); m != nullptr && m->robot >= rigs_.size()) {
+    throw SetupError("no robot " + std::to_string(m->robot) + "; the run has " + std::to_string(rigs_.size()));
+  }
+  if (const auto* m = std::get_if<MoveObstacle>(&change); m != nullptr && m->obstacle >= world_->obstacle_count()) {
+    throw SetupError("no obstacle " + std::to_string(m->obstacle) + "; the run has " +
+                     std::to_string(world_->obstacle_count()));
+  }
+  const bool bus = std::holds_alternative<InjectFault>(change);
+  if (bus) {
+    const can_nodes::FaultRule& rule = std::get<InjectFault>(change).rule;
+    if (rule.kind == can_nodes::FaultKind::kErrorFrame) {
+      std::string refused;
+      {
+        const std::lock_guard lock(changes_mutex_);
+        refused = error_frames_refused_;
+      }
+      if (!refused.empty()) throw SetupError("fault '" + rule.text + "': " + refused);
+    }
+    // The target must exist: the same check the injector makes at start.
+    can_nodes::FaultInjector check({rule}, options_.messages, robot_node_names(), 0);
+  }
+  const std::lock_guard lock(changes_mutex_);
+  if (bus) {
+    bus_changes_.push_back(std::move(change));
+    any_bus_change_ = true;
+  } else {
+    world_changes_.push_back(std::move(change));
+    any_world_change_ = true;
+  }
+}
+
+void Session::refuse_error_frames(std::string why) {
+  const std::lock_guard lock(changes_mutex_);
+  error_frames_refused_ = std::move(why);
+}
+
+void Session::apply_now(const Change& change) {
+  if (const auto* m = std::get_if<MoveRobot>(&change)) {
+    world_->robot(m->robot).place(m->to);
+  } else if (const auto* b = std::get_if<MoveBall>(&change)) {
+    world_->place_ball(b->position, b->velocity);
+  } else if (const auto* o = std::get_if<MoveObstacle>(&change)) {
+    world_->place_obstacle(o->obstacle, o->x_m, o->y_m);
+  } else if (const auto* f = std::get_if<InjectFault>(&change)) {
+    for (Rig& rig : rigs_) rig.faults->add_rule(f->rule);
+  }
+}
+
+void Session::publish(std::uint64_t step) {
+  const std::lock_guard lock(snapshot_mutex_);
+  WorldSnapshot& s = snapshot_;
+  s.time_s = world_->time_s();
+  s.steps = step;
+  s.ball = world_->ball_position();
+  s.ball_velocity = world_->ball_velocity();
+  s.robots.resize(world_->robot_count());
+  for (std::size_t r = 0; r < s.robots.size(); ++r) s.robots[r] = world_->robot(r).pose();
+  s.obstacles.resize(world_->obstacle_count());
+  for (std::size_t o = 0; o < s.obstacles.size(); ++o) s.obstacles[o] = world_->obstacle_position(o);
+  if (s.goals.size() != goals_.goals().size()) s.goals = goals_.goals();
+}
+
+WorldSnapshot Session::snapshot() const {
+  const std::lock_guard lock(snapshot_mutex_);
+  return snapshot_;
+}
+
+std::vector<can_nodes::FaultCount> Session::fault_counts() const {
+  std::vector<can_nodes::FaultCount> sum;
+  for (const Rig& rig : rigs_) {
+    const auto c = rig.faults->counts();
+    if (sum.empty()) {
+      sum = c;
+    } else {
+      for (std::size_t k = 0; k < c.size() && k < sum.size(); ++k) sum[k] += c[k];
+    }
+  }
+  return sum;
+}
+
+void Session::log_world(Nanos now) {
+  if (options_.world_log_period <= Nanos{0} || now < next_log_) return;
+  next_log_ = now + options_.world_log_period;
+  char buf[160];
+  const Eigen::Vector3d b = world_->ball_position();
+  std::snprintf(buf, sizeof buf, "%.3f,%.4f,%.4f,%.4f", to_seconds(now), b.x(), b.y(), b.z());
+  world_log_ += buf;
+  for (const Rig& rig : rigs_) {
+    const kinematics::Pose p = world_->robot(rig.index).pose();
+    CMD_Pos reported{};
+    if (rtdb_) DB_get_from(rig.agent, rig.agent, CMD_POS, &reported);
+    std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.2f,%.4f,%.4f,%.2f", p.x_m, p.y_m, p.heading_rad * 180 / M_PI,
+                  reported.px, reported.py, reported.pa * 180 / M_PI);
+    world_log_ += buf;
+  }
+  world_log_ += '\n';
+}
+
+}  // namespace canhil::emulator

@@ -1,0 +1,162 @@
+#include "canhil/emulator/virtual_driver.hpp"
+
+#include <algorithm>
+
+#include "canhil/emulator/handler_participant.hpp"
+#include "canhil/frames/candump.hpp"
+#include "canhil/laptop/agent.hpp"
+#include "canhil/laptop/agent_io.hpp"
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/rtdb.h"
+#include "rtdb_user.h"
+
+namespace canhil::emulator {
+namespace {
+
+// The reference agent, woken after each of its vision frames.
+class AgentParticipant final : public can_nodes::Participant {
+ public:
+  AgentParticipant(int agent, const laptop::AgentConfig& config) : io_(agent), logic_(config) {}
+  void frame_ready(Nanos now) { wake_ = now; }
+  std::size_t poll() override { return 0; }
+  Nanos next_wakeup() const override { return wake_; }
+  void tick(Nanos now) override {
+    wake_ = kNever;
+    const double dt = last_ == kNever ? 1.0 / 30 : to_seconds(now - last_);
+    last_ = now;
+    io_.write(logic_.decide(io_.read(dt)));
+  }
+  int kicks() const { return logic_.kicks(); }
+
+ private:
+  laptop::AgentIo io_;
+  laptop::Agent logic_;
+  Nanos wake_ = kNever;
+  Nanos last_ = kNever;
+};
+
+// A fresh database for the run: every item of the agent zeroed, and the
+// handler asked to put the odometry where the robot stands.
+void prepare_rtdb(int agent, const kinematics::Pose& at) {
+  for (int item = 0; item < DB_item_count(); ++item) {
+    if (DB_item_shared(agent, item) < 0) continue;
+    std::vector<unsigned char> zero(static_cast<std::size_t>(DB_item_size(item)), 0);
+    DB_put_in(agent, agent, item, zero.data(), 0);
+  }
+  CMD_SetPose pose{static_cast<float>(at.x_m), static_cast<float>(at.y_m), static_cast<float>(at.heading_rad), 0, 1};
+  DB_put_in(agent, agent, CMD_SETPOSE, &pose, 0);
+}
+
+}  // namespace
+
+struct VirtualDriver::Laptop {
+  std::unique_ptr<HandlerParticipant> handler;
+  std::unique_ptr<AgentParticipant> agent;
+};
+
+VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
+    : session_(session), options_(options), lockstep_(clock_) {
+  if (options_.reference_laptop && !session_.options().vision_on) {
+    throw SetupError("the reference laptop stack needs the vision and the RTDB (SessionOptions::vision_on)");
+  }
+  const std::size_t n = session_.robot_count();
+  for (std::size_t r = 0; r < n; ++r) {
+    buses_.push_back(std::make_unique<can_nodes::MemoryBus>(clock_, session_.rig(r).interface));
+  }
+  session_.build_nodes(
+      [this](std::size_t r, const std::string& node) { return std::unique_ptr<can_nodes::Bus>(buses_[r]->attach(node)); },
+      Session::IoMode::kDirect, Nanos{0});
+  laptop::AgentConfig agent_cfg;
+  agent_cfg.goal_x_m = session_.scenario().world.field.length_m / 2;
+  agent_cfg.kick_power = session_.scenario().kick_power;
+  const auto& messages = session_.options().messages;
+  const Nanos ec = session_.options().ftt.elementary_cycle;
+  recorded_.resize(n);
+  frame_counts_.resize(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    const Rig& rig = session_.rig(r);
+    auto laptop = std::make_unique<Laptop>();
+    if (options_.reference_laptop) {
+      prepare_rtdb(rig.agent, session_.world().robot(r).pose());
+      laptop->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, rig.agent);
+      laptop->agent = std::make_unique<AgentParticipant>(rig.agent, agent_cfg);
+    }
+    if (options_.count_frames || options_.record_trace) {
+      recorders_.push_back(buses_[r]->attach("trace", 1 << 20));
+      recorders_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
+    }
+    laptops_.push_back(std::move(laptop));
+  }
+  // Ticked in this order at every instant: robot by robot, its nodes, then its handler and agent.
+  for (std::size_t r = 0; r < n; ++r) {
+    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) lockstep_.add(*node);
+    if (laptops_[r]->handler) lockstep_.add(*laptops_[r]->handler);
+    if (laptops_[r]->agent) lockstep_.add(*laptops_[r]->agent);
+  }
+  session_.on_vision_frame([this](std::size_t r, Nanos now) {
+    if (laptops_[r]->agent) laptops_[r]->agent->frame_ready(now);
+  });
+  lockstep_.set_step(session_.step_period(), [this](Nanos now) {
+    session_.apply_bus_changes();
+    session_.before_step();
+    session_.world().step();
+    session_.after_step(now);
+    record();
+  });
+}
+
+VirtualDriver::~VirtualDriver() { session_.on_vision_frame(nullptr); }
+
+void VirtualDriver::run_until(Nanos end) {
+  lockstep_.run_until(end);
+  record();
+}
+
+void VirtualDriver::run_for(Nanos duration) { run_until(clock_.now() + duration); }
+
+void VirtualDriver::record() {
+  for (std::size_t r = 0; r < recorders_.size(); ++r) {
+    while (auto f = recorders_[r]->receive()) {
+      ++frame_counts_[r];
+      if (options_.record_trace) recorded_[r].push_back(*f);
+    }
+  }
+}
+
+std::vector<RobotOutcome> VirtualDriver::outcomes() const {
+  std::vector<RobotOutcome> out;
+  const physics::World& world = session_.world();
+  for (std::size_t r = 0; r < session_.robot_count(); ++r) {
+    RobotOutcome o;
+    o.pose = world.robot(r).pose();
+    o.kicks = laptops_[r]->agent ? laptops_[r]->agent->kicks() : 0;
+    o.frames = frame_counts_[r];
+    o.bad_frames = session_.rig(r).nodes->bad_frames();
+    o.battery = world.robot(r).battery();
+    o.charge = world.robot(r).charge();
+    out.push_back(o);
+  }
+  return out;
+}
+
+std::string VirtualDriver::trace() const {
+  struct Line {
+    Nanos time;
+    std::size_t bus;
+    std::size_t order;
+  };
+  std::vector<Line> lines;
+  for (std::size_t r = 0; r < recorded_.size(); ++r) {
+    for (std::size_t i = 0; i < recorded_[r].size(); ++i) lines.push_back({recorded_[r][i].time, r, i});
+  }
+  std::stable_sort(lines.begin(), lines.end(),
+                   [](const Line& a, const Line& b) { return a.time != b.time ? a.time < b.time : a.bus < b.bus; });
+  std::string out;
+  for (const Line& l : lines) {
+    out += frames::format_log_line(l.time, session_.rig(l.bus).interface, recorded_[l.bus][l.order].frame);
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace canhil::emulator

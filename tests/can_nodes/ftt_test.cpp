@@ -1,0 +1,77 @@
+// The FTT schedule from the shipped DBC: which synchronous messages each EC
+// carries, how long their window is, and the schedules it refuses.
+#include "canhil/can_nodes/ftt.hpp"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+
+#include "canhil/frames/wire.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::can_nodes {
+namespace {
+
+using namespace std::chrono_literals;
+
+class Ftt : public ::testing::Test {
+ protected:
+  std::uint32_t bit(const char* name) const { return 1u << set_->ftt(*set_->codec().find(name)).index; }
+  std::shared_ptr<const frames::MessageSet> set_ = frames::MessageSet::load(test::shipped_dbc());
+};
+
+TEST_F(Ftt, EveryMessageIsDueEveryPeriodFromEcZeroAndNeverBetween) {
+  const FttSchedule s(*set_, FttConfig{});
+  const std::pair<const char*, int> periods[] = {{"M1", 3},   {"M3_1", 1}, {"M3_2", 1}, {"M3_3", 1}, {"M4_1", 5},
+                                                 {"M4_2", 5}, {"M6_1", 3}, {"M6_2", 3}, {"M8", 5},   {"M9", 3}};
+  for (const auto& [name, every] : periods) {
+    for (std::uint64_t ec = 0; ec < 30; ++ec) {
+      EXPECT_EQ((s.bitmap(ec) & bit(name)) != 0, ec % static_cast<std::uint64_t>(every) == 0) << name << " EC " << ec;
+    }
+  }
+  EXPECT_EQ(s.bitmap(0), s.bitmap(15)) << "the schedule repeats every lcm(1, 3, 5) = 15 ECs";
+  EXPECT_EQ(std::popcount(s.bitmap(0)), 10) << "EC 0 carries every synchronous message";
+  EXPECT_EQ(s.bitmap(1), bit("M3_1") | bit("M3_2") | bit("M3_3"));
+}
+
+TEST_F(Ftt, TheWindowIsTheWorstCaseWireTimeOfWhatIsDuePlusTheGuard) {
+  FttConfig config;
+  const FttSchedule s(*set_, config);
+  const Nanos frame = frames::bits_to_time(frames::worst_case_frame_bits(8), config.bit_rate);
+  EXPECT_EQ(s.sync_window(0), Nanos{0}) << "nothing due, no window";
+  EXPECT_EQ(s.sync_window(s.bitmap(1)), 3 * frame + config.sync_window_guard);
+  EXPECT_EQ(s.sync_window(s.bitmap(0)), 10 * frame + config.sync_window_guard);
+  FttConfig slower = config;
+  slower.bit_rate = 500'000;
+  EXPECT_EQ(FttSchedule(*set_, slower).sync_window(s.bitmap(1)), 2 * 3 * frame + config.sync_window_guard);
+}
+
+TEST(FttScheduleChecks, RefusesAScheduleThatDoesNotFit) {
+  auto set = frames::MessageSet::load(test::shipped_dbc());
+  FttConfig slow;
+  slow.bit_rate = 125'000;
+  try {
+    FttSchedule s(*set, slow);
+    FAIL();
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not fit the 10000 us elementary cycle"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("raise the bit rate"), std::string::npos);
+  }
+  FttConfig odd;
+  odd.elementary_cycle = 7ms;
+  EXPECT_THROW(FttSchedule(*set, odd), SetupError);
+}
+
+TEST_F(Ftt, AnEcOtherThanTheTriggerPeriodIsRefusedSayingBoth) {
+  FttConfig config;
+  config.elementary_cycle = 20ms;
+  try {
+    FttSchedule s(*set_, config);
+    FAIL();
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("trigger message TM has period 10000 us"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace canhil::can_nodes

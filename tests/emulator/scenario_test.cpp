@@ -1,0 +1,93 @@
+// Scenarios: the [run] table's fields and mistakes, the defaults and rules
+// complete() fills in and checks for every scenario, and the shipped ones.
+#include "canhil/emulator/scenario.hpp"
+
+#include <gtest/gtest.h>
+
+#include "canhil/physics/config.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
+  auto error_of = [](const std::string& text) {
+    try {
+      parse_scenario(text, "bad.toml");
+    } catch (const physics::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string robot = "[[robots]]\nx_m = 0\n";
+  EXPECT_NE(
+      error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n").find("bad.toml:4: run.interfaces: give one"),
+      std::string::npos)
+      << error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n");
+  EXPECT_NE(error_of("[run]\nfaults = [\"drop:M1:7\"]\n").find("run.faults: fault 'drop:M1:7'"), std::string::npos);
+  EXPECT_NE(error_of("[run]\nduratoin_s = 3\n").find("run.duratoin_s: unknown field"), std::string::npos);
+  EXPECT_NE(error_of(robot + robot + "[run]\nagents = [2, 2]\n").find("appears twice"), std::string::npos);
+  EXPECT_NE(error_of("[rnu]\n").find("unknown field"), std::string::npos) << "the world's own check";
+  const Scenario ok = parse_scenario(robot + robot + "[run]\nseed = 9\nagents = [3, 1]\n", "ok.toml");
+  EXPECT_EQ(ok.seed, 9u);
+  EXPECT_EQ(ok.agents, (std::vector<int>{3, 1}));
+  EXPECT_EQ(ok.interfaces, (std::vector<std::string>{"vcan0", "vcan1"}));
+  const Scenario one = load_scenario(test::source_dir() + "/emulator/scenarios/one_robot.toml");
+  EXPECT_EQ(one.world.robots.size(), 1u);
+  EXPECT_DOUBLE_EQ(one.duration_s, 8);
+}
+
+TEST(Scenarios, CompleteFillsInTheDefaultsOnce) {
+  Scenario s;
+  complete(s);
+  ASSERT_EQ(s.world.robots.size(), 1u) << "a world without robots gets one";
+  EXPECT_DOUBLE_EQ(s.world.robots[0].x_m, kDefaultPlacement.x_m);
+  EXPECT_DOUBLE_EQ(s.world.robots[0].heading_deg, kDefaultPlacement.heading_deg);
+  EXPECT_EQ(s.interfaces, (std::vector<std::string>{"vcan0"}));
+  EXPECT_EQ(s.agents, (std::vector<int>{1}));
+  const Scenario again = [&] {
+    Scenario t = s;
+    complete(t);
+    return t;
+  }();
+  EXPECT_EQ(again.interfaces, s.interfaces) << "idempotent";
+  EXPECT_EQ(again.world.robots.size(), 1u);
+  const Scenario from_file = parse_scenario("", "empty.toml");
+  EXPECT_EQ(from_file.world.robots.size(), 1u) << "a file and code get the same default";
+  EXPECT_EQ(from_file.interfaces, s.interfaces);
+}
+
+TEST(Scenarios, CompleteRefusesWhatNoRunCanDo) {
+  auto error_of = [](Scenario s) {
+    try {
+      complete(s);
+    } catch (const SetupError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  Scenario seven;
+  seven.world.robots.assign(7, physics::Placement{});
+  EXPECT_NE(error_of(seven).find("at most 6 robots"), std::string::npos) << error_of(seven);
+  Scenario two;
+  two.world.robots = {physics::Placement{-2, 0, 0}, physics::Placement{2, 0, 0}};
+  two.agents = {1};
+  EXPECT_NE(error_of(two).find("one interface and one agent number per robot"), std::string::npos);
+  two.agents = {1, 7};
+  EXPECT_NE(error_of(two).find("agent numbers are 1..6, got 7"), std::string::npos) << error_of(two);
+  two.agents = {4, 4};
+  EXPECT_NE(error_of(two).find("agent 4 is given to two robots"), std::string::npos) << error_of(two);
+  two.agents = {4, 5};
+  EXPECT_EQ(error_of(two), "accepted");
+}
+
+TEST(Scenarios, TheShippedScenariosLoad) {
+  const Scenario five = load_scenario(shipped_scenario("five_robots.toml"));
+  EXPECT_EQ(five.world.robots.size(), 5u);
+  EXPECT_EQ(five.world.obstacles.size(), 5u);
+  EXPECT_EQ(five.interfaces.size(), 5u);
+  EXPECT_TRUE(std::filesystem::exists(shipped_scenario("one_robot.toml")));
+}
+
+}  // namespace
+}  // namespace canhil::emulator

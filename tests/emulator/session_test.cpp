@@ -1,0 +1,139 @@
+// A session's one narrow surface, driven in virtual time: a consistent
+// snapshot to read, and changes (a robot, the ball or an obstacle moved, a
+// fault injected) that take effect at the next step, checked when asked.
+#include "canhil/emulator/session.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <thread>
+
+#include "canhil/emulator/virtual_driver.hpp"
+#include "support/counter_watch.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+using namespace std::chrono_literals;
+
+class SessionTest : public test::WatchedTest {
+ protected:
+  SessionTest() {
+    static int counter = 0;
+    setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6)).c_str(), 1);
+    scenario_.world.robots = {physics::Placement{-3.0, 0.0, -90}, physics::Placement{3.0, 2.0, 90}};
+    scenario_.world.obstacles = {physics::ObstaclePlacement{{0, -3, 0}, {}}};
+    scenario_.world.ball_start = {-1.0, 1.0, scenario_.world.ball.radius_m};
+    options_.messages = frames::MessageSet::load(test::shipped_dbc());
+  }
+  Scenario scenario_;
+  SessionOptions options_;
+};
+
+TEST_F(SessionTest, TheSnapshotIsTheWorldAsTheLastStepLeftIt) {
+  Session session(scenario_, options_);
+  VirtualDriver driver(session);
+  const WorldSnapshot before = session.snapshot();
+  EXPECT_EQ(before.steps, 0u);
+  ASSERT_EQ(before.robots.size(), 2u);
+  ASSERT_EQ(before.obstacles.size(), 1u);
+  EXPECT_NEAR(before.robots[1].x_m, 3.0, 1e-9);
+  driver.run_for(1s);
+  const WorldSnapshot s = session.snapshot();
+  EXPECT_EQ(s.steps, 100u);
+  EXPECT_NEAR(s.time_s, 1.0, 1e-9);
+  EXPECT_EQ(s.ball, session.world().ball_position());
+  for (std::size_t r = 0; r < 2; ++r) {
+    EXPECT_DOUBLE_EQ(s.robots[r].x_m, session.world().robot(r).pose().x_m);
+  }
+}
+
+TEST_F(SessionTest, MovesTakeEffectAtTheNextStepNotBefore) {
+  Session session(scenario_, options_);
+  VirtualDriver driver(session);
+  driver.run_for(500ms);
+  const double x_before = session.world().robot(1).pose().x_m;
+  session.apply(MoveRobot{1, physics::Placement{5.0, -4.0, 30}});
+  session.apply(MoveBall{{2.0, 2.0, 0.11}, {1.0, 0.0, 0.0}});
+  session.apply(MoveObstacle{0, 4.0, 4.0});
+  EXPECT_EQ(session.world().robot(1).pose().x_m, x_before) << "nothing moved yet";
+  EXPECT_EQ(session.snapshot().robots[1].x_m, x_before);
+  driver.run_for(10ms);  // one step
+  const WorldSnapshot s = session.snapshot();
+  EXPECT_NEAR(s.robots[1].x_m, 5.0, 0.01);
+  EXPECT_NEAR(s.robots[1].y_m, -4.0, 0.01);
+  EXPECT_NEAR(s.ball.x(), 2.01, 0.005) << "placed, then one step at 1 m/s";
+  EXPECT_NEAR(s.obstacles[0].x(), 4.0, 1e-9);
+  EXPECT_NEAR(s.obstacles[0].y(), 4.0, 1e-9);
+  driver.run_for(1s);
+  EXPECT_GT(session.world().ball_position().x(), 2.3) << "the ball rolls on with its new velocity";
+}
+
+TEST_F(SessionTest, AMistakenChangeIsRefusedAtOnceAndChangesNothing) {
+  Session session(scenario_, options_);
+  VirtualDriver driver(session);
+  EXPECT_THROW(session.apply(MoveRobot{2, {}}), SetupError);
+  EXPECT_THROW(session.apply(MoveObstacle{1, 0, 0}), SetupError);
+  EXPECT_THROW(session.apply(InjectFault{can_nodes::parse_fault("drop:Motor9")}), SetupError);
+  session.refuse_error_frames("a CAN adapter");
+  try {
+    session.apply(InjectFault{can_nodes::parse_fault("error:M3_1")});
+    FAIL();
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("a CAN adapter"), std::string::npos) << e.what();
+  }
+  driver.run_for(100ms);
+  EXPECT_TRUE(session.fault_counts().empty());
+}
+
+TEST_F(SessionTest, AFaultInjectedDuringTheRunActsFromThenOn) {
+  Session session(scenario_, options_);
+  VirtualDriver driver(session);
+  counters.watch_nodes(*session.rig(0).nodes, "robot0.");
+  driver.run_for(1s);
+  session.apply(InjectFault{can_nodes::parse_fault("silence:Compass:0")});
+  driver.run_for(1s);
+  const auto counts = session.fault_counts();
+  ASSERT_EQ(counts.size(), 1u);
+  EXPECT_EQ(counts[0].applied, counts[0].matched) << "silence drops every frame from then on";
+  EXPECT_EQ(counts[0].applied, 2u * 19u) << "both robots' compasses: the M8s after the next step (1.01 s) to 2 s";
+  counters.expect("robot0.Compass.fault_dropped", 19);
+  // In the trace: M8 until the step that applied the rule, none after.
+  std::istringstream in(driver.trace());
+  std::size_t before = 0, after = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.find(" vcan0 141#") == std::string::npos) continue;
+    (line < "(1.010000)" ? before : after) += 1;
+  }
+  EXPECT_EQ(before, 21u) << "M8 every 50 ms up to 1.01 s";
+  EXPECT_EQ(after, 0u);
+  counters.finish();  // while the session's nodes exist
+}
+
+TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
+  Session session(scenario_, options_);
+  VirtualDriver driver(session);
+  std::atomic<bool> done{false};
+  std::uint64_t seen = 0;
+  std::thread viewer([&] {
+    while (!done) {
+      const WorldSnapshot s = session.snapshot();
+      EXPECT_EQ(s.robots.size(), 2u);
+      seen = std::max(seen, s.steps);
+      session.apply(MoveBall{{0, 0, 0.11}, Eigen::Vector3d::Zero()});
+    }
+  });
+  driver.run_for(2s);
+  done = true;
+  viewer.join();
+  EXPECT_GT(seen, 0u);
+  EXPECT_EQ(session.snapshot().steps, 200u);
+}
+
+}  // namespace
+}  // namespace canhil::emulator
