@@ -123,6 +123,11 @@ void VirtualDriver::record() {
   }
 }
 
+const laptop::HwComm* VirtualDriver::handler(std::size_t robot) const {
+  const auto& h = laptops_.at(robot)->handler;
+  return h ? &h->hw() : nullptr;
+}
+
 std::vector<RobotOutcome> VirtualDriver::outcomes() const {
   std::vector<RobotOutcome> out;
   const physics::World& world = session_.world();

@@ -5,6 +5,7 @@
 #include "canhil/frames/candump.hpp"
 
 #include "canhil/emulator/robot_rig.hpp"
+#include "support/counter_watch.hpp"
 #include "support/laptop_endpoint.hpp"
 #include "support/test_paths.hpp"
 
@@ -13,12 +14,19 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// A robot and a laptop endpoint; its nodes' error counters are watched and
+// checked when the rig goes (a test says what it provokes).
 struct Rig : RobotRig {
-  explicit Rig(physics::WorldParams wp = default_world())
+  explicit Rig(test::CounterWatch& watch, physics::WorldParams wp = default_world())
       : RobotRig(frames::MessageSet::load(test::shipped_dbc()), std::move(wp)),
-        laptop(bus(), messages(), params().ftt.elementary_cycle) {
+        laptop(bus(), messages(), params().ftt.elementary_cycle),
+        watch_(watch) {
     add(laptop);
+    watch_.watch_nodes(nodes());
   }
+  ~Rig() { watch_.finish(); }
+  Rig(const Rig&) = delete;
+  Rig& operator=(const Rig&) = delete;
   static physics::WorldParams default_world() {
     physics::WorldParams p;
     p.robots = {physics::Placement{0, 0, 0}};  // front along world +y
@@ -29,10 +37,16 @@ struct Rig : RobotRig {
   frames::M4_2 last_m4_2() const { return laptop.decoded(messages()->m4_2).back(); }
 
   test::LaptopEndpoint laptop;
+  test::CounterWatch& watch() { return watch_; }
+
+ private:
+  test::CounterWatch& watch_;
 };
 
-TEST(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {
-  Rig r;
+class ClosedLoop : public test::WatchedTest {};
+
+TEST_F(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {
+  Rig r(counters);
   r.laptop.m6_1 = frames::M6_1{0, 0.5};
   r.run_until(2s);
   r.laptop.m6_1.reset();
@@ -47,8 +61,8 @@ TEST(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {
   EXPECT_NEAR(m4.x, truth.x_m, 0.01);
 }
 
-TEST(ClosedLoop, M5ResetBringsOdometryToZeroAndM5SetsAPose) {
-  Rig r;
+TEST_F(ClosedLoop, M5ResetBringsOdometryToZeroAndM5SetsAPose) {
+  Rig r(counters);
   r.laptop.m6_1 = frames::M6_1{0.3, 0.3};
   r.run_until(1s);
   r.laptop.m6_1.reset();
@@ -74,9 +88,9 @@ physics::WorldParams ball_in_front(double distance) {
   return p;
 }
 
-TEST(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
+TEST_F(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
   {
-    Rig r(ball_in_front(1.5));  // out of reach
+    Rig r(counters, ball_in_front(1.5));  // out of reach
     r.run_until(100ms);
     frames::M7 m7;
     m7.kick = frames::M7::make_kick(true, 40);
@@ -87,7 +101,7 @@ TEST(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
   }
   {
     const physics::RobotParams robot;
-    Rig r(ball_in_front(robot.body_radius_m - robot.mouth_depth_m + 0.11));
+    Rig r(counters, ball_in_front(robot.body_radius_m - robot.mouth_depth_m + 0.11));
     frames::M7 grab;
     grab.grabber_mode = 100;
     r.laptop.send(r.messages()->m7.encode(grab));
@@ -105,8 +119,8 @@ TEST(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
   }
 }
 
-TEST(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
-  Rig r;
+TEST_F(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
+  Rig r(counters);
   r.laptop.m6_1 = frames::M6_1{0, 1.0};
   r.run_until(1s);
   ASSERT_GT(r.world().robot(0).twist().vy_mps, 0.9);
@@ -119,8 +133,8 @@ TEST(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
   EXPECT_LT(std::fabs(r.world().robot(0).twist().vy_mps), 0.01) << "stopped";
 }
 
-TEST(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) {
-  Rig r;
+TEST_F(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) {
+  Rig r(counters);
   r.run_until(100ms);
   // 6 000 frames in one instant: more than the system monitor's queue holds (4 096).
   auto junk = r.bus().attach("junk");
@@ -130,6 +144,12 @@ TEST(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) {
     ASSERT_EQ(junk->send(f), can_nodes::SendStatus::kOk);
   }
   r.run_until(1s);
+  // The 2 000 short TMs, counted by every node that takes TMs; of the 4 000
+  // unknown ids, those that reached the monitor before its queue overflowed.
+  for (const char* n : {"Pic_base", "Motor1", "Motor2", "Motor3", "Pic_odom", "Compass"}) {
+    r.watch().expect(std::string(n) + ".wrong_length", 2000);
+  }
+  r.watch().allow("SysMon.unknown_id");
   const can_nodes::BusReport b = r.nodes().bus_report();
   EXPECT_EQ(b.monitor_heard + b.monitor_overflow, 6000 + b.sent)
       << "everything on the bus reached the monitor's watching endpoint or was counted lost";
@@ -142,9 +162,9 @@ TEST(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) {
   EXPECT_EQ(can_nodes::describe(b).rfind("nodes sent ", 0), 0u);
 }
 
-TEST(ClosedLoop, VirtualTimeRunsAreDeterministic) {
-  auto trace = [] {
-    Rig r;
+TEST_F(ClosedLoop, VirtualTimeRunsAreDeterministic) {
+  auto trace = [this] {
+    Rig r(counters);
     r.laptop.m6_1 = frames::M6_1{0.2, 0.6};
     r.laptop.m6_2.va = 0.5;
     r.run_until(1500ms);

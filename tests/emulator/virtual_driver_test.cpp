@@ -18,6 +18,7 @@
 #include "canhil/frames/candump.hpp"
 #include "canhil/physics/config.hpp"
 #include "canhil/timing/analysis.hpp"
+#include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
@@ -32,9 +33,30 @@ struct Config {
 };
 
 // A session and its virtual driver, as canhil run --virtual-time builds them.
+// Every robot's nodes and handler are watched: a counter that moves without
+// the test saying so fails it when the loop ends.
 class Loop {
  public:
-  explicit Loop(const Config& c) : session_(c.scenario, c.options), driver_(session_, c.virtual_options) {}
+  explicit Loop(const Config& c, test::CounterWatch* watch = nullptr)
+      : session_(c.scenario, c.options), driver_(session_, c.virtual_options), watch_(watch) {
+    if (watch_ == nullptr) return;
+    for (std::size_t r = 0; r < session_.robot_count(); ++r) {
+      const std::string p = "robot" + std::to_string(r) + ".";
+      watch_->watch_nodes(*session_.rig(r).nodes, p);
+      if (const laptop::HwComm* hw = driver_.handler(r)) {
+        watch_->watch(p + "handler.wrong_length", [hw] { return hw->stats().wrong_length; });
+        watch_->watch(p + "handler.out_of_range", [hw] { return hw->stats().out_of_range; });
+        watch_->watch(p + "handler.unknown_id", [hw] { return hw->stats().unknown_id; });
+        watch_->watch(p + "handler.missed_tms", [hw] { return hw->stats().missed_tms; });
+        watch_->watch(p + "handler.send_failed", [hw] { return hw->stats().send_failed; });
+      }
+    }
+  }
+  ~Loop() {
+    if (watch_ != nullptr) watch_->finish();
+  }
+  Loop(const Loop&) = delete;
+  Loop& operator=(const Loop&) = delete;
   void run_for(Nanos d) { driver_.run_for(d); }
   std::string trace() const { return driver_.trace(); }
   const physics::World& world() const { return session_.world(); }
@@ -46,9 +68,10 @@ class Loop {
  private:
   Session session_;
   VirtualDriver driver_;
+  test::CounterWatch* watch_;
 };
 
-class VirtualRunTest : public ::testing::Test {
+class VirtualRunTest : public test::WatchedTest {
  protected:
   void SetUp() override {
     static int counter = 0;
@@ -66,11 +89,11 @@ class VirtualRunTest : public ::testing::Test {
 TEST_F(VirtualRunTest, SameScenarioSameTraceByteForByte) {
   std::string first;
   {
-    Loop run(one_robot());
+    Loop run(one_robot(), &counters);
     run.run_for(3s);
     first = run.trace();
   }
-  Loop again(one_robot());
+  Loop again(one_robot(), &counters);
   again.run_for(3s);
   EXPECT_EQ(again.trace(), first);
   EXPECT_GT(first.size(), 50'000u);
@@ -79,14 +102,14 @@ TEST_F(VirtualRunTest, SameScenarioSameTraceByteForByte) {
 TEST_F(VirtualRunTest, WithoutATraceFramesAreCountedNotKept) {
   Config c = one_robot();
   c.virtual_options.record_trace = false;
-  Loop run(c);
+  Loop run(c, &counters);
   run.run_for(1s);
   EXPECT_TRUE(run.trace().empty());
   EXPECT_GT(run.outcomes()[0].frames, 500u);
 }
 
 TEST_F(VirtualRunTest, TheTraceIsFttCompliant) {
-  Loop run(one_robot());
+  Loop run(one_robot(), &counters);
   run.run_for(4s);
   const Config cfg = one_robot();
   timing::TimingAnalyzer analyzer(cfg.options.messages, timing::TimingConfig{});
@@ -104,7 +127,7 @@ TEST_F(VirtualRunTest, TheTraceIsFttCompliant) {
 }
 
 TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
-  Loop run(one_robot());
+  Loop run(one_robot(), &counters);
   const double start_x = run.world().ball_position().x();
   bool kicked = false;
   for (int second = 0; second < 30 && !kicked; ++second) {
@@ -145,7 +168,7 @@ TEST_F(VirtualRunTest, TheFiveRobotScenarioRunsWithEveryLoopClosed) {
   c.scenario.interfaces = sc.interfaces;
   c.scenario.agents = sc.agents;
   c.options.world_log_period = 100ms;
-  Loop run(c);
+  Loop run(c, &counters);
   run.run_for(6s);
   const auto outcomes = run.outcomes();
   const std::string trace = run.trace();
@@ -190,10 +213,13 @@ TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
   std::string first;
   std::vector<can_nodes::FaultCount> counts;
   {
-    Loop run(c);
+    Loop run(c, &counters);
     run.run_for(2s);
     first = run.trace();
     counts = run.fault_counts();
+    // What the rules did, and nothing else.
+    counters.expect("robot0.Pic_odom.fault_dropped", counts.at(0).applied);
+    counters.expect("robot0.Motor2.fault_dropped", counts.at(1).applied);
   }
   ASSERT_EQ(counts.size(), 2u);
   EXPECT_EQ(counts[1].applied, counts[1].matched);
@@ -218,7 +244,9 @@ TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
   // The timing report sees the faults: M4_1 frames missing, M3_2 missing.
   const timing::TimingReport report = analyse(first, c.options.messages, "vcan0");
   EXPECT_FALSE(report.ok());
-  Loop again(c);
+  Loop again(c, &counters);
+  counters.expect("robot0.Pic_odom.fault_dropped", counts[0].applied);
+  counters.expect("robot0.Motor2.fault_dropped", counts[1].applied);
   again.run_for(2s);
   EXPECT_EQ(again.trace(), first) << "same scenario and seed, same faults";
 }
@@ -226,10 +254,11 @@ TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
 TEST_F(VirtualRunTest, ErrorFramesGoOnTheBusAndTheFrameIsSentAgainAfter) {
   Config c = one_robot();
   c.scenario.faults = {can_nodes::parse_fault("error:M3_1:0.2")};
-  Loop run(c);
+  Loop run(c, &counters);
   run.run_for(2s);
   const auto counts = run.fault_counts();
   ASSERT_EQ(counts.size(), 1u);
+  counters.expect("robot0.Motor1.error_frames", counts[0].applied);
   EXPECT_GT(counts[0].applied, counts[0].matched / 10);
   EXPECT_LT(counts[0].applied, counts[0].matched * 3 / 10);
   const std::uint32_t m3_1 = c.options.messages->codec().find("M3_1")->id();
@@ -266,7 +295,7 @@ TEST_F(VirtualRunTest, ABatteryFaultDrainsThePackTheSystemMonitorReports) {
   auto power24 = [&](std::vector<std::string> rules) {
     Config c = one_robot();
     for (const auto& r : rules) c.scenario.faults.push_back(can_nodes::parse_fault(r));
-    Loop run(c);
+    Loop run(c, &counters);
     run.run_for(5s);
     const frames::MessageCodec& m2 = *c.options.messages->codec().find("M2");
     const std::size_t v24 = *m2.index_of("v_power24");

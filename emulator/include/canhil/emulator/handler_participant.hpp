@@ -36,6 +36,7 @@ class HandlerParticipant final : public can_nodes::Participant {
   Nanos next_wakeup() const override { return hw_.next_deadline(); }
 
   laptop::HwComm& hw() noexcept { return hw_; }
+  const laptop::HwComm& hw() const noexcept { return hw_; }
   /// Every frame sent, when kept.
   const std::vector<frames::CanFrame>& sent() const noexcept { return sent_; }
 

@@ -17,6 +17,7 @@
 #include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/session.hpp"
+#include "canhil/laptop/hwcomm.hpp"
 
 namespace canhil::emulator {
 
@@ -58,6 +59,8 @@ class VirtualDriver {
   std::uint64_t physics_steps() const noexcept { return lockstep_.steps(); }
 
   std::vector<RobotOutcome> outcomes() const;
+  /// Robot r's in-process reference handler, or nullptr without the reference laptop.
+  const laptop::HwComm* handler(std::size_t robot) const;
   /// Every bus as a candump log, one interface name per robot, in time order (record_trace).
   std::string trace() const;
 
