@@ -1,0 +1,88 @@
+// The real-time driver in process, on a real vcan (the vcan suite): a session
+// of one robot whose nodes answer a laptop played by the test, the physics on
+// its own thread, and the narrow surface at work while it runs: a change to
+// the world lands at a step, an injected fault on the nodes' next pass.
+// Outcomes and counts, never timing: real time here may be an emulated machine.
+#include "canhil/emulator/realtime_driver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "canhil/can_nodes/socketcan_bus.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
+  Scenario scenario;
+  scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};
+  scenario.world.ball_start = {3.0, 3.0, scenario.world.ball.radius_m};
+  scenario.interfaces = {"vcan0"};
+  SessionOptions options;
+  options.messages = frames::MessageSet::load(test::shipped_dbc());
+  options.vision_on = false;
+  Session session(scenario, options);
+  RealtimeOptions rt;
+  rt.priority = 0;
+  RealtimeDriver driver(session, rt);
+  const frames::MessageSet& set = *options.messages;
+
+  // The laptop: M6 (forward, 0.5 m/s) in every slot that schedules it; counts M8.
+  auto laptop = can_nodes::SocketCanBus::open("vcan0");
+  std::atomic<bool> stop{false};
+  std::atomic<int> tms{0}, m8{0};
+  std::thread laptop_thread([&] {
+    while (!stop) {
+      if (!laptop->wait_readable(20ms)) continue;
+      while (auto f = laptop->receive()) {
+        frames::Tm tm;
+        if (f->frame.id == set.tm.message().id() && set.tm.decode(f->frame, tm).ok()) {
+          ++tms;
+          if ((tm.sync_bitmap & (1u << set.ftt(set.m6_1.message()).index)) != 0) {
+            laptop->send(set.m6_1.encode(frames::M6_1{0, 0.5}));
+            laptop->send(set.m6_2.encode(frames::M6_2{}));
+          }
+        } else if (f->frame.id == set.m8.message().id()) {
+          ++m8;
+        }
+      }
+    }
+  });
+  std::atomic<bool> never{false};
+  auto run_until = [&](auto done, Nanos limit) {
+    const Nanos end = driver.clock().now() + limit;
+    while (!done() && driver.clock().now() < end) driver.run_until(driver.clock().now() + 100ms, never);
+    return done();
+  };
+  driver.start();
+  EXPECT_TRUE(run_until([&] { return tms >= 50; }, 60s)) << "trigger messages flow";
+  const double x0 = session.snapshot().robots[0].x_m;
+  EXPECT_TRUE(run_until([&] { return session.snapshot().robots[0].x_m > x0 + 0.3; }, 60s))
+      << "the laptop's M6 drove the robot forward (+x)";
+
+  session.apply(MoveBall{{-1.0, -2.0, 0.11}, Eigen::Vector3d::Zero()});
+  EXPECT_TRUE(run_until([&] { return session.snapshot().ball.y() < -1.9; }, 10s)) << "the ball was moved at a step";
+  EXPECT_NEAR(session.snapshot().ball.x(), -1.0, 0.01);
+
+  session.apply(InjectFault{can_nodes::parse_fault("drop:M8")});
+  run_until([&] { return session.fault_counts().size() == 1 && session.fault_counts()[0].applied >= 10; }, 30s);
+  const int m8_then = m8;
+  run_until([] { return false; }, 1s);
+  stop = true;
+  laptop_thread.join();
+  driver.stop();
+  EXPECT_LE(m8 - m8_then, 1) << "no M8 after the fault took effect (one may have been on its way)";
+  const auto counts = session.fault_counts();
+  ASSERT_EQ(counts.size(), 1u);
+  EXPECT_EQ(counts[0].applied, counts[0].matched) << "every M8 since then dropped";
+  EXPECT_EQ(session.rig(0).nodes->bad_frames(), 0u);
+  EXPECT_GT(driver.physics_stats().physics_steps, 100u);
+}
+
+}  // namespace
+}  // namespace canhil::emulator
