@@ -10,8 +10,7 @@
 #include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
 #include "support/counter_watch.hpp"
-#include "support/fake_robot.hpp"
-#include "support/laptop_endpoint.hpp"
+#include "support/node_rig.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::can_nodes {
@@ -23,34 +22,23 @@ using test::FakeRobot;
 
 class NodesTest : public test::WatchedTest {
  protected:
-  NodesTest()
-      : set_(frames::MessageSet::load(test::shipped_dbc())),
-        bus_(clock_),
-        nodes_(
-            set_, params_, robot_, [this](const std::string& name) { return std::unique_ptr<Bus>(bus_.attach(name)); },
-            Nanos{0}),
-        laptop_(bus_, set_, params_.ftt.elementary_cycle),
-        run_(clock_) {
-    for (Node* n : nodes_.nodes()) run_.add(*n);
-    run_.add(laptop_);
-    counters.watch_nodes(nodes_);
-  }
+  NodesTest() { counters.watch_nodes(nodes_); }
   std::vector<frames::Tm> tms() const { return laptop_.decoded(set_->tm); }
   Nanos window_start(std::size_t ec) const {
     const auto tm = laptop_.with_id(set_->tm.message().id()).at(ec);
     frames::Tm t;
     set_->tm.decode(tm.frame, t);
-    return tm.time + params_.ftt.elementary_cycle - std::chrono::microseconds(t.sync_window_us);
+    return frames::sync_window_start(t, tm.time, params_.ftt.elementary_cycle);
   }
 
-  std::shared_ptr<const frames::MessageSet> set_;
-  NodeParams params_;
-  FakeRobot robot_;
-  SimulatedClock clock_;
-  MemoryBus bus_;
-  RobotNodes nodes_;
-  test::LaptopEndpoint laptop_;
-  Lockstep run_;
+  test::NodeRig rig_;
+  const std::shared_ptr<const frames::MessageSet>& set_ = rig_.set;
+  const NodeParams& params_ = rig_.params;
+  FakeRobot& robot_ = rig_.robot;
+  RobotNodes& nodes_ = rig_.nodes;
+  test::LaptopEndpoint& laptop_ = rig_.laptop;
+  Lockstep& run_ = rig_.run;
+  const SimulatedClock& clock_ = rig_.clock;
 };
 
 TEST_F(NodesTest, TriggerMessageExactlyEveryElementaryCycle) {

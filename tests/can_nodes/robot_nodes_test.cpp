@@ -8,12 +8,8 @@
 #include <set>
 
 #include "canhil/can_nodes/fault.hpp"
-#include "canhil/can_nodes/lockstep.hpp"
-#include "canhil/can_nodes/memory_bus.hpp"
 #include "support/counter_watch.hpp"
-#include "support/fake_robot.hpp"
-#include "support/laptop_endpoint.hpp"
-#include "support/test_paths.hpp"
+#include "support/node_rig.hpp"
 
 namespace canhil::can_nodes {
 namespace {
@@ -22,37 +18,18 @@ using namespace std::chrono_literals;
 
 class RobotNodesTest : public test::WatchedTest {
  protected:
-  RobotNodesTest()
-      : set_(frames::MessageSet::load(test::shipped_dbc())),
-        bus_(clock_),
-        nodes_(
-            set_, params_, robot_,
-            [this](const std::string& name) {
-              asked_.push_back(name);
-              return std::unique_ptr<Bus>(bus_.attach(name));
-            },
-            Nanos{0}),
-        laptop_(bus_, set_, params_.ftt.elementary_cycle),
-        run_(clock_) {
-    for (Node* n : nodes_.nodes()) run_.add(*n);
-    run_.add(laptop_);
-    counters.watch_nodes(nodes_);
-  }
-  std::shared_ptr<const frames::MessageSet> set_;
-  NodeParams params_;
-  test::FakeRobot robot_;
-  SimulatedClock clock_;
-  MemoryBus bus_;
-  std::vector<std::string> asked_;
-  RobotNodes nodes_;
-  test::LaptopEndpoint laptop_;
-  Lockstep run_;
+  RobotNodesTest() { counters.watch_nodes(nodes_); }
+  test::NodeRig rig_;
+  const std::shared_ptr<const frames::MessageSet>& set_ = rig_.set;
+  RobotNodes& nodes_ = rig_.nodes;
+  test::LaptopEndpoint& laptop_ = rig_.laptop;
+  Lockstep& run_ = rig_.run;
 };
 
 TEST_F(RobotNodesTest, OneEndpointPerNodeNamedFromTheTableAndOneToWatchTheBus) {
   std::vector<std::string> expected(kNodeNames.begin(), kNodeNames.end());
   expected.push_back("SysMon watch");
-  EXPECT_EQ(asked_, expected);
+  EXPECT_EQ(rig_.endpoints_asked, expected);
   for (std::size_t i = 0; i < kNodeCount; ++i) {
     EXPECT_EQ(nodes_.node(static_cast<NodeId>(i)).name(), kNodeNames[i]);
   }

@@ -4,11 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "canhil/can_nodes/lockstep.hpp"
-#include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/frames/wire.hpp"
-#include "support/fake_robot.hpp"
-#include "support/laptop_endpoint.hpp"
+#include "support/node_rig.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::timing {
@@ -19,21 +16,11 @@ using namespace std::chrono_literals;
 // 3 s of one robot's bus in virtual time, the laptop sending M6 in its slots,
 // plus the laptop's own frames (a listener hears everyone but itself). The
 // nodes drive a fake robot: timing needs the bus, not the physics.
-std::vector<frames::TimedFrame> clean_trace(const std::shared_ptr<const frames::MessageSet>& set) {
-  can_nodes::SimulatedClock clock;
-  can_nodes::MemoryBus bus(clock);
-  test::FakeRobot robot;
-  const can_nodes::NodeParams params;
-  can_nodes::RobotNodes nodes(
-      set, params, robot, [&](const std::string& n) { return std::unique_ptr<can_nodes::Bus>(bus.attach(n)); },
-      Nanos{0});
-  test::LaptopEndpoint laptop(bus, set, 10ms);
-  laptop.m6_1 = frames::M6_1{0, 0.4};
-  auto listener = bus.attach("listener", 1 << 20);
-  can_nodes::Lockstep run(clock);
-  for (can_nodes::Node* n : nodes.nodes()) run.add(*n);
-  run.add(laptop);
-  run.run_until(3s);
+std::vector<frames::TimedFrame> clean_trace() {
+  test::NodeRig rig;
+  rig.laptop.m6_1 = frames::M6_1{0, 0.4};
+  auto listener = rig.bus.attach("listener", 1 << 20);
+  rig.run.run_until(3s);
   std::vector<frames::TimedFrame> out;
   while (auto f = listener->receive()) out.push_back(*f);
   return out;
@@ -43,7 +30,7 @@ class Timing : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     set_ = frames::MessageSet::load(test::shipped_dbc());
-    trace_ = new std::vector<frames::TimedFrame>(clean_trace(set_));
+    trace_ = new std::vector<frames::TimedFrame>(clean_trace());
   }
   static void TearDownTestSuite() {
     delete trace_;
