@@ -859,13 +859,6 @@ const MessageDef* Database::find_message(std::uint32_t id, bool extended) const 
   return nullptr;
 }
 
-const AttributeDef* Database::find_attribute_def(std::string_view attr) const noexcept {
-  for (const auto& d : attribute_defs) {
-    if (d.name == attr) return &d;
-  }
-  return nullptr;
-}
-
 Database parse_dbc(std::string_view text, std::string_view file_name) {
   Parser parser(text, std::string(file_name));
   Database db = parser.parse();

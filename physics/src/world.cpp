@@ -618,7 +618,6 @@ Robot& World::robot(std::size_t i) { return *impl_->robots.at(i); }
 const Robot& World::robot(std::size_t i) const { return *impl_->robots.at(i); }
 Eigen::Vector3d World::ball_position() const { return vec(dBodyGetPosition(impl_->ball)); }
 Eigen::Vector3d World::ball_velocity() const { return vec(dBodyGetLinearVel(impl_->ball)); }
-Eigen::Vector3d World::ball_spin() const { return vec(dBodyGetAngularVel(impl_->ball)); }
 bool World::ball_on_ground() const noexcept { return impl_->ball_on_ground; }
 std::size_t World::obstacle_count() const noexcept { return impl_->obstacle_geoms.size(); }
 const ObstacleParams& World::obstacle_params(std::size_t i) const { return impl_->params.obstacles.at(i).params; }

@@ -90,8 +90,6 @@ class MotorNode final : public Node {
   /// `wheel` is 0..2 (Motor1..Motor3).
   MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
             int wheel, Nanos first_tick);
-  int setpoint() const noexcept { return setpoint_; }
-  bool enabled_by_base() const noexcept { return enable_; }
 
  protected:
   void on_frame(const frames::TimedFrame& frame) override;

@@ -56,8 +56,6 @@ class RobotNodes {
   /// The time the set started at (its first EC).
   Nanos start() const noexcept { return start_; }
   PicBase& pic_base() { return static_cast<PicBase&>(node(NodeId::kPicBase)); }
-  PicOdom& pic_odom() { return static_cast<PicOdom&>(node(NodeId::kPicOdom)); }
-  SystemMonitor& system_monitor() { return static_cast<SystemMonitor&>(node(NodeId::kSysMon)); }
   /// Bad frames counted by all nodes.
   std::uint64_t bad_frames() const;
   BusReport bus_report() const;

@@ -154,7 +154,6 @@ class Session {
   std::vector<can_nodes::FaultCount> fault_counts() const;
   /// The world log (CSV with a header line); empty when world_log_period is 0.
   const std::string& world_log() const noexcept { return world_log_; }
-  std::uint64_t vision_frames() const noexcept { return vision_ ? vision_->frames() : 0; }
 
  private:
   void log_world(Nanos now);

@@ -118,7 +118,6 @@ struct Database {
 
   const MessageDef* find_message(std::string_view message_name) const noexcept;
   const MessageDef* find_message(std::uint32_t id, bool extended) const noexcept;
-  const AttributeDef* find_attribute_def(std::string_view attr) const noexcept;
 
  private:
   void relink() noexcept;

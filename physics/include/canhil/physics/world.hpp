@@ -166,7 +166,6 @@ class World {
 
   Eigen::Vector3d ball_position() const;
   Eigen::Vector3d ball_velocity() const;
-  Eigen::Vector3d ball_spin() const;
   /// The ball touched the carpet during the last substep.
   bool ball_on_ground() const noexcept;
   void place_ball(const Eigen::Vector3d& position, const Eigen::Vector3d& velocity = Eigen::Vector3d::Zero(),
