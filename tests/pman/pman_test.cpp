@@ -20,6 +20,7 @@
 #include <climits>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -110,6 +111,7 @@ class Client {
   explicit Client(const ClientOptions& o) {
     int fds[2];
     if (pipe(fds) != 0) std::abort();
+    std::fflush(nullptr);  // the child must not write the parent's buffered output again
     pid_ = fork();
     if (pid_ == 0) {
       close(fds[0]);
