@@ -21,8 +21,8 @@
 #include <thread>
 
 #include "bench_realtime.hpp"
-#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"

@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/fifo_scheduling.hpp"
 #include "run_realtime.hpp"

@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <string>
 
-#include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/realtime_driver.hpp"
+#include "canhil/emulator/scenario.hpp"
 
 namespace canhil::app {
 

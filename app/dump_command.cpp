@@ -121,9 +121,8 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   const can_nodes::WallClock clock;
-  const Nanos deadline = seconds > 0
-                             ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds))
-                             : kNever;
+  const Nanos deadline =
+      seconds > 0 ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds)) : kNever;
   Printer printer(codec, json);
   can_nodes::BusState last = bus->state();
   if (last != can_nodes::BusState::kUp)

@@ -192,8 +192,8 @@ int run_rtdb(Args& args) {
   do {
     const int age = DB_get_from(agent, from, item, raw.data());
     if (age < 0) {
-      throw SetupError(std::string("agent ") + DB_agent_name(agent) + "'s database has no " + words[2] +
-                                  " of " + DB_agent_name(from));
+      throw SetupError(std::string("agent ") + DB_agent_name(agent) + "'s database has no " + words[2] + " of " +
+                       DB_agent_name(from));
     }
     std::printf("%s[%s] %s age %s: %s\n", DB_agent_name(agent), DB_agent_name(from), words[2].c_str(),
                 age_text(age).c_str(), decode(words[2], raw).c_str());

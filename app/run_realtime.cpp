@@ -45,8 +45,8 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   char length[32] = "until Ctrl-C";
   if (output.duration_s > 0) std::snprintf(length, sizeof length, "%g s", output.duration_s);
   const emulator::Scenario& sc = session.scenario();
-  std::fprintf(out, "canhil run: %zu robot(s), real time, %s, seed %llu, %zu fault rule(s)\n", sc.robot_count(),
-               length, static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  std::fprintf(out, "canhil run: %zu robot(s), real time, %s, seed %llu, %zu fault rule(s)\n", sc.robot_count(), length,
+               static_cast<unsigned long long>(sc.seed), sc.faults.size());
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
     std::fprintf(out, "  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,

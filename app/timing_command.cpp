@@ -62,16 +62,14 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
       if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
       frames::LogEntry e;
       std::string error;
-      if (!frames::parse_log_line(line, e, &error))
-        throw SetupError(source + ":" + std::to_string(n) + ": " + error);
+      if (!frames::parse_log_line(line, e, &error)) throw SetupError(source + ":" + std::to_string(n) + ": " + error);
       analyzer.add({e.frame, e.time});
     }
   } else {
     auto bus = can_nodes::SocketCanBus::open(source);
     bus->set_error_mask(frames::kErrorClassMask);  // error frames count toward the load and the report
     const can_nodes::WallClock clock;
-    const Nanos end =
-        clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds));
+    const Nanos end = clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds));
     std::signal(SIGINT, stop_timing);
     if (!json)
       std::fprintf(stderr, "canhil timing: listening on %s for %.0f s (Ctrl-C stops early)\n", source.c_str(), seconds);

@@ -13,7 +13,7 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   if (config.bit_rate == 0) throw SetupError("the bit rate must be positive");
   auto us = [](Nanos t) { return std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(t).count()); };
   Nanos longest_async{0};
-  Nanos tm_time{0};  // the TM's worst-case wire time
+  Nanos tm_time{0};         // the TM's worst-case wire time
   std::uint32_t cycle = 1;  // ECs after which the schedule repeats
   for (const frames::MessageCodec& m : set.codec().messages()) {
     const frames::FttInfo& info = set.ftt(m);
@@ -52,9 +52,9 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   const Nanos needed = tm_time + longest_async + longest;
   if (needed > ec) {
     std::ostringstream os;
-    os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message ("
-       << us(tm_time) << " us), one asynchronous frame (" << us(longest_async)
-       << " us) and the synchronous window of EC " << worst_ec << " (" << us(longest) << " us, messages";
+    os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message (" << us(tm_time)
+       << " us), one asynchronous frame (" << us(longest_async) << " us) and the synchronous window of EC " << worst_ec
+       << " (" << us(longest) << " us, messages";
     const std::uint32_t b = bitmap(worst_ec);
     for (int i = 0; i < 32; ++i) {
       if ((b >> i) & 1u) os << ' ' << set.sync_message(i)->name();

@@ -66,7 +66,10 @@ void FttMaster::step(Nanos now) {
 // --- PicBase -------------------------------------------------------------------
 
 PicBase::PicBase(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot)
-    : Node(node_name(NodeId::kPicBase), bus, std::move(set)), params_(params), robot_(robot), kinematics_(params.geometry) {
+    : Node(node_name(NodeId::kPicBase), bus, std::move(set)),
+      params_(params),
+      robot_(robot),
+      kinematics_(params.geometry) {
   const auto f = filters_for(messages(), {"TM", "M6_1", "M6_2", "M7"});
   bus.set_filters(f);
 }

@@ -6,8 +6,8 @@
 
 namespace canhil::can_nodes {
 
-RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params,
-                       RobotIo& robot, const EndpointFactory& endpoints, Nanos start)
+RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params, RobotIo& robot,
+                       const EndpointFactory& endpoints, Nanos start)
     : schedule_(*set, params.ftt), start_(start) {
   for (std::size_t i = 0; i < kNodeCount; ++i) buses_.push_back(endpoints(node_name(static_cast<NodeId>(i))));
   watch_bus_ = endpoints("SysMon watch");
@@ -15,8 +15,7 @@ RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, con
   nodes_.push_back(std::make_unique<FttMaster>(bus(NodeId::kMaster), set, schedule_, start));
   nodes_.push_back(std::make_unique<PicBase>(bus(NodeId::kPicBase), set, params, robot));
   for (int w = 0; w < 3; ++w) {
-    nodes_.push_back(
-        std::make_unique<MotorNode>(bus(motor_node(w)), set, params, robot, w, start));
+    nodes_.push_back(std::make_unique<MotorNode>(bus(motor_node(w)), set, params, robot, w, start));
   }
   nodes_.push_back(std::make_unique<PicOdom>(bus(NodeId::kPicOdom), set, params));
   nodes_.push_back(std::make_unique<CompassNode>(bus(NodeId::kCompass), set, params, robot));

@@ -120,9 +120,9 @@ void complete(Scenario& s) {
     for (std::size_t k = 0; k < robots; ++k) s.agents.push_back(kFirstAgent + static_cast<int>(k));
   }
   if (s.interfaces.size() != robots || s.agents.size() != robots) {
-    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) +
-                     " robots, " + std::to_string(s.interfaces.size()) + " interfaces, " +
-                     std::to_string(s.agents.size()) + " agents)");
+    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) + " robots, " +
+                     std::to_string(s.interfaces.size()) + " interfaces, " + std::to_string(s.agents.size()) +
+                     " agents)");
   }
   for (const int a : s.agents) {
     if (a < kFirstAgent || a > kLastAgent) {

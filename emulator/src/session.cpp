@@ -80,8 +80,8 @@ Session::Session(Scenario scenario, SessionOptions options)
     world_log_ = "time_s,ball_x_m,ball_y_m,ball_z_m";
     for (std::size_t r = 0; r < n; ++r) {
       const std::string p = "robot" + std::to_string(r) + "_";
-      world_log_ += "," + p + "x_m," + p + "y_m," + p + "heading_deg," + p + "reported_x_m," + p + "reported_y_m," +
-                    p + "reported_heading_deg";
+      world_log_ += "," + p + "x_m," + p + "y_m," + p + "heading_deg," + p + "reported_x_m," + p + "reported_y_m," + p +
+                    "reported_heading_deg";
     }
     world_log_ += '\n';
   }

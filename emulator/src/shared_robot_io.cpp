@@ -6,10 +6,7 @@
 
 namespace canhil::emulator {
 
-SharedRobotIo::SharedRobotIo(physics::Robot& robot)
-    : robot_(robot), kicker_(robot.params().kicker) {
-  publish();
-}
+SharedRobotIo::SharedRobotIo(physics::Robot& robot) : robot_(robot), kicker_(robot.params().kicker) { publish(); }
 
 void SharedRobotIo::set_wheel_speed(int wheel, double radps) {
   const std::lock_guard lock(mutex_);

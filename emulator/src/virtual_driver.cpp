@@ -64,7 +64,9 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     buses_.push_back(std::make_unique<can_nodes::MemoryBus>(clock_, session_.rig(r).interface));
   }
   session_.build_nodes(
-      [this](std::size_t r, const std::string& node) { return std::unique_ptr<can_nodes::Bus>(buses_[r]->attach(node)); },
+      [this](std::size_t r, const std::string& node) {
+        return std::unique_ptr<can_nodes::Bus>(buses_[r]->attach(node));
+      },
       Session::IoMode::kDirect, Nanos{0});
   laptop::AgentConfig agent_cfg;
   agent_cfg.goal_x_m = session_.scenario().world.field.length_m / 2;

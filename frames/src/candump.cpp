@@ -6,7 +6,6 @@
 namespace canhil::frames {
 namespace {
 
-
 int hex_value(char c) {
   if (c >= '0' && c <= '9') return c - '0';
   if (c >= 'A' && c <= 'F') return c - 'A' + 10;

@@ -343,10 +343,7 @@ void read_all(Reader& root, WorldParams& w) {
 }  // namespace
 
 ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& message)
-    : SetupError(format(file, line, field, message)),
-      file_(std::move(file)),
-      line_(line),
-      field_(std::move(field)) {}
+    : SetupError(format(file, line, field, message)), file_(std::move(file)), line_(line), field_(std::move(field)) {}
 
 WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name,
                                const std::vector<std::string>& other_tables) {

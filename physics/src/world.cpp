@@ -10,8 +10,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "canhil/base/setup_error.hpp"
 #include "canhil/base/demand.hpp"
+#include "canhil/base/setup_error.hpp"
 #include "convex.hpp"
 
 namespace canhil::physics {
@@ -382,7 +382,8 @@ void World::Impl::apply_robot_inputs(RobotImpl& r) {
     const double target = r.state.wheel_target_radps[n];
     const bool driving = (target - w) * w > 0;
     double i_max = mp.current_limit_a;
-    if (driving) i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
+    if (driving)
+      i_max = std::min(i_max, std::max(0.0, (v_supply - k * std::fabs(w_motor)) / mp.terminal_resistance_ohm));
     dJointSetHingeParam(r.hinge[n], dParamVel, target);
     dJointSetHingeParam(r.hinge[n], dParamFMax, i_max * k * gear * mp.gear_efficiency);
   }
@@ -594,9 +595,8 @@ void check_start_positions(const WorldParams& p) {
     const bool held = i < p.robots.size() && in_mouth(i);
     if (p.ball_start.z_m < 1.0 && !held &&
         std::hypot(a.x - p.ball_start.x_m, a.y - p.ball_start.y_m) < a.r + ball_r - 1e-9) {
-      throw SetupError("ball_start (" + std::to_string(p.ball_start.x_m) + ", " +
-                                  std::to_string(p.ball_start.y_m) + ") is inside " + a.what +
-                                  "; move the ball or the " + a.what.substr(0, a.what.find(' ')));
+      throw SetupError("ball_start (" + std::to_string(p.ball_start.x_m) + ", " + std::to_string(p.ball_start.y_m) +
+                       ") is inside " + a.what + "; move the ball or the " + a.what.substr(0, a.what.find(' ')));
     }
     for (std::size_t j = i + 1; j < discs.size(); ++j) {
       const Disc& b = discs[j];
@@ -705,9 +705,8 @@ void World::restore(const WorldState& s) {
   if (s.robots.size() != impl_->robots.size() || s.obstacles.size() != impl_->obstacle_geoms.size() ||
       s.obstacle_idle_steps.size() != impl_->obstacle_geoms.size()) {
     throw SetupError("the saved state has " + std::to_string(s.robots.size()) + " robots and " +
-                                std::to_string(s.obstacles.size()) + " obstacles; this world has " +
-                                std::to_string(impl_->robots.size()) + " and " +
-                                std::to_string(impl_->obstacle_geoms.size()));
+                     std::to_string(s.obstacles.size()) + " obstacles; this world has " +
+                     std::to_string(impl_->robots.size()) + " and " + std::to_string(impl_->obstacle_geoms.size()));
   }
   impl_->time = s.time_s;
   impl_->seed = s.seed;
@@ -836,8 +835,8 @@ BatteryVolts Robot::battery() const {
     return std::max(0.0, r.empty_v + (r.full_v - r.empty_v) * charge - current * r.internal_resistance_ohm);
   };
   return BatteryVolts{volts(bp.logic, st.charge[0], bp.logic.base_current_a),
-                        volts(bp.power12, st.charge[1], bp.power12.base_current_a),
-                        volts(bp.power24, st.charge[2], bp.power24.base_current_a + motors)};
+                      volts(bp.power12, st.charge[1], bp.power12.base_current_a),
+                      volts(bp.power24, st.charge[2], bp.power24.base_current_a + motors)};
 }
 
 std::array<double, 3> Robot::charge() const { return impl_->state.charge; }

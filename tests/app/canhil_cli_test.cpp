@@ -136,7 +136,9 @@ TEST(Canhil, UsageErrorsExitTwo) {
   EXPECT_EQ(canhil("--help").status, 0);
 }
 
-std::size_t lines_of(const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); }
+std::size_t lines_of(const std::string& text) {
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
 
 TEST(Canhil, AWrongOptionShowsTheErrorAndThatCommandsUsageOnly) {
   const CliRun r = canhil("timing --bogus frames/samples/one_robot.log");

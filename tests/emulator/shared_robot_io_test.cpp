@@ -9,9 +9,9 @@
 #include <cstdlib>
 #include <thread>
 
-#include "canhil/emulator/realtime_physics.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/physics_robot_io.hpp"
+#include "canhil/emulator/realtime_physics.hpp"
 #include "canhil/emulator/session.hpp"
 #include "support/test_paths.hpp"
 

@@ -64,7 +64,8 @@ TEST_F(HwCommUnit, SendsCmdVelInTheM6SlotOfTheTmThatSchedulesIt) {
   now_ = 39ms - 1ns;
   hw_.on_time(now_);
   EXPECT_TRUE(sent_with(set_->m6_1.message().id()).empty()) << "not before the slot";
-  EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u) << "the grabber's first state, once, in the first asynchronous window";
+  EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u)
+      << "the grabber's first state, once, in the first asynchronous window";
   now_ = 39ms;
   hw_.on_time(now_);
   const auto m6_1s = sent_with(set_->m6_1.message().id());

@@ -45,8 +45,8 @@ class ChildProcess {
   }
   void check_sanitizers() const {
     const std::string out = output();
-    for (const char* report : {"WARNING: ThreadSanitizer", "ERROR: AddressSanitizer", "ERROR: LeakSanitizer",
-                               "runtime error:"}) {
+    for (const char* report :
+         {"WARNING: ThreadSanitizer", "ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:"}) {
       if (out.find(report) != std::string::npos) ADD_FAILURE() << log_ << " has a sanitizer report:\n" << out;
     }
   }

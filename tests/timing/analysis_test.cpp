@@ -168,7 +168,7 @@ TEST_F(Timing, ACleanCaptureHasNoCaptureProblem) {
 
 TEST_F(Timing, AnEmptyCaptureIsAProblemNotAPass) {
   const TimingReport r = analyse({});
-  EXPECT_TRUE(r.ok());  // nothing violated ...
+  EXPECT_TRUE(r.ok());           // nothing violated ...
   EXPECT_FALSE(r.capture_ok());  // ... because nothing was there
   EXPECT_TRUE(has_problem(r, CaptureProblem::kNoFrames));
   EXPECT_NE(format_table(r).find("capture problem: the capture has no frames"), std::string::npos);

@@ -9,7 +9,6 @@
 
 namespace canhil::can_nodes {
 
-
 class Clock {
  public:
   virtual ~Clock() = default;

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "canhil/can_nodes/clock.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/clock.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace canhil::can_nodes {

@@ -24,7 +24,6 @@
 
 namespace canhil::can_nodes {
 
-
 struct NodeCounters {
   std::uint64_t received = 0;       ///< frames handled
   std::uint64_t sent = 0;           ///< frames handed to the bus

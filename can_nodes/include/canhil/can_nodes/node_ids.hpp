@@ -13,8 +13,8 @@ namespace canhil::can_nodes {
 enum class NodeId : std::uint8_t { kMaster, kPicBase, kMotor1, kMotor2, kMotor3, kPicOdom, kCompass, kSysMon };
 inline constexpr std::size_t kNodeCount = 8;
 
-inline constexpr std::array<const char*, kNodeCount> kNodeNames = {
-    "FTT master", "Pic_base", "Motor1", "Motor2", "Motor3", "Pic_odom", "Compass", "SysMon"};
+inline constexpr std::array<const char*, kNodeCount> kNodeNames = {"FTT master", "Pic_base", "Motor1",  "Motor2",
+                                                                   "Motor3",     "Pic_odom", "Compass", "SysMon"};
 
 constexpr const char* node_name(NodeId id) noexcept { return kNodeNames[static_cast<std::size_t>(id)]; }
 /// Motor node of wheel 0..2.

@@ -17,10 +17,10 @@
 #include <optional>
 
 #include "canhil/can_nodes/ftt.hpp"
-#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/can_nodes/node.hpp"
 #include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/can_nodes/robot_io.hpp"
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/kinematics/omni.hpp"
 
 namespace canhil::can_nodes {

@@ -15,7 +15,6 @@
 
 namespace canhil::can_nodes {
 
-
 /// What one robot's nodes saw and did on their bus: the run summaries' line.
 struct BusReport {
   std::uint64_t sent = 0;              ///< frames all nodes handed to the bus
@@ -46,8 +45,8 @@ class RobotNodes {
 
   /// Builds the set. `params` and `robot` must outlive it. Throws
   /// SetupError when the schedule does not fit the EC.
-  RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params,
-             RobotIo& robot, const EndpointFactory& endpoints, Nanos start);
+  RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params, RobotIo& robot,
+             const EndpointFactory& endpoints, Nanos start);
 
   Node& node(NodeId id) { return *nodes_[static_cast<std::size_t>(id)]; }
   const Node& node(NodeId id) const { return *nodes_[static_cast<std::size_t>(id)]; }

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "canhil/can_nodes/bus.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/bus.hpp"
 
 namespace canhil::can_nodes {
 

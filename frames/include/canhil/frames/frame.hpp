@@ -13,7 +13,6 @@
 
 namespace canhil::frames {
 
-
 inline constexpr std::uint32_t kStandardIdMask = 0x7FFu;
 inline constexpr std::uint32_t kExtendedIdMask = 0x1FFF'FFFFu;
 inline constexpr std::size_t kMaxDataBytes = 8;
@@ -53,19 +52,19 @@ constexpr CanFrame make_data_frame(std::uint32_t id, std::initializer_list<std::
 /// of canhil): the flag that marks an error frame's id (CAN_ERR_FLAG), the
 /// class bits in its low 29 bits (CAN_ERR_*, also a socket's error mask), and
 /// the protocol-error details canhil produces (the error-frame fault).
-inline constexpr std::uint32_t kErrorFlag = 0x2000'0000u;         ///< CAN_ERR_FLAG
-inline constexpr std::uint32_t kErrorClassMask = 0x1FFF'FFFFu;    ///< CAN_ERR_MASK: every class
-inline constexpr std::uint32_t kErrorClassTxTimeout = 0x001u;     ///< CAN_ERR_TX_TIMEOUT
+inline constexpr std::uint32_t kErrorFlag = 0x2000'0000u;            ///< CAN_ERR_FLAG
+inline constexpr std::uint32_t kErrorClassMask = 0x1FFF'FFFFu;       ///< CAN_ERR_MASK: every class
+inline constexpr std::uint32_t kErrorClassTxTimeout = 0x001u;        ///< CAN_ERR_TX_TIMEOUT
 inline constexpr std::uint32_t kErrorClassLostArbitration = 0x002u;  ///< CAN_ERR_LOSTARB
-inline constexpr std::uint32_t kErrorClassController = 0x004u;    ///< CAN_ERR_CRTL
-inline constexpr std::uint32_t kErrorClassProtocol = 0x008u;      ///< CAN_ERR_PROT: data[2], data[3] say what and where
-inline constexpr std::uint32_t kErrorClassTransceiver = 0x010u;   ///< CAN_ERR_TRX
-inline constexpr std::uint32_t kErrorClassNoAck = 0x020u;         ///< CAN_ERR_ACK
-inline constexpr std::uint32_t kErrorClassBusOff = 0x040u;        ///< CAN_ERR_BUSOFF
-inline constexpr std::uint32_t kErrorClassBusError = 0x080u;      ///< CAN_ERR_BUSERROR
-inline constexpr std::uint32_t kErrorClassRestarted = 0x100u;     ///< CAN_ERR_RESTARTED
-inline constexpr std::uint8_t kProtocolErrorBit = 0x01;           ///< CAN_ERR_PROT_BIT, in data[2]
-inline constexpr std::uint8_t kProtocolLocationCrc = 0x08;        ///< CAN_ERR_PROT_LOC_CRC_SEQ, in data[3]
+inline constexpr std::uint32_t kErrorClassController = 0x004u;       ///< CAN_ERR_CRTL
+inline constexpr std::uint32_t kErrorClassProtocol = 0x008u;     ///< CAN_ERR_PROT: data[2], data[3] say what and where
+inline constexpr std::uint32_t kErrorClassTransceiver = 0x010u;  ///< CAN_ERR_TRX
+inline constexpr std::uint32_t kErrorClassNoAck = 0x020u;        ///< CAN_ERR_ACK
+inline constexpr std::uint32_t kErrorClassBusOff = 0x040u;       ///< CAN_ERR_BUSOFF
+inline constexpr std::uint32_t kErrorClassBusError = 0x080u;     ///< CAN_ERR_BUSERROR
+inline constexpr std::uint32_t kErrorClassRestarted = 0x100u;    ///< CAN_ERR_RESTARTED
+inline constexpr std::uint8_t kProtocolErrorBit = 0x01;          ///< CAN_ERR_PROT_BIT, in data[2]
+inline constexpr std::uint8_t kProtocolLocationCrc = 0x08;       ///< CAN_ERR_PROT_LOC_CRC_SEQ, in data[3]
 
 /// The error frame a bit error in a frame's CRC sequence gives, as SocketCAN
 /// reports it: protocol violation and bus error, all 8 data bytes.

@@ -18,7 +18,6 @@
 
 namespace canhil::timing {
 
-
 struct TimingConfig {
   Nanos elementary_cycle = std::chrono::milliseconds(10);
   std::uint32_t bit_rate = 1'000'000;
