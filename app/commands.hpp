@@ -24,5 +24,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc);
 int run_rtdb(Args& args);
 /// `canhil nodes --iface IFACE`: one robot's node set with physics, in real time.
 int run_nodes(Args& args, const std::optional<std::string>& dbc);
+/// `canhil coach STATE|status|--robot N ...`: the base station's orders to a running run.
+int run_coach(Args& args, const std::optional<std::string>& dbc);
 
 }  // namespace canhil::app

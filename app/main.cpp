@@ -56,6 +56,7 @@ const Command kCommands[] = {
                                               scenarios in emulator/scenarios/
   canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B]
              [--rx-buffer-kb 1024] [--priority 40] [--save-world FILE] [--restore-world FILE] [--quiet]
+             [--control PATH | --no-control]
                                               real time: every robot's nodes on its interface (vcan0, ...),
                                               vision into its agent's RTDB; run your handler and agent
                                               (or canhil-hwcomm, canhil-agent) with AGENT=N next to it
@@ -87,6 +88,15 @@ const Command kCommands[] = {
                                               copy shared items between agents (the team's wireless)
 )",
      run_rtdb},
+    {"coach", "the base station's orders to a running canhil run",
+     R"(  canhil coach STATE [--control PATH]         the game state for every robot: stop, start, our_kickoff,
+                                              their_kickoff, drop_ball, ... (emulator/coach.hpp)
+  canhil coach --robot N [--running yes|no] [--role ROLE]
+                                              one robot's orders
+  canhil coach status                         what the coach says now
+                                              (PATH: the run's control socket, as canhil run prints it)
+)",
+     canhil::app::run_coach},
     {"experiment", "physics calibration experiments and a vision frame",
      R"(  canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "canhil/control/unix_server.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
@@ -77,6 +78,7 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
   const emulator::Scenario& sc = session.scenario();
   std::printf("canhil run: %zu robot(s), virtual time, %g s, seed %llu, %zu fault rule(s)\n", sc.robot_count(),
               duration, static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  std::fflush(stdout);
   std::signal(SIGINT, stop_run);
   std::signal(SIGTERM, stop_run);
   const Nanos total = from_seconds(duration);
@@ -112,6 +114,26 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
   return g_stop ? 130 : 0;
 }
 
+// The run's control socket (canhil coach, scripts): --control PATH, or the
+// default one; when another run holds the default, this run's own beside it.
+std::unique_ptr<control::UnixServer> serve_control(control::Commands& commands, const std::optional<std::string>& path,
+                                                   FILE* out) {
+  std::unique_ptr<control::UnixServer> server;
+  if (path) {
+    server = std::make_unique<control::UnixServer>(*path, commands);
+  } else {
+    try {
+      server = std::make_unique<control::UnixServer>(control::default_socket_path(), commands);
+    } catch (const SetupError&) {
+      server = std::make_unique<control::UnixServer>(
+          control::default_socket_path().string() + "-" + std::to_string(getpid()), commands);
+    }
+  }
+  std::fprintf(out, "canhil run: control socket %s (canhil coach --control %s start|stop|status)\n",
+               server->path().c_str(), server->path().c_str());
+  return server;
+}
+
 }  // namespace
 
 int run_run(Args& args, const std::optional<std::string>& dbc) {
@@ -126,6 +148,9 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   while (auto f = args.option("--fault")) fault_texts.push_back(*f);
   const auto seed_text = args.option("--seed");
   outputs.quiet = args.flag("--quiet");
+  const auto control_path = args.option("--control");
+  const bool no_control = args.flag("--no-control");
+  if (control_path && no_control) throw UsageError("give --control PATH or --no-control, not both");
   emulator::Scenario scenario =
       emulator::load_scenario(config ? std::filesystem::path(*config) : emulator::shipped_scenario("one_robot.toml"));
   const std::optional<double> duration_given = optional_number(args, "--duration");
@@ -186,14 +211,20 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     output.duration_s = duration_given.value_or(0);  // none: until Ctrl-C
     output.quiet = outputs.quiet;
     output.save_world = outputs.save_world;
-    return run_realtime(*session(), rt, output);
+    const auto s = session();
+    control::Commands commands(*s);
+    const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
+    return run_realtime(*s, rt, output);
   }
   if (std::getenv("RTDB_KEY") == nullptr) {
     // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
     setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
   }
   if (outputs.world_log) options.world_log_period = from_seconds(outputs.log_period_s);
-  return run_virtual(*session(), duration, outputs);
+  const auto s = session();
+  control::Commands commands(*s);
+  const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
+  return run_virtual(*s, duration, outputs);
 }
 
 }  // namespace canhil::app

@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # physics
   libode-dev libeigen3-dev libtomlplusplus-dev
+  # the control channel and the viewer: JSON, HTTP and WebSocket
+  nlohmann-json3-dev libboost-dev
   # SocketCAN tools and interface set-up
   can-utils iproute2 kmod
   # the VM runner for kernels without CAN (vcan_setup/vm-run.sh)

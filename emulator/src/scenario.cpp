@@ -9,98 +9,196 @@
 namespace canhil::emulator {
 namespace {
 
-class RunReader {
+// One table of a scenario ([run], [coach], [laptop]): its fields with their
+// lines, unknown fields refused, mistakes as `FILE:LINE: TABLE.FIELD: ...`.
+class TableReader {
  public:
-  RunReader(const toml::table& run, const std::string& file) : run_(run), file_(file) {}
-  [[noreturn]] void fail(const toml::node& at, const std::string& key, const std::string& what) const {
-    throw physics::ConfigError(file_, static_cast<int>(at.source().begin.line), "run." + key, what);
+  TableReader(const toml::table& table, std::string name, const std::string& file, std::vector<std::string> known)
+      : table_(table), name_(std::move(name)), file_(file) {
+    for (const auto& [k, v] : table_) {
+      if (std::find(known.begin(), known.end(), k.str()) != known.end()) continue;
+      std::string list;
+      for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
+      fail(v, std::string(k.str()), "unknown field; known here: " + list);
+    }
   }
-  const toml::node* get(const std::string& key) const { return run_.get(key); }
+  [[noreturn]] void fail(const toml::node& at, const std::string& key, const std::string& what) const {
+    throw physics::ConfigError(file_, static_cast<int>(at.source().begin.line), name_ + "." + key, what);
+  }
+  const toml::node* get(const std::string& key) const { return table_.get(key); }
   const toml::array* array(const std::string& key) const {
     const toml::node* n = get(key);
     if (n == nullptr) return nullptr;
     if (!n->is_array()) fail(*n, key, "must be a list, e.g. " + key + " = [...]");
     return n->as_array();
   }
+  std::optional<std::string> text(const std::string& key, const char* example) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return std::nullopt;
+    const auto v = n->value<std::string>();
+    if (!v || v->empty()) fail(*n, key, std::string("must be a text, e.g. ") + key + " = " + example);
+    return *v;
+  }
+  // A list with one entry per robot.
+  template <class T>
+  std::vector<T> per_robot(const std::string& key, std::size_t robots, const char* what) const {
+    std::vector<T> out;
+    const toml::array* a = array(key);
+    if (a == nullptr) return out;
+    for (const toml::node& e : *a) {
+      const auto v = e.value<T>();
+      if (!v) fail(e, key, std::string("must be ") + what);
+      out.push_back(*v);
+    }
+    if (out.size() != robots) {
+      fail(*get(key), key, "give one per robot: the file places " + std::to_string(robots) + " robot(s)");
+    }
+    return out;
+  }
+  const std::string& file() const { return file_; }
 
  private:
-  const toml::table& run_;
+  const toml::table& table_;
+  std::string name_;
   const std::string& file_;
 };
 
+void read_run(const TableReader& r, Scenario& s, std::size_t robots) {
+  if (const toml::node* n = r.get("duration_s")) {
+    const auto v = n->value<double>();
+    if (!v || !(*v > 0)) r.fail(*n, "duration_s", "must be a number of seconds above 0");
+    s.duration_s = *v;
+  }
+  if (const toml::node* n = r.get("seed")) {
+    const auto v = n->value<std::int64_t>();
+    if (!v || *v < 0 || !n->is_integer()) r.fail(*n, "seed", "must be a whole number, 0 or more");
+    s.seed = static_cast<std::uint64_t>(*v);
+  }
+  if (const toml::node* n = r.get("kick_power")) {
+    const auto v = n->value<std::int64_t>();
+    if (!v || !n->is_integer() || *v < 0 || *v > s.world.robot.kicker.max_power) {
+      r.fail(*n, "kick_power", "must be a whole number from 0 to robot.kicker.max_power");
+    }
+    s.kick_power = static_cast<int>(*v);
+  }
+  if (const toml::array* a = r.array("interfaces")) {
+    for (const toml::node& e : *a) {
+      const auto v = e.value<std::string>();
+      if (!v || v->empty() || v->size() > 15) r.fail(e, "interfaces", "must be interface names such as \"vcan0\"");
+      s.interfaces.push_back(*v);
+    }
+    if (s.interfaces.size() != robots) {
+      r.fail(*r.get("interfaces"), "interfaces",
+             "give one interface per robot: the file places " + std::to_string(robots) + " robot(s)");
+    }
+  }
+  if (const toml::array* a = r.array("agents")) {
+    for (const toml::node& e : *a) {
+      const auto v = e.value<std::int64_t>();
+      if (!v || !e.is_integer() || *v < kFirstAgent || *v > kLastAgent) {
+        r.fail(e, "agents", "agent numbers are whole numbers 1..6");
+      }
+      if (std::count(s.agents.begin(), s.agents.end(), *v) != 0) {
+        r.fail(e, "agents", "agent " + std::to_string(*v) + " appears twice; give each robot its own");
+      }
+      s.agents.push_back(static_cast<int>(*v));
+    }
+    if (s.agents.size() != robots) {
+      r.fail(*r.get("agents"), "agents",
+             "give one agent number per robot: the file places " + std::to_string(robots) + " robot(s)");
+    }
+  }
+  if (const toml::array* a = r.array("faults")) {
+    for (const toml::node& e : *a) {
+      const auto v = e.value<std::string>();
+      if (!v) r.fail(e, "faults", "must be a list of fault texts such as \"drop:M4_1:0.1\"");
+      try {
+        s.faults.push_back(can_nodes::parse_fault(*v));
+      } catch (const SetupError& err) {
+        r.fail(e, "faults", err.what());
+      }
+    }
+  }
+}
+
+void read_coach(const TableReader& r, Scenario& s, std::size_t robots) {
+  if (const auto state = r.text("game_state", "\"start\"")) {
+    if (!is_game_state(*state)) {
+      std::string list;
+      for (const auto g : kGameStates) list += (list.empty() ? "" : ", ") + std::string(g);
+      r.fail(*r.get("game_state"), "game_state", "\"" + *state + "\" is not a game state; use one of " + list);
+    }
+    s.coach.game_state = *state;
+  }
+  s.coach.players.resize(robots);
+  const auto running = r.per_robot<bool>("running", robots, "true or false");
+  const auto roles = r.per_robot<std::string>("roles", robots, "role names such as \"striker\"");
+  const auto role_auto = r.per_robot<bool>("role_auto", robots, "true or false");
+  for (std::size_t k = 0; k < robots; ++k) {
+    if (!running.empty()) s.coach.players[k].running = running[k];
+    if (!roles.empty()) s.coach.players[k].role = roles[k];
+    if (!role_auto.empty()) s.coach.players[k].role_auto = role_auto[k];
+  }
+}
+
+// A path in the file, relative to the file's folder.
+std::string beside(const std::string& file, const std::string& path) {
+  const std::filesystem::path p(path);
+  if (p.is_absolute() || file.empty()) return path;
+  return (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
+}
+
+void read_laptop(const TableReader& r, Scenario& s) {
+  LaptopSide& l = s.laptop;
+  if (const auto v = r.text("rtdb_lib", "\"builtin\" or \"/path/to/librtdb.so\"")) {
+    l.rtdb_lib = *v == "builtin" ? *v : beside(r.file(), *v);
+  }
+  if (const auto v = r.text("rtdb_items", "\"../cambada/src/libs/rtdb/rtdb_user.h\"")) {
+    l.rtdb_items = beside(r.file(), *v);
+  }
+  if (const auto v = r.text("rtdb_ini", "\"../cambada/config/rtdb.ini\"")) l.rtdb_ini = beside(r.file(), *v);
+  if (const auto v = r.text("layout", "\"cambada\", \"canhil\" or a layout file")) {
+    l.layout = (*v == "cambada" || *v == "canhil") ? *v : beside(r.file(), *v);
+  }
+  if (const auto v = r.text("pman", "\"builtin\", \"none\" or \"/path/to/libpman.so\"")) {
+    l.pman = (*v == "builtin" || *v == "none") ? *v : beside(r.file(), *v);
+  }
+  if (const toml::array* a = r.array("pman_processes")) {
+    l.pman_processes.clear();
+    for (const toml::node& e : *a) {
+      const auto v = e.value<std::string>();
+      if (!v || v->empty() || v->size() > 30) {
+        r.fail(e, "pman_processes", "must be process names such as \"agent\" (the agent number is appended)");
+      }
+      l.pman_processes.push_back(*v);
+    }
+  }
+}
+
 }  // namespace
+
+bool is_game_state(std::string_view name) noexcept {
+  return std::find(kGameStates.begin(), kGameStates.end(), name) != kGameStates.end();
+}
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
-  s.world = physics::parse_world_params(toml_text, file_name, {"run"});
+  s.world = physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop"});
   const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
   if (const toml::table* run = root["run"].as_table()) {
-    const RunReader r(*run, file_name);
-    for (const auto& [k, v] : *run) {
-      static const std::vector<std::string> kKnown = {"duration_s", "seed",   "kick_power",
-                                                      "interfaces", "agents", "faults"};
-      if (std::find(kKnown.begin(), kKnown.end(), k.str()) == kKnown.end()) {
-        r.fail(v, std::string(k.str()),
-               "unknown field; known here: duration_s, seed, kick_power, interfaces, agents, faults");
-      }
-    }
-    if (const toml::node* n = r.get("duration_s")) {
-      const auto v = n->value<double>();
-      if (!v || !(*v > 0)) r.fail(*n, "duration_s", "must be a number of seconds above 0");
-      s.duration_s = *v;
-    }
-    if (const toml::node* n = r.get("seed")) {
-      const auto v = n->value<std::int64_t>();
-      if (!v || *v < 0 || !n->is_integer()) r.fail(*n, "seed", "must be a whole number, 0 or more");
-      s.seed = static_cast<std::uint64_t>(*v);
-    }
-    if (const toml::node* n = r.get("kick_power")) {
-      const auto v = n->value<std::int64_t>();
-      if (!v || !n->is_integer() || *v < 0 || *v > s.world.robot.kicker.max_power) {
-        r.fail(*n, "kick_power", "must be a whole number from 0 to robot.kicker.max_power");
-      }
-      s.kick_power = static_cast<int>(*v);
-    }
-    if (const toml::array* a = r.array("interfaces")) {
-      for (const toml::node& e : *a) {
-        const auto v = e.value<std::string>();
-        if (!v || v->empty() || v->size() > 15) r.fail(e, "interfaces", "must be interface names such as \"vcan0\"");
-        s.interfaces.push_back(*v);
-      }
-      if (s.interfaces.size() != robots) {
-        r.fail(*r.get("interfaces"), "interfaces",
-               "give one interface per robot: the file places " + std::to_string(robots) + " robot(s)");
-      }
-    }
-    if (const toml::array* a = r.array("agents")) {
-      for (const toml::node& e : *a) {
-        const auto v = e.value<std::int64_t>();
-        if (!v || !e.is_integer() || *v < kFirstAgent || *v > kLastAgent) {
-          r.fail(e, "agents", "agent numbers are whole numbers 1..6");
-        }
-        if (std::count(s.agents.begin(), s.agents.end(), *v) != 0) {
-          r.fail(e, "agents", "agent " + std::to_string(*v) + " appears twice; give each robot its own");
-        }
-        s.agents.push_back(static_cast<int>(*v));
-      }
-      if (s.agents.size() != robots) {
-        r.fail(*r.get("agents"), "agents",
-               "give one agent number per robot: the file places " + std::to_string(robots) + " robot(s)");
-      }
-    }
-    if (const toml::array* a = r.array("faults")) {
-      for (const toml::node& e : *a) {
-        const auto v = e.value<std::string>();
-        if (!v) r.fail(e, "faults", "must be a list of fault texts such as \"drop:M4_1:0.1\"");
-        try {
-          s.faults.push_back(can_nodes::parse_fault(*v));
-        } catch (const SetupError& err) {
-          r.fail(e, "faults", err.what());
-        }
-      }
-    }
+    read_run(TableReader(*run, "run", file_name,
+                         {"duration_s", "seed", "kick_power", "interfaces", "agents", "faults"}),
+             s, robots);
+  }
+  if (const toml::table* coach = root["coach"].as_table()) {
+    read_coach(TableReader(*coach, "coach", file_name, {"game_state", "running", "roles", "role_auto"}), s, robots);
+  }
+  if (const toml::table* laptop = root["laptop"].as_table()) {
+    read_laptop(TableReader(*laptop, "laptop", file_name,
+                            {"rtdb_lib", "rtdb_items", "rtdb_ini", "layout", "pman", "pman_processes"}),
+                s);
   }
   complete(s);
   return s;
@@ -120,9 +218,9 @@ void complete(Scenario& s) {
     for (std::size_t k = 0; k < robots; ++k) s.agents.push_back(kFirstAgent + static_cast<int>(k));
   }
   if (s.interfaces.size() != robots || s.agents.size() != robots) {
-    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) + " robots, " +
-                     std::to_string(s.interfaces.size()) + " interfaces, " + std::to_string(s.agents.size()) +
-                     " agents)");
+    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) +
+                     " robots, " + std::to_string(s.interfaces.size()) + " interfaces, " +
+                     std::to_string(s.agents.size()) + " agents)");
   }
   for (const int a : s.agents) {
     if (a < kFirstAgent || a > kLastAgent) {
@@ -133,6 +231,14 @@ void complete(Scenario& s) {
       throw SetupError("agent " + std::to_string(a) + " is given to two robots; give each robot its own");
     }
   }
+  if (!is_game_state(s.coach.game_state)) {
+    throw SetupError("\"" + s.coach.game_state + "\" is not a game state (emulator/coach.hpp lists them)");
+  }
+  s.coach.players.resize(robots);
+}
+
+Scenario load_scenario(const std::filesystem::path& path) {
+  return parse_scenario(physics::read_config_file(path), path.string());
 }
 
 std::filesystem::path shipped_scenario(const std::string& name) {
@@ -144,10 +250,6 @@ std::filesystem::path shipped_scenario(const std::string& name) {
     if (fs::exists(installed, ec)) return installed;
   }
   return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
-}
-
-Scenario load_scenario(const std::filesystem::path& path) {
-  return parse_scenario(physics::read_config_file(path), path.string());
 }
 
 }  // namespace canhil::emulator

@@ -43,6 +43,7 @@ std::vector<std::string> robot_node_names() { return {can_nodes::kNodeNames.begi
 Session::Session(Scenario scenario, SessionOptions options)
     : scenario_(std::move(scenario)), options_(std::move(options)), goals_(scenario_.world) {
   complete(scenario_);
+  coach_ = scenario_.coach;
   if (!options_.messages) throw SetupError("a run needs a message set");
   world_ = std::make_unique<physics::World>(scenario_.world);
   if (options_.initial_state) {
@@ -161,6 +162,18 @@ void Session::apply(Change change) {
     throw SetupError("no obstacle " + std::to_string(m->obstacle) + "; the run has " +
                      std::to_string(world_->obstacle_count()));
   }
+  if (const auto* c = std::get_if<SetCoach>(&change)) {
+    if (c->game_state && !is_game_state(*c->game_state)) {
+      std::string list;
+      for (const auto g : kGameStates) list += (list.empty() ? "" : ", ") + std::string(g);
+      throw SetupError("\"" + *c->game_state + "\" is not a game state; use one of " + list);
+    }
+    if ((c->running || c->role) && !c->robot) throw SetupError("say which robot the coach's order is for");
+    if (c->robot && *c->robot >= rigs_.size()) {
+      throw SetupError("no robot " + std::to_string(*c->robot) + "; the run has " + std::to_string(rigs_.size()));
+    }
+    if (c->role && c->role->empty()) throw SetupError("a role needs a name, e.g. \"striker\"");
+  }
   const bool bus = std::holds_alternative<InjectFault>(change);
   if (bus) {
     const can_nodes::FaultRule& rule = std::get<InjectFault>(change).rule;
@@ -176,6 +189,9 @@ void Session::apply(Change change) {
     can_nodes::FaultInjector check({rule}, options_.messages, robot_node_names(), 0);
   }
   const std::lock_guard lock(changes_mutex_);
+  if (bus_changes_.size() + world_changes_.size() >= kMaxPendingChanges) {
+    throw SetupError("too many changes are waiting for the next step; send fewer, or wait for the run to step");
+  }
   if (bus) {
     bus_changes_.push_back(std::move(change));
     any_bus_change_ = true;
@@ -199,6 +215,18 @@ void Session::apply_now(const Change& change) {
     world_->place_obstacle(o->obstacle, o->x_m, o->y_m);
   } else if (const auto* f = std::get_if<InjectFault>(&change)) {
     for (Rig& rig : rigs_) rig.faults->add_rule(f->rule);
+  } else if (const auto* c = std::get_if<SetCoach>(&change)) {
+    CoachState next = coach_;
+    if (c->game_state) next.game_state = *c->game_state;
+    if (c->robot) {
+      CoachPlayer& p = next.players.at(*c->robot);
+      if (c->running) p.running = *c->running;
+      if (c->role) p.role = *c->role;
+    }
+    if (next != coach_) {
+      coach_ = std::move(next);
+      if (coach_hook_) coach_hook_(coach_);
+    }
   }
 }
 
@@ -214,6 +242,7 @@ void Session::publish(std::uint64_t step) {
   s.obstacles.resize(world_->obstacle_count());
   for (std::size_t o = 0; o < s.obstacles.size(); ++o) s.obstacles[o] = world_->obstacle_position(o);
   if (s.goals.size() != goals_.goals().size()) s.goals = goals_.goals();
+  if (s.coach != coach_) s.coach = coach_;
 }
 
 WorldSnapshot Session::snapshot() const {

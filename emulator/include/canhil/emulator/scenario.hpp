@@ -10,7 +10,20 @@
 //   agents = [1]                     # one per robot, 1..6; default 1, 2, ...
 //   faults = ["drop:M4_1:0.1"]       # see can_nodes/fault.hpp
 //
-// A physics world file (no [run]) is a scenario too. The defaults are filled
+//   [coach]                          # the base station's orders (emulator/coach.hpp)
+//   game_state = "start"             # stop, start, our_kickoff, ...
+//   running = [true]                 # one per robot
+//   roles = ["striker"]              # one per robot, role names of the team's layout
+//
+//   [laptop]                         # the team's laptop software (docs/own-software.md)
+//   rtdb_lib = "builtin"             # or the team's librtdb.so (its simulator API)
+//   rtdb_items = "rtdb_user.h"       # the team's generated item ids, and
+//   rtdb_ini = "rtdb.ini"            #   its item table, for a team library
+//   layout = "canhil"                # "cambada", "canhil" or a layout file (docs/layouts.md)
+//   pman = "builtin"                 # "builtin", "none" or the team's libpman.so
+//   pman_processes = ["agent"]       # registered per robot as NAME<agent>
+//
+// Paths are relative to the scenario file. A physics world file (no [run]) is a scenario too. The defaults are filled
 // in, and the rules checked, in one place (complete()), for files and for
 // scenarios built in code alike. Mistakes in a file are physics::ConfigError:
 // `FILE:LINE: run.FIELD: what; what to do`. The shipped scenarios are in
@@ -22,6 +35,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/fault.hpp"
+#include "canhil/emulator/coach.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::emulator {
@@ -34,6 +48,17 @@ inline constexpr int kLastAgent = 6;
 /// centre spot, facing the opponent goal (+x).
 inline constexpr physics::Placement kDefaultPlacement{-3.0, 0.0, -90.0};
 
+/// The team's laptop side: which RTDB and PMan libraries canhil writes
+/// through, and in which layout. Empty: the command line's or the defaults.
+struct LaptopSide {
+  std::string rtdb_lib;    ///< "builtin" (canhil's, linked in) or a path to the team's library
+  std::string rtdb_items;  ///< the team's rtdb_user.h (item ids), with a team library
+  std::string rtdb_ini;    ///< the team's rtdb.ini (item sizes and owners), with a team library
+  std::string layout;      ///< "canhil", "cambada" or a layout description file
+  std::string pman;        ///< "builtin", "none" or a path to the team's libpman.so
+  std::vector<std::string> pman_processes = {"agent"};  ///< registered per robot as NAME<agent>
+};
+
 struct Scenario {
   physics::WorldParams world;
   double duration_s = 20;
@@ -42,6 +67,8 @@ struct Scenario {
   std::vector<std::string> interfaces;  ///< one per robot after complete()
   std::vector<int> agents;              ///< one per robot after complete()
   std::vector<can_nodes::FaultRule> faults;
+  CoachState coach;  ///< one player per robot after complete()
+  LaptopSide laptop;
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
 };

@@ -73,6 +73,7 @@ struct WorldSnapshot {
   std::vector<kinematics::Pose> robots;
   std::vector<Eigen::Vector3d> obstacles;
   std::vector<Goal> goals;
+  CoachState coach;  ///< the base station's orders now
 };
 
 /// Changes to a running world. A moved body is a physics state change like any
@@ -93,7 +94,7 @@ struct MoveObstacle {
 struct InjectFault {
   can_nodes::FaultRule rule;
 };
-using Change = std::variant<MoveRobot, MoveBall, MoveObstacle, InjectFault>;
+using Change = std::variant<MoveRobot, MoveBall, MoveObstacle, InjectFault, SetCoach>;
 
 class Session {
  public:
@@ -145,8 +146,15 @@ class Session {
   // --- the narrow surface (any thread) ----------------------------------------
   WorldSnapshot snapshot() const;
   /// Queues a change for the next step; SetupError for an unknown robot or
-  /// obstacle, or a fault rule whose target does not exist.
+  /// obstacle, a fault rule whose target does not exist, a game state canhil
+  /// does not know, or too many changes waiting (kMaxPendingChanges: a flood
+  /// of requests cannot grow memory).
   void apply(Change change);
+  static constexpr std::size_t kMaxPendingChanges = 1024;
+  /// The coach's orders now (the stepping thread, or after the run).
+  const CoachState& coach() const noexcept { return coach_; }
+  /// Called on the stepping thread whenever the coach's orders changed (a writer puts them in the RTDB).
+  void on_coach_change(std::function<void(const CoachState&)> hook) { coach_hook_ = std::move(hook); }
 
   // --- results (after the run, or from the stepping thread) -------------------
   const std::vector<Goal>& goals() const noexcept { return goals_.goals(); }
@@ -169,6 +177,8 @@ class Session {
   std::unique_ptr<vision_emu::VisionRunner> vision_;
   std::function<void(std::size_t, Nanos)> frame_hook_;
   GoalWatcher goals_;
+  CoachState coach_;
+  std::function<void(const CoachState&)> coach_hook_;
   bool rtdb_ = false;
   std::string world_log_;
   std::string error_frames_refused_;  // empty: allowed

@@ -1,0 +1,47 @@
+// canhil/emulator/coach.hpp — the base station's orders to the robots: the
+// game state (the referee's signal as the coach relays it) and, per robot,
+// whether it plays and in which role. A scenario sets them ([coach]); a
+// running session changes them (SetCoach: canhil coach, the viewer, the
+// referee); the coach writer puts them into every robot's RTDB as the team's
+// base station does (COACH_INFO, FORMATION_INFO in the team's layout).
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace canhil::emulator {
+
+/// The game states canhil knows, by name (a layout maps each to the team's value).
+inline constexpr std::array<std::string_view, 20> kGameStates = {
+    "stop",         "start",          "halt",           "ready",         "drop_ball",    "our_kickoff",   "their_kickoff",
+    "our_freekick", "their_freekick", "our_goalkick",   "their_goalkick", "our_corner",   "their_corner",  "our_throwin",
+    "their_throwin", "our_penalty",   "their_penalty",  "our_goal",       "their_goal",   "parking"};
+
+/// True when `name` is one of kGameStates.
+bool is_game_state(std::string_view name) noexcept;
+
+struct CoachPlayer {
+  bool running = true;           ///< the base station lets it play
+  std::string role = "striker";  ///< a role the team's layout names
+  bool role_auto = true;         ///< the agent picks its role itself
+  friend bool operator==(const CoachPlayer&, const CoachPlayer&) = default;
+};
+
+struct CoachState {
+  std::string game_state = "start";
+  std::vector<CoachPlayer> players;  ///< one per robot
+  friend bool operator==(const CoachState&, const CoachState&) = default;
+};
+
+/// A change of the coach's orders: the game state, or one robot's (what is given).
+struct SetCoach {
+  std::optional<std::string> game_state;
+  std::optional<std::size_t> robot;
+  std::optional<bool> running;
+  std::optional<std::string> role;
+};
+
+}  // namespace canhil::emulator
