@@ -335,6 +335,7 @@ TEST(Conversions, AbsentQuantitiesWriteNothingAndReadZero) {
   EXPECT_EQ(one.buf.get(vy), 0.0);
   EXPECT_TRUE(
       std::all_of(one.buf.bytes().begin(), one.buf.bytes().end(), [](std::byte b) { return b == std::byte{0}; }));
+  EXPECT_DEATH(one.buf.quantity("vz"), "outside canhil's contract") << "a misspelt name in canhil's code is a bug";
   const Layout other = Layout::parse("[ROBOT_WS]\nsize = 4\n", "r.toml");
   EXPECT_FALSE(ItemBuffer(*other.item("ROBOT_WS")).quantity("anything")) << "an item outside the contract";
 }

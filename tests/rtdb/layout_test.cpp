@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -296,6 +297,14 @@ TEST(ShippedLayouts, UnknownNameListsTheChoices) {
   }
   EXPECT_TRUE(std::filesystem::exists(Layout::shipped_path("cambada")));
   EXPECT_TRUE(std::filesystem::exists(Layout::shipped_path("canhil")));
+}
+
+TEST(ShippedLayouts, LayoutDirOverridesWhereTheyAreFound) {
+  ASSERT_EQ(setenv("CANHIL_LAYOUT_DIR", "/nowhere/layouts", 1), 0);
+  const std::filesystem::path path = Layout::shipped_path("cambada");
+  EXPECT_THROW(Layout::shipped("cambada"), LayoutError) << "no such file there";
+  unsetenv("CANHIL_LAYOUT_DIR");
+  EXPECT_EQ(path, "/nowhere/layouts/cambada.toml");
 }
 
 TEST(ShippedLayouts, CarryEveryQuantityCanhilUses) {
