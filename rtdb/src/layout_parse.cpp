@@ -325,7 +325,7 @@ FieldLayout read_field(Reader& r, const std::string& item, const std::string& na
     } else if (const auto* d = value->as_floating_point(); d != nullptr && !is_integer(f.type)) {
       f.value = d->get();
     }
-    if (!f.value || *f.value < low || *f.value > high) {
+    if (!f.value || !std::isfinite(*f.value) || *f.value < low || *f.value > high) {
       r.fail(value, "value must be " + std::string(f.type == ScalarType::kBool ? "true or false"
                                                    : is_integer(f.type)
                                                        ? "a whole number that fits " + std::string(name_of(f.type))
@@ -391,6 +391,10 @@ void check_bytes(const std::vector<FieldLayout>& fields, std::size_t size, const
            << f.element_bytes() << ")";
       os << ", past the item's size " << size << "; check offset, count and stride, or the item's size";
       throw LayoutError(file, f.line, item + "." + f.name, os.str());
+    }
+    if (f.stride_bytes == f.element_bytes()) {  // back to back: one span
+      spans.push_back({f.offset_bytes, f.end_bytes(), i});
+      continue;
     }
     for (std::size_t e = 0; e < f.count; ++e) {
       const std::size_t b = f.offset_bytes + e * f.stride_bytes;

@@ -110,6 +110,12 @@ INSTANTIATE_TEST_SUITE_P(
             VEL "vx = { type = \"f32\", offset = 0, from = \"vx\", unit = \"m/s\" }\n"
                 "vy = { type = \"f32\", offset = 2, from = \"vy\", unit = \"m/s\" }\n",
             4, "CMD_VEL.vy", "bytes 2..5 overlap vx (line 3, bytes 0..3)"},
+        Bad{"OverlapInAnArrayOfStructs",
+            "[COACH_INFO]\nsize = 24\na = { type = \"u32\", offset = 0, count = 3, stride = 8 }\n"
+            "b = { type = \"u8\", offset = 16 }\n",
+            4, "COACH_INFO.b", "bytes 16..16 overlap a (line 3, bytes 16..19)"},
+        Bad{"NotANumberValue", VEL "x = { type = \"f32\", offset = 0, value = nan }\n", 3, "CMD_VEL.x",
+            "value must be a number"},
         Bad{"CountTimesStridePastTheSize",
             "[VISION_INFO]\nsize = 40\nn = { type = \"i32\", offset = 0, from = \"lines.count\" }\n"
             "p = { type = \"f32\", offset = 4, count = 5, stride = 8, components = 2, from = \"lines\", unit = \"m\" "
