@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -23,6 +24,13 @@
 namespace {
 
 using namespace std::chrono_literals;
+
+// canhil's item layouts are fixed (the vision emulator and the agent share them).
+static_assert(sizeof(canhil_vec2) == 8);
+static_assert(sizeof(VisionInfo) == 4852);
+static_assert(offsetof(VisionInfo, linePoints) == 2404);
+static_assert(offsetof(VisionInfo, ball) == 4808);
+static_assert(offsetof(VisionInfo, nBalls) == 4848);
 
 // Every test gets its own System V keys, so runs never meet.
 class Rtdb : public ::testing::Test {
