@@ -37,7 +37,7 @@ void Replicator::cycle(std::chrono::nanoseconds now) {
     InFlight& f = in_flight_.front();
     const auto flight_ms = std::chrono::duration_cast<std::chrono::milliseconds>(now - f.read_at).count();
     const long long life = std::min<long long>(INT_MAX, f.age_ms + flight_ms);
-    if (DB_put_in(f.to_agent, f.from_agent, f.item, f.value.data(), static_cast<int>(life)) == 0) ++stats_.copied;
+    if (DB_put_in(f.to_agent, f.from_agent, f.item, f.value.data(), static_cast<int>(life)) >= 0) ++stats_.copied;
     in_flight_.pop_front();
   }
 }
