@@ -23,7 +23,7 @@ typedef struct {
   const int8_t* membership;
 } canhil_rtdb_agent;
 
-typedef struct {
+typedef struct canhil_rtdb_table {
   uint32_t n_agents;
   uint32_t n_items;
   const canhil_rtdb_agent* agents;
