@@ -102,6 +102,20 @@ static const canhil_rtdb_table* table(int retry) {
   return g_table = g_loaded;
 }
 
+/* The heap the library keeps between calls, returned when it is unloaded
+ * (dlclose) or the program ends with nothing attached (while attached, the
+ * memory stays with the attachment). */
+__attribute__((destructor)) static void release_heap(void) {
+  if (attached()) return;
+  canhil_rtdb_table_free(g_loaded);
+  g_loaded = NULL;
+  g_table = NULL;
+  free(g_config_file);
+  g_config_file = NULL;
+  free(g_offsets);
+  g_offsets = NULL;
+}
+
 /* What two programs must agree on to share a segment: agents, sizes and who
  * has which item (names are for people: an rtdb.ini has none). */
 static uint64_t config_hash(void) {

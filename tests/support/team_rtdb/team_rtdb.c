@@ -111,7 +111,7 @@ static int present(int space, int owner, int id) {
 /* The byte offset of (owner, id) in space's segment, or -1; with owner -1,
  * the segment's size. */
 static int64_t offset(int space, int owner, int id) {
-  int64_t off = sizeof(segment_header);
+  int64_t off = (sizeof(segment_header) + 7) & ~(size_t)7; /* records are 8-aligned */
   for (int a = 0; a < g_table.n_agents; ++a) {
     for (int i = 0; i < ITEMS; ++i) {
       if (!present(space, a, i)) continue;
@@ -169,6 +169,8 @@ static int get_from(int space, int owner, int id, void* value) {
   if (!r->written) return INT_MIN;
   return (int)(now_ms() - r->stamp_ms);
 }
+
+__attribute__((destructor)) static void release(void) { free(g_config); } /* at dlclose */
 
 API void DB_set_config_file(const char* cf) {
   free(g_config);
