@@ -226,9 +226,9 @@ int Database::require(std::string_view item, std::size_t size, int space) const 
                      bytes + ") to " + agent + "'s schema and regenerate rtdb_user.h and rtdb.ini");
   }
   if (!items_.size(*id)) {
-    throw SetupError("RTDB item " + name + " (id " + std::to_string(*id) + ") is in " + items_.source() +
-                     "'s header, but no agent has it in its rtdb.ini: the two files come from different "
-                     "configurations, or no schema uses it; add it to " +
+    throw SetupError("RTDB item " + name + " (id " + std::to_string(*id) +
+                     ") is in the team's rtdb_user.h but in no agent's section of its rtdb.ini (" + items_.source() +
+                     "): the two files come from different configurations, or no schema uses the item; add it to " +
                      agent + "'s schema and regenerate both");
   }
   if (items_.kind(space, *id) == ItemKind::kNone) {

@@ -116,9 +116,10 @@ TEST_F(TeamDatabase, RequireNamesWhatIsWrongAndWhatToDo) {
   EXPECT_EQ(error_of([&] { db->require("VISION_INFO", 8052, kBaseStation); }),
             "agent 0 (BASE_STATION) has no RTDB item VISION_INFO in " + source +
                 "; add it to that agent's schema (shared or local) and regenerate");
-  EXPECT_NE(error_of([&] {
-              db->require("UNUSED_ITEM", 4, kRobot1);
-            }).find("RTDB item UNUSED_ITEM (id 4) is in " + source + "'s header, but no agent has it in its rtdb.ini"),
+  EXPECT_NE(error_of([&] { db->require("UNUSED_ITEM", 4, kRobot1); })
+                .find("RTDB item UNUSED_ITEM (id 4) is in the team's rtdb_user.h but in no agent's section of its "
+                      "rtdb.ini (" +
+                      source + ")"),
             std::string::npos);
 }
 
