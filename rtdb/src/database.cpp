@@ -175,14 +175,15 @@ class CApiDatabase final : public Database {
   std::unique_ptr<LoadedLibrary> loaded_;
 };
 
+// A library without Whoami: its agent is AGENT's (verify() checks it).
 int agent_from_environment() {
   const char* a = std::getenv("AGENT");
-  return a != nullptr ? std::atoi(a) : -1;
+  return a != nullptr ? static_cast<int>(std::strtol(a, nullptr, 10)) : -1;
 }
 
 std::vector<int> all_agents(const ItemTable& t) {
-  std::vector<int> out;
-  for (int a = 0; a < t.agent_count(); ++a) out.push_back(a);
+  std::vector<int> out(static_cast<std::size_t>(t.agent_count()));
+  for (std::size_t a = 0; a < out.size(); ++a) out[a] = static_cast<int>(a);
   return out;
 }
 

@@ -35,6 +35,9 @@ ItemTable load(const std::filesystem::path* rtdb_user_h, const std::filesystem::
 ItemTable ItemTable::from_c(const canhil_rtdb_table& t, std::string source, bool header_names) {
   ItemTable out;
   out.source_ = std::move(source);
+  out.items_.reserve(t.n_items);
+  out.agents_.reserve(t.n_agents);
+  out.kinds_.reserve(t.n_agents);
   for (std::uint32_t i = 0; i < t.n_items; ++i) {
     out.items_.push_back(Item{t.items[i].name, t.items[i].size});
     const int id = static_cast<int>(i);
@@ -42,8 +45,8 @@ ItemTable ItemTable::from_c(const canhil_rtdb_table& t, std::string source, bool
   }
   for (std::uint32_t a = 0; a < t.n_agents; ++a) {
     out.agents_.emplace_back(t.agents[a].name);
-    std::vector<ItemKind> kinds;
-    for (std::uint32_t i = 0; i < t.n_items; ++i) kinds.push_back(kind_of(t.agents[a].membership[i]));
+    std::vector<ItemKind> kinds(t.n_items);
+    for (std::uint32_t i = 0; i < t.n_items; ++i) kinds[i] = kind_of(t.agents[a].membership[i]);
     out.kinds_.push_back(std::move(kinds));
   }
   return out;
@@ -68,6 +71,9 @@ ItemTable ItemTable::builtin() {
   ItemTable out;
   out.source_ = std::string("canhil's linked RTDB (") + (source != nullptr ? source : "?") + ")";
   const int n = DB_item_count();
+  out.items_.reserve(static_cast<std::size_t>(n));
+  out.agents_.reserve(static_cast<std::size_t>(agents));
+  out.kinds_.reserve(static_cast<std::size_t>(agents));
   for (int id = 0; id < n; ++id) {
     const char* name = DB_item_name(id);
     const int size = DB_item_size(id);
@@ -77,8 +83,8 @@ ItemTable ItemTable::builtin() {
   for (int a = 0; a < agents; ++a) {
     const char* name = DB_agent_name(a);
     out.agents_.emplace_back(name != nullptr ? name : "agent" + std::to_string(a));
-    std::vector<ItemKind> kinds;
-    for (int id = 0; id < n; ++id) kinds.push_back(kind_of(DB_item_shared(a, id)));
+    std::vector<ItemKind> kinds(static_cast<std::size_t>(n));
+    for (int id = 0; id < n; ++id) kinds[static_cast<std::size_t>(id)] = kind_of(DB_item_shared(a, id));
     out.kinds_.push_back(std::move(kinds));
   }
   return out;

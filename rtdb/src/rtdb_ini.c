@@ -52,14 +52,16 @@ typedef struct {
 
 __attribute__((format(printf, 4, 5))) static int fail(parse_state* p, const char* file, int line, const char* fmt,
                                                       ...) {
-  int n = line > 0 ? snprintf(p->error, p->error_size, "%s:%d: ", file, line)
-                   : snprintf(p->error, p->error_size, "%s: ", file);
-  if (n < 0) n = 0;
-  if ((size_t)n < p->error_size) {
-    va_list args;
-    va_start(args, fmt);
-    vsnprintf(p->error + n, p->error_size - (size_t)n, fmt, args);
-    va_end(args);
+  char message[768];
+  va_list args;
+  va_start(args, fmt);
+  /* clang-analyzer 14 calls args uninitialised here (only through the build's compile database): a false positive. */
+  vsnprintf(message, sizeof message, fmt, args);  // NOLINT(clang-analyzer-valist.Uninitialized)
+  va_end(args);
+  if (line > 0) {
+    snprintf(p->error, p->error_size, "%s:%d: %s", file, line, message);
+  } else {
+    snprintf(p->error, p->error_size, "%s: %s", file, message);
   }
   return -1;
 }
@@ -327,7 +329,12 @@ static canhil_rtdb_table* build(const parse_state* p, const char* source) {
     t->agents = agents;
     t->source = strdup(source);
   }
-  if (t == NULL || items == NULL || agents == NULL || t->source == NULL) {
+  if (t == NULL) {
+    free(items);
+    free(agents);
+    return NULL;
+  }
+  if (items == NULL || agents == NULL || t->source == NULL) {
     canhil_rtdb_table_free(t);
     return NULL;
   }
