@@ -12,6 +12,7 @@
 
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/database.hpp"
 #include "canhil/rtdb/replicator.hpp"
 #include "canhil/rtdb/rtdb.h"
 #include "commands.hpp"
@@ -166,7 +167,8 @@ int run_rtdb(Args& args) {
     return 0;
   }
   if (sub == "replicate") {
-    rtdb::Replicator rep(cfg);
+    const auto db = rtdb::open_builtin(rtdb::Scope::kAllAgents);
+    rtdb::Replicator rep(*db, cfg);
     const can_nodes::WallClock clock;
     std::printf("canhil rtdb replicate: every %lld ms, delay %lld ms, loss %.2f; Ctrl-C stops\n",
                 static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.period).count()),

@@ -1,5 +1,7 @@
 /* The RTDB: one System V shared-memory segment per agent, sequence-locked
- * item slots, ages from CLOCK_MONOTONIC. See canhil/rtdb/rtdb.h. */
+ * item slots, ages from CLOCK_MONOTONIC; the item table linked in or read
+ * from an rtdb.ini (rtdb_ini.c). See canhil/rtdb/rtdb.h and CAMBADA's names
+ * in rtdb_api.h, rtdb_sim.h, rtdb_comm.h. */
 #define _GNU_SOURCE  // NOLINT(bugprone-reserved-identifier): the POSIX/GNU feature macro
 #include "canhil/rtdb/rtdb.h"
 
@@ -18,11 +20,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "canhil/rtdb/rtdb_table.h"
+#include "rtdb_internal.h"
 
 #define RTDB_MAGIC 0x43484C52u /* "CHLR" */
-#define RTDB_VERSION 1u
-#define MAX_AGENTS 64
+#define RTDB_VERSION 2u        /* 2: the configuration hash leaves names out */
 
 typedef struct {
   _Atomic uint32_t seq; /* odd while a write is in progress */
@@ -40,13 +41,18 @@ typedef struct {
   uint64_t total_size;
 } segment_header;
 
-static const canhil_rtdb_table* g_table = &canhil_rtdb_config;
+static const canhil_rtdb_table* g_table = NULL; /* chosen at the first use; see table() */
+static canhil_rtdb_table* g_loaded = NULL;      /* g_table when read from an rtdb.ini */
+static char* g_config_file = NULL;              /* DB_set_config_file's */
+static int g_table_stale = 0;                   /* DB_set_config_file since g_table was chosen */
+static int g_table_failed = 0;                  /* reading it failed; only an init tries again */
 static int g_me = -1;
-static int g_all = 0;
-static void* g_seg[MAX_AGENTS]; /* attached segments, by agent */
-static int g_shmid[MAX_AGENTS];
+static int g_me_nesting = 0;                /* DB_init calls not yet freed */
+static int g_all = 0;                       /* DB_init_all calls not yet freed */
+static void* g_seg[CANHIL_RTDB_MAX_AGENTS]; /* attached segments, by agent */
+static int g_shmid[CANHIL_RTDB_MAX_AGENTS];
 static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
-static uint64_t g_sizes[MAX_AGENTS];
+static uint64_t g_sizes[CANHIL_RTDB_MAX_AGENTS];
 static sem_t* g_frame_sem = NULL;
 
 static int verbose(void) {
@@ -60,16 +66,67 @@ static int64_t now_ns(void) {
   return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
+static int attached(void) { return g_me >= 0 || g_all > 0; }
+
+/* The item table: DB_set_config_file's rtdb.ini, else the linked one, else
+ * (librtdb.so) $CANHIL_RTDB_INI or CONFIG_FILE. Chosen once and kept while
+ * anything is attached; a failure is retried by the next init only. */
+static const canhil_rtdb_table* table(int retry) {
+  if (g_table_stale && !attached()) {
+    canhil_rtdb_table_free(g_loaded);
+    g_loaded = NULL;
+    g_table = NULL;
+    g_table_stale = 0;
+    g_table_failed = 0;
+  }
+  if (g_table != NULL) return g_table;
+  if (g_table_failed && !retry) return NULL;
+  const canhil_rtdb_table* linked = canhil_rtdb_linked_table();
+  if (g_config_file == NULL && linked != NULL) return g_table = linked;
+  const char* env = getenv("CANHIL_RTDB_INI");
+  const char* ini = g_config_file != NULL ? g_config_file : (env != NULL && *env != '\0' ? env : CONFIG_FILE);
+  const char* names = getenv("CANHIL_RTDB_USER_H");
+  char error[1024];
+  g_loaded = canhil_rtdb_table_load(ini, names != NULL && *names != '\0' ? names : NULL, error, sizeof error);
+  if (g_loaded == NULL) {
+    g_table_failed = 1;
+    fprintf(stderr, "rtdb: %s\n", error);
+    if (g_config_file == NULL) {
+      fprintf(stderr,
+              "rtdb: (the item table is DB_set_config_file's file, else $CANHIL_RTDB_INI, else %s from the working "
+              "directory)\n",
+              CONFIG_FILE);
+    }
+    return NULL;
+  }
+  return g_table = g_loaded;
+}
+
+/* The heap the library keeps between calls, returned when it is unloaded
+ * (dlclose) or the program ends with nothing attached (while attached, the
+ * memory stays with the attachment). */
+__attribute__((destructor)) static void release_heap(void) {
+  if (attached()) return;
+  canhil_rtdb_table_free(g_loaded);
+  g_loaded = NULL;
+  g_table = NULL;
+  free(g_config_file);
+  g_config_file = NULL;
+  free(g_offsets);
+  g_offsets = NULL;
+}
+
+/* What two programs must agree on to share a segment: agents, sizes and who
+ * has which item (names are for people: an rtdb.ini has none). */
 static uint64_t config_hash(void) {
   uint64_t h = 1469598103934665603ULL; /* FNV-1a */
   const canhil_rtdb_table* t = g_table;
 #define MIX(byte) (h = (h ^ (uint8_t)(byte)) * 1099511628211ULL)
+  for (int b = 0; b < 4; ++b) MIX(t->n_agents >> (8 * b));
   for (uint32_t a = 0; a < t->n_agents; ++a) {
-    for (const char* c = t->agents[a].name; *c; ++c) MIX(*c);
     for (uint32_t i = 0; i < t->n_items; ++i) MIX(t->agents[a].membership[i] + 2);
   }
   for (uint32_t i = 0; i < t->n_items; ++i) {
-    for (const char* c = t->items[i].name; *c; ++c) MIX(*c);
     for (int b = 0; b < 4; ++b) MIX(t->items[i].size >> (8 * b));
   }
 #undef MIX
@@ -92,8 +149,8 @@ static int64_t* offset_at(int seg, int owner, int item) {
 static int compute_layout(void) {
   const uint32_t na = g_table->n_agents;
   const uint32_t ni = g_table->n_items;
-  if (na == 0 || na > MAX_AGENTS) {
-    fprintf(stderr, "rtdb: the configuration has %u agents; canhil supports 1 to %d\n", na, MAX_AGENTS);
+  if (na == 0 || na > CANHIL_RTDB_MAX_AGENTS) {
+    fprintf(stderr, "rtdb: the configuration has %u agents; canhil supports 1 to %d\n", na, CANHIL_RTDB_MAX_AGENTS);
     return -1;
   }
   free(g_offsets);
@@ -229,7 +286,7 @@ static void detach(int agent) {
 }
 
 static slot_header* slot(int seg, int owner, int item) {
-  if (seg < 0 || (uint32_t)seg >= g_table->n_agents || g_seg[seg] == NULL) return NULL;
+  if (!attached() || seg < 0 || (uint32_t)seg >= g_table->n_agents || g_seg[seg] == NULL) return NULL;
   if (owner < 0 || (uint32_t)owner >= g_table->n_agents || item < 0 || (uint32_t)item >= g_table->n_items) return NULL;
   const int64_t off = *offset_at(seg, owner, item);
   return off < 0 ? NULL : (slot_header*)(void*)((char*)g_seg[seg] + off);
@@ -317,32 +374,42 @@ static int parse_agent(void) {
   return (int)n;
 }
 
-int DB_init(void) {
-  if (g_me >= 0) return 0;
+RTDB_EXPORT int DB_init(void) {
+  if (g_me >= 0) {
+    ++g_me_nesting;
+    return 0;
+  }
+  if (table(1) == NULL) return -1;
   const int me = parse_agent();
-  if (me < 0 || compute_layout() < 0) return -1;
+  if (me < 0 || (!attached() && compute_layout() < 0)) return -1;
   if (attach(me) < 0) return -1;
   g_me = me;
+  g_me_nesting = 1;
   return 0;
 }
 
-void DB_free(void) {
-  if (g_me < 0) return;
+RTDB_EXPORT void DB_free(void) {
+  if (g_me < 0 || --g_me_nesting > 0) return;
   if (g_frame_sem != NULL) {
     sem_close(g_frame_sem);
     g_frame_sem = NULL;
   }
-  if (!g_all) detach(g_me);
+  if (g_all == 0) detach(g_me);
   g_me = -1;
 }
 
-int DB_init_all(int second_rtdb) {
+RTDB_EXPORT int DB_init_all(int second_rtdb) {
   (void)second_rtdb;
-  if (g_all) return 0;
-  if (compute_layout() < 0) return -1;
+  if (g_all > 0) {
+    ++g_all;
+    return 0;
+  }
+  if (table(1) == NULL || (!attached() && compute_layout() < 0)) return -1;
   for (uint32_t a = 0; a < g_table->n_agents; ++a) {
     if (attach((int)a) < 0) {
-      for (uint32_t b = 0; b < a; ++b) detach((int)b);
+      for (uint32_t b = 0; b < a; ++b) {
+        if ((int)b != g_me) detach((int)b);
+      }
       return -1;
     }
   }
@@ -350,58 +417,117 @@ int DB_init_all(int second_rtdb) {
   return 0;
 }
 
-void DB_free_all(int second_rtdb) {
+RTDB_EXPORT void DB_free_all(int second_rtdb) {
   (void)second_rtdb;
-  if (!g_all) return;
+  if (g_all == 0 || --g_all > 0) return;
   for (uint32_t a = 0; a < g_table->n_agents; ++a) {
     if ((int)a != g_me) detach((int)a);
   }
-  g_all = 0;
-  if (g_me >= 0) {
-    const int me = g_me;
-    g_me = -1;
-    detach(me);
-  }
 }
 
-int Whoami(void) { return g_me; }
+RTDB_EXPORT int Whoami(void) { return g_me; }
 
-int DB_put(int id, void* value) {
-  slot_header* s = slot(g_me, g_me, id);
-  if (s == NULL || value == NULL) return -1;
-  write_slot(s, value, now_ns());
-  return 0;
-}
-
-int DB_get(int from_agent, int id, void* value) {
-  const slot_header* s = slot(g_me, from_agent, id);
-  if (s == NULL || value == NULL) return -1;
-  return read_slot(s, value);
-}
-
-int DB_put_in(int agent, int to_agent, int id, void* value, int life) {
-  slot_header* s = slot(agent, to_agent, id);
+/* The API's calls go through these (never through an exported symbol that
+ * another library could interpose). */
+static int put_in(int agent, int to_agent, int id, const void* value, int life) {
+  slot_header* s = slot(agent, to_agent == SELF ? agent : to_agent, id);
   if (s == NULL || value == NULL || life < 0) return -1;
   write_slot(s, value, now_ns() - (int64_t)life * 1000000);
-  return 0;
+  return (int)s->size;
 }
 
-int DB_get_from(int agent, int from_agent, int id, void* value) {
-  const slot_header* s = slot(agent, from_agent, id);
+static int get_from(int agent, int from_agent, int id, void* value) {
+  const slot_header* s = slot(agent, from_agent == SELF ? agent : from_agent, id);
   if (s == NULL || value == NULL) return -1;
   return read_slot(s, value);
 }
 
-int DB_agent_count(void) { return (int)g_table->n_agents; }
-int DB_item_count(void) { return (int)g_table->n_items; }
-const char* DB_agent_name(int agent) {
-  return agent >= 0 && (uint32_t)agent < g_table->n_agents ? g_table->agents[agent].name : NULL;
+RTDB_EXPORT int DB_put(int id, void* value) { return put_in(g_me, g_me, id, value, 0); }
+
+RTDB_EXPORT int DB_get(int from_agent, int id, void* value) { return get_from(g_me, from_agent, id, value); }
+
+RTDB_EXPORT int DB_put_in(int agent, int to_agent, int id, void* value, int life) {
+  return put_in(agent, to_agent, id, value, life);
 }
-const char* DB_item_name(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? g_table->items[id].name : NULL; }
-int DB_item_size(int id) { return id >= 0 && (uint32_t)id < g_table->n_items ? (int)g_table->items[id].size : -1; }
-int DB_item_shared(int agent, int id) {
-  if (agent < 0 || (uint32_t)agent >= g_table->n_agents || id < 0 || (uint32_t)id >= g_table->n_items) return -1;
-  return g_table->agents[agent].membership[id];
+
+RTDB_EXPORT int DB_get_from(int agent, int from_agent, int id, void* value) {
+  return get_from(agent, from_agent, id, value);
+}
+
+RTDB_EXPORT void DB_set_config_file(const char* cf) {
+  char* copy = cf != NULL ? strdup(cf) : NULL;
+  if (cf != NULL && copy == NULL) return;
+  free(g_config_file);
+  g_config_file = copy;
+  g_table_stale = 1;
+  if (attached()) fprintf(stderr, "rtdb: DB_set_config_file after init: the item table changes once all is freed\n");
+}
+
+RTDB_EXPORT int DB_comm_put(int agent, int id, int size, void* value, int life) {
+  (void)size; /* the table has it */
+  if (g_me < 0) return -1;
+  if (agent == SELF || agent == g_me) {
+    fprintf(stderr, "rtdb: DB_comm_put: agent %d is this process's own; write its items with DB_put\n", g_me);
+    return -1;
+  }
+  if (agent < 0 || (uint32_t)agent >= g_table->n_agents || id < 0 || (uint32_t)id >= g_table->n_items ||
+      g_table->agents[agent].membership[id] != 1) {
+    fprintf(stderr, "rtdb: DB_comm_put: item %d is not a shared item of agent %d\n", id, agent);
+    return -1;
+  }
+  return put_in(g_me, agent, id, value, life);
+}
+
+RTDB_EXPORT int DB_comm_ini(RTDBconf_var* rec) {
+  if (g_me < 0 || rec == NULL) return -1;
+  int n = 0;
+  for (uint32_t id = 0; id < g_table->n_items; ++id) n += g_table->agents[g_me].membership[id] == 1;
+  if (n > MAX_RECS) {
+    fprintf(stderr, "rtdb: DB_comm_ini: agent %d has %d shared items, more than MAX_RECS (%d)\n", g_me, n, MAX_RECS);
+    return -1;
+  }
+  n = 0;
+  for (uint32_t id = 0; id < g_table->n_items; ++id) {
+    if (g_table->agents[g_me].membership[id] != 1) continue;
+    rec[n++] = (RTDBconf_var){(int)id, (int)g_table->items[id].size, (int)g_table->items[id].period};
+  }
+  return n;
+}
+
+RTDB_EXPORT int DB_agent_count(void) {
+  const canhil_rtdb_table* t = table(0);
+  return t != NULL ? (int)t->n_agents : 0;
+}
+
+RTDB_EXPORT int DB_item_count(void) {
+  const canhil_rtdb_table* t = table(0);
+  return t != NULL ? (int)t->n_items : 0;
+}
+
+RTDB_EXPORT const char* DB_agent_name(int agent) {
+  const canhil_rtdb_table* t = table(0);
+  return t != NULL && agent >= 0 && (uint32_t)agent < t->n_agents ? t->agents[agent].name : NULL;
+}
+
+RTDB_EXPORT const char* DB_item_name(int id) {
+  const canhil_rtdb_table* t = table(0);
+  return t != NULL && id >= 0 && (uint32_t)id < t->n_items ? t->items[id].name : NULL;
+}
+
+RTDB_EXPORT int DB_item_size(int id) {
+  const canhil_rtdb_table* t = table(0);
+  return t != NULL && id >= 0 && (uint32_t)id < t->n_items && t->items[id].size > 0 ? (int)t->items[id].size : -1;
+}
+
+RTDB_EXPORT int DB_item_shared(int agent, int id) {
+  const canhil_rtdb_table* t = table(0);
+  if (t == NULL || agent < 0 || (uint32_t)agent >= t->n_agents || id < 0 || (uint32_t)id >= t->n_items) return -1;
+  return t->agents[agent].membership[id];
+}
+
+RTDB_EXPORT const char* DB_config_source(void) {
+  const canhil_rtdb_table* t = table(0);
+  return t != NULL ? t->source : NULL;
 }
 
 static sem_t* frame_sem(int agent) {
@@ -411,8 +537,9 @@ static sem_t* frame_sem(int agent) {
   return s == SEM_FAILED ? NULL : s;
 }
 
-int DB_signal_frame(int agent) {
-  if (agent < 0 || (uint32_t)agent >= g_table->n_agents) return -1;
+RTDB_EXPORT int DB_signal_frame(int agent) {
+  const canhil_rtdb_table* t = table(0);
+  if (t == NULL || agent < 0 || (uint32_t)agent >= t->n_agents) return -1;
   sem_t* s = frame_sem(agent);
   if (s == NULL) return -1;
   int value = 0;
@@ -421,7 +548,7 @@ int DB_signal_frame(int agent) {
   return 0;
 }
 
-int DB_wait_frame(int timeout_ms) {
+RTDB_EXPORT int DB_wait_frame(int timeout_ms) {
   if (g_me < 0) return -1;
   if (g_frame_sem == NULL && (g_frame_sem = frame_sem(g_me)) == NULL) return -1;
   int r;

@@ -1,6 +1,8 @@
 // The RTDB C API: agents kept apart (in one process and in two), shared items
 // reaching the others through the replicator, no torn values, ages, bad
-// input, crashed runs reclaimed, owner-only segments removed on exit.
+// input, crashed runs reclaimed, owner-only segments removed on exit; CAMBADA's
+// semantics (sizes returned, SELF, DB_comm_put / DB_comm_ini, nested inits,
+// an rtdb.ini named by DB_set_config_file).
 #include "canhil/rtdb/rtdb.h"
 
 #include <gtest/gtest.h>
@@ -11,18 +13,28 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <string>
 #include <thread>
 
 #include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/database.hpp"
 #include "canhil/rtdb/replicator.hpp"
 #include "rtdb_user.h"
+#include "support/rtdb_ipc.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
+
+// canhil's item layouts are fixed (the vision emulator and the agent share them).
+static_assert(sizeof(canhil_vec2) == 8);
+static_assert(sizeof(VisionInfo) == 4852);
+static_assert(offsetof(VisionInfo, linePoints) == 2404);
+static_assert(offsetof(VisionInfo, ball) == 4808);
+static_assert(offsetof(VisionInfo, nBalls) == 4848);
 
 // Every test gets its own System V keys, so runs never meet.
 class Rtdb : public ::testing::Test {
@@ -59,7 +71,7 @@ TEST_F(Rtdb, PutGetRoundTripWithAge) {
   ASSERT_EQ(DB_init(), 0);
   EXPECT_EQ(Whoami(), 1);
   CMD_Vel v{0.5f, -0.25f, 1.5f, true};
-  ASSERT_EQ(DB_put(CMD_VEL, &v), 0);
+  ASSERT_EQ(DB_put(CMD_VEL, &v), static_cast<int>(sizeof v)) << "the item's size, as CAMBADA's library";
   CMD_Vel back{};
   const int age = DB_get(CAMBADA_1, CMD_VEL, &back);
   EXPECT_GE(age, 0);
@@ -98,7 +110,7 @@ TEST_F(Rtdb, NeverWrittenItemsReadAsZerosAndLifeAgesAWrite) {
   ASSERT_GE(DB_get_from(CAMBADA_2, CAMBADA_2, CMD_POS, &p), 0);
   EXPECT_EQ(p.px, 0.0f);
   CMD_Pos q{1, 2, 3, 0, 0, 0};
-  ASSERT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_POS, &q, 250), 0);
+  ASSERT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_POS, &q, 250), static_cast<int>(sizeof q));
   const int age = DB_get_from(CAMBADA_2, CAMBADA_2, CMD_POS, &p);
   EXPECT_GE(age, 250);
   EXPECT_LT(age, 1250);
@@ -110,8 +122,8 @@ TEST_F(Rtdb, TwoAgentsInOneProcessKeepLocalItemsApartAndShareThroughTheReplicato
   ASSERT_EQ(DB_init_all(0), 0);
   CMD_Vel v1{1, 1, 1, false};
   CMD_Vel v2{2, 2, 2, false};
-  ASSERT_EQ(DB_put_in(CAMBADA_1, CAMBADA_1, CMD_VEL, &v1, 0), 0);
-  ASSERT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_VEL, &v2, 0), 0);
+  ASSERT_EQ(DB_put_in(CAMBADA_1, CAMBADA_1, CMD_VEL, &v1, 0), static_cast<int>(sizeof v1));
+  ASSERT_EQ(DB_put_in(CAMBADA_2, CAMBADA_2, CMD_VEL, &v2, 0), static_cast<int>(sizeof v2));
   CMD_Vel out{};
   DB_get_from(CAMBADA_1, CAMBADA_1, CMD_VEL, &out);
   EXPECT_EQ(out.vx, 1.0f);
@@ -120,11 +132,12 @@ TEST_F(Rtdb, TwoAgentsInOneProcessKeepLocalItemsApartAndShareThroughTheReplicato
   EXPECT_EQ(DB_get_from(CAMBADA_2, CAMBADA_1, CMD_VEL, &out), -1) << "local items are not visible to others";
 
   RobotWS w{3.0f, 4.0f, 0.5f, 1, 7};
-  ASSERT_EQ(DB_put_in(CAMBADA_1, CAMBADA_1, ROBOT_WS, &w, 0), 0);
+  ASSERT_EQ(DB_put_in(CAMBADA_1, CAMBADA_1, ROBOT_WS, &w, 0), static_cast<int>(sizeof w));
   RobotWS seen{};
   DB_get_from(CAMBADA_2, CAMBADA_1, ROBOT_WS, &seen);
   EXPECT_EQ(seen.frame, 0u) << "not replicated yet";
-  canhil::rtdb::Replicator rep({});
+  const auto db = canhil::rtdb::open_builtin(canhil::rtdb::Scope::kAllAgents);
+  canhil::rtdb::Replicator rep(*db, {});
   rep.cycle(0ns);
   DB_get_from(CAMBADA_2, CAMBADA_1, ROBOT_WS, &seen);
   EXPECT_EQ(seen.frame, 7u);
@@ -134,37 +147,6 @@ TEST_F(Rtdb, TwoAgentsInOneProcessKeepLocalItemsApartAndShareThroughTheReplicato
   // Every cycle copies every shared item (the base station's COACH_INFO and
   // the six robots' ROBOT_WS) to the six other agents.
   EXPECT_EQ(rep.stats().copied, 7u * (N_AGENTS - 1));
-}
-
-TEST_F(Rtdb, ReplicatorDelayAndLossAreApplied) {
-  ASSERT_EQ(DB_init_all(0), 0);
-  canhil::rtdb::ReplicatorConfig cfg;
-  cfg.delay = 300ms;
-  canhil::rtdb::Replicator rep(cfg);
-  RobotWS w{0, 0, 0, 1, 42};
-  DB_put_in(CAMBADA_3, CAMBADA_3, ROBOT_WS, &w, 0);
-  rep.cycle(0ms);
-  RobotWS seen{};
-  DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
-  EXPECT_EQ(seen.frame, 0u) << "still in flight";
-  rep.cycle(200ms);
-  DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
-  EXPECT_EQ(seen.frame, 0u);
-  rep.cycle(300ms);
-  const int age = DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
-  EXPECT_EQ(seen.frame, 42u) << "arrived after the delay";
-  EXPECT_GE(age, 300) << "aged by its time in flight";
-
-  canhil::rtdb::ReplicatorConfig lossy;
-  lossy.loss = 0.5;
-  lossy.seed = 9;
-  canhil::rtdb::Replicator r2(lossy);
-  for (int i = 0; i < 200; ++i) r2.cycle(std::chrono::milliseconds(100 * i));
-  const double lost = static_cast<double>(r2.stats().lost) / static_cast<double>(r2.stats().lost + r2.stats().copied);
-  EXPECT_NEAR(lost, 0.5, 0.05);
-  canhil::rtdb::Replicator r3(lossy);
-  for (int i = 0; i < 200; ++i) r3.cycle(std::chrono::milliseconds(100 * i));
-  EXPECT_EQ(r3.stats().lost, r2.stats().lost) << "seeded: the same losses";
 }
 
 TEST_F(Rtdb, TwoAgentsInTwoProcesses) {
@@ -192,14 +174,14 @@ TEST_F(Rtdb, TwoAgentsInTwoProcesses) {
   setenv("AGENT", "2", 1);
   ASSERT_EQ(DB_init(), 0);
   CMD_Vel mine{2.5f, 0, 0, false};
-  ASSERT_EQ(DB_put(CMD_VEL, &mine), 0);
+  ASSERT_EQ(DB_put(CMD_VEL, &mine), static_cast<int>(sizeof mine));
   CMD_Vel out{};
   DB_get(CAMBADA_2, CMD_VEL, &out);
   EXPECT_EQ(out.vx, 2.5f) << "its own item, not the other process's";
   EXPECT_EQ(DB_get(CAMBADA_1, CMD_VEL, &out), -1);
   // The replicator (here in this process) carries the shared item across.
-  ASSERT_EQ(DB_init_all(0), 0);
-  canhil::rtdb::Replicator rep({});
+  const auto db = canhil::rtdb::open_builtin(canhil::rtdb::Scope::kAllAgents);
+  canhil::rtdb::Replicator rep(*db, {});
   rep.cycle(0ns);
   RobotWS seen{};
   DB_get(CAMBADA_1, ROBOT_WS, &seen);
@@ -243,6 +225,103 @@ TEST_F(Rtdb, NoReaderEverSeesAHalfWrittenItem) {
   reader.join();
   EXPECT_EQ(torn.load(), 0);
   EXPECT_GT(reads.load(), 1000);
+}
+
+TEST_F(Rtdb, SelfMeansTheAgentWhoseDatabaseIsRead) {
+  ASSERT_EQ(DB_init(), 0);
+  CMD_Vel v{0.75f, 0, 0, false};
+  ASSERT_EQ(DB_put(CMD_VEL, &v), static_cast<int>(sizeof v));
+  CMD_Vel back{};
+  EXPECT_GE(DB_get(SELF, CMD_VEL, &back), 0);
+  EXPECT_EQ(back.vx, 0.75f);
+  ASSERT_EQ(DB_init_all(0), 0);
+  CMD_Vel two{2.25f, 0, 0, false};
+  ASSERT_EQ(DB_put_in(CAMBADA_2, SELF, CMD_VEL, &two, 0), static_cast<int>(sizeof two));
+  EXPECT_GE(DB_get_from(CAMBADA_2, SELF, CMD_VEL, &back), 0);
+  EXPECT_EQ(back.vx, 2.25f) << "agent 2's own item, in agent 2's database";
+}
+
+TEST_F(Rtdb, InitCallsNestAndEachModeIsFreedOnItsOwn) {
+  ASSERT_EQ(DB_init(), 0);
+  ASSERT_EQ(DB_init(), 0);
+  DB_free();
+  CMD_Vel v{};
+  EXPECT_GT(DB_put(CMD_VEL, &v), 0) << "one DB_init still open";
+  ASSERT_EQ(DB_init_all(0), 0);
+  ASSERT_EQ(DB_init_all(0), 0);
+  DB_free_all(0);
+  EXPECT_GT(DB_put_in(CAMBADA_3, CAMBADA_3, CMD_VEL, &v, 0), 0) << "one DB_init_all still open";
+  DB_free_all(0);
+  EXPECT_EQ(DB_put_in(CAMBADA_3, CAMBADA_3, CMD_VEL, &v, 0), -1);
+  EXPECT_LT(shmget(key_ + CAMBADA_3, 0, 0), 0) << "agent 3's database went with the last DB_free_all";
+  EXPECT_GT(DB_put(CMD_VEL, &v), 0) << "DB_free_all leaves DB_init's agent attached";
+  DB_free();
+  EXPECT_EQ(DB_put(CMD_VEL, &v), -1);
+}
+
+TEST_F(Rtdb, CommPutStoresAnotherAgentsSharedItemOnly) {
+  RobotWS w{1, 2, 3, 1, 5};
+  EXPECT_EQ(DB_comm_put(CAMBADA_2, ROBOT_WS, sizeof w, &w, 0), -1) << "before DB_init";
+  ASSERT_EQ(DB_init(), 0);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(DB_comm_put(CAMBADA_1, ROBOT_WS, sizeof w, &w, 0), -1) << "this agent's own item";
+  EXPECT_EQ(DB_comm_put(SELF, ROBOT_WS, sizeof w, &w, 0), -1);
+  CMD_Vel v{};
+  EXPECT_EQ(DB_comm_put(CAMBADA_2, CMD_VEL, sizeof v, &v, 0), -1) << "a local item";
+  const std::string said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find("this process's own"), std::string::npos) << said;
+  EXPECT_NE(said.find("not a shared item of agent 2"), std::string::npos) << said;
+  ASSERT_EQ(DB_comm_put(CAMBADA_2, ROBOT_WS, 0, &w, 300), static_cast<int>(sizeof w)) << "size is ignored";
+  RobotWS seen{};
+  EXPECT_GE(DB_get(CAMBADA_2, ROBOT_WS, &seen), 300);
+  EXPECT_EQ(seen.frame, 5u);
+}
+
+TEST_F(Rtdb, CommIniListsThisAgentsSharedItems) {
+  RTDBconf_var rec[MAX_RECS];
+  EXPECT_EQ(DB_comm_ini(rec), -1) << "before DB_init";
+  ASSERT_EQ(DB_init(), 0);
+  ASSERT_EQ(DB_comm_ini(rec), 1);
+  EXPECT_EQ(rec[0].id, ROBOT_WS);
+  EXPECT_EQ(rec[0].size, static_cast<int>(sizeof(RobotWS)));
+  EXPECT_EQ(rec[0].period, 1);
+}
+
+// The static library reads an rtdb.ini when the program names one, and goes
+// back to its linked table when the program takes it back.
+TEST_F(Rtdb, SetConfigFileSwitchesToAnIniBeforeInit) {
+  const auto dir = canhil::test::scratch_dir("rtdb_set_config");
+  canhil::test::write_file(dir / "rtdb.ini", "# 0 COACH\n1 40 1 s\n\n# 1 ROBOT\n0 24 1 s\n2 7 1 l\n");
+  DB_set_config_file((dir / "rtdb.ini").c_str());
+  ASSERT_EQ(DB_init(), 0);
+  EXPECT_EQ(DB_agent_count(), 2);
+  EXPECT_EQ(DB_item_count(), 3);
+  EXPECT_STREQ(DB_agent_name(1), "ROBOT");
+  EXPECT_STREQ(DB_item_name(2), "item2") << "an rtdb.ini has no item names";
+  EXPECT_STREQ(DB_config_source(), (dir / "rtdb.ini").c_str());
+  unsigned char seven[7] = {1, 2, 3, 4, 5, 6, 7};
+  EXPECT_EQ(DB_put(2, seven), 7) << "the ini's size";
+  testing::internal::CaptureStderr();
+  DB_set_config_file(nullptr);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("changes once all is freed"), std::string::npos);
+  EXPECT_EQ(DB_item_count(), 3) << "not while attached";
+  DB_free();
+  EXPECT_EQ(DB_item_count(), N_ITEMS) << "the linked table again";
+  EXPECT_STREQ(DB_item_name(CMD_VEL), "CMD_VEL");
+}
+
+TEST_F(Rtdb, AnIniThatDoesNotParseFailsInitNamingFileAndLine) {
+  const auto dir = canhil::test::scratch_dir("rtdb_bad_ini");
+  canhil::test::write_file(dir / "rtdb.ini", "## a comment\n# 0 BASE\n1 40 1 s\n# 1 ROBOT\n0 24 1 x\n");
+  DB_set_config_file((dir / "rtdb.ini").c_str());
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(DB_init(), -1);
+  const std::string said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find((dir / "rtdb.ini").string() + ":5: item 0 is \"x\"; write s (shared) or l (local)"),
+            std::string::npos)
+      << said;
+  DB_set_config_file(nullptr);
+  EXPECT_EQ(DB_item_count(), N_ITEMS);
 }
 
 TEST_F(Rtdb, SegmentsAreOwnerOnlyAndRemovedOnCleanExit) {

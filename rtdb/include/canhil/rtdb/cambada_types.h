@@ -65,21 +65,23 @@ typedef struct {
 #define MAX_POINTS 300
 #define MAX_BALLS 5
 
-/* A point in the robot frame, metres (x right, y forward). */
+/* A point in the robot frame, metres (x right, y forward). CAMBADA calls its
+ * own two-float point `Vec` (geom/Vec.h, a C++ class with the same layout);
+ * this header keeps its name apart so that both can meet in one program. */
 typedef struct {
   float x, y;
-} Vec;
+} canhil_vec2;
 
 typedef struct {
   int nPoints;
-  Vec point[MAX_POINTS];
+  canhil_vec2 point[MAX_POINTS];
 } PointList;
 
 /* Written by the vision (emulator) at 30 Hz. */
 typedef struct {
   PointList obstacles;
   PointList linePoints;
-  Vec ball[MAX_BALLS];
+  canhil_vec2 ball[MAX_BALLS];
   int nBalls;
 } VisionInfo;
 

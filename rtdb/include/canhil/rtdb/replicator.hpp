@@ -1,17 +1,23 @@
 // canhil/rtdb/replicator.hpp — the stand-in for the team's wireless: copies
-// each agent's shared items into every other agent's database.
+// each agent's shared items into every other agent's database, through a
+// Database (canhil's RTDB or the team's own library).
 //
-// Call cycle(now) every `period` (canhil rtdb replicate does, and so does
-// canhil run). Each copy is lost with probability `loss` (seeded, so runs
-// repeat) and otherwise arrives `delay` later, aged accordingly. Needs
-// DB_init_all() in this process. Not thread-safe; the clock is the caller's.
+// Call cycle(now) every `period` (canhil rtdb replicate does). For each agent
+// a and each of a's shared items: read it in a's database, then write it, as
+// a's item, into every other agent's database. Each copy is lost with
+// probability `loss` (seeded, so runs repeat) and otherwise arrives `delay`
+// later, aged by its age when read plus its time in flight. An item never
+// written is not copied. Not thread-safe; the clock is the caller's.
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <random>
 #include <vector>
+
+#include "canhil/rtdb/database.hpp"
 
 namespace canhil::rtdb {
 
@@ -24,13 +30,16 @@ struct ReplicatorConfig {
 
 struct ReplicatorStats {
   std::uint64_t cycles = 0;
-  std::uint64_t copied = 0;
-  std::uint64_t lost = 0;
+  std::uint64_t copied = 0;         ///< copies written
+  std::uint64_t lost = 0;           ///< copies dropped (loss)
+  std::uint64_t never_written = 0;  ///< shared items not copied: never written (libraries that can tell)
 };
 
 class Replicator {
  public:
-  explicit Replicator(const ReplicatorConfig& config);
+  /// Copies through `db`, which must reach every agent (Scope::kAllAgents;
+  /// SetupError otherwise) and outlive the replicator.
+  Replicator(Database& db, const ReplicatorConfig& config);
   /// One replication cycle at time `now` (any monotonic time base), and
   /// delivery of every delayed copy that is due.
   void cycle(std::chrono::nanoseconds now);
@@ -45,8 +54,9 @@ class Replicator {
     int item;
     int age_ms;  // age when read
     std::chrono::nanoseconds read_at;
-    std::vector<unsigned char> value;
+    std::vector<std::byte> value;
   };
+  Database& db_;
   ReplicatorConfig config_;
   std::mt19937_64 rng_;
   std::deque<InFlight> in_flight_;

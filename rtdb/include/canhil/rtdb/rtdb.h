@@ -1,87 +1,74 @@
 /* canhil/rtdb/rtdb.h — the real-time database (RTDB): a shared-memory
- * blackboard per robot, with the C API the CAMBADA laptop software calls.
+ * blackboard per robot, with the C API the CAMBADA laptop software calls and
+ * canhil's extensions.
  *
  * Each agent (robot or base station, numbered by their order in the
- * configuration's AGENTS list; the process's agent comes from the AGENT
- * environment variable) has its own System V shared-memory segment, readable
- * and writable by its owner only. It holds the agent's own items (the shared
- * and local items of its schema) and a copy of every other agent's shared
- * items, which the replicator (canhil rtdb replicate) keeps up to date.
+ * configuration; the process's agent comes from the AGENT environment
+ * variable) has its own System V shared-memory segment, readable and writable
+ * by its owner only. It holds the agent's own items (the shared and local
+ * items of its schema) and a copy of every other agent's shared items, which
+ * the replicator (canhil rtdb replicate) keeps up to date.
  *
  * Every item carries the time it was written; readers get it as an age. A
  * write is never seen half done: items are sequence-locked. All functions are
- * thread-safe after DB_init / DB_init_all.
+ * thread-safe after DB_init / DB_init_all (DB_set_config_file and the first
+ * call of any function belong to set-up, on one thread).
  *
- * Which items exist comes from a configuration file (AGENTS / ITEM / SCHEMA /
- * ASSIGNMENT; see docs/rtdb.md) turned into C by canhil-rtdb-gen at build
- * time: rtdb_user.h (item ids) and rtdb_config.c (the table this library
- * reads). Link canhil::rtdb for canhil's shipped configuration, or
- * canhil::rtdb_core plus your own generated rtdb_config.c.
+ * The CAMBADA calls are declared in CAMBADA's headers, which this one
+ * includes: rtdb_api.h (one agent), rtdb_sim.h (every agent, the item table's
+ * file), rtdb_comm.h (team communication), rtdbdefs.h (SELF, MAX_RECS,
+ * RTDBconf_var). A CAMBADA program includes "rtdb.h" (rtdb_user.h and
+ * rtdb_api.h) instead of this header.
+ *
+ * The item table (which items exist, their sizes, who has which):
+ *  - canhil::rtdb and canhil::rtdb_core + your generated rtdb_config.c: the
+ *    table canhil-rtdb-gen compiled from an AGENTS / ITEM / SCHEMA /
+ *    ASSIGNMENT file (docs/rtdb.md), unless DB_set_config_file names an
+ *    rtdb.ini;
+ *  - librtdb.so (canhil::rtdb_shared): an rtdb.ini read at DB_init /
+ *    DB_init_all, as CAMBADA's library does: DB_set_config_file's, else
+ *    $CANHIL_RTDB_INI, else CONFIG_FILE (../config/rtdb.ini).
+ * An rtdb.ini has no item names: DB_item_name gives "item<ID>", or the names
+ * of the rtdb_user.h that $CANHIL_RTDB_USER_H names (checked against the ini).
  *
  * Environment:
- *   AGENT         this process's agent number (required by DB_init)
- *   RTDB_KEY      base System V key (default: derived from the user id), so
- *                 that several independent teams or test runs share a machine
- *   RTDB_VERBOSE  1 prints what DB_init does to stderr
+ *   AGENT              this process's agent number (required by DB_init)
+ *   RTDB_KEY           base System V key (default: derived from the user id),
+ *                      so that several independent teams or test runs share a
+ *                      machine; agent N's segment has key RTDB_KEY + N
+ *   RTDB_VERBOSE       1 prints what DB_init does to stderr
+ *   CANHIL_RTDB_INI    librtdb.so: the rtdb.ini when the program names none
+ *   CANHIL_RTDB_USER_H the rtdb_user.h that names an rtdb.ini's items
  */
 #ifndef CANHIL_RTDB_RTDB_H
 #define CANHIL_RTDB_RTDB_H
+
+/* Relative paths: the CAMBADA-named headers installed next to canhil/, never
+ * another library's files of the same names on the include path. */
+#include "../../rtdb_api.h"
+#include "../../rtdb_comm.h"
+#include "../../rtdb_sim.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Attaches this process to its agent's database (AGENT), creating it when it
- * does not exist yet and reclaiming one left by a crashed run.
- * Returns 0, or -1 with a message on stderr saying what to do. */
-int DB_init(void);
-
-/* Detaches; the last process to detach from a segment removes it. */
-void DB_free(void);
-
-/* Writes item `id` of this agent. Returns 0, or -1 (not initialised, unknown
- * id, or an item this agent's schema does not have). */
-int DB_put(int id, void* value);
-
-/* Reads item `id` of agent `from_agent` (this agent's own item when
- * from_agent == Whoami(), else the replicated copy of that agent's shared
- * item) into `value`. Returns the item's age in ms, or -1 on error. An item
- * never written reads as zeros with its age counted from the database's
- * creation. */
-int DB_get(int from_agent, int id, void* value);
-
-/* This process's agent number, or -1 before DB_init. */
-int Whoami(void);
-
-/* For a process serving several robots (a simulator): after DB_init_all,
- * writes into agent `agent`'s database the item `id` of agent `to_agent`
- * (`agent` itself, or the copy of another agent's shared item), as if it was
- * written `life` ms ago. Returns 0 or -1. */
-int DB_put_in(int agent, int to_agent, int id, void* value, int life);
-
-/* Attaches to the databases of all agents (creating them as needed).
- * `second_rtdb` is accepted for compatibility and ignored. Returns 0 or -1. */
-int DB_init_all(int second_rtdb);
-
-/* Detaches from all agents' databases. */
-void DB_free_all(int second_rtdb);
-
-/* After DB_init_all: reads, from agent `agent`'s database, the item `id` of
- * agent `from_agent`. Returns the age in ms or -1. */
-int DB_get_from(int agent, int from_agent, int id, void* value);
-
 /* --- canhil extensions ---------------------------------------------------- */
 
-/* Number of agents and items in the linked configuration. */
+/* Number of agents and items in the item table (item ids are 0 .. count - 1;
+ * an rtdb.ini may leave ids out: they have no size and no owner). 0 when the
+ * table cannot be read (the reason on stderr). */
 int DB_agent_count(void);
 int DB_item_count(void);
-/* Names from the configuration (NULL when out of range). */
+/* Names from the table (NULL when out of range). */
 const char* DB_agent_name(int agent);
 const char* DB_item_name(int id);
-/* Size in bytes of item `id`, or -1. */
+/* Size in bytes of item `id`, or -1 (out of range, or an id no agent has). */
 int DB_item_size(int id);
 /* 1 if agent `agent`'s schema has item `id` as shared, 0 as local, -1 neither. */
 int DB_item_shared(int agent, int id);
+/* Where the item table came from (a configuration file's path), or NULL. */
+const char* DB_config_source(void);
 
 /* The vision-to-agent wake-up: after writing VISION_INFO, the vision process
  * calls DB_signal_frame(agent); the agent blocks in DB_wait_frame until then

@@ -1,8 +1,10 @@
-/* canhil/rtdb/rtdb_table.h — the configuration table canhil-rtdb-gen writes
- * (rtdb_config.c) and the RTDB library reads. Not for application code. */
+/* canhil/rtdb/rtdb_table.h — the item table the RTDB library reads: compiled
+ * by canhil-rtdb-gen (rtdb_config.c) or read from a team's rtdb.ini at run
+ * time. Not for application code. */
 #ifndef CANHIL_RTDB_RTDB_TABLE_H
 #define CANHIL_RTDB_RTDB_TABLE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -11,7 +13,7 @@ extern "C" {
 
 typedef struct {
   const char* name;
-  uint32_t size;   /* sizeof(datatype) */
+  uint32_t size;   /* sizeof(datatype); 0: an id no agent has (rtdb.ini) */
   uint32_t period; /* replication period in replicator cycles */
 } canhil_rtdb_item;
 
@@ -21,7 +23,7 @@ typedef struct {
   const int8_t* membership;
 } canhil_rtdb_agent;
 
-typedef struct {
+typedef struct canhil_rtdb_table {
   uint32_t n_agents;
   uint32_t n_items;
   const canhil_rtdb_agent* agents;
@@ -31,6 +33,16 @@ typedef struct {
 
 /* Defined by the generated rtdb_config.c. */
 extern const canhil_rtdb_table canhil_rtdb_config;
+
+/* Reads a table from an rtdb.ini (CAMBADA's runtime format) and, when
+ * user_h is not NULL, the rtdb_user.h that names its agents and items
+ * (#define NAME NUMBER; checked against the ini: an ini item or agent the
+ * header does not name, or names otherwise, is an error; a header item no
+ * agent has is kept, with size 0). Returns the table (free it with
+ * canhil_rtdb_table_free), or NULL with "FILE:LINE: what is wrong; what to
+ * do" in error. */
+canhil_rtdb_table* canhil_rtdb_table_load(const char* ini, const char* user_h, char* error, size_t error_size);
+void canhil_rtdb_table_free(canhil_rtdb_table* table);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,102 @@
+// canhil/rtdb/database.hpp — one narrow way to a team's RTDB, whichever
+// library holds it: canhil's linked RTDB (open_builtin) or the team's own
+// shared library with CAMBADA's C API, loaded at run time (open_library).
+//
+// A Database reaches the databases ("memory spaces") of every agent
+// (Scope::kAllAgents: DB_init_all, as a simulator) or of this process's agent
+// (Scope::kOneAgent: DB_init with AGENT, as an agent). Item `id` of agent
+// `owner` in agent `space`'s database is the owner's own item when
+// owner == space, else that database's copy of the owner's shared item.
+//
+// Non-copyable; thread-compatible (one thread at a time, or the caller's
+// lock). One per library and process: the C libraries keep their state in
+// globals. Closing (destruction) frees (DB_free_all / DB_free) and unloads.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "canhil/rtdb/item_table.hpp"
+
+namespace canhil::rtdb {
+
+enum class Scope {
+  kAllAgents,  ///< every agent's database (DB_init_all)
+  kOneAgent,   ///< this process's agent's database (DB_init, AGENT)
+};
+
+class Database {
+ public:
+  /// get()'s age for an item never written: infinitely old (CAMBADA's library
+  /// answers INT_MIN there; canhil's ages such an item from the database's
+  /// creation instead).
+  static constexpr int kNeverWritten = std::numeric_limits<int>::max();
+
+  virtual ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  /// The team's items, as the library was opened with (checked against it).
+  const ItemTable& items() const noexcept { return items_; }
+  Scope scope() const noexcept { return scope_; }
+  /// The agents whose databases this process reaches, ascending.
+  const std::vector<int>& spaces() const noexcept { return spaces_; }
+  bool serves(int space) const noexcept;
+  /// What holds the RTDB, for messages: "canhil's linked RTDB (...)" or the library's path.
+  const std::string& library() const noexcept { return library_; }
+
+  /// Item `id` of agent `owner` written into agent `space`'s database
+  /// (owner == space: its own item; else the copy of owner's shared item),
+  /// aged `life_ms` (>= 0). The space must be served, the item in it, and
+  /// `bytes` exactly the item's size: a broken invariant otherwise (callers
+  /// check with require() at set-up).
+  virtual void put(int space, int owner, int id, std::span<const std::byte> bytes, int life_ms = 0) = 0;
+  /// Reads it into `bytes` (same preconditions). The age in ms,
+  /// kNeverWritten for an item never written, or nullopt when the library
+  /// says the item does not exist.
+  virtual std::optional<int> get(int space, int owner, int id, std::span<std::byte> bytes) = 0;
+
+  /// The item's id after checking that agent `space` has it (shared or local)
+  /// with exactly `size` bytes. SetupError otherwise, naming the item, the
+  /// table's size and the size asked, and what to do; also for a space this
+  /// Database does not serve.
+  int require(std::string_view item, std::size_t size, int space) const;
+
+ protected:
+  Database(ItemTable items, Scope scope, std::vector<int> spaces, std::string library);
+  /// The invariants put() and get() share (aborts with a message).
+  void demand_slot(int space, int owner, int id, std::size_t size) const;
+
+ private:
+  ItemTable items_;
+  Scope scope_;
+  std::vector<int> spaces_;
+  std::string library_;
+};
+
+/// canhil's linked RTDB (canhil::rtdb): every agent (DB_init_all) or this
+/// process's agent (DB_init, AGENT). Its table is ItemTable::builtin().
+/// SetupError when it cannot attach (the library's reason is on stderr).
+/// Several may be open at once (canhil's inits nest).
+std::unique_ptr<Database> open_builtin(Scope scope);
+
+/// A team's RTDB library (its librtdb.so, or canhil's), loaded with
+/// dlopen(RTLD_NOW | RTLD_LOCAL): DB_set_config_file(config_file) when given,
+/// then DB_init_all / DB_put_in / DB_get_from / DB_free_all (kAllAgents) or
+/// DB_init / DB_put / DB_get / DB_free (kOneAgent; DB_put_in and Whoami when
+/// present). `table` must describe the rtdb.ini the library reads: at open,
+/// every item the table gives a space is read once through the library (and,
+/// where the library is canhil's, its sizes compared). SetupError saying what
+/// to do: no such library, a missing symbol (named), the library already open
+/// in this process, init failed, a table the library contradicts.
+std::unique_ptr<Database> open_library(const std::filesystem::path& so, ItemTable table, Scope scope,
+                                       std::optional<std::filesystem::path> config_file);
+
+}  // namespace canhil::rtdb

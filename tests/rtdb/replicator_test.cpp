@@ -1,0 +1,94 @@
+// The replicator through a Database: canhil's linked RTDB (delay, loss, seed)
+// and a team's library loaded at run time (the stand-in: its put counters
+// show the copies went through it). Own System V keys, nothing left behind.
+#include "canhil/rtdb/replicator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/rtdb.h"
+#include "rtdb_user.h"
+#include "support/team_rtdb.hpp"
+
+namespace canhil::rtdb {
+namespace {
+
+using namespace std::chrono_literals;
+
+class ReplicatorTest : public ::testing::Test {
+ protected:
+  void SetUp() override { setenv("AGENT", "1", 1); }
+  void TearDown() override { EXPECT_EQ(keys_.leftovers(), "") << "segments left behind"; }
+  test::RtdbKeys keys_;
+};
+
+TEST_F(ReplicatorTest, DelayAndLossThroughTheBuiltin) {
+  const auto db = open_builtin(Scope::kAllAgents);
+  ReplicatorConfig cfg;
+  cfg.delay = 300ms;
+  Replicator rep(*db, cfg);
+  const RobotWS w{0, 0, 0, 1, 42};
+  DB_put_in(CAMBADA_3, CAMBADA_3, ROBOT_WS, const_cast<RobotWS*>(&w), 0);
+  rep.cycle(0ms);
+  RobotWS seen{};
+  DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 0u) << "still in flight";
+  rep.cycle(200ms);
+  DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 0u);
+  rep.cycle(300ms);
+  const int age = DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+  EXPECT_EQ(seen.frame, 42u) << "arrived after the delay";
+  EXPECT_GE(age, 300) << "aged by its time in flight";
+
+  ReplicatorConfig lossy;
+  lossy.loss = 0.5;
+  lossy.seed = 9;
+  Replicator r2(*db, lossy);
+  for (int i = 0; i < 200; ++i) r2.cycle(std::chrono::milliseconds(100 * i));
+  const double lost = static_cast<double>(r2.stats().lost) / static_cast<double>(r2.stats().lost + r2.stats().copied);
+  EXPECT_NEAR(lost, 0.5, 0.05);
+  Replicator r3(*db, lossy);
+  for (int i = 0; i < 200; ++i) r3.cycle(std::chrono::milliseconds(100 * i));
+  EXPECT_EQ(r3.stats().lost, r2.stats().lost) << "seeded: the same losses";
+}
+
+TEST_F(ReplicatorTest, ThroughTheTeamsLibrary) {
+  const test::TeamFiles f = test::write_team_files("replicator_team");
+  const auto db =
+      open_library(test::team_rtdb_library(), ItemTable::from_files(f.user_h, f.ini), Scope::kAllAgents, f.ini);
+  std::array<unsigned char, 20> ws{};
+  ws[0] = 9;
+  db->put(test::kRobot1, test::kRobot1, test::kRobotWs, std::as_bytes(std::span(ws)), 150);
+  Replicator rep(*db, {});
+  rep.cycle(0ms);
+  // Robot 1's ROBOT_WS reached the base station and robot 2; the base
+  // station's COACH_INFO and robot 2's ROBOT_WS were never written.
+  EXPECT_EQ(rep.stats().copied, 2u);
+  EXPECT_EQ(rep.stats().never_written, 2u);
+  EXPECT_EQ(test::standin_put_count(test::kBaseStation, test::kRobotWs), 1) << "written through the team's library";
+  EXPECT_EQ(test::standin_put_count(test::kRobot2, test::kRobotWs), 1);
+  EXPECT_EQ(test::standin_put_count(test::kRobot1, test::kCoachInfo), 0);
+  std::array<unsigned char, 20> seen{};
+  const auto age = db->get(test::kRobot2, test::kRobot1, test::kRobotWs, std::as_writable_bytes(std::span(seen)));
+  ASSERT_TRUE(age.has_value());
+  EXPECT_GE(*age, 150) << "the age it had when read";
+  EXPECT_EQ(seen[0], 9);
+}
+
+TEST_F(ReplicatorTest, NeedsEveryAgentsDatabase) {
+  const auto db = open_builtin(Scope::kOneAgent);
+  try {
+    Replicator rep(*db, {});
+    FAIL() << "a one-agent database was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("open " + db->library() + " for every agent (Scope::kAllAgents)"),
+              std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace canhil::rtdb
