@@ -114,8 +114,11 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
   return g_stop ? 130 : 0;
 }
 
-// The run's control socket (canhil coach, scripts): --control PATH, or the
-// default one; when another run holds the default, this run's own beside it.
+// The run's control socket (canhil coach, scripts): --control PATH (an error
+// when it cannot be served), or the default one; when another run holds the
+// default, this run's own beside it. Where neither can be served (a /tmp on a
+// filesystem without sockets, such as 9p or some NFS), the run goes on without
+// one and says so.
 std::unique_ptr<control::UnixServer> serve_control(control::Commands& commands, const std::optional<std::string>& path,
                                                    FILE* out) {
   std::unique_ptr<control::UnixServer> server;
@@ -125,8 +128,16 @@ std::unique_ptr<control::UnixServer> serve_control(control::Commands& commands, 
     try {
       server = std::make_unique<control::UnixServer>(control::default_socket_path(), commands);
     } catch (const SetupError&) {
-      server = std::make_unique<control::UnixServer>(
-          control::default_socket_path().string() + "-" + std::to_string(getpid()), commands);
+      try {
+        server = std::make_unique<control::UnixServer>(
+            control::default_socket_path().string() + "-" + std::to_string(getpid()), commands);
+      } catch (const SetupError& e) {
+        std::fprintf(stderr,
+                     "canhil run: warning: no control socket (%s); canhil coach cannot reach this run. Set "
+                     "XDG_RUNTIME_DIR or give --control PATH on a local filesystem, or --no-control to say so.\n",
+                     e.what());
+        return nullptr;
+      }
     }
   }
   std::fprintf(out, "canhil run: control socket %s (canhil coach --control %s start|stop|status)\n",

@@ -21,9 +21,9 @@ struct CliRun {
   std::string out;  // stdout and stderr together
 };
 
-CliRun canhil(const std::string& args) {
-  const std::string cmd =
-      "cd " + canhil::test::source_dir() + " && " + canhil::test::canhil_binary() + " " + args + " 2>&1";
+CliRun canhil(const std::string& args, const std::string& env = "") {
+  const std::string cmd = "cd " + canhil::test::source_dir() + " && " + env + (env.empty() ? "" : " ") +
+                          canhil::test::canhil_binary() + " " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   CliRun r{-1, ""};
   if (p == nullptr) return r;
@@ -268,6 +268,23 @@ TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
   EXPECT_FALSE(has(r, " 0 error frames")) << "the error frames are in the trace\n" << r.out;
   std::remove(trace.c_str());
   std::remove(world.c_str());
+}
+
+TEST(CanhilRun, ARunWhoseDefaultControlSocketCannotBeServedGoesOnAndSaysSo) {
+  // A runtime folder whose socket path is longer than a socket address holds
+  // (as a /tmp without sockets, 9p or NFS, fails): the run warns and goes on.
+  const std::string deep = "/tmp/canhil_cli_" + std::string(110, 'd');
+  CliRun r = canhil("run --virtual-time --config emulator/scenarios/one_robot.toml --duration 0.2 --quiet",
+                    "XDG_RUNTIME_DIR=" + deep);
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "warning: no control socket")) << r.out;
+  EXPECT_TRUE(has(r, "is too long")) << r.out;
+  // Asked for by name, the same place is an error.
+  r = canhil("run --virtual-time --config emulator/scenarios/one_robot.toml --duration 0.2 --quiet --control " + deep +
+             "/control");
+  EXPECT_NE(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "is too long")) << r.out;
+  EXPECT_FALSE(has(r, "warning: no control socket")) << r.out;
 }
 
 TEST(CanhilRun, ASavedWorldStartsTheNextRunWhereTheLastEnded) {

@@ -119,6 +119,7 @@ TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
   Session session(scenario_, options_);
   VirtualDriver driver(session);
   std::atomic<bool> done{false};
+  std::atomic<std::uint64_t> looks{0};
   std::uint64_t seen = 0;
   std::thread viewer([&] {
     while (!done) {
@@ -126,12 +127,19 @@ TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
       EXPECT_EQ(s.robots.size(), 2u);
       seen = std::max(seen, s.steps);
       session.apply(MoveBall{{0, 0, 0.11}, Eigen::Vector3d::Zero()});
+      looks.fetch_add(1);
     }
   });
-  driver.run_for(2s);
+  // The run goes on in slices; after each, the viewer has looked at least once
+  // more (on a loaded machine it may otherwise not be scheduled until the end).
+  for (int slice = 0; slice < 20; ++slice) {
+    const std::uint64_t before = looks.load();
+    driver.run_for(100ms);
+    while (looks.load() < before + 2) std::this_thread::yield();
+  }
   done = true;
   viewer.join();
-  EXPECT_GT(seen, 0u);
+  EXPECT_GE(seen, 10u) << "the viewer saw the run between its slices";
   EXPECT_EQ(session.snapshot().steps, 200u);
 }
 

@@ -7,6 +7,7 @@
 
 #include <sys/wait.h>
 #include <unistd.h>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <optional>
@@ -93,7 +94,9 @@ TEST(VcanClosedLoop, HandlerOnASeparateProcessDrivesTheEmulatedRobot) {
   EXPECT_NEAR(laptop.last_m4->x, 0.0, 0.15);
   laptop.send(laptop.set_->m5_1.encode(frames::M5_1{0, 0}));
   laptop.send(laptop.set_->m5_2.encode(frames::M5_2{0, frames::M5_2::kReset}));
-  laptop.run(300ms);
+  // The reset is sporadic and M4 comes every 100 ms: wait (at most 10 s, the
+  // VM may be slow) for an M4 sent after the reset took effect.
+  for (int i = 0; i < 100 && std::abs(laptop.last_m4->y) > 0.01; ++i) laptop.run(100ms);
   EXPECT_NEAR(laptop.last_m4->y, 0.0, 0.01) << "M5 reset";
   emu.stop();
   const std::string out = emu.output();
