@@ -56,10 +56,13 @@ const Command kCommands[] = {
                                               scenarios in emulator/scenarios/
   canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B]
              [--rx-buffer-kb 1024] [--priority 40] [--save-world FILE] [--restore-world FILE] [--quiet]
-             [--control PATH | --no-control]
+             [--control PATH | --no-control] [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI]
+             [--layout cambada|canhil|FILE] [--pman-lib LIB | --no-pman]
                                               real time: every robot's nodes on its interface (vcan0, ...),
-                                              vision into its agent's RTDB; run your handler and agent
-                                              (or canhil-hwcomm, canhil-agent) with AGENT=N next to it
+                                              vision into its agent's RTDB (canhil's, or the team's library
+                                              in the team's layout), each agent woken through PMan; run
+                                              your handler and agent (or canhil-hwcomm, canhil-agent) with
+                                              AGENT=N next to it (docs/own-software.md)
 )",
      canhil::app::run_run},
     {"bench", "the performance figures against their targets",

@@ -145,6 +145,19 @@ std::unique_ptr<control::UnixServer> serve_control(control::Commands& commands, 
   return server;
 }
 
+// The team's laptop side from the command line, over the scenario's [laptop].
+void laptop_options(Args& args, emulator::LaptopSide& side) {
+  if (auto v = args.option("--rtdb-lib")) side.rtdb_lib = *v;
+  if (auto v = args.option("--rtdb-items")) side.rtdb_items = *v;
+  if (auto v = args.option("--rtdb-ini")) side.rtdb_ini = *v;
+  if (auto v = args.option("--layout")) side.layout = *v;
+  const auto pman_lib = args.option("--pman-lib");
+  const bool no_pman = args.flag("--no-pman");
+  if (pman_lib && no_pman) throw UsageError("give --pman-lib PATH or --no-pman, not both");
+  if (pman_lib) side.pman = *pman_lib;
+  if (no_pman) side.pman = "none";
+}
+
 }  // namespace
 
 int run_run(Args& args, const std::optional<std::string>& dbc) {
@@ -164,6 +177,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   if (control_path && no_control) throw UsageError("give --control PATH or --no-control, not both");
   emulator::Scenario scenario =
       emulator::load_scenario(config ? std::filesystem::path(*config) : emulator::shipped_scenario("one_robot.toml"));
+  laptop_options(args, scenario.laptop);
   const std::optional<double> duration_given = optional_number(args, "--duration");
   const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
   const double rx_buffer_kb = number_option(args, "--rx-buffer-kb", 1024);
@@ -193,6 +207,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     }
   }
   emulator::SessionOptions options;
+  options.realtime = !virtual_time;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   if (restore_world) options.initial_state = load_world(*restore_world);
   const auto session = [&] {

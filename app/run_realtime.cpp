@@ -1,5 +1,7 @@
 #include "run_realtime.hpp"
 
+#include "canhil/emulator/laptop_link.hpp"
+
 #include <atomic>
 #include <csignal>
 
@@ -32,6 +34,7 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
       std::fprintf(out, "    fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
     }
   }
+  if (const emulator::LaptopLink* laptop = session.laptop()) std::fputs(laptop->summary().c_str(), out);
 }
 
 }  // namespace

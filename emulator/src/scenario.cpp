@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 #include <algorithm>
+#include <cstdio>
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
@@ -38,6 +39,23 @@ class TableReader {
     const auto v = n->value<std::string>();
     if (!v || v->empty()) fail(*n, key, std::string("must be a text, e.g. ") + key + " = " + example);
     return *v;
+  }
+  std::optional<double> number(const std::string& key, double lo, double hi) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return std::nullopt;
+    const auto v = n->value<double>();
+    if (!v || !(*v >= lo && *v <= hi)) {
+      char range[96];
+      std::snprintf(range, sizeof range, "must be a number from %g to %g", lo, hi);
+      fail(*n, key, range);
+    }
+    return *v;
+  }
+  std::optional<bool> boolean(const std::string& key) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return std::nullopt;
+    if (!n->is_boolean()) fail(*n, key, "must be true or false");
+    return n->value<bool>();
   }
   // A list with one entry per robot.
   template <class T>
@@ -163,6 +181,9 @@ void read_laptop(const TableReader& r, Scenario& s) {
   if (const auto v = r.text("pman", "\"builtin\", \"none\" or \"/path/to/libpman.so\"")) {
     l.pman = (*v == "builtin" || *v == "none") ? *v : beside(r.file(), *v);
   }
+  if (const auto v = r.number("coach_period_s", 0.001, 10.0)) l.coach_period_s = *v;
+  if (const auto v = r.boolean("replicate")) l.replicate = *v;
+  if (const auto v = r.number("replicate_period_s", 0.001, 10.0)) l.replicate_period_s = *v;
   if (const toml::array* a = r.array("pman_processes")) {
     l.pman_processes.clear();
     for (const toml::node& e : *a) {
@@ -197,7 +218,8 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   }
   if (const toml::table* laptop = root["laptop"].as_table()) {
     read_laptop(TableReader(*laptop, "laptop", file_name,
-                            {"rtdb_lib", "rtdb_items", "rtdb_ini", "layout", "pman", "pman_processes"}),
+                            {"rtdb_lib", "rtdb_items", "rtdb_ini", "layout", "pman", "pman_processes", "coach_period_s",
+                             "replicate", "replicate_period_s"}),
                 s);
   }
   complete(s);

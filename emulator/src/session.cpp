@@ -5,10 +5,8 @@
 #include <cstdio>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/laptop_link.hpp"
 #include "canhil/emulator/physics_robot_io.hpp"
-#include "canhil/rtdb/cambada_types.h"
-#include "canhil/rtdb/rtdb.h"
-#include "rtdb_user.h"
 
 namespace canhil::emulator {
 
@@ -67,13 +65,13 @@ Session::Session(Scenario scenario, SessionOptions options)
                                                             scenario_.seed + r, options_.ftt.bit_rate);
   }
   if (options_.vision_on) {
-    if (DB_init_all(0) != 0) throw SetupError("cannot attach to the RTDB (see above)");
-    rtdb_ = true;
+    scenario_.laptop = resolve_laptop(scenario_.laptop, n, options_.realtime);
+    laptop_ = std::make_unique<LaptopLink>(scenario_.laptop, scenario_.agents, coach_);
     std::vector<vision_emu::Vision> vision;
     for (std::size_t r = 0; r < n; ++r) vision.emplace_back(options_.vision, world_->markings());
     vision_ = std::make_unique<vision_emu::VisionRunner>(
         std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
-          vision_emu::write_vision_info(rigs_[r].agent, f);
+          laptop_->vision_frame(r, f);
           if (frame_hook_) frame_hook_(r, now_);
         });
   }
@@ -91,7 +89,6 @@ Session::Session(Scenario scenario, SessionOptions options)
 
 Session::~Session() {
   for (Rig& rig : rigs_) rig.nodes.reset();  // before the I/O they use
-  if (rtdb_) DB_free_all(0);
 }
 
 void Session::build_nodes(const Endpoints& endpoints, IoMode mode, Nanos start) {
@@ -137,6 +134,7 @@ void Session::after_step(Nanos now) {
     world_->robot(rig.index).drain(rig.faults->battery_drain_until(now));
   }
   if (vision_) vision_->on_step(*world_);
+  if (laptop_) laptop_->step(now, coach_);
   log_world(now);
   goals_.step(*world_, now);
   publish(steps_);
@@ -225,6 +223,7 @@ void Session::apply_now(const Change& change) {
     }
     if (next != coach_) {
       coach_ = std::move(next);
+      if (laptop_) laptop_->write_coach(coach_);
       if (coach_hook_) coach_hook_(coach_);
     }
   }
@@ -272,10 +271,11 @@ void Session::log_world(Nanos now) {
   world_log_ += buf;
   for (const Rig& rig : rigs_) {
     const kinematics::Pose p = world_->robot(rig.index).pose();
-    CMD_Pos reported{};
-    if (rtdb_) DB_get_from(rig.agent, rig.agent, CMD_POS, &reported);
+    // The pose as stored (a float in canhil's layout), so the log reads as before.
+    const kinematics::Pose reported = laptop_ ? laptop_->reported_pose(rig.index).value_or(kinematics::Pose{})
+                                              : kinematics::Pose{};
     std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.2f,%.4f,%.4f,%.2f", p.x_m, p.y_m, p.heading_rad * 180 / M_PI,
-                  reported.px, reported.py, reported.pa * 180 / M_PI);
+                  reported.x_m, reported.y_m, reported.heading_rad * 180 / M_PI);
     world_log_ += buf;
   }
   world_log_ += '\n';

@@ -1,5 +1,7 @@
 #include "canhil/emulator/virtual_driver.hpp"
 
+#include "canhil/emulator/laptop_link.hpp"
+
 #include <algorithm>
 
 #include "canhil/emulator/handler_participant.hpp"
@@ -59,6 +61,15 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   if (options_.reference_laptop && !session_.options().vision_on) {
     throw SetupError("the reference laptop stack needs the vision and the RTDB (SessionOptions::vision_on)");
   }
+  if (options_.reference_laptop) {
+    const LaptopSide& side = session_.scenario().laptop;
+    if (side.rtdb_lib != "builtin" || side.layout != "canhil") {
+      throw SetupError(
+          "the in-process reference laptop (canhil's handler and agent) works on canhil's linked RTDB in canhil's "
+          "layout, not on " + side.rtdb_lib + " in layout " + side.layout +
+          "; run the team's own software against a real-time run (canhil run without --virtual-time)");
+    }
+  }
   const std::size_t n = session_.robot_count();
   for (std::size_t r = 0; r < n; ++r) {
     buses_.push_back(std::make_unique<can_nodes::MemoryBus>(clock_, session_.rig(r).interface));
@@ -80,7 +91,9 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     auto laptop = std::make_unique<Laptop>();
     if (options_.reference_laptop) {
       prepare_rtdb(rig.agent, session_.world().robot(r).pose());
-      laptop->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, rig.agent);
+      LaptopLink& link = *session_.laptop();
+      laptop->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
+                                                             link.layout(), rig.agent);
       laptop->agent = std::make_unique<AgentParticipant>(rig.agent, agent_cfg);
     }
     if (options_.count_frames || options_.record_trace) {

@@ -6,9 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "canhil/rtdb/cambada_types.h"
-#include "canhil/rtdb/rtdb.h"
-#include "rtdb_user.h"
+#include "canhil/base/setup_error.hpp"
 
 namespace canhil::laptop {
 namespace {
@@ -17,15 +15,102 @@ bool is(const frames::CanFrame& f, const frames::MessageCodec& m) {
   return f.kind == frames::FrameKind::kData && !f.extended && f.id == m.id();
 }
 
-unsigned short sat16(double v) { return static_cast<unsigned short>(std::clamp(std::lround(v), 0L, 65535L)); }
+// One item of the handler: its id in the team's table, its bytes in the team's layout.
+struct Item {
+  int id = -1;
+  std::unique_ptr<rtdb::ItemBuffer> buf;
+  explicit operator bool() const noexcept { return buf != nullptr; }
+  rtdb::Quantity q(std::string_view name) const { return buf->quantity(name); }
+};
+
+Item resolve(rtdb::Database& db, const rtdb::Layout& layout, int space, std::string_view name,
+             std::initializer_list<std::string_view> quantities, bool required) {
+  if (!required && layout.item(name) == nullptr) return {};
+  const rtdb::ItemLayout& item = rtdb::require(layout, name, quantities);
+  Item out;
+  out.id = db.require(name, item.size_bytes(), space);
+  out.buf = std::make_unique<rtdb::ItemBuffer>(item);
+  return out;
+}
 
 }  // namespace
 
-HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, int agent)
-    : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)), agent_(agent) {
+struct HwComm::Items {
+  rtdb::Database& db;
+  int space;
+  Item pos, info, grabber_info, imu, hwerrors, vel, last_vel, kicker, grabber, setpose;
+  rtdb::Quantity x, y, heading, dx, dy, dheading;
+  rtdb::DeltasFrame deltas = rtdb::DeltasFrame::kOdometry;
+  rtdb::Quantity v_logic, v_power12, v_power24, v_kicker, just_kicked;
+  rtdb::Quantity ball_engaged, grabber_state, compass, compass_raw;
+  rtdb::Quantity vx, vy, va, small, last_vx, last_vy, last_va, last_small;
+  rtdb::Quantity kick, eng_high, eng_low, grab;
+  rtdb::Quantity set_x, set_y, set_heading, set_command, set_pending;
+
+  // Reads the item as the agent last wrote it (a never-written item reads as zeros).
+  void get(Item& i) {
+    if (!db.get(space, space, i.id, i.buf->bytes())) i.buf->clear();
+  }
+  void put(const Item& i) { db.put(space, space, i.id, i.buf->bytes(), 0); }
+};
+
+HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, rtdb::Database& db,
+               const rtdb::Layout& layout, int space)
+    : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)) {
   stats_.received.assign(set_->codec().messages().size(), 0);
   stats_.sent.assign(set_->codec().messages().size(), 0);
+  items_ = std::make_unique<Items>(Items{db, space});
+  Items& i = *items_;
+  i.pos = resolve(db, layout, space, "CMD_POS", {"x", "y", "heading"}, true);
+  i.x = i.pos.q("x");
+  i.y = i.pos.q("y");
+  i.heading = i.pos.q("heading");
+  i.dx = i.pos.q("dx");
+  i.dy = i.pos.q("dy");
+  i.dheading = i.pos.q("dheading");
+  i.deltas = i.pos.buf->layout().deltas_frame();
+  i.info = resolve(db, layout, space, "CMD_INFO", {"v_logic", "v_power12", "v_power24", "v_kicker"}, true);
+  i.v_logic = i.info.q("v_logic");
+  i.v_power12 = i.info.q("v_power12");
+  i.v_power24 = i.info.q("v_power24");
+  i.v_kicker = i.info.q("v_kicker");
+  i.just_kicked = i.info.q("just_kicked");
+  i.grabber_info = resolve(db, layout, space, "CMD_GRABBER_INFO", {"ball_engaged"}, true);
+  i.ball_engaged = i.grabber_info.q("ball_engaged");
+  i.grabber_state = i.grabber_info.q("grabber");
+  i.imu = resolve(db, layout, space, "CMD_IMU", {"heading"}, true);
+  i.compass = i.imu.q("heading");
+  i.compass_raw = i.imu.q("raw");
+  i.hwerrors = resolve(db, layout, space, "CMD_HWERRORS", {}, false);
+  i.vel = resolve(db, layout, space, "CMD_VEL", {"vx", "vy", "va"}, true);
+  i.vx = i.vel.q("vx");
+  i.vy = i.vel.q("vy");
+  i.va = i.vel.q("va");
+  i.small = i.vel.q("small_adjustment");
+  i.last_vel = resolve(db, layout, space, "LAST_CMD_VEL", {"vx", "vy", "va"}, false);
+  if (i.last_vel) {
+    i.last_vx = i.last_vel.q("vx");
+    i.last_vy = i.last_vel.q("vy");
+    i.last_va = i.last_vel.q("va");
+    i.last_small = i.last_vel.q("small_adjustment");
+  }
+  i.kicker = resolve(db, layout, space, "CMD_KICKER", {"kick"}, true);
+  i.kick = i.kicker.q("kick");
+  i.eng_high = i.kicker.q("eng_level_high");
+  i.eng_low = i.kicker.q("eng_level_low");
+  i.grabber = resolve(db, layout, space, "CMD_GRABBER", {"grabber"}, true);
+  i.grab = i.grabber.q("grabber");
+  i.setpose = resolve(db, layout, space, "CMD_SETPOSE", {"x", "y", "heading", "command", "pending"}, false);
+  if (i.setpose) {
+    i.set_x = i.setpose.q("x");
+    i.set_y = i.setpose.q("y");
+    i.set_heading = i.setpose.q("heading");
+    i.set_command = i.setpose.q("command");
+    i.set_pending = i.setpose.q("pending");
+  }
 }
+
+HwComm::~HwComm() = default;
 
 std::size_t HwComm::index_of(const frames::MessageCodec& m) const noexcept {
   return static_cast<std::size_t>(&m - set_->codec().messages().data());
@@ -39,18 +124,6 @@ std::uint64_t HwComm::received(std::string_view name) const noexcept {
 std::uint64_t HwComm::sent(std::string_view name) const noexcept {
   const frames::MessageCodec* m = set_->codec().find(name);
   return m == nullptr ? 0 : stats_.sent[index_of(*m)];
-}
-
-int HwComm::get(int id, void* value) const {
-  return agent_ < 0 ? DB_get(Whoami(), id, value) : DB_get_from(agent_, agent_, id, value);
-}
-
-void HwComm::put(int id, void* value) const {
-  if (agent_ < 0) {
-    DB_put(id, value);
-  } else {
-    DB_put_in(agent_, agent_, id, value, 0);
-  }
 }
 
 void HwComm::send(const frames::CanFrame& f, const frames::MessageCodec& message) {
@@ -97,49 +170,39 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
   } else if (is(f, s.m4_2.message())) {
     frames::M4_2 m4;
     if (!usable(s.m4_2, f, m4, stats_) || !have_m4_1_) return;
-    CMD_Pos p;
-    p.px = static_cast<float>(m4_1_.x);
-    p.py = static_cast<float>(m4_1_.y);
-    p.pa = static_cast<float>(m4.theta);
-    p.dx = have_pose_ ? p.px - last_px_ : 0.0f;
-    p.dy = have_pose_ ? p.py - last_py_ : 0.0f;
-    p.da = have_pose_ ? static_cast<float>(std::remainder(p.pa - last_pa_, 2.0 * 3.14159265358979)) : 0.0f;
-    last_px_ = p.px;
-    last_py_ = p.py;
-    last_pa_ = p.pa;
-    have_pose_ = true;
-    have_m4_1_ = false;
-    put(CMD_POS, &p);
+    on_pose(m4);
     latency(rx);
   } else if (is(f, s.m2.message())) {
     frames::M2 m2;
     if (!usable(s.m2, f, m2, stats_)) return;
-    CMD_Info info;
-    get(CMD_INFO, &info);
-    info.Voltage_logic = sat16(m2.v_logic * 100);
-    info.Voltage_power12 = sat16(m2.v_power12 * 100);
-    info.Voltage_power24 = sat16(m2.v_power24 * 100);
-    put(CMD_INFO, &info);
+    Items& i = *items_;
+    i.get(i.info);
+    i.info.buf->set(i.v_logic, m2.v_logic);
+    i.info.buf->set(i.v_power12, m2.v_power12);
+    i.info.buf->set(i.v_power24, m2.v_power24);
+    i.put(i.info);
     latency(rx);
   } else if (is(f, s.m9.message())) {
     frames::M9 m9;
     if (!usable(s.m9, f, m9, stats_)) return;
-    CMD_Info info;
-    get(CMD_INFO, &info);
-    info.justKicked = m9.just_kicked != 0;
-    info.Kicker_voltage = sat16(m9.kicker_voltage * 100);
-    put(CMD_INFO, &info);
-    CMD_Grabber_Info g{m9.ball_engaged, m9.grabber};
-    put(CMD_GRABBER_INFO, &g);
+    Items& i = *items_;
+    i.get(i.info);
+    i.info.buf->set(i.just_kicked, m9.just_kicked != 0 ? 1.0 : 0.0);
+    i.info.buf->set(i.v_kicker, m9.kicker_voltage);
+    i.put(i.info);
+    i.grabber_info.buf->clear();
+    i.grabber_info.buf->set(i.ball_engaged, m9.ball_engaged != 0 ? 1.0 : 0.0);
+    i.grabber_info.buf->set(i.grabber_state, m9.grabber / 100.0);  // M9 carries 0..100
+    i.put(i.grabber_info);
     latency(rx);
   } else if (is(f, s.m8.message())) {
     frames::M8 m8;
     if (!usable(s.m8, f, m8, stats_)) return;
-    CMD_Imu imu;
-    imu.compass = static_cast<int>(std::lround(m8.heading)) % 360;
-    imu.yaw = static_cast<int>(std::lround(m8.heading * 100));
-    imu.rawYaw = m8.raw;
-    put(CMD_IMU, &imu);
+    Items& i = *items_;
+    i.imu.buf->clear();
+    i.imu.buf->set(i.compass, m8.heading);  // degrees clockwise from north, as the node reports it
+    i.imu.buf->set(i.compass_raw, m8.raw);
+    i.put(i.imu);
     latency(rx);
   } else if (is(f, s.m10.message())) {
     if (usable(s.m10, f, m10_, stats_)) {
@@ -149,18 +212,53 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
   }
 }
 
-void HwComm::write_hwerrors() {
-  CMD_HWerrors e;
-  std::memset(&e, 0, sizeof e);
-  e.error_count[0][0] = m10_.errors;
-  e.error_count[0][1] = m10_.alive;
-  e.error_count[0][2] = m10_.node_state;
-  const std::uint64_t own[] = {stats_.wrong_length, stats_.out_of_range, stats_.unknown_id, stats_.missed_tms,
-                               stats_.send_failed};
-  for (std::size_t i = 0; i < std::size(own); ++i) {
-    e.error_count[1][i] = static_cast<unsigned short>(std::min<std::uint64_t>(own[i], 65535));
+void HwComm::on_pose(const frames::M4_2& m4) {
+  Items& i = *items_;
+  rtdb::ItemBuffer& b = *i.pos.buf;
+  // As the team's struct stores them (a float pose stays a float pose), so
+  // that the deltas add up to the pose the agent reads.
+  b.clear();
+  b.set(i.x, m4_1_.x);
+  b.set(i.y, m4_1_.y);
+  b.set(i.heading, m4.theta);
+  const double x = b.get(i.x), y = b.get(i.y), heading = b.get(i.heading);
+  double dx = 0, dy = 0, dheading = 0;
+  if (have_pose_) {
+    dx = x - last_x_;
+    dy = y - last_y_;
+    dheading = std::remainder(heading - last_heading_, 2.0 * M_PI);
+    if (i.deltas == rtdb::DeltasFrame::kRobot) {
+      const double c = std::cos(heading), s = std::sin(heading);
+      const double rx = c * dx + s * dy;
+      dy = -s * dx + c * dy;
+      dx = rx;
+    }
   }
-  put(CMD_HWERRORS, &e);
+  b.set(i.dx, dx);
+  b.set(i.dy, dy);
+  b.set(i.dheading, dheading);
+  last_x_ = x;
+  last_y_ = y;
+  last_heading_ = heading;
+  have_pose_ = true;
+  have_m4_1_ = false;
+  i.put(i.pos);
+}
+
+void HwComm::write_hwerrors() {
+  Items& i = *items_;
+  if (!i.hwerrors) return;
+  rtdb::ItemBuffer& b = *i.hwerrors.buf;
+  b.clear();
+  b.set(b.quantity("bad_frames"), m10_.errors);
+  b.set(b.quantity("alive"), m10_.alive);
+  b.set(b.quantity("node_state"), m10_.node_state);
+  b.set(b.quantity("wrong_length"), static_cast<double>(stats_.wrong_length));
+  b.set(b.quantity("out_of_range"), static_cast<double>(stats_.out_of_range));
+  b.set(b.quantity("unknown_id"), static_cast<double>(stats_.unknown_id));
+  b.set(b.quantity("missed_tms"), static_cast<double>(stats_.missed_tms));
+  b.set(b.quantity("send_failed"), static_cast<double>(stats_.send_failed));
+  i.put(i.hwerrors);
 }
 
 void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
@@ -175,35 +273,38 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
   if (const auto start = m6_slot_.on_tm(tm, rx, ec_, m6)) m6_at_ = *start;
   // The asynchronous window opens now: kicker and grabber, pose.
   const Nanos now = rx;
-  CMD_Kicker kick;
-  CMD_Grabber grab;
-  get(CMD_KICKER, &kick);
-  get(CMD_GRABBER, &grab);
-  const bool kick_wanted = (kick.power & 0x7F) != 0;
-  const bool grabber_changed = grab.mode != last_grabber_;
+  Items& i = *items_;
+  i.get(i.kicker);
+  i.get(i.grabber);
+  const auto kick = static_cast<std::uint8_t>(std::clamp(i.kicker.buf->get(i.kick), 0.0, 255.0));
+  const double grab = std::clamp(i.grabber.buf->get(i.grab), 0.0, 1.0);
+  const bool kick_wanted = (kick & 0x7F) != 0;
+  const bool grabber_changed = grab != last_grabber_;
   if ((kick_wanted || grabber_changed) && now - last_m7_ >= s.ftt(s.m7.message()).min_gap) {
     frames::M7 m7;
-    m7.kick = kick.power;
-    m7.grabber_mode = std::min<std::uint8_t>(grab.mode, 100);
-    m7.eng_lvl_high = kick.engLvlHigh;
-    m7.eng_lvl_low = kick.engLvlLow;
+    m7.kick = kick;
+    m7.grabber_mode = static_cast<std::uint8_t>(std::lround(grab * 100));
+    m7.eng_lvl_high = static_cast<std::uint8_t>(std::clamp(i.kicker.buf->get(i.eng_high), 0.0, 255.0));
+    m7.eng_lvl_low = static_cast<std::uint8_t>(std::clamp(i.kicker.buf->get(i.eng_low), 0.0, 255.0));
     send(s.m7.encode(m7), s.m7.message());
     last_m7_ = now;
-    last_grabber_ = grab.mode;
+    last_grabber_ = grab;
     if (kick_wanted) {
       ++stats_.kicks_sent;
-      kick.power = 0;  // sent once: the agent asks again for another kick
-      put(CMD_KICKER, &kick);
+      i.kicker.buf->set(i.kick, 0.0);  // sent once: the agent asks again for another kick
+      i.put(i.kicker);
     }
   }
-  CMD_SetPose pose;
-  get(CMD_SETPOSE, &pose);
-  if (pose.pending != 0 && now - last_m5_ >= s.ftt(s.m5_1.message()).min_gap) {
-    send(s.m5_1.encode(frames::M5_1{pose.px, pose.py}), s.m5_1.message());
-    send(s.m5_2.encode(frames::M5_2{pose.pa, pose.command}), s.m5_2.message());
+  if (!i.setpose) return;
+  i.get(i.setpose);
+  rtdb::ItemBuffer& pose = *i.setpose.buf;
+  if (pose.get(i.set_pending) != 0 && now - last_m5_ >= s.ftt(s.m5_1.message()).min_gap) {
+    send(s.m5_1.encode(frames::M5_1{pose.get(i.set_x), pose.get(i.set_y)}), s.m5_1.message());
+    send(s.m5_2.encode(frames::M5_2{pose.get(i.set_heading), static_cast<std::uint8_t>(pose.get(i.set_command))}),
+         s.m5_2.message());
     last_m5_ = now;
-    pose.pending = 0;
-    put(CMD_SETPOSE, &pose);
+    pose.set(i.set_pending, 0.0);
+    i.put(i.setpose);
   }
 }
 
@@ -211,12 +312,22 @@ void HwComm::on_time(Nanos now) {
   if (now < m6_at_) return;
   m6_at_ = kNever;
   m6_slot_.done();
-  CMD_Vel v;
-  get(CMD_VEL, &v);
+  Items& i = *items_;
+  i.get(i.vel);
+  const rtdb::ItemBuffer& v = *i.vel.buf;
+  const double vx = v.get(i.vx), vy = v.get(i.vy), va = v.get(i.va), small = v.get(i.small);
   const frames::MessageSet& s = *set_;
-  send(s.m6_1.encode(frames::M6_1{v.vx, v.vy}), s.m6_1.message());
-  send(s.m6_2.encode(frames::M6_2{v.va, static_cast<std::uint8_t>(v.smallAdjustment ? 1 : 0), m6_seq_++}),
-       s.m6_2.message());
+  send(s.m6_1.encode(frames::M6_1{vx, vy}), s.m6_1.message());
+  send(s.m6_2.encode(frames::M6_2{va, static_cast<std::uint8_t>(small != 0 ? 1 : 0), m6_seq_++}), s.m6_2.message());
+  if (i.last_vel) {  // the team's agent reads back what was sent
+    rtdb::ItemBuffer& last = *i.last_vel.buf;
+    last.clear();
+    last.set(i.last_vx, vx);
+    last.set(i.last_vy, vy);
+    last.set(i.last_va, va);
+    last.set(i.last_small, small);
+    i.put(i.last_vel);
+  }
 }
 
 std::string HwComm::summary() const {

@@ -1,9 +1,12 @@
 // canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] [--rt-priority N] [--busy-poll]
+//               [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]
 //
 // The reference low-level communication handler: this robot's RTDB (AGENT)
-// on one side, its CAN bus on the other. Runs until Ctrl-C (or --duration)
-// and prints a summary, with the latency from each frame's kernel receive
-// timestamp to its RTDB write.
+// on one side, its CAN bus on the other. The RTDB is canhil's, or the team's
+// own library loaded at run time (its rtdb.ini and generated rtdb_user.h),
+// every item in the team's layout (cambada for a team library unless told).
+// Runs until Ctrl-C (or --duration) and prints a summary, with the latency
+// from each frame's kernel receive timestamp to its RTDB write.
 #include <poll.h>
 #include <sched.h>
 #include <sys/mman.h>
@@ -20,7 +23,8 @@
 #include "canhil/frames/messages.hpp"
 #include "canhil/laptop/hwcomm.hpp"
 #include "canhil/laptop/raw_can.hpp"
-#include "canhil/rtdb/rtdb.h"
+#include "canhil/rtdb/database.hpp"
+#include "canhil/rtdb/layout.hpp"
 #include "cli_numbers.hpp"
 
 namespace {
@@ -37,7 +41,8 @@ canhil::Nanos wall_now() {
 int usage(const char* why) {
   std::fprintf(stderr,
                "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] "
-               "[--rt-priority N]\n",
+               "[--rt-priority N] [--busy-poll]\n"
+               "         [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]\n",
                why);
   return 2;
 }
@@ -51,6 +56,7 @@ int main(int argc, char** argv) {
   double duration_s = 0;
   int rt_priority = 0;
   bool busy_poll = false;
+  std::string rtdb_lib, rtdb_items, rtdb_ini, layout_name;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -67,6 +73,14 @@ int main(int argc, char** argv) {
         ec_ms = canhil::laptop::parse_number(a, argv[++i]);
       } else if (a == "--duration") {
         duration_s = canhil::laptop::parse_number(a, argv[++i]);
+      } else if (a == "--rtdb-lib") {
+        rtdb_lib = argv[++i];
+      } else if (a == "--rtdb-items") {
+        rtdb_items = argv[++i];
+      } else if (a == "--rtdb-ini") {
+        rtdb_ini = argv[++i];
+      } else if (a == "--layout") {
+        layout_name = argv[++i];
       } else if (a == "--rt-priority") {
         rt_priority = static_cast<int>(canhil::laptop::parse_number(a, argv[++i]));
       } else {
@@ -77,6 +91,13 @@ int main(int argc, char** argv) {
     return usage(e.what());
   }
   if (iface.empty()) return usage("--iface is required");
+  if (rtdb_lib.empty() && (!rtdb_items.empty() || !rtdb_ini.empty())) {
+    return usage("--rtdb-items and --rtdb-ini describe a team library's table: give --rtdb-lib too");
+  }
+  if (!rtdb_lib.empty() && (rtdb_items.empty() || rtdb_ini.empty())) {
+    return usage("--rtdb-lib needs the team's --rtdb-items (its generated rtdb_user.h) and --rtdb-ini");
+  }
+  if (layout_name.empty()) layout_name = rtdb_lib.empty() ? "canhil" : "cambada";
   if (rt_priority > 0) {
     // Hardware in the loop: run before ordinary work and never page out.
     sched_param sp{};
@@ -88,10 +109,16 @@ int main(int argc, char** argv) {
   try {
     auto set = canhil::frames::MessageSet::load(dbc);
     canhil::laptop::RawCan can(iface);
-    if (DB_init() != 0) return 2;
+    namespace rtdb = canhil::rtdb;
+    const bool shipped = layout_name == "canhil" || layout_name == "cambada";
+    const rtdb::Layout layout = shipped ? rtdb::Layout::shipped(layout_name) : rtdb::Layout::load(layout_name);
+    const auto db = rtdb_lib.empty() ? rtdb::open_builtin(rtdb::Scope::kOneAgent)
+                                     : rtdb::open_library(rtdb_lib, rtdb::ItemTable::from_files(rtdb_items, rtdb_ini),
+                                                          rtdb::Scope::kOneAgent, std::filesystem::path(rtdb_ini));
+    const int agent = db->spaces().front();
     const auto ec = std::chrono::duration_cast<canhil::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
     canhil::laptop::HwComm hw(
-        set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now);
+        set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now, *db, layout, agent);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const int timer = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);
@@ -99,7 +126,8 @@ int main(int argc, char** argv) {
         duration_s > 0
             ? wall_now() + std::chrono::duration_cast<canhil::Nanos>(std::chrono::duration<double>(duration_s))
             : canhil::kNever;
-    std::printf("canhil-hwcomm: agent %d (%s) on %s\n", Whoami(), DB_agent_name(Whoami()), iface.c_str());
+    std::printf("canhil-hwcomm: agent %d (%s) on %s; RTDB %s, layout %s\n", agent,
+                db->items().agent_name(agent).c_str(), iface.c_str(), db->library().c_str(), layout.name().c_str());
     std::fflush(stdout);
     while (!g_stop && wall_now() < end) {
       pollfd p[2] = {{can.fd(), POLLIN, 0}, {timer, POLLIN, 0}};
@@ -125,7 +153,6 @@ int main(int argc, char** argv) {
     }
     ::close(timer);
     std::printf("canhil-hwcomm: summary\n%s", hw.summary().c_str());
-    DB_free();
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "canhil-hwcomm: %s\n", e.what());

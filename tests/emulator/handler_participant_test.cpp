@@ -35,7 +35,9 @@ class HwCommTest : public test::WatchedTest {
     wp.robots = {physics::Placement{0, 0, 0}};
     wp.ball_start = {0, 0.26, wp.ball.radius_m};  // in the mouth
     rig_ = std::make_unique<RobotRig>(set_, wp);
-    laptop_ = std::make_unique<HandlerParticipant>(rig_->bus(), set_, 10ms, rig_->clock(), -1, true);
+    db_ = rtdb::open_builtin(rtdb::Scope::kOneAgent);
+    laptop_ = std::make_unique<HandlerParticipant>(rig_->bus(), set_, 10ms, rig_->clock(), *db_, layout_, CAMBADA_1,
+                                                   true);
     rig_->add(*laptop_);
     counters.watch_nodes(rig_->nodes());
     const laptop::HwCommStats& hw = laptop_->hw().stats();
@@ -45,7 +47,11 @@ class HwCommTest : public test::WatchedTest {
     counters.watch("handler.missed_tms", [&hw] { return hw.missed_tms; });
     counters.watch("handler.send_failed", [&hw] { return hw.send_failed; });
   }
-  ~HwCommTest() override { DB_free(); }
+  ~HwCommTest() override {
+    laptop_.reset();
+    db_.reset();
+    DB_free();
+  }
   int count_sent(std::uint32_t id) const {
     int n = 0;
     for (const auto& f : laptop_->sent()) n += f.id == id ? 1 : 0;
@@ -54,6 +60,8 @@ class HwCommTest : public test::WatchedTest {
 
   std::shared_ptr<const frames::MessageSet> set_;
   std::unique_ptr<RobotRig> rig_;
+  std::unique_ptr<rtdb::Database> db_;
+  const rtdb::Layout layout_ = rtdb::Layout::shipped("canhil");
   std::unique_ptr<HandlerParticipant> laptop_;
 };
 

@@ -26,13 +26,25 @@ class HwCommUnit : public ::testing::Test {
     setenv("RTDB_KEY", std::to_string(0x5C000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6)).c_str(), 1);
     setenv("AGENT", "1", 1);
     EXPECT_EQ(DB_init(), 0);
+    db_ = rtdb::open_builtin(rtdb::Scope::kOneAgent);
+    hw_ = std::make_unique<HwComm>(
+        set_, 10ms,
+        [this](const frames::CanFrame& f) {
+          sent_.push_back(f);
+          return true;
+        },
+        [this] { return now_; }, *db_, layout_, CAMBADA_1);
   }
-  ~HwCommUnit() override { DB_free(); }
+  ~HwCommUnit() override {
+    hw_.reset();
+    db_.reset();
+    DB_free();
+  }
 
   // A TM of EC `ec` at `t`, scheduling `bitmap`, with a 1 ms synchronous window.
   void tm(std::uint16_t ec, Nanos t, std::uint32_t bitmap) {
     now_ = t;
-    hw_.on_frame(set_->tm.encode(frames::Tm{ec, bitmap, 1000}), t);
+    hw_->on_frame(set_->tm.encode(frames::Tm{ec, bitmap, 1000}), t);
   }
   std::uint32_t bit(const char* name) const { return 1u << set_->ftt(*set_->codec().find(name)).index; }
   std::vector<frames::CanFrame> sent_with(std::uint32_t id) const {
@@ -46,28 +58,25 @@ class HwCommUnit : public ::testing::Test {
   std::shared_ptr<const frames::MessageSet> set_ = frames::MessageSet::load(test::shipped_dbc());
   std::vector<frames::CanFrame> sent_;
   Nanos now_{0};
-  HwComm hw_{set_, 10ms,
-             [this](const frames::CanFrame& f) {
-               sent_.push_back(f);
-               return true;
-             },
-             [this] { return now_; }};
+  std::unique_ptr<rtdb::Database> db_;
+  const rtdb::Layout layout_ = rtdb::Layout::shipped("canhil");
+  std::unique_ptr<HwComm> hw_;
 };
 
 TEST_F(HwCommUnit, SendsCmdVelInTheM6SlotOfTheTmThatSchedulesIt) {
   CMD_Vel v{0.25f, -0.5f, 1.5f, true};
   DB_put(CMD_VEL, &v);
   tm(1, 10ms, bit("M3_1"));
-  EXPECT_EQ(hw_.next_deadline(), kNever) << "M6 not due in this EC";
+  EXPECT_EQ(hw_->next_deadline(), kNever) << "M6 not due in this EC";
   tm(3, 30ms, bit("M6_1") | bit("M6_2"));
-  EXPECT_EQ(hw_.next_deadline(), 30ms + 10ms - 1ms) << "the window's start: TM + EC - window";
+  EXPECT_EQ(hw_->next_deadline(), 30ms + 10ms - 1ms) << "the window's start: TM + EC - window";
   now_ = 39ms - 1ns;
-  hw_.on_time(now_);
+  hw_->on_time(now_);
   EXPECT_TRUE(sent_with(set_->m6_1.message().id()).empty()) << "not before the slot";
   EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u)
       << "the grabber's first state, once, in the first asynchronous window";
   now_ = 39ms;
-  hw_.on_time(now_);
+  hw_->on_time(now_);
   const auto m6_1s = sent_with(set_->m6_1.message().id());
   const auto m6_2s = sent_with(set_->m6_2.message().id());
   ASSERT_EQ(m6_1s.size(), 1u);
@@ -80,25 +89,25 @@ TEST_F(HwCommUnit, SendsCmdVelInTheM6SlotOfTheTmThatSchedulesIt) {
   EXPECT_DOUBLE_EQ(m6_1.vy, -0.5);
   EXPECT_DOUBLE_EQ(m6_2.va, 1.5);
   EXPECT_EQ(m6_2.small_adjustment, 1);
-  EXPECT_EQ(hw_.next_deadline(), kNever);
-  EXPECT_EQ(hw_.sent("M6_1"), 1u);
-  EXPECT_EQ(hw_.received("TM"), 2u);
+  EXPECT_EQ(hw_->next_deadline(), kNever);
+  EXPECT_EQ(hw_->sent("M6_1"), 1u);
+  EXPECT_EQ(hw_->received("TM"), 2u);
 }
 
 TEST_F(HwCommUnit, OdometryBecomesCmdPosWithTheChangeSinceTheLast) {
-  hw_.on_frame(set_->m4_2.encode(frames::M4_2{0.5, 0}), 0ms);
+  hw_->on_frame(set_->m4_2.encode(frames::M4_2{0.5, 0}), 0ms);
   CMD_Pos p{};
   DB_get(Whoami(), CMD_POS, &p);
   EXPECT_EQ(p.pa, 0.0f) << "an M4_2 without its M4_1 is not a pose";
-  hw_.on_frame(set_->m4_1.encode(frames::M4_1{1.0, 2.0}), 50ms);
-  hw_.on_frame(set_->m4_2.encode(frames::M4_2{0.5, 1}), 50ms);
+  hw_->on_frame(set_->m4_1.encode(frames::M4_1{1.0, 2.0}), 50ms);
+  hw_->on_frame(set_->m4_2.encode(frames::M4_2{0.5, 1}), 50ms);
   DB_get(Whoami(), CMD_POS, &p);
   EXPECT_FLOAT_EQ(p.px, 1.0f);
   EXPECT_FLOAT_EQ(p.py, 2.0f);
   EXPECT_FLOAT_EQ(p.pa, 0.5f);
   EXPECT_EQ(p.dx, 0.0f) << "the first pose has no change";
-  hw_.on_frame(set_->m4_1.encode(frames::M4_1{1.25, 1.5}), 100ms);
-  hw_.on_frame(set_->m4_2.encode(frames::M4_2{-3.0, 2}), 100ms);
+  hw_->on_frame(set_->m4_1.encode(frames::M4_1{1.25, 1.5}), 100ms);
+  hw_->on_frame(set_->m4_2.encode(frames::M4_2{-3.0, 2}), 100ms);
   DB_get(Whoami(), CMD_POS, &p);
   EXPECT_NEAR(p.dx, 0.25, 1e-6);
   EXPECT_NEAR(p.dy, -0.5, 1e-6);
@@ -123,24 +132,24 @@ TEST_F(HwCommUnit, AKickGoesOutOnceInTheAsynchronousWindowAndItsPowerIsReset) {
   EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u) << "not within M7's minimum gap (1000 ms)";
   tm(2, 1000ms, 0);
   EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 2u) << "at the gap";
-  EXPECT_EQ(hw_.stats().kicks_sent, 2u);
+  EXPECT_EQ(hw_->stats().kicks_sent, 2u);
 }
 
 TEST_F(HwCommUnit, BadTrafficIsCountedAndWritesNothing) {
   frames::CanFrame short_m8 = set_->m8.encode(frames::M8{90, 0});
   short_m8.len = 4;
-  hw_.on_frame(short_m8, 0ms);
-  hw_.on_frame(frames::make_data_frame(0x7FF, {1, 2}), 0ms);
+  hw_->on_frame(short_m8, 0ms);
+  hw_->on_frame(frames::make_data_frame(0x7FF, {1, 2}), 0ms);
   CMD_Imu imu{};
   DB_get(Whoami(), CMD_IMU, &imu);
   EXPECT_EQ(imu.yaw, 0);
   tm(10, 0ms, 0);
   tm(13, 30ms, 0);  // ECs 11 and 12 were never heard
-  EXPECT_EQ(hw_.stats().wrong_length, 1u);
-  EXPECT_EQ(hw_.stats().unknown_id, 1u);
-  EXPECT_EQ(hw_.stats().missed_tms, 2u);
-  EXPECT_NE(hw_.summary().find("missed TMs 2, wrong length 1"), std::string::npos) << hw_.summary();
-  EXPECT_NE(hw_.summary().find("received: M8 1 TM 2"), std::string::npos) << hw_.summary();
+  EXPECT_EQ(hw_->stats().wrong_length, 1u);
+  EXPECT_EQ(hw_->stats().unknown_id, 1u);
+  EXPECT_EQ(hw_->stats().missed_tms, 2u);
+  EXPECT_NE(hw_->summary().find("missed TMs 2, wrong length 1"), std::string::npos) << hw_->summary();
+  EXPECT_NE(hw_->summary().find("received: M8 1 TM 2"), std::string::npos) << hw_->summary();
 }
 
 }  // namespace

@@ -14,15 +14,17 @@ namespace canhil::emulator {
 
 class HandlerParticipant final : public can_nodes::Participant {
  public:
-  /// `agent` as laptop::HwComm takes it (-1: from AGENT); `keep_sent` keeps a
-  /// copy of every frame it sends (tests), otherwise nothing grows.
+  /// The handler of agent `space` in `db`, its items in `layout` (as
+  /// laptop::HwComm takes them); `keep_sent` keeps a copy of every frame it
+  /// sends (tests), otherwise nothing grows.
   HandlerParticipant(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set, Nanos ec,
-                     const can_nodes::Clock& clock, int agent = -1, bool keep_sent = false)
+                     const can_nodes::Clock& clock, rtdb::Database& db, const rtdb::Layout& layout, int space,
+                     bool keep_sent = false)
       : ep_(bus.attach("handler", 1 << 16)),
         keep_sent_(keep_sent),
         hw_(
             std::move(set), ec, [this](const frames::CanFrame& f) { return send(f); }, [&clock] { return clock.now(); },
-            agent) {}
+            db, layout, space) {}
 
   std::size_t poll() override {
     std::size_t n = 0;

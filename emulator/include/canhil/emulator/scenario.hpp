@@ -22,6 +22,9 @@
 //   layout = "canhil"                # "cambada", "canhil" or a layout file (docs/layouts.md)
 //   pman = "builtin"                 # "builtin", "none" or the team's libpman.so
 //   pman_processes = ["agent"]       # registered per robot as NAME<agent>
+//   coach_period_s = 0.1             # COACH_INFO written again this often
+//   replicate = true                 # the wireless: shared items copied between agents
+//   replicate_period_s = 0.1
 //
 // Paths are relative to the scenario file. A physics world file (no [run]) is a scenario too. The defaults are filled
 // in, and the rules checked, in one place (complete()), for files and for
@@ -31,6 +34,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -57,6 +61,9 @@ struct LaptopSide {
   std::string layout;      ///< "canhil", "cambada" or a layout description file
   std::string pman;        ///< "builtin", "none" or a path to the team's libpman.so
   std::vector<std::string> pman_processes = {"agent"};  ///< registered per robot as NAME<agent>
+  double coach_period_s = 0.1;          ///< COACH_INFO / FORMATION_INFO written again this often (and at changes)
+  std::optional<bool> replicate;        ///< copy shared items between agents (default: with more than one robot)
+  double replicate_period_s = 0.1;      ///< the replicator's cycle
 };
 
 struct Scenario {

@@ -18,8 +18,9 @@
 // effect at the next step (world changes) or the nodes' next pass (bus
 // changes), in either driver.
 //
-// Vision writes each robot's VISION_INFO into its agent's RTDB (DB_init_all;
-// set RTDB_KEY to keep runs apart), then calls the frame hook.
+// Vision writes each robot's VISION_INFO into its agent's RTDB through the
+// LaptopLink (the team's RTDB and layout, or canhil's; set RTDB_KEY to keep
+// runs on canhil's RTDB apart), ticks its PMan table, then calls the frame hook.
 #pragma once
 
 #include <Eigen/Core>
@@ -42,12 +43,17 @@
 
 namespace canhil::emulator {
 
+class LaptopLink;
+
 /// What a run needs beyond its scenario: chosen by the command, not the file.
 struct SessionOptions {
   std::shared_ptr<const frames::MessageSet> messages;
   can_nodes::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
   vision_emu::VisionParams vision;
   bool vision_on = true;      ///< off: no vision and no RTDB (canhil nodes)
+  /// The run follows the wall clock, so processes outside it can take part
+  /// (the laptop side's defaults: PMan masters only then, see resolve_laptop).
+  bool realtime = false;
   Nanos world_log_period{0};  ///< 0: no world log
   /// A saved world (physics::load_state) to start from instead of the placements.
   std::optional<physics::WorldState> initial_state;
@@ -140,6 +146,10 @@ class Session {
   /// From now on, error-frame faults are refused with this reason (a driver
   /// on CAN hardware, which no software can make send an error frame).
   void refuse_error_frames(std::string why);
+  /// The seam to the team's laptop software (RTDB, layout, PMan, coach,
+  /// replicator), or nullptr without vision.
+  LaptopLink* laptop() noexcept { return laptop_.get(); }
+  const LaptopLink* laptop() const noexcept { return laptop_.get(); }
   /// Called after robot r's VISION_INFO is written (wake its agent).
   void on_vision_frame(std::function<void(std::size_t robot, Nanos now)> hook) { frame_hook_ = std::move(hook); }
 
@@ -179,7 +189,7 @@ class Session {
   GoalWatcher goals_;
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
-  bool rtdb_ = false;
+  std::unique_ptr<LaptopLink> laptop_;  // with vision: the team's RTDB, layout, PMan, coach, replicator
   std::string world_log_;
   std::string error_frames_refused_;  // empty: allowed
   Nanos next_log_{0};

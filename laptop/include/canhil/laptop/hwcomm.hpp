@@ -7,9 +7,13 @@
 //                 CMD_KICKER (power != 0) -> M7 once, then power reset to 0; CMD_GRABBER changes -> M7
 //                 CMD_SETPOSE (pending) -> M5_1 + M5_2 once
 //
-// Uses only the DBC codec and the RTDB C API (DB_init by the caller); the
-// transport and the clock are the caller's: canhil-hwcomm uses SocketCAN and
-// the wall clock, tests the memory bus and virtual time.
+// Uses only the DBC codec and the RTDB through rtdb::Database (canhil's or
+// the team's library), every item in the team's layout (rtdb::Layout: its
+// structs and units; "canhil" or "cambada" shipped); the transport and the
+// clock are the caller's: canhil-hwcomm uses SocketCAN and the wall clock,
+// tests the memory bus and virtual time. Also, when the layout has them:
+// LAST_CMD_VEL echoes every CMD_VEL sent; CMD_HWERRORS carries M10 and the
+// handler's own counts.
 #pragma once
 
 #include <functional>
@@ -19,6 +23,8 @@
 
 #include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"
+#include "canhil/rtdb/database.hpp"
+#include "canhil/rtdb/layout.hpp"
 
 namespace canhil::laptop {
 
@@ -44,9 +50,18 @@ class HwComm {
   using Clock = std::function<Nanos()>;
 
   /// `ec` is the elementary cycle (the TM carries the window, not the EC).
-  /// `agent` < 0: this process's agent (DB_init); else that agent's database
-  /// through DB_init_all (a process serving several robots, e.g. canhil run).
-  HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, int agent = -1);
+  /// The handler serves agent `space`'s database in `db` (canhil's RTDB or the
+  /// team's library; a process serving one robot: db.spaces().front()), its
+  /// items in `layout`'s structs and units. Checks every item it uses against
+  /// the team's table and the layout (SetupError naming the item): the
+  /// written ones and CMD_VEL, CMD_KICKER, CMD_GRABBER are required;
+  /// LAST_CMD_VEL, CMD_HWERRORS and CMD_SETPOSE are served when the layout
+  /// describes them. `db` and `layout` must outlive the handler.
+  HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, rtdb::Database& db,
+         const rtdb::Layout& layout, int space);
+  ~HwComm();
+  HwComm(const HwComm&) = delete;
+  HwComm& operator=(const HwComm&) = delete;
 
   /// A received frame with its receive timestamp.
   void on_frame(const frames::CanFrame& frame, Nanos rx_time);
@@ -63,18 +78,19 @@ class HwComm {
   std::string summary() const;
 
  private:
+  struct Items;
   void send(const frames::CanFrame& f, const frames::MessageCodec& message);
   std::size_t index_of(const frames::MessageCodec& m) const noexcept;
   void on_tm(const frames::Tm& tm, Nanos rx_time);
+  void on_pose(const frames::M4_2& m4);
   void latency(Nanos rx_time);
   void write_hwerrors();
-  int get(int id, void* value) const;
-  void put(int id, void* value) const;
 
   std::shared_ptr<const frames::MessageSet> set_;
   Nanos ec_;
   Send send_;
   Clock clock_;
+  std::unique_ptr<Items> items_;  // the RTDB items in the team's layout, resolved once
   HwCommStats stats_;
   frames::SyncSlot m6_slot_;
   Nanos m6_at_ = kNever;  // the M6 slot to serve (the last TM's may be replaced by the next)
@@ -83,13 +99,12 @@ class HwComm {
   bool have_m4_1_ = false;
   frames::M4_1 m4_1_{};
   bool have_pose_ = false;
-  float last_px_ = 0, last_py_ = 0, last_pa_ = 0;
+  double last_x_ = 0, last_y_ = 0, last_heading_ = 0;
   Nanos last_m7_ = kLongAgo;
   Nanos last_m5_ = kLongAgo;
-  int last_grabber_ = -1;
+  double last_grabber_ = -1;  // the fraction last sent; -1: none yet
   std::uint8_t m6_seq_ = 0;
   frames::M10 m10_{};
-  int agent_ = -1;
 };
 
 }  // namespace canhil::laptop
