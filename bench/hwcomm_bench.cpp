@@ -25,8 +25,12 @@ void BM_HwCommUpdate(benchmark::State& state) {
   }
   auto set = frames::MessageSet::load(CANHIL_BENCH_DBC);
   Nanos now{0};
+  // canhil's RTDB in canhil's layout (a team's library adds its own put cost).
+  const auto db = rtdb::open_builtin(rtdb::Scope::kOneAgent);
+  const rtdb::Layout layout = rtdb::Layout::shipped("canhil");
   laptop::HwComm hw(
-      set, std::chrono::milliseconds(10), [](const frames::CanFrame&) { return true; }, [&] { return now; });
+      set, std::chrono::milliseconds(10), [](const frames::CanFrame&) { return true; }, [&] { return now; }, *db,
+      layout, db->spaces().front());
   // One EC's worth of bus->RTDB traffic: M4_1 + M4_2 (CMD_POS), M8 (CMD_IMU), M9 (CMD_INFO, CMD_GRABBER_INFO), M2.
   const frames::CanFrame m4_1 = set->m4_1.encode({1.25, -0.5});
   const frames::CanFrame m4_2 = set->m4_2.encode({0.75, 3});

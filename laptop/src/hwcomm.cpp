@@ -36,6 +36,7 @@ Item resolve(rtdb::Database& db, const rtdb::Layout& layout, int space, std::str
 }  // namespace
 
 struct HwComm::Items {
+  Items(rtdb::Database& database, int agent) : db(database), space(agent) {}
   rtdb::Database& db;
   int space;
   Item pos, info, grabber_info, imu, hwerrors, vel, last_vel, kicker, grabber, setpose;
@@ -59,7 +60,7 @@ HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send sen
     : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)) {
   stats_.received.assign(set_->codec().messages().size(), 0);
   stats_.sent.assign(set_->codec().messages().size(), 0);
-  items_ = std::make_unique<Items>(Items{db, space});
+  items_ = std::make_unique<Items>(db, space);
   Items& i = *items_;
   i.pos = resolve(db, layout, space, "CMD_POS", {"x", "y", "heading"}, true);
   i.x = i.pos.q("x");
