@@ -89,6 +89,12 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
     if (item == nullptr) continue;  // the team's layout has no such item: its agents do not read it
     CoachItem c;
     c.buffer = std::make_unique<rtdb::ItemBuffer>(*item);
+    if (std::string_view(name) == "COACH_INFO") {
+      c.game_state = c.buffer->quantity("game_state");
+      c.running = c.buffer->quantity("running");
+      c.role_auto = c.buffer->quantity("role_auto");
+      c.role = c.buffer->quantity("role");
+    }
     const rtdb::ItemTable& table = db_->items();
     const auto id = table.id(name);
     if (!id) {
@@ -165,13 +171,13 @@ void LaptopLink::write_coach(const CoachState& coach) {
         if (warned_.insert(name).second) std::fprintf(stderr, "canhil: warning: %s\n", e.what());
       }
     };
-    set_name(b.quantity("game_state"), coach.game_state, 0);
+    set_name(c.game_state, coach.game_state, 0);
     for (std::size_t k = 0; k < robots_.size() && k < coach.players.size(); ++k) {
       const auto agent = static_cast<std::size_t>(robots_[k]->agent);
       const CoachPlayer& p = coach.players[k];
-      b.set(b.quantity("running"), p.running ? 1.0 : 0.0, agent);
-      b.set(b.quantity("role_auto"), p.role_auto ? 1.0 : 0.0, agent);
-      set_name(b.quantity("role"), p.role, agent);
+      b.set(c.running, p.running ? 1.0 : 0.0, agent);
+      b.set(c.role_auto, p.role_auto ? 1.0 : 0.0, agent);
+      set_name(c.role, p.role, agent);
     }
     for (const auto& [space, owner] : c.targets) db_->put(space, owner, c.id, b.bytes(), 0);
   }

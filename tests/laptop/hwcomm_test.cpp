@@ -5,13 +5,18 @@
 #include "canhil/laptop/hwcomm.hpp"
 
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <unistd.h>
 
+#include <array>
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
+#include "support/team_rtdb.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::laptop {
@@ -150,6 +155,107 @@ TEST_F(HwCommUnit, BadTrafficIsCountedAndWritesNothing) {
   EXPECT_EQ(hw_->stats().missed_tms, 2u);
   EXPECT_NE(hw_->summary().find("missed TMs 2, wrong length 1"), std::string::npos) << hw_->summary();
   EXPECT_NE(hw_->summary().find("received: M8 1 TM 2"), std::string::npos) << hw_->summary();
+}
+
+// The same handler serving a CAMBADA-like team: the stand-in team library
+// (CAMBADA's API, its own keys) with a CAMBADA-like table, in CAMBADA's
+// layout. In an IPC namespace of its own.
+class HwCommCambada : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(unshare(CLONE_NEWIPC), 0) << "a private IPC namespace needs root (CAP_SYS_ADMIN): " << strerror(errno);
+    setenv("AGENT", "1", 1);
+    const std::string dir = test::source_dir() + "/tests/support/cambada_like/";
+    db_ = rtdb::open_library(test::team_rtdb_library(),
+                             rtdb::ItemTable::from_files(dir + "rtdb_user.h", dir + "config/rtdb.ini"),
+                             rtdb::Scope::kOneAgent, dir + "config/rtdb.ini");
+    hw_ = std::make_unique<HwComm>(
+        set_, 10ms,
+        [this](const frames::CanFrame& f) {
+          sent_.push_back(f);
+          return true;
+        },
+        [this] { return now_; }, *db_, layout_, 1);
+  }
+  int id(const char* item) const { return *db_->items().id(item); }
+  std::vector<std::byte> get(const char* item) {
+    std::vector<std::byte> b(*db_->items().size(id(item)));
+    EXPECT_TRUE(db_->get(1, 1, id(item), b).has_value());
+    return b;
+  }
+  template <class T>
+  T at(const std::vector<std::byte>& b, std::size_t offset) {
+    T v{};
+    std::memcpy(&v, b.data() + offset, sizeof v);
+    return v;
+  }
+  template <class T, std::size_t N>
+  void put(const char* item, const std::array<T, N>& fields) {
+    std::vector<std::byte> b(*db_->items().size(id(item)));
+    std::memcpy(b.data(), fields.data(), std::min(b.size(), sizeof(T) * N));
+    db_->put(1, 1, id(item), b);
+  }
+  std::uint32_t bit(const char* name) const { return 1u << set_->ftt(*set_->codec().find(name)).index; }
+
+  std::shared_ptr<const frames::MessageSet> set_ = frames::MessageSet::load(test::shipped_dbc());
+  const rtdb::Layout layout_ = rtdb::Layout::shipped("cambada");
+  std::unique_ptr<rtdb::Database> db_;
+  std::vector<frames::CanFrame> sent_;
+  Nanos now_{0};
+  std::unique_ptr<HwComm> hw_;
+};
+
+TEST_F(HwCommCambada, OdometryDeltasInTheRobotsFrameInMillimetres) {
+  const double quarter = M_PI / 2;  // the robot's +x axis along the field's +y
+  hw_->on_frame(set_->m4_1.encode(frames::M4_1{1.0, 2.0}), 10ms);
+  hw_->on_frame(set_->m4_2.encode(frames::M4_2{quarter, 1}), 10ms);
+  hw_->on_frame(set_->m4_1.encode(frames::M4_1{1.0, 2.1}), 20ms);
+  hw_->on_frame(set_->m4_2.encode(frames::M4_2{quarter, 2}), 20ms);
+  const auto p = get("CMD_POS");
+  EXPECT_FLOAT_EQ(at<float>(p, 4), 2.1F) << "py in metres";
+  EXPECT_NEAR(at<float>(p, 12), 100.0F, 1e-3) << "0.1 m along +y is 100 mm along the robot's +x";
+  EXPECT_NEAR(at<float>(p, 16), 0.0F, 1e-3);
+}
+
+TEST_F(HwCommCambada, VoltagesInTenthsCompassWithTheNorthAndArmsForTheBarrier) {
+  hw_->on_frame(set_->m2.encode(frames::M2{12.5, 12.4, 25.0, 0}), 10ms);
+  hw_->on_frame(set_->m9.encode(frames::M9{1, 0, 180.0, 100}), 10ms);
+  hw_->on_frame(set_->m8.encode(frames::M8{90.0, 7}), 10ms);
+  const auto info = get("CMD_INFO");
+  EXPECT_EQ(at<std::uint16_t>(info, 0), 125) << "Voltage_logic in 0.1 V";
+  EXPECT_EQ(at<std::uint16_t>(info, 4), 250);
+  EXPECT_EQ(at<std::uint16_t>(info, 6), 1800) << "Kicker_voltage";
+  const auto arms = get("CMD_GRABBER_INFO");
+  EXPECT_EQ(at<std::uint32_t>(arms, 0), 100u) << "ball engaged: arms closed (> 70)";
+  // 90 degrees clockwise from north is -90 counter-clockwise, plus theNorth -80.
+  EXPECT_EQ(at<std::int32_t>(get("CMD_IMU"), 0), -170);
+}
+
+TEST_F(HwCommCambada, EchoesLastCmdVelMapsTheGrabberAndResetsTheKick) {
+  put("CMD_VEL", std::array<float, 3>{0.25F, 1.5F, -0.5F});
+  put("CMD_GRABBER", std::array<std::uint8_t, 1>{1});
+  put("CMD_KICKER", std::array<std::uint8_t, 3>{50, 70, 35});
+  now_ = 30ms;
+  hw_->on_frame(set_->tm.encode(frames::Tm{3, bit("M6_1") | bit("M6_2"), 1000}), now_);
+  now_ = 39ms;
+  hw_->on_time(now_);
+  const auto last = get("LAST_CMD_VEL");
+  EXPECT_FLOAT_EQ(at<float>(last, 0), 0.25F) << "the handler's echo of what it sent";
+  EXPECT_FLOAT_EQ(at<float>(last, 4), 1.5F);
+  EXPECT_FLOAT_EQ(at<float>(last, 8), -0.5F);
+  std::vector<frames::M7> m7s;
+  for (const auto& f : sent_) {
+    frames::M7 m7;
+    if (f.id == set_->m7.message().id() && set_->m7.decode(f, m7).ok()) m7s.push_back(m7);
+  }
+  ASSERT_EQ(m7s.size(), 1u);
+  EXPECT_EQ(m7s[0].kick, 50);
+  EXPECT_EQ(m7s[0].grabber_mode, 100) << "CAMBADA's grabber 1 is on: 100";
+  EXPECT_EQ(m7s[0].eng_lvl_high, 70);
+  EXPECT_EQ(m7s[0].eng_lvl_low, 35);
+  const auto kicker = get("CMD_KICKER");
+  EXPECT_EQ(at<std::uint8_t>(kicker, 0), 0) << "sent once: the kick reset";
+  EXPECT_EQ(at<std::uint8_t>(kicker, 1), 70) << "the thresholds kept";
 }
 
 }  // namespace

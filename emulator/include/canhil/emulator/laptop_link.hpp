@@ -82,6 +82,7 @@ class LaptopLink {
     int id = -1;
     std::unique_ptr<rtdb::ItemBuffer> buffer;
     std::vector<std::pair<int, int>> targets;  // (space, owner) of every copy written
+    rtdb::Quantity game_state, running, role_auto, role;  // COACH_INFO's (FORMATION_INFO: written as zeros)
   };
   std::unique_ptr<rtdb::Database> db_;
   rtdb::Layout layout_;

@@ -1,0 +1,174 @@
+// The seam to the team's laptop software: what a run writes into and reads
+// from the team's RTDB, in the team's layout, and how it wakes the team's
+// agents. canhil's RTDB in canhil's layout; the stand-in team library
+// (tests/support/team_rtdb/) with a CAMBADA-like table in CAMBADA's layout;
+// tables that disagree with the layout. Each test runs in an IPC namespace of
+// its own (PMan's keys are fixed by the agent number, 0x9011 + 2 x agent).
+#include "canhil/emulator/laptop_link.hpp"
+
+#include <gtest/gtest.h>
+#include <sched.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "canhil/base/setup_error.hpp"
+#include "support/team_rtdb.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+std::string cambada_like(const char* file) { return test::source_dir() + "/tests/support/cambada_like/" + file; }
+
+class LaptopLinkTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(unshare(CLONE_NEWIPC), 0) << "a private IPC namespace needs root (CAP_SYS_ADMIN): " << strerror(errno);
+  }
+  static LaptopSide team(bool realtime = false) {
+    LaptopSide side;
+    side.rtdb_lib = test::team_rtdb_library();
+    side.rtdb_items = cambada_like("rtdb_user.h");
+    side.rtdb_ini = cambada_like("config/rtdb.ini");
+    return resolve_laptop(side, 1, realtime);
+  }
+  static CoachState coach(std::size_t robots) {
+    CoachState c;
+    c.players.resize(robots);
+    return c;
+  }
+  static vision_emu::VisionFrame frame() {
+    vision_emu::VisionFrame f;
+    f.lines = {{1.0, 2.0}, {-0.5, 0.25}};
+    f.balls = {{0.1, 1.5}};
+    f.obstacles = {{2.0, -1.0}};
+    return f;
+  }
+};
+
+float f32_at(const std::vector<std::byte>& b, std::size_t offset) {
+  float v = 0;
+  std::memcpy(&v, b.data() + offset, sizeof v);
+  return v;
+}
+std::int32_t i32_at(const std::vector<std::byte>& b, std::size_t offset) {
+  std::int32_t v = 0;
+  std::memcpy(&v, b.data() + offset, sizeof v);
+  return v;
+}
+
+TEST_F(LaptopLinkTest, DefaultsFollowTheRtdbAndTheClock) {
+  LaptopSide side = resolve_laptop({}, 1, false);
+  EXPECT_EQ(side.rtdb_lib, "builtin");
+  EXPECT_EQ(side.layout, "canhil");
+  EXPECT_EQ(side.pman, "none") << "nothing outside the process follows virtual time";
+  EXPECT_FALSE(*side.replicate);
+  side = resolve_laptop({}, 3, true);
+  EXPECT_EQ(side.pman, "builtin");
+  EXPECT_TRUE(*side.replicate);
+  EXPECT_EQ(team().layout, "cambada") << "a team library speaks CAMBADA's layout unless told";
+  LaptopSide half;
+  half.rtdb_lib = "/some/librtdb.so";
+  EXPECT_THROW(resolve_laptop(half, 1, true), SetupError);
+  LaptopSide stray;
+  stray.rtdb_ini = "rtdb.ini";
+  EXPECT_THROW(resolve_laptop(stray, 1, true), SetupError);
+}
+
+TEST_F(LaptopLinkTest, VisionAndCoachGoIntoTheTeamsLibraryInTheTeamsUnits) {
+  LaptopLink link(team(), {1}, coach(1));
+  rtdb::Database& db = link.database();
+  EXPECT_EQ(db.library(), test::team_rtdb_library());
+  const int vision = *db.items().id("VISION_INFO");
+  const int coach_info = *db.items().id("COACH_INFO");
+  const int before = test::standin_put_count(1, vision);
+  link.vision_frame(0, frame());
+  EXPECT_EQ(test::standin_put_count(1, vision), before + 1) << "written through the team's library";
+  std::vector<std::byte> v(8052);
+  ASSERT_TRUE(db.get(1, 1, vision, v));
+  // CAMBADA's VisionInfo: line points from 4008 (their count at 4004) in
+  // millimetres; obstacles (from 4) and the ball (from 8008) in metres.
+  EXPECT_EQ(i32_at(v, 4004), 2);
+  EXPECT_FLOAT_EQ(f32_at(v, 4), 2.0F);
+  EXPECT_FLOAT_EQ(f32_at(v, 8012), 1.5F);
+  EXPECT_EQ(i32_at(v, 8048), 1);
+  EXPECT_FLOAT_EQ(f32_at(v, 4008), 1000.0F);
+  EXPECT_FLOAT_EQ(f32_at(v, 4012), 2000.0F);
+  EXPECT_FLOAT_EQ(f32_at(v, 4016), -500.0F);
+  // The coach: the base station's shared copy in robot 1's database, and its own.
+  std::vector<std::byte> c(260);
+  ASSERT_TRUE(db.get(1, 0, coach_info, c));
+  EXPECT_EQ(static_cast<int>(c[13]), 1) << "playerInfo[0].running";
+  ASSERT_TRUE(db.get(1, 1, coach_info, c));
+  EXPECT_EQ(static_cast<int>(c[13]), 1);
+  CoachState stop = coach(1);
+  stop.game_state = "stop";
+  stop.players[0].running = false;
+  link.write_coach(stop);
+  ASSERT_TRUE(db.get(1, 0, coach_info, c));
+  EXPECT_EQ(static_cast<int>(c[13]), 0) << "the coach stopped robot 1";
+  EXPECT_EQ(link.vision_writes(), 1u);
+  EXPECT_GE(link.coach_writes(), 2u);
+}
+
+TEST_F(LaptopLinkTest, CanhilsOwnRtdbInCanhilsLayoutAndThePoseReadBack) {
+  setenv("RTDB_KEY", std::to_string(0x5F000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  LaptopLink link(resolve_laptop({}, 2, false), {1, 2}, coach(2));
+  rtdb::Database& db = link.database();
+  link.vision_frame(1, frame());
+  std::vector<std::byte> v(4852);
+  ASSERT_TRUE(db.get(2, 2, *db.items().id("VISION_INFO"), v));
+  EXPECT_EQ(i32_at(v, 2404), 2) << "canhil's layout: line points in metres";
+  EXPECT_FLOAT_EQ(f32_at(v, 2408), 1.0F);
+  std::vector<std::byte> pos(24);
+  const float stored[6] = {1.5F, -2.0F, 0.5F, 0, 0, 0};
+  std::memcpy(pos.data(), stored, sizeof stored);
+  db.put(2, 2, *db.items().id("CMD_POS"), pos);
+  const auto p = link.reported_pose(1);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_DOUBLE_EQ(p->x_m, 1.5);
+  EXPECT_DOUBLE_EQ(p->heading_rad, 0.5);
+  EXPECT_NE(link.replicator_stats(), nullptr) << "two robots: the replicator runs";
+}
+
+TEST_F(LaptopLinkTest, EachRobotsPmanTableIsTickedAfterItsVisionInfo) {
+  LaptopLink link(team(true), {1}, coach(1));
+  ASSERT_NE(link.masters(), nullptr);
+  const auto processes = link.masters()->query(1);
+  ASSERT_EQ(processes.size(), 1u);
+  EXPECT_EQ(processes[0].name, "agent1") << "registered before anything else runs";
+  link.vision_frame(0, frame());
+  link.vision_frame(0, frame());
+  EXPECT_EQ(link.masters()->counts(1).at(0).activations, 0u) << "no client attached: nobody to wake";
+  EXPECT_NE(link.summary().find("agent 1 agent1: 0 activations"), std::string::npos) << link.summary();
+}
+
+TEST_F(LaptopLinkTest, ATableThatDisagreesWithTheLayoutStopsTheRunNamingTheItem) {
+  const auto dir = test::scratch_dir("laptop_link_mismatch");
+  std::ifstream in(cambada_like("config/rtdb.ini"));
+  std::string ini((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Every robot's VISION_INFO the size of canhil's.
+  std::size_t replaced = 0;
+  for (auto at = ini.find("2    8052"); at != std::string::npos; at = ini.find("2    8052", at)) {
+    ini.replace(at, 9, "2    4852");
+    ++replaced;
+  }
+  ASSERT_EQ(replaced, 6u);
+  test::write_file(dir / "rtdb.ini", ini);
+  LaptopSide side = team();
+  side.rtdb_ini = (dir / "rtdb.ini").string();
+  try {
+    LaptopLink link(side, {1}, coach(1));
+    FAIL() << "a VISION_INFO of the wrong size was accepted";
+  } catch (const SetupError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("VISION_INFO"), std::string::npos) << what;
+    EXPECT_NE(what.find("8052"), std::string::npos) << what;
+    EXPECT_NE(what.find("4852"), std::string::npos) << what;
+  }
+}
+
+}  // namespace
+}  // namespace canhil::emulator
