@@ -26,6 +26,7 @@ struct Command {
 
 int run_experiment(Args& args, const DbcOption&) { return canhil::app::run_experiment(args); }
 int run_rtdb(Args& args, const DbcOption&) { return canhil::app::run_rtdb(args); }
+int run_pman(Args& args, const DbcOption&) { return canhil::app::run_pman(args); }
 
 const Command kCommands[] = {
     {"frames", "the message set: list, encode and decode frames",
@@ -100,6 +101,12 @@ const Command kCommands[] = {
                                               (PATH: the run's control socket, as canhil run prints it)
 )",
      canhil::app::run_coach},
+    {"pman", "the robots' PMan tables: who is registered, attached and woken",
+     R"(  canhil pman list                            every robot's PMan table (keys 0x9011 + 2 x agent): its
+                                              processes, their pids, states and activations, read
+                                              without attaching (canhil run's, or the team's master's)
+)",
+     run_pman},
     {"experiment", "physics calibration experiments and a vision frame",
      R"(  canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],

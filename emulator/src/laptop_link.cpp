@@ -212,7 +212,8 @@ std::string LaptopLink::summary() const {
     for (const auto& r : robots_) {
       for (const pman::ProcessCounts& c : masters_->counts(r->agent)) {
         os << "    agent " << r->agent << " " << c.name << ": " << c.activations << " activations, " << c.epilogues
-           << " epilogues, " << c.deadline_misses << " deadline misses\n";
+           << " epilogues, " << c.deadline_misses << " deadline misses, " << c.gone
+           << " times gone (its process died or left)\n";
       }
     }
   } else {

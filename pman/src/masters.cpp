@@ -51,6 +51,7 @@ int CountingMasters::tick(int agent) {
   int signalled = 0;
   for (const Process& p : query(agent)) {
     const auto old = std::find_if(before.begin(), before.end(), [&](const Process& b) { return b.name == p.name; });
+    if (old != before.end() && old->pid != 0 && p.pid == 0) ++book.counts[p.name].gone;  // died, or left
     if (old != before.end() && p.activations > old->activations) {
       ++book.counts[p.name].activations;
       book.pending[p.name] = true;

@@ -77,6 +77,12 @@ class Client {
     return ::read(fd_, &c, 1) == 1 && c == 'C';
   }
   pid_t pid() const { return pid_; }
+  /// SIGKILL: dies without a word, and is reaped (its pid no longer exists).
+  void die() {
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
 
  private:
   pid_t pid_ = -1;
@@ -141,6 +147,25 @@ TEST(Masters, AClientThatDoesNotEndItsCycleMissesItsDeadline) {
   ASSERT_EQ(counts.size(), 1u);
   EXPECT_EQ(counts[0].epilogues, 0u);
   EXPECT_EQ(counts[0].deadline_misses, 2u) << "the first two activations were judged at the next tick";
+}
+
+TEST(Masters, AClientThatDiesIsCountedGoneAndNotActivatedAgain) {
+  auto m = builtin_masters();
+  const int agent = test_agent(2);
+  m->open(agent, {"mortal"});
+  {
+    Client client(agent, "mortal");
+    ASSERT_TRUE(attached(*m, agent));
+    EXPECT_EQ(m->tick(agent), 1);
+    ASSERT_TRUE(client.cycle());
+    client.die();
+  }
+  EXPECT_EQ(m->tick(agent), 0) << "nobody to wake";
+  EXPECT_EQ(m->tick(agent), 0);
+  const auto counts = m->counts(agent);
+  ASSERT_EQ(counts.size(), 1u);
+  EXPECT_EQ(counts[0].activations, 1u);
+  EXPECT_EQ(counts[0].gone, 1u) << "its death seen once";
 }
 
 TEST(Masters, ALibraryWithoutThePmanApiIsNamed) {

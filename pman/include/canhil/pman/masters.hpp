@@ -43,6 +43,7 @@ struct ProcessCounts {
   std::uint64_t activations = 0;      ///< ticks that activated it (it was attached)
   std::uint64_t epilogues = 0;        ///< activations whose cycle ended by the next tick
   std::uint64_t deadline_misses = 0;  ///< activations whose cycle had not ended by the next tick
+  std::uint64_t gone = 0;             ///< times its client left the table at a tick (it died, or detached)
 };
 
 class Masters {

@@ -1,0 +1,153 @@
+// team_agent — a test program that behaves as the CAMBADA agent does towards
+// canhil: written here from the published facts (docs/layouts.md,
+// tests/rtdb/cambada_facts.hpp), linked against a team's own RTDB library
+// (the stand-in, tests/support/team_rtdb/) and a PMan library with CAMBADA's
+// API, with a CAMBADA-like team's rtdb_user.h and rtdb.ini.
+//
+//   AGENT=1 team_agent --ini RTDB_INI [--name agent1] [--seconds S]
+//
+// It attaches to its robot's PMan table (retrying while no master has made it),
+// sleeps in sigsuspend, and per SIGCONT runs one cycle: reads VISION_INFO,
+// CMD_POS, CMD_IMU and the base station's COACH_INFO; when the coach lets it
+// play, drives to the ball and kicks it (CMD_VEL, CMD_KICKER, CMD_GRABBER),
+// otherwise stands still; then PMAN_epilogue. SIGINT (the master's
+// PMAN_close) ends it. It prints what it did, one line per event, and its
+// counts (at each change of the coach's word and at the end) for the tests:
+//   team_agent: cycles N, before vision M, playing P, stopped S, kicks K
+// Exit status: 0 after SIGINT, 3 if the RTDB cannot be opened, 4 if its
+// process name is not in the table.
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "pman.h"
+#include "rtdb/cambada_facts.hpp"
+#include "rtdb_api.h"
+#include "rtdb_sim.h"
+#include "support/cambada_like/rtdb_user.h"
+
+
+namespace {
+
+constexpr int kStart = 3;  // CAMBADA's SIGstart
+
+struct Counts {
+  long cycles = 0, before_vision = 0, playing = 0, stopped = 0, kicks = 0;
+};
+
+void print_counts(const Counts& n) {
+  std::printf("team_agent: cycles %ld, before vision %ld, playing %ld, stopped %ld, kicks %ld\n", n.cycles,
+              n.before_vision, n.playing, n.stopped, n.kicks);
+  std::fflush(stdout);
+}
+
+void cycle(int agent, Counts& n, bool& was_playing) {
+  ++n.cycles;
+  facts::VisionInfo vision{};
+  facts::CMD_Pos pos{};
+  facts::CMD_Imu imu{};
+  facts::CoachInfo coach{};
+  const int vision_age = DB_get(agent, VISION_INFO, &vision);
+  DB_get(agent, CMD_POS, &pos);
+  DB_get(agent, CMD_IMU, &imu);
+  DB_get(BASE_STATION, COACH_INFO, &coach);  // the base station's shared copy
+  if (vision_age < 0) {  // never written (CAMBADA's library answers INT_MIN)
+    ++n.before_vision;
+    return;
+  }
+  const facts::PlayerInfo& me = coach.playerInfo[agent - 1];
+  const bool play = me.running && coach.gameState == kStart;
+  if (play != was_playing) {
+    std::printf("team_agent: coach says %s (game state %d)\n", play ? "play" : "stop", coach.gameState);
+    print_counts(n);
+    was_playing = play;
+  }
+  facts::CMD_Vel vel{};
+  facts::CMD_Grabber grabber{};
+  if (play && vision.nBalls > 0) {
+    ++n.playing;
+    // The ball in the robot's frame (x right, y forward), metres: turn to it, go to it.
+    const float bx = vision.ball[0].position.x, by = vision.ball[0].position.y;
+    const float distance = std::hypot(bx, by);
+    const float bearing = std::atan2(-bx, by);  // counter-clockwise from forward
+    vel.va = std::clamp(2.0F * bearing, -2.0F, 2.0F);
+    const float speed = std::abs(bearing) < 0.5F ? std::min(1.5F, 1.2F * distance) : 0.0F;
+    vel.vx = speed * bx / std::max(distance, 0.01F);
+    vel.vy = speed * by / std::max(distance, 0.01F);
+    grabber.mode = distance < 0.6F ? 1 : 0;
+    if (distance < 0.35F && std::abs(bearing) < 0.3F) {
+      facts::CMD_Kicker kick{30, 70, 35};
+      DB_put(CMD_KICKER, &kick);
+      ++n.kicks;
+    }
+  } else {
+    ++n.stopped;
+  }
+  DB_put(CMD_VEL, &vel);
+  DB_put(CMD_GRABBER, &grabber);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string ini, name;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--ini") ini = argv[i + 1];
+    if (a == "--name") name = argv[i + 1];
+  }
+  const char* agent_text = std::getenv("AGENT");
+  const int agent = agent_text != nullptr ? std::atoi(agent_text) : 0;
+  if (ini.empty() || agent < 1) {
+    std::fprintf(stderr, "usage: AGENT=N team_agent --ini RTDB_INI [--name NAME]\n");
+    return 2;
+  }
+  if (name.empty()) name = "agent" + std::to_string(agent);
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGCONT);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  sigprocmask(SIG_BLOCK, &set, nullptr);
+  DB_set_config_file(ini.c_str());
+  if (DB_init() != 0) {
+    std::fprintf(stderr, "team_agent: cannot open the RTDB\n");
+    return 3;
+  }
+  // As the CAMBADA agent: wait for the master's table, then attach.
+  for (int waited = 0; PMAN_init(SHMEM_OCAM_PMAN_KEY, SEM_OCAM_PMAN_KEY, nullptr, 0, PMAN_ATTACH) != 0; ++waited) {
+    PMAN_close(PMAN_CLLEAVE);
+    if (waited == 0) std::printf("team_agent: no PMan table yet, waiting\n");
+    std::fflush(stdout);
+    usleep(100'000);
+  }
+  if (PMAN_attach(name.c_str(), getpid()) != 0) {
+    std::printf("team_agent: %s is not in the PMan table\n", name.c_str());
+    PMAN_close(PMAN_CLLEAVE);
+    DB_free();
+    return 4;
+  }
+  std::printf("team_agent: attached as %s\n", name.c_str());
+  std::fflush(stdout);
+  Counts n;
+  bool was_playing = false;
+  while (true) {
+    int sig = 0;
+    sigwait(&set, &sig);
+    if (sig != SIGCONT) break;
+    cycle(agent, n, was_playing);
+    PMAN_epilogue(name.c_str());
+  }
+  facts::CMD_Vel stop{};
+  DB_put(CMD_VEL, &stop);
+  print_counts(n);
+  PMAN_close(PMAN_CLLEAVE);
+  DB_free();
+  return 0;
+}
