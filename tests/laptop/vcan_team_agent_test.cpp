@@ -161,4 +161,34 @@ TEST(VcanTeamAgent, TheTeamsAgentOnItsOwnLibrariesDrivesToTheBallAndStopsWhenThe
   EXPECT_TRUE(has(handler.output(), "layout cambada")) << handler.output();
 }
 
+TEST(VcanTeamAgent, TheRunScriptStartsAllThreeAndStopsThemTogether) {
+  setenv("AGENT", "1", 1);
+  setenv("TEAM_RTDB_KEY", std::to_string(0x7E100000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  const std::string src = canhil::test::source_dir();
+  const std::string team = src + "/tests/support/cambada_like/";
+  const std::string logs = "/tmp/canhil_vcan_own_software";
+  ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() + " --logs " +
+                          logs + " --rtdb-lib " + CANHIL_TEST_TEAM_RTDB + " --rtdb-items " + team +
+                          "rtdb_user.h --rtdb-ini " + team + "config/rtdb.ini --layout cambada --pman-lib " +
+                          CANHIL_TEST_LIBPMAN + " -- " + CANHIL_TEST_TEAM_AGENT + " --ini " + team + "config/rtdb.ini",
+                      "/tmp/canhil_vcan_own_software.log");
+  ASSERT_TRUE(wait_for(script, 60s, [](const std::string& o) { return has(o, "== running"); })) << script.output();
+  std::this_thread::sleep_for(5s);
+  script.stop();  // Ctrl-C
+  const std::string out = script.output();
+  EXPECT_TRUE(has(out, "== canhil run's summary")) << out;
+  const auto at = out.find("agent 1 agent1: ");
+  ASSERT_NE(at, std::string::npos) << out;
+  long activations = 0;
+  ASSERT_EQ(std::sscanf(out.c_str() + at, "agent 1 agent1: %ld activations", &activations), 1) << out;
+  EXPECT_GT(activations, 0) << out;
+  std::FILE* f = std::fopen((logs + "/agent.log").c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string agent_log;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, f) != nullptr) agent_log += buf;
+  std::fclose(f);
+  EXPECT_TRUE(has(agent_log, "team_agent: cycles")) << "the agent ended when the run closed its table\n" << agent_log;
+}
+
 }  // namespace
