@@ -14,8 +14,9 @@ namespace canhil::app {
 namespace {
 
 nlohmann::json ask(const std::filesystem::path& socket, const nlohmann::json& request) {
-  const nlohmann::json reply = nlohmann::json::parse(control::send_request(socket, request.dump()), nullptr, false);
-  if (reply.is_discarded() || !reply.is_object()) throw SetupError("the run at " + socket.string() + " answered nonsense");
+  nlohmann::json reply = nlohmann::json::parse(control::send_request(socket, request.dump()), nullptr, false);
+  if (reply.is_discarded() || !reply.is_object())
+    throw SetupError("the run at " + socket.string() + " answered nonsense");
   if (!reply.value("ok", false)) throw UsageError("the run refused: " + reply.value("error", std::string("?")));
   return reply;
 }

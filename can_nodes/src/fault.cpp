@@ -154,7 +154,7 @@ std::string describe(const FaultCount& c) {
   return line;
 }
 
-FaultInjector::FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,
+FaultInjector::FaultInjector(const std::vector<FaultRule>& rules, std::shared_ptr<const frames::MessageSet> set,
                              const std::vector<std::string>& node_names, std::uint64_t seed, std::uint32_t bit_rate)
     : set_(std::move(set)), node_names_(node_names), state_(seed), bit_rate_(bit_rate) {
   for (const FaultRule& rule : rules) add_rule(rule);

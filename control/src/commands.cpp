@@ -91,7 +91,8 @@ json to_json(const emulator::WorldSnapshot& s) {
   json obstacles = json::array();
   for (const auto& o : s.obstacles) obstacles.push_back({{"x", o.x()}, {"y", o.y()}});
   json goals = json::array();
-  for (const emulator::Goal& g : s.goals) goals.push_back({{"time_s", to_seconds(g.time)}, {"positive_x", g.positive_x}});
+  for (const emulator::Goal& g : s.goals)
+    goals.push_back({{"time_s", to_seconds(g.time)}, {"positive_x", g.positive_x}});
   json players = json::array();
   for (const emulator::CoachPlayer& p : s.coach.players) {
     players.push_back({{"running", p.running}, {"role", p.role}, {"role_auto", p.role_auto}});
@@ -109,10 +110,10 @@ json to_json(const emulator::WorldSnapshot& s) {
 Commands::Commands(emulator::Session& session) : session_(session) {
   add("snapshot", {}, [this](const json&) { return json{{"snapshot", to_json(session_.snapshot())}}; });
   add("move_robot", {"robot", "x", "y", "heading_deg"}, [this](const json& r) {
-    session_.apply(emulator::MoveRobot{index(r, "robot"),
-                                       physics::Placement{number(r, "x", -kMaxCoordinateM, kMaxCoordinateM),
-                                                          number(r, "y", -kMaxCoordinateM, kMaxCoordinateM),
-                                                          number_or(r, "heading_deg", 0, -3600, 3600)}});
+    session_.apply(
+        emulator::MoveRobot{index(r, "robot"), physics::Placement{number(r, "x", -kMaxCoordinateM, kMaxCoordinateM),
+                                                                  number(r, "y", -kMaxCoordinateM, kMaxCoordinateM),
+                                                                  number_or(r, "heading_deg", 0, -3600, 3600)}});
     return json::object();
   });
   add("move_ball", {"x", "y", "z", "vx", "vy", "vz"}, [this](const json& r) {

@@ -22,8 +22,8 @@ sockaddr_un address_of(const std::filesystem::path& path) {
   a.sun_family = AF_UNIX;
   const std::string p = path.string();
   if (p.size() >= sizeof a.sun_path) {
-    throw SetupError("the control socket path " + p + " is too long (at most " +
-                     std::to_string(sizeof a.sun_path - 1) + " characters); give a shorter --control");
+    throw SetupError("the control socket path " + p + " is too long (at most " + std::to_string(sizeof a.sun_path - 1) +
+                     " characters); give a shorter --control");
   }
   std::memcpy(a.sun_path, p.c_str(), p.size() + 1);
   return a;

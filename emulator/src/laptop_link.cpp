@@ -61,9 +61,7 @@ struct LaptopLink::Robot {
 };
 
 LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, const CoachState& coach)
-    : db_(open_database(side)),
-      layout_(load_layout(side.layout)),
-      coach_period_(from_seconds(side.coach_period_s)) {
+    : db_(open_database(side)), layout_(load_layout(side.layout)), coach_period_(from_seconds(side.coach_period_s)) {
   const rtdb::ItemLayout& vision = rtdb::require(layout_, "VISION_INFO", {"lines", "obstacles", "balls"});
   const rtdb::ItemLayout* pos = layout_.item("CMD_POS");
   if (pos != nullptr && !(pos->has("x") && pos->has("y") && pos->has("heading"))) pos = nullptr;
@@ -99,7 +97,8 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
     const auto id = table.id(name);
     if (!id) {
       throw SetupError(std::string(name) + ": the layout " + layout_.file() + " describes it but the team's table (" +
-                       table.source() + ") has no such item; add it to the team's rtdb.conf or remove it from the "
+                       table.source() +
+                       ") has no such item; add it to the team's rtdb.conf or remove it from the "
                        "layout");
     }
     c.id = *id;
@@ -116,8 +115,10 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
     }
     if (base_shares) c.targets.emplace_back(0, 0);
     if (c.targets.empty()) {
-      throw SetupError(std::string(name) + ": no robot's database has it, neither as the base station's (agent 0) "
-                       "shared item nor as its own, in " + table.source() +
+      throw SetupError(std::string(name) +
+                       ": no robot's database has it, neither as the base station's (agent 0) "
+                       "shared item nor as its own, in " +
+                       table.source() +
                        "; share it from the base station in the team's rtdb.conf, or remove it from the layout");
     }
     coach_items_.push_back(std::move(c));

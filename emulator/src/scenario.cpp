@@ -209,9 +209,9 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
   if (const toml::table* run = root["run"].as_table()) {
-    read_run(TableReader(*run, "run", file_name,
-                         {"duration_s", "seed", "kick_power", "interfaces", "agents", "faults"}),
-             s, robots);
+    read_run(
+        TableReader(*run, "run", file_name, {"duration_s", "seed", "kick_power", "interfaces", "agents", "faults"}), s,
+        robots);
   }
   if (const toml::table* coach = root["coach"].as_table()) {
     read_coach(TableReader(*coach, "coach", file_name, {"game_state", "running", "roles", "role_auto"}), s, robots);
@@ -229,8 +229,9 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
 void complete(Scenario& s) {
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
-  if (robots > static_cast<std::size_t>(kLastAgent - kFirstAgent + 1)) {
-    throw SetupError("a run takes at most " + std::to_string(kLastAgent - kFirstAgent + 1) +
+  constexpr std::size_t kMostRobots = kLastAgent - kFirstAgent + 1;
+  if (robots > kMostRobots) {
+    throw SetupError("a run takes at most " + std::to_string(kMostRobots) +
                      " robots (agents CAMBADA_1..6); this one places " + std::to_string(robots));
   }
   if (s.interfaces.empty()) {
@@ -240,9 +241,9 @@ void complete(Scenario& s) {
     for (std::size_t k = 0; k < robots; ++k) s.agents.push_back(kFirstAgent + static_cast<int>(k));
   }
   if (s.interfaces.size() != robots || s.agents.size() != robots) {
-    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) +
-                     " robots, " + std::to_string(s.interfaces.size()) + " interfaces, " +
-                     std::to_string(s.agents.size()) + " agents)");
+    throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) + " robots, " +
+                     std::to_string(s.interfaces.size()) + " interfaces, " + std::to_string(s.agents.size()) +
+                     " agents)");
   }
   for (const int a : s.agents) {
     if (a < kFirstAgent || a > kLastAgent) {

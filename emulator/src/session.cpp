@@ -272,8 +272,8 @@ void Session::log_world(Nanos now) {
   for (const Rig& rig : rigs_) {
     const kinematics::Pose p = world_->robot(rig.index).pose();
     // The pose as stored (a float in canhil's layout), so the log reads as before.
-    const kinematics::Pose reported = laptop_ ? laptop_->reported_pose(rig.index).value_or(kinematics::Pose{})
-                                              : kinematics::Pose{};
+    const kinematics::Pose reported =
+        laptop_ ? laptop_->reported_pose(rig.index).value_or(kinematics::Pose{}) : kinematics::Pose{};
     std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.2f,%.4f,%.4f,%.2f", p.x_m, p.y_m, p.heading_rad * 180 / M_PI,
                   reported.x_m, reported.y_m, reported.heading_rad * 180 / M_PI);
     world_log_ += buf;

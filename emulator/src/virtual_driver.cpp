@@ -66,7 +66,8 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     if (side.rtdb_lib != "builtin" || side.layout != "canhil") {
       throw SetupError(
           "the in-process reference laptop (canhil's handler and agent) works on canhil's linked RTDB in canhil's "
-          "layout, not on " + side.rtdb_lib + " in layout " + side.layout +
+          "layout, not on " +
+          side.rtdb_lib + " in layout " + side.layout +
           "; run the team's own software against a real-time run (canhil run without --virtual-time)");
     }
   }

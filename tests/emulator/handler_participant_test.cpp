@@ -36,8 +36,8 @@ class HwCommTest : public test::WatchedTest {
     wp.ball_start = {0, 0.26, wp.ball.radius_m};  // in the mouth
     rig_ = std::make_unique<RobotRig>(set_, wp);
     db_ = rtdb::open_builtin(rtdb::Scope::kOneAgent);
-    laptop_ = std::make_unique<HandlerParticipant>(rig_->bus(), set_, 10ms, rig_->clock(), *db_, layout_, CAMBADA_1,
-                                                   true);
+    laptop_ =
+        std::make_unique<HandlerParticipant>(rig_->bus(), set_, 10ms, rig_->clock(), *db_, layout_, CAMBADA_1, true);
     rig_->add(*laptop_);
     counters.watch_nodes(rig_->nodes());
     const laptop::HwCommStats& hw = laptop_->hw().stats();

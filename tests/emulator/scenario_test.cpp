@@ -37,6 +37,34 @@ TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
   EXPECT_DOUBLE_EQ(one.duration_s, 8);
 }
 
+TEST(Scenarios, TheLaptopTableNamesTheTeamsSoftwareRelativeToTheFile) {
+  const Scenario s = parse_scenario(
+      "[laptop]\nrtdb_lib = \"lib/librtdb.so\"\nrtdb_items = \"rtdb_user.h\"\nrtdb_ini = \"/abs/rtdb.ini\"\n"
+      "layout = \"cambada\"\npman = \"none\"\ncoach_period_s = 0.5\nreplicate = false\nreplicate_period_s = 0.2\n",
+      "/team/scenarios/s.toml");
+  EXPECT_EQ(s.laptop.rtdb_lib, "/team/scenarios/lib/librtdb.so");
+  EXPECT_EQ(s.laptop.rtdb_items, "/team/scenarios/rtdb_user.h");
+  EXPECT_EQ(s.laptop.rtdb_ini, "/abs/rtdb.ini");
+  EXPECT_EQ(s.laptop.layout, "cambada");
+  EXPECT_EQ(s.laptop.pman, "none");
+  EXPECT_DOUBLE_EQ(s.laptop.coach_period_s, 0.5);
+  EXPECT_EQ(s.laptop.replicate, std::optional<bool>(false));
+  EXPECT_DOUBLE_EQ(s.laptop.replicate_period_s, 0.2);
+  auto error_of = [](const std::string& text) {
+    try {
+      parse_scenario(text, "bad.toml");
+    } catch (const physics::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error_of("[laptop]\ncoach_period_s = 0\n").find("bad.toml:2: laptop.coach_period_s: must be a number"),
+            std::string::npos)
+      << error_of("[laptop]\ncoach_period_s = 0\n");
+  EXPECT_NE(error_of("[laptop]\nreplicate = 1\n").find("laptop.replicate: must be true or false"), std::string::npos);
+  EXPECT_NE(error_of("[laptop]\npman_lib = \"x\"\n").find("laptop.pman_lib: unknown field"), std::string::npos);
+}
+
 TEST(Scenarios, CompleteFillsInTheDefaultsOnce) {
   Scenario s;
   complete(s);

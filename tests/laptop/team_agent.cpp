@@ -32,7 +32,6 @@
 #include "rtdb_sim.h"
 #include "support/cambada_like/rtdb_user.h"
 
-
 namespace {
 
 constexpr int kStart = 3;  // CAMBADA's SIGstart
@@ -57,7 +56,7 @@ void cycle(int agent, Counts& n, bool& was_playing) {
   DB_get(agent, CMD_POS, &pos);
   DB_get(agent, CMD_IMU, &imu);
   DB_get(BASE_STATION, COACH_INFO, &coach);  // the base station's shared copy
-  if (vision_age < 0) {  // never written (CAMBADA's library answers INT_MIN)
+  if (vision_age < 0) {                      // never written (CAMBADA's library answers INT_MIN)
     ++n.before_vision;
     return;
   }

@@ -99,7 +99,8 @@ TEST(VcanTeamAgent, TheTeamsAgentOnItsOwnLibrariesDrivesToTheBallAndStopsWhenThe
   ChildProcess handler(canhil::test::build_dir() + "/laptop/canhil-hwcomm --iface vcan0" + libs,
                        "/tmp/canhil_vcan_team_hwcomm.log");
   ASSERT_TRUE(wait_for(agent, 60s, [](const std::string& o) { return has(o, "attached as agent1"); }))
-      << agent.output() << "\nrun:\n" << emulator.output();
+      << agent.output() << "\nrun:\n"
+      << emulator.output();
   // A process the table does not name is refused, and only it.
   ASSERT_TRUE(wait_for(stranger, 60s, [](const std::string& o) { return has(o, "agent9 is not in the PMan table"); }))
       << stranger.output();
@@ -167,8 +168,8 @@ TEST(VcanTeamAgent, TheRunScriptStartsAllThreeAndStopsThemTogether) {
   const std::string src = canhil::test::source_dir();
   const std::string team = src + "/tests/support/cambada_like/";
   const std::string logs = "/tmp/canhil_vcan_own_software";
-  ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() + " --logs " +
-                          logs + " --rtdb-lib " + CANHIL_TEST_TEAM_RTDB + " --rtdb-items " + team +
+  ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() +
+                          " --logs " + logs + " --rtdb-lib " + CANHIL_TEST_TEAM_RTDB + " --rtdb-items " + team +
                           "rtdb_user.h --rtdb-ini " + team + "config/rtdb.ini --layout cambada --pman-lib " +
                           CANHIL_TEST_LIBPMAN + " -- " + CANHIL_TEST_TEAM_AGENT + " --ini " + team + "config/rtdb.ini",
                       "/tmp/canhil_vcan_own_software.log");

@@ -75,7 +75,7 @@ class FaultInjector final : public FaultHook {
   /// Throws SetupError when a target is neither a message nor a node
   /// name (nor a pack, for battery rules). `bit_rate` times an error frame and
   /// the retransmission it causes.
-  FaultInjector(std::vector<FaultRule> rules, std::shared_ptr<const frames::MessageSet> set,
+  FaultInjector(const std::vector<FaultRule>& rules, std::shared_ptr<const frames::MessageSet> set,
                 const std::vector<std::string>& node_names, std::uint64_t seed, std::uint32_t bit_rate = 1'000'000);
 
   /// The time on the nodes' clock the run starts at: rule times (@SECONDS,

@@ -16,9 +16,9 @@ namespace canhil::emulator {
 
 /// The game states canhil knows, by name (a layout maps each to the team's value).
 inline constexpr std::array<std::string_view, 20> kGameStates = {
-    "stop",         "start",          "halt",           "ready",         "drop_ball",    "our_kickoff",   "their_kickoff",
-    "our_freekick", "their_freekick", "our_goalkick",   "their_goalkick", "our_corner",   "their_corner",  "our_throwin",
-    "their_throwin", "our_penalty",   "their_penalty",  "our_goal",       "their_goal",   "parking"};
+    "stop",          "start",          "halt",          "ready",          "drop_ball",  "our_kickoff",  "their_kickoff",
+    "our_freekick",  "their_freekick", "our_goalkick",  "their_goalkick", "our_corner", "their_corner", "our_throwin",
+    "their_throwin", "our_penalty",    "their_penalty", "our_goal",       "their_goal", "parking"};
 
 /// True when `name` is one of kGameStates.
 bool is_game_state(std::string_view name) noexcept;

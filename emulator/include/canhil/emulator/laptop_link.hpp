@@ -81,7 +81,7 @@ class LaptopLink {
   struct CoachItem {
     int id = -1;
     std::unique_ptr<rtdb::ItemBuffer> buffer;
-    std::vector<std::pair<int, int>> targets;  // (space, owner) of every copy written
+    std::vector<std::pair<int, int>> targets;             // (space, owner) of every copy written
     rtdb::Quantity game_state, running, role_auto, role;  // COACH_INFO's (FORMATION_INFO: written as zeros)
   };
   std::unique_ptr<rtdb::Database> db_;
@@ -90,7 +90,7 @@ class LaptopLink {
   std::unique_ptr<rtdb::Replicator> replicator_;
   std::vector<std::unique_ptr<Robot>> robots_;
   std::vector<CoachItem> coach_items_;
-  std::set<std::string> warned_;  // names the layout cannot store, warned of once
+  std::set<std::string> warned_;               // names the layout cannot store, warned of once
   std::vector<std::array<double, 2>> points_;  // scratch for a frame's points
   Nanos coach_period_;
   Nanos next_coach_{0};

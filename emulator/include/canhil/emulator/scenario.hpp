@@ -61,9 +61,9 @@ struct LaptopSide {
   std::string layout;      ///< "canhil", "cambada" or a layout description file
   std::string pman;        ///< "builtin", "none" or a path to the team's libpman.so
   std::vector<std::string> pman_processes = {"agent"};  ///< registered per robot as NAME<agent>
-  double coach_period_s = 0.1;          ///< COACH_INFO / FORMATION_INFO written again this often (and at changes)
-  std::optional<bool> replicate;        ///< copy shared items between agents (default: with more than one robot)
-  double replicate_period_s = 0.1;      ///< the replicator's cycle
+  double coach_period_s = 0.1;      ///< COACH_INFO / FORMATION_INFO written again this often (and at changes)
+  std::optional<bool> replicate;    ///< copy shared items between agents (default: with more than one robot)
+  double replicate_period_s = 0.1;  ///< the replicator's cycle
 };
 
 struct Scenario {

@@ -50,7 +50,7 @@ struct SessionOptions {
   std::shared_ptr<const frames::MessageSet> messages;
   can_nodes::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
   vision_emu::VisionParams vision;
-  bool vision_on = true;      ///< off: no vision and no RTDB (canhil nodes)
+  bool vision_on = true;  ///< off: no vision and no RTDB (canhil nodes)
   /// The run follows the wall clock, so processes outside it can take part
   /// (the laptop side's defaults: PMan masters only then, see resolve_laptop).
   bool realtime = false;

@@ -29,12 +29,12 @@ namespace canhil::pman {
 /// One registered process of a robot's table, as the table has it.
 struct Process {
   std::string name;
-  int pid = 0;          ///< 0 until its client attached
-  int status = 0;       ///< PROC_S_* (pman.h): 3 idle, 2 activated and running
-  std::uint64_t activations = 0;      ///< the table's count (PROC_nact)
-  std::int64_t last_start_us = 0;     ///< gettimeofday of its last activation, or 0
-  std::int64_t last_finish_us = 0;    ///< of its last epilogue, or 0
-  bool idle() const noexcept;         ///< waiting for its next activation (its cycle ended)
+  int pid = 0;                      ///< 0 until its client attached
+  int status = 0;                   ///< PROC_S_* (pman.h): 3 idle, 2 activated and running
+  std::uint64_t activations = 0;    ///< the table's count (PROC_nact)
+  std::int64_t last_start_us = 0;   ///< gettimeofday of its last activation, or 0
+  std::int64_t last_finish_us = 0;  ///< of its last epilogue, or 0
+  bool idle() const noexcept;       ///< waiting for its next activation (its cycle ended)
 };
 
 /// What canhil counted for one process over the run.
