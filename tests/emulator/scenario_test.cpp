@@ -5,20 +5,18 @@
 #include <gtest/gtest.h>
 
 #include "canhil/physics/config.hpp"
+#include "support/error_of.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
 namespace {
 
+// What a scenario text's mistake says.
+std::string error_of(const std::string& text) {
+  return test::error_of<physics::ConfigError>([&] { parse_scenario(text, "bad.toml"); });
+}
+
 TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
-  auto error_of = [](const std::string& text) {
-    try {
-      parse_scenario(text, "bad.toml");
-    } catch (const physics::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   const std::string robot = "[[robots]]\nx_m = 0\n";
   EXPECT_NE(
       error_of(robot + "[run]\ninterfaces = [\"vcan0\", \"vcan1\"]\n").find("bad.toml:4: run.interfaces: give one"),
@@ -50,14 +48,6 @@ TEST(Scenarios, TheLaptopTableNamesTheTeamsSoftwareRelativeToTheFile) {
   EXPECT_DOUBLE_EQ(s.laptop.coach_period_s, 0.5);
   EXPECT_EQ(s.laptop.replicate, std::optional<bool>(false));
   EXPECT_DOUBLE_EQ(s.laptop.replicate_period_s, 0.2);
-  auto error_of = [](const std::string& text) {
-    try {
-      parse_scenario(text, "bad.toml");
-    } catch (const physics::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   EXPECT_NE(error_of("[laptop]\ncoach_period_s = 0\n").find("bad.toml:2: laptop.coach_period_s: must be a number"),
             std::string::npos)
       << error_of("[laptop]\ncoach_period_s = 0\n");

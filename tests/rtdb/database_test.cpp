@@ -13,6 +13,7 @@
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
+#include "support/error_of.hpp"
 #include "support/team_rtdb.hpp"
 
 namespace canhil::rtdb {
@@ -25,14 +26,7 @@ std::span<const std::byte> bytes_of(const std::array<unsigned char, N>& a) {
   return std::as_bytes(std::span(a));
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const SetupError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 class TeamDatabase : public ::testing::Test {
  protected:

@@ -7,6 +7,7 @@
 #include "canhil/base/setup_error.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "rtdb_user.h"
+#include "support/error_of.hpp"
 #include "support/team_rtdb.hpp"
 
 namespace canhil::rtdb {
@@ -14,14 +15,7 @@ namespace {
 
 using test::write_file;
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const SetupError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 TEST(ItemTable, ReadsTheTeamsHeaderAndIni) {
   const test::TeamFiles f = test::write_team_files("item_table_reads");

@@ -11,6 +11,7 @@
 #include <sys/shm.h>
 #include <unistd.h>
 
+#include "check.h"
 #include "rtdb.h"
 #include "rtdb_sim.h"
 
@@ -33,13 +34,6 @@ typedef struct {
 int comm_checks(void); /* compat_comm.c */
 
 static int failures = 0;
-#define CHECK(cond)                                                            \
-  do {                                                                         \
-    if (!(cond)) {                                                             \
-      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                              \
-    }                                                                          \
-  } while (0)
 
 int main(void) {
   char key[32];

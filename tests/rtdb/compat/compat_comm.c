@@ -3,16 +3,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "check.h"
 #include "rtdb.h"
 #include "rtdb_comm.h"
-
-#define CHECK(cond)                                                            \
-  do {                                                                         \
-    if (!(cond)) {                                                             \
-      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                              \
-    }                                                                          \
-  } while (0)
 
 int comm_checks(void) {
   int failures = 0;
