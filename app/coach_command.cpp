@@ -3,8 +3,10 @@
 // socket (canhil/control/commands.hpp): the game state for every robot, or
 // one robot's running flag and role. canhil writes them into every robot's
 // RTDB as the team's base station would (COACH_INFO in the team's layout).
+#include <chrono>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "canhil/control/unix_server.hpp"
 #include "canhil/emulator/coach.hpp"
@@ -29,6 +31,18 @@ void print_status(const nlohmann::json& snapshot) {
     std::printf("  robot %d: %s, role %s%s\n", r++, p.value("running", false) ? "running" : "stopped",
                 p.value("role", std::string("?")).c_str(), p.value("role_auto", false) ? " (auto)" : "");
   }
+}
+
+// Whether the run's snapshot shows what `order` asked for.
+bool taken(const nlohmann::json& snapshot, const nlohmann::json& order) {
+  const nlohmann::json& coach = snapshot["coach"];
+  if (order.contains("game_state") && coach.value("game_state", std::string()) != order["game_state"]) return false;
+  if (!order.contains("robot")) return true;
+  const auto r = order["robot"].get<std::size_t>();
+  if (!coach["players"].is_array() || r >= coach["players"].size()) return false;
+  const nlohmann::json& p = coach["players"][r];
+  if (order.contains("running") && p.value("running", false) != order["running"].get<bool>()) return false;
+  return !order.contains("role") || p.value("role", std::string()) == order["role"];
 }
 
 }  // namespace
@@ -69,7 +83,16 @@ int run_coach(Args& args, const std::optional<std::string>&) {
   if ((running || role) && !robot) throw UsageError("--running and --role need --robot N");
   if (request.size() == 1) throw UsageError("say what to order: a game state, or --robot N with --running or --role");
   ask(socket, request);
-  print_status(ask(socket, {{"command", "snapshot"}})["snapshot"]);
+  // The order takes effect at the run's next step: show the state once it has
+  // (a slow or loaded machine may take a while; say so if it has not).
+  nlohmann::json snapshot;
+  for (int i = 0; i < 250; ++i) {
+    snapshot = ask(socket, {{"command", "snapshot"}})["snapshot"];
+    if (taken(snapshot, request)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (!taken(snapshot, request)) std::printf("ordered; the run has not taken it yet (it does at its next step)\n");
+  print_status(snapshot);
   return 0;
 }
 

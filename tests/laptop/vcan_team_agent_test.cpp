@@ -124,7 +124,7 @@ TEST(VcanTeamAgent, TheTeamsAgentOnItsOwnLibrariesDrivesToTheBallAndStopsWhenThe
 
   // The coach says stop: the agent stops, the robot stands.
   const std::string coach = run_canhil("coach stop");
-  EXPECT_TRUE(has(coach, "stop")) << coach;
+  EXPECT_TRUE(has(coach, "game state: stop")) << "shown once the run has taken the order\n" << coach;
   ASSERT_TRUE(wait_for(agent, 30s, [](const std::string& o) { return has(o, "coach says stop"); })) << context;
   const AgentCounts at_stop = last_counts(agent.output());
   EXPECT_EQ(at_stop.before_vision, 0) << "never woken before its VISION_INFO was written\n" << agent.output();
