@@ -126,7 +126,16 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     usleep(100'000);
   }
-  if (PMAN_attach(name.c_str(), getpid()) != 0) {
+  // A team's PMan library makes the table visible before the master has
+  // registered its processes (PMAN_init, then PMAN_procadd): an agent that
+  // attaches in between is refused. This one tries again for a moment before
+  // it takes the refusal as final (CAMBADA's agent would exit at once).
+  int refused = PMAN_attach(name.c_str(), getpid());
+  for (int tries = 1; refused != 0 && tries < 20; ++tries) {
+    usleep(100'000);
+    refused = PMAN_attach(name.c_str(), getpid());
+  }
+  if (refused != 0) {
     std::printf("team_agent: %s is not in the PMan table\n", name.c_str());
     PMAN_close(PMAN_CLLEAVE);
     DB_free();
