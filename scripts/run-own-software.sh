@@ -59,11 +59,20 @@ export AGENT=$agent
 echo "== canhil run (log: $logs/run.log)"
 "$canhil" "${run_args[@]}" >"$logs/run.log" 2>&1 &
 run_pid=$!
+started=""
 for _ in $(seq 100); do
-  grep -q "on $iface" "$logs/run.log" 2>/dev/null && break
+  grep -q "robot [0-9]* on " "$logs/run.log" 2>/dev/null && { started=1; break; }
   kill -0 "$run_pid" 2>/dev/null || { cat "$logs/run.log"; die "canhil run ended before it started"; }
   sleep 0.1
 done
+# The scenario decides the run's interfaces and agent numbers: the handler and
+# the agent must be started on the ones it uses.
+if [[ -z "$started" ]] || ! grep -q "on $iface for agent $agent " "$logs/run.log"; then
+  kill -INT "$run_pid" 2>/dev/null || true
+  wait "$run_pid" 2>/dev/null || true
+  grep "robot [0-9]* on " "$logs/run.log" >&2 || cat "$logs/run.log" >&2
+  die "canhil run has no robot on $iface for agent $agent (above: what it runs); give --iface and --agent-number as its scenario says, or a --config whose [run] interfaces and agents say so"
+fi
 echo "== canhil-hwcomm on $iface, agent $agent (log: $logs/hwcomm.log)"
 "$hwcomm" --iface "$iface" "${laptop[@]}" >"$logs/hwcomm.log" 2>&1 &
 hw_pid=$!

@@ -201,4 +201,17 @@ TEST(VcanTeamAgent, TheRunScriptStartsAllThreeAndStopsThemTogether) {
   EXPECT_TRUE(has(agent_log, "team_agent: cycles")) << "the agent ended when the run closed its table\n" << agent_log;
 }
 
+TEST(VcanTeamAgent, TheRunScriptRefusesAnInterfaceTheScenarioDoesNotUse) {
+  const std::string src = canhil::test::source_dir();
+  ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() +
+                          " --iface vcan7 --logs /tmp/canhil_vcan_own_software_wrong -- /bin/sleep 30",
+                      "/tmp/canhil_vcan_own_software_wrong.log");
+  ASSERT_TRUE(wait_for(script, 60s, [](const std::string& o) { return has(o, "no robot on vcan7"); }))
+      << script.output();
+  const int status = script.stop();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << script.output();
+  EXPECT_TRUE(has(script.output(), "robot 0 on vcan0 for agent 1")) << "what the run does use\n" << script.output();
+  EXPECT_FALSE(has(script.output(), "== the agent")) << "nothing else was started\n" << script.output();
+}
+
 }  // namespace
