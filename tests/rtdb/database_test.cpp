@@ -7,13 +7,17 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cstring>
+#include <thread>
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
 #include "support/error_of.hpp"
+#include "support/sanitizers.hpp"
 #include "support/team_rtdb.hpp"
 
 namespace canhil::rtdb {
@@ -87,6 +91,37 @@ TEST_F(TeamDatabase, OneAgentThroughTheTeamsLibrary) {
             }).find("is open for agent 2 only: open it for every agent (Scope::kAllAgents) or run with AGENT=1"),
             std::string::npos);
 }
+
+// The stand-in, as CAMBADA's library, copies values without a lock: the
+// race below is the point, and ThreadSanitizer would report it. Under TSan
+// this test is left out; the plain and ASan flavours run it.
+#if !CANHIL_UNDER_TSAN
+TEST_F(TeamDatabase, AReadThatAWriteOvertakesNeverAnswersANegativeAge) {
+  // A team's agent reads VISION_INFO while canhil writes the next frame. The
+  // age is now minus the stamp: read the stamp after the clock and a write in
+  // between makes it negative, which canhil and CAMBADA's agent take for
+  // "never written". A writer thread puts without pause while this one reads.
+  auto db = open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini);
+  const std::array<unsigned char, 16> vel{1};
+  db->put(kRobot1, kRobot1, kCmdVel, bytes_of(vel));
+  std::atomic<bool> stop{false};
+  std::thread writer([&] {
+    while (!stop.load(std::memory_order_relaxed)) db->put(kRobot1, kRobot1, kCmdVel, bytes_of(vel));
+  });
+  long reads = 0, not_fresh = 0;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+  std::array<unsigned char, 16> back{};
+  while (std::chrono::steady_clock::now() < until) {
+    const auto age = db->get(kRobot1, kRobot1, kCmdVel, std::as_writable_bytes(std::span(back)));
+    ++reads;
+    if (!age.has_value() || *age < 0) ++not_fresh;
+  }
+  stop = true;
+  writer.join();
+  EXPECT_GT(reads, 1000);
+  EXPECT_EQ(not_fresh, 0) << "of " << reads << " reads";
+}
+#endif
 
 TEST_F(TeamDatabase, ClosingFreesAndUnloads) {
   open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini).reset();

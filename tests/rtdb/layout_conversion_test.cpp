@@ -18,20 +18,12 @@
 #include <vector>
 
 #include "canhil/rtdb/layout.hpp"
+#include "support/sanitizers.hpp"
 
 // ThreadSanitizer's runtime defines the allocation operators itself (a
 // static archive: a second definition does not link), so under TSan the
 // allocation count and its test are left out; the plain and ASan flavours run it.
-#if defined(__SANITIZE_THREAD__)
-#define CANHIL_COUNT_ALLOCATIONS 0
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define CANHIL_COUNT_ALLOCATIONS 0
-#endif
-#endif
-#ifndef CANHIL_COUNT_ALLOCATIONS
-#define CANHIL_COUNT_ALLOCATIONS 1
-#endif
+#define CANHIL_COUNT_ALLOCATIONS (!CANHIL_UNDER_TSAN)
 
 #if CANHIL_COUNT_ALLOCATIONS
 // Counts every allocation of this test program (the no-allocation test reads

@@ -156,7 +156,7 @@ static int put_in(int space, int owner, int id, const void* value, int life) {
   record* r = find(space, owner, id);
   if (r == NULL || value == NULL) return -1;
   memcpy(r + 1, value, g_table.size[id]);
-  r->stamp_ms = now_ms() - life;
+  __atomic_store_n(&r->stamp_ms, now_ms() - life, __ATOMIC_RELEASE);
   r->written = 1;
   __atomic_fetch_add(&((segment_header*)g_seg[space])->puts[id], 1u, __ATOMIC_RELAXED);
   return (int)g_table.size[id];
@@ -167,7 +167,10 @@ static int get_from(int space, int owner, int id, void* value) {
   if (r == NULL || value == NULL) return -1;
   memcpy(value, r + 1, g_table.size[id]);
   if (!r->written) return INT_MIN;
-  return (int)(now_ms() - r->stamp_ms);
+  /* The stamp before the clock: read after it, a write that lands in between
+   * (the next frame) would make the age negative. */
+  const int64_t stamp = __atomic_load_n(&r->stamp_ms, __ATOMIC_ACQUIRE);
+  return (int)(now_ms() - stamp);
 }
 
 __attribute__((destructor)) static void release(void) { free(g_config); } /* at dlclose */
