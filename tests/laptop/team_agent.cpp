@@ -58,9 +58,8 @@ void cycle(int agent, Counts& n, bool& was_playing) {
   DB_get(agent, CMD_IMU, &imu);
   DB_get(BASE_STATION, COACH_INFO, &coach);  // the base station's shared copy
   // Never written: CAMBADA's library answers INT_MIN. Any other negative age
-  // is a written item whose stamp is a millisecond ahead of this CPU's clock
-  // (seen in the VM runner, whose virtual CPUs' clocks drift apart slightly):
-  // it is fresh, not missing.
+  // is a written item (a library that reads its clock before the stamp can
+  // answer -1 when the next write lands in between): fresh, not missing.
   if (vision_age == INT_MIN) {
     ++n.before_vision;
     return;
