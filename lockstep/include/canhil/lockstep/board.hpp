@@ -1,0 +1,84 @@
+// canhil/lockstep/board.hpp — the shared-memory board between canhil (the
+// conductor, which owns the virtual clock) and the time shim preloaded into
+// each external process (the team's handler and agent).
+//
+// The protocol, in one paragraph. The conductor writes the virtual time and
+// then bumps `epoch` (a futex word) whenever something a blocked process may
+// be waiting for can have changed: the time moved, canhil sent frames, PMan
+// activated someone. Each thread of an external process has a slot. Before it
+// blocks (a sleep, a poll, a blocking read, sigsuspend...) the shim reads the
+// epoch, checks once without blocking whether its call can complete, and if
+// not marks its slot blocked *at that epoch* with the virtual time it would
+// wake at, then waits on the epoch word. The conductor moves the clock only
+// when every slot is blocked at the current epoch (so nobody missed a change)
+// and every frame the processes sent has been seen on the bus. Nothing is
+// counted in advance: a process that decides to send one more frame simply
+// does not block until it has sent it.
+//
+// Layout rules: fixed-size, no pointers, lock-free atomics only (they work
+// across processes in shared memory on Linux); bump kVersion on any change.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+
+namespace canhil::lockstep {
+
+inline constexpr std::uint32_t kMagic = 0x4C4B5354;  // "LKST"
+inline constexpr std::uint32_t kVersion = 1;
+inline constexpr std::size_t kMaxSlots = 64;
+inline constexpr std::size_t kNameBytes = 32;
+inline constexpr std::size_t kWhatBytes = 24;
+/// wake_at_ns of a slot that waits with no timeout.
+inline constexpr std::int64_t kNoWake = INT64_MAX;
+/// The environment variable naming the board (a POSIX shared-memory name).
+inline constexpr const char* kBoardVariable = "CANHIL_LOCKSTEP";
+
+enum class SlotState : std::uint32_t {
+  kFree = 0,
+  kRunning = 1,  ///< the thread is doing something: the clock waits
+  kBlocked = 2,  ///< the thread waits (at seen_epoch, until wake_at_ns or something changes)
+  kGone = 3,     ///< the thread or its process ended; the conductor frees it
+};
+
+struct alignas(64) Slot {
+  std::atomic<std::uint32_t> state{0};       ///< SlotState
+  std::atomic<std::uint32_t> seen_epoch{0};  ///< the epoch it checked before blocking
+  /// 1 while it waits for a signal only (sigsuspend, pause, waitpid): quiet at
+  /// any epoch; the conductor waits for what it signalled by other means.
+  std::atomic<std::uint32_t> signal_wait{0};
+  /// The thread it joins (pthread_join), while it does: quiet only as long as
+  /// that thread exists (once it is gone, the joiner is about to run).
+  std::atomic<std::int32_t> join_tid{0};
+  std::atomic<std::int64_t> wake_at_ns{kNoWake};
+  std::atomic<std::uint64_t> frames_sent{0};           ///< CAN frames it wrote (counted on success)
+  std::atomic<std::uint64_t> blocks{0};                ///< times it blocked
+  std::atomic<std::uint64_t> busy_wall_ns{0};          ///< wall time spent running between blocks
+  std::atomic<std::int64_t> running_since_wall_ns{0};  ///< CLOCK_MONOTONIC (real) when it last ran
+  std::atomic<std::int32_t> pid{0};
+  std::atomic<std::int32_t> tid{0};
+  char name[kNameBytes]{};  ///< the process's comm; written before state leaves kFree
+  char what[kWhatBytes]{};  ///< the call it blocks in ("poll", "nanosleep", "sigsuspend", ...)
+};
+
+struct Board {
+  std::uint32_t magic = 0;
+  std::uint32_t version = 0;
+  std::int32_t conductor_pid = 0;
+  std::uint32_t reserved = 0;
+  /// CLOCK_REALTIME (and gettimeofday, time) at virtual 0; CLOCK_MONOTONIC and
+  /// CLOCK_BOOTTIME read monotonic_base_ns + now.
+  std::int64_t realtime_base_ns = 0;
+  std::int64_t monotonic_base_ns = 0;
+  alignas(64) std::atomic<std::int64_t> now_ns{0};    ///< virtual time since the run's start
+  alignas(64) std::atomic<std::uint32_t> epoch{0};    ///< futex word the processes wait on
+  alignas(64) std::atomic<std::uint32_t> changes{0};  ///< futex word the conductor waits on: bumped on each block
+  alignas(64) Slot slots[kMaxSlots];
+};
+
+static_assert(std::atomic<std::int64_t>::is_always_lock_free);
+static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
+static_assert(sizeof(std::atomic<std::uint32_t>) == 4, "futex words are 32-bit");
+
+}  // namespace canhil::lockstep

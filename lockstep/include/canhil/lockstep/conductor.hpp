@@ -1,0 +1,106 @@
+// canhil/lockstep/conductor.hpp — canhil's side of virtual time with external
+// processes: it owns the board (board.hpp) the time shim in each process
+// reads its clock from, moves the virtual time, tells the processes when
+// something changed, and waits until every one of them is quiet again.
+//
+// A run goes: start the processes with environment() (or tell the user to),
+// wait_attached(), then at each instant: set_time(now) (bumps the epoch only
+// when a process's wake-up has come), after sending frames or signals
+// nudge(), then wait_quiet() before the next instant; next_wakeup() says when
+// the earliest sleeping process wants to run.
+//
+// Thread-compatible: one thread drives a Conductor.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "canhil/lockstep/board.hpp"
+
+namespace canhil::lockstep {
+
+using Nanos = std::chrono::nanoseconds;
+
+struct ConductorOptions {
+  /// How long (wall time) a process may take to become quiet before the run
+  /// names it and stops.
+  Nanos answer_limit = std::chrono::seconds(1);
+  /// CLOCK_REALTIME at virtual 0 (gettimeofday, time): 2026-01-01 00:00:00 UTC,
+  /// the same in every run so that what the processes print is the same.
+  std::int64_t realtime_base_ns = 1'767'225'600LL * 1'000'000'000;
+  /// CLOCK_MONOTONIC at virtual 0.
+  std::int64_t monotonic_base_ns = 1'000LL * 1'000'000'000;
+};
+
+/// One external process (its threads summed), for the run's summary.
+struct ProcessReport {
+  std::string name;
+  int pid = 0;
+  int threads = 0;
+  bool gone = false;         ///< it exited (or was killed)
+  std::uint64_t blocks = 0;  ///< times one of its threads waited
+  std::uint64_t frames_sent = 0;
+  Nanos busy_wall{0};  ///< wall time its threads ran while canhil waited for them
+};
+
+class Conductor {
+ public:
+  /// Creates the board (a POSIX shared-memory object named after this
+  /// process). SetupError: no shared memory.
+  explicit Conductor(ConductorOptions options = {});
+  ~Conductor();
+  Conductor(const Conductor&) = delete;
+  Conductor& operator=(const Conductor&) = delete;
+
+  /// The board's name: the value of CANHIL_LOCKSTEP for the processes.
+  const std::string& board_name() const noexcept { return name_; }
+  /// The environment entries a process needs: CANHIL_LOCKSTEP and LD_PRELOAD
+  /// (the shim first, then whatever `preload_already` holds).
+  std::vector<std::string> environment(const std::filesystem::path& shim, const char* preload_already) const;
+
+  /// Waits (wall time, up to `limit`) until `count` threads have attached;
+  /// returns how many did.
+  std::size_t wait_attached(std::size_t count, Nanos limit);
+
+  /// Moves the virtual clock to `now` (never back). Wakes the processes if
+  /// one of them asked to be woken by then.
+  void set_time(Nanos now);
+  Nanos now() const noexcept;
+  /// Something a process may be waiting for happened (frames sent, a signal):
+  /// every waiting process checks again.
+  void nudge();
+  /// The earliest virtual time a waiting process asked to be woken at.
+  Nanos next_wakeup() const noexcept;
+
+  /// Waits until every thread is quiet (waiting at the current epoch, or for
+  /// a signal) and `also()` returns an empty string (canhil's own condition:
+  /// the frames in flight seen, PMan's epilogues). Empty on success; after
+  /// the answer limit, a sentence naming who did not answer and what canhil
+  /// waited for (`waiting_for`, e.g. "the trigger message at t = 1.230 s").
+  std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for);
+
+  /// CAN frames the processes wrote (counted by the shim), over the run.
+  std::uint64_t frames_sent() const noexcept;
+  /// The processes seen over the run, in the order they attached.
+  std::vector<ProcessReport> processes() const;
+  /// Wall time spent in wait_quiet (canhil waiting for the processes).
+  Nanos waited_wall() const noexcept { return waited_; }
+
+ private:
+  bool quiet(std::string* who);
+  void sweep_dead();
+  void retire(Slot& slot);
+
+  ConductorOptions options_;
+  std::string name_;
+  Board* board_ = nullptr;
+  Nanos waited_{0};
+  std::uint64_t frames_of_freed_ = 0;
+  std::vector<ProcessReport> freed_;  // reports of slots freed (processes gone)
+};
+
+}  // namespace canhil::lockstep

@@ -1,0 +1,256 @@
+// canhil/lockstep/conductor.cpp — the board's owner (conductor.hpp).
+#include "canhil/lockstep/conductor.hpp"
+
+#include <fcntl.h>
+#include <linux/futex.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <climits>
+#include <cstdio>
+#include <cstring>
+#include <new>
+
+#include "canhil/base/setup_error.hpp"
+
+namespace canhil::lockstep {
+namespace {
+
+std::atomic<int> g_boards{0};
+
+long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const timespec* timeout) noexcept {
+  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
+}
+
+Nanos wall_now() noexcept {
+  timespec ts{};
+  // The raw system call: in a run whose canhil is itself preloaded with the
+  // shim (a team library stamping items), clock_gettime would be virtual.
+  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
+  return std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
+}
+
+SlotState state_of(const Slot& s) { return static_cast<SlotState>(s.state.load(std::memory_order_acquire)); }
+
+std::string text_of(const char* chars, std::size_t size) { return std::string(chars, strnlen(chars, size)); }
+
+std::string seconds(Nanos t) {
+  char out[32];
+  std::snprintf(out, sizeof out, "%.3f s", std::chrono::duration<double>(t).count());
+  return out;
+}
+
+// Whether a thread exists and has not ended: a process that exited stays a
+// zombie until its parent reaps it, and a zombie runs no more.
+bool running_thread(int pid, int tid) {
+  if (syscall(SYS_tgkill, pid, tid, 0) != 0 && errno == ESRCH) return false;
+  const std::string path = "/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/stat";
+  FILE* f = std::fopen(path.c_str(), "r");
+  if (f == nullptr) return false;
+  char line[512] = {};
+  const bool read = std::fgets(line, sizeof line, f) != nullptr;
+  std::fclose(f);
+  const char* end_of_name = read ? std::strrchr(line, ')') : nullptr;  // "tid (comm) S ..."
+  if (end_of_name == nullptr || end_of_name[1] == '\0') return true;
+  const char state = end_of_name[2];
+  return state != 'Z' && state != 'X';
+}
+
+bool alive(const Slot& s) {
+  const int pid = s.pid.load();
+  const int tid = s.tid.load();
+  if (tid == 0) return kill(pid, 0) == 0 || errno != ESRCH;  // a thread not yet started
+  return running_thread(pid, tid);
+}
+
+}  // namespace
+
+Conductor::Conductor(ConductorOptions options) : options_(options) {
+  name_ = "/canhil-lockstep-" + std::to_string(getpid()) + "-" + std::to_string(g_boards.fetch_add(1));
+  const int fd = shm_open(name_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    throw SetupError("canhil: cannot create the lockstep board " + name_ + " (" + std::strerror(errno) +
+                     "): is /dev/shm mounted and writable?");
+  }
+  const bool sized = ftruncate(fd, sizeof(Board)) == 0;
+  void* mapped = sized ? mmap(nullptr, sizeof(Board), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0) : MAP_FAILED;
+  close(fd);
+  if (mapped == MAP_FAILED) {
+    const std::string why = std::strerror(errno);
+    shm_unlink(name_.c_str());
+    throw SetupError("canhil: cannot map the lockstep board " + name_ + " (" + why + ")");
+  }
+  board_ = new (mapped) Board();
+  board_->conductor_pid = getpid();
+  board_->realtime_base_ns = options_.realtime_base_ns;
+  board_->monotonic_base_ns = options_.monotonic_base_ns;
+  board_->version = kVersion;
+  std::atomic_thread_fence(std::memory_order_release);
+  board_->magic = kMagic;
+}
+
+Conductor::~Conductor() {
+  if (board_ == nullptr) return;
+  // Anyone still waiting learns at its next check that canhil is gone.
+  munmap(board_, sizeof(Board));
+  shm_unlink(name_.c_str());
+}
+
+std::vector<std::string> Conductor::environment(const std::filesystem::path& shim, const char* preload_already) const {
+  std::string preload = "LD_PRELOAD=" + shim.string();
+  if (preload_already != nullptr && *preload_already != '\0') preload += std::string(":") + preload_already;
+  return {std::string(kBoardVariable) + "=" + name_, preload};
+}
+
+std::size_t Conductor::wait_attached(std::size_t count, Nanos limit) {
+  const Nanos until = wall_now() + limit;
+  for (;;) {
+    std::size_t attached = 0;
+    for (const Slot& s : board_->slots) {
+      if (state_of(s) != SlotState::kFree) ++attached;
+    }
+    if (attached >= count || wall_now() > until) return attached;
+    const std::uint32_t seen = board_->changes.load(std::memory_order_acquire);
+    const timespec a_while{0, 20'000'000};
+    futex(&board_->changes, FUTEX_WAIT, seen, &a_while);
+  }
+}
+
+void Conductor::set_time(Nanos now) {
+  const std::int64_t ns = now.count();
+  if (ns <= board_->now_ns.load(std::memory_order_relaxed)) return;
+  board_->now_ns.store(ns, std::memory_order_release);
+  if (next_wakeup() <= now) nudge();
+}
+
+Nanos Conductor::now() const noexcept { return Nanos(board_->now_ns.load(std::memory_order_acquire)); }
+
+void Conductor::nudge() {
+  board_->epoch.fetch_add(1, std::memory_order_acq_rel);
+  futex(&board_->epoch, FUTEX_WAKE, INT_MAX, nullptr);
+}
+
+Nanos Conductor::next_wakeup() const noexcept {
+  std::int64_t next = kNoWake;
+  for (const Slot& s : board_->slots) {
+    if (state_of(s) == SlotState::kBlocked && s.signal_wait.load(std::memory_order_relaxed) == 0) {
+      next = std::min(next, s.wake_at_ns.load(std::memory_order_relaxed));
+    }
+  }
+  return Nanos(next);
+}
+
+bool Conductor::quiet(std::string* who) {
+  const std::uint32_t epoch = board_->epoch.load(std::memory_order_acquire);
+  for (Slot& s : board_->slots) {
+    const SlotState state = state_of(s);
+    if (state == SlotState::kFree) continue;
+    if (state == SlotState::kGone) {
+      // A thread that said goodbye is quiet once it has really ended: until
+      // then a thread joining it has not been woken.
+      if (!alive(s)) {
+        retire(s);
+        continue;
+      }
+    } else if (state == SlotState::kBlocked) {
+      const int joined = s.join_tid.load(std::memory_order_relaxed);
+      if (s.signal_wait.load(std::memory_order_relaxed) != 0) {
+        if (joined == 0 || running_thread(s.pid.load(), joined)) continue;
+      } else if (s.seen_epoch.load(std::memory_order_relaxed) == epoch) {
+        continue;
+      }
+    }
+    if (who != nullptr) {
+      std::string doing = " did not come back from " + text_of(s.what, sizeof s.what);
+      if (state == SlotState::kRunning) doing = " kept running and did not wait again";
+      if (state == SlotState::kGone) doing = " is ending and has not ended";
+      *who = text_of(s.name, sizeof s.name) + " (pid " + std::to_string(s.pid.load()) + ", thread " +
+             std::to_string(s.tid.load()) + ")" + doing;
+    }
+    return false;
+  }
+  return true;
+}
+
+void Conductor::retire(Slot& s) {
+  // Keep its figures for the summary, then free the slot.
+  const int pid = s.pid.load();
+  auto it = std::find_if(freed_.begin(), freed_.end(), [pid](const ProcessReport& r) { return r.pid == pid; });
+  if (it == freed_.end()) it = freed_.insert(freed_.end(), ProcessReport{text_of(s.name, sizeof s.name), pid});
+  it->threads += 1;
+  it->blocks += s.blocks.load();
+  it->frames_sent += s.frames_sent.load();
+  it->busy_wall += Nanos(s.busy_wall_ns.load());
+  frames_of_freed_ += s.frames_sent.load();
+  s.state.store(static_cast<std::uint32_t>(SlotState::kFree), std::memory_order_release);
+  s.pid.store(0, std::memory_order_release);
+}
+
+void Conductor::sweep_dead() {
+  for (Slot& s : board_->slots) {
+    const SlotState state = state_of(s);
+    if (state == SlotState::kFree) continue;
+    if (!alive(s)) retire(s);
+  }
+}
+
+std::string Conductor::wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for) {
+  const Nanos start = wall_now();
+  const Nanos until = start + options_.answer_limit;
+  bool swept = false;
+  for (;;) {
+    const std::uint32_t seen = board_->changes.load(std::memory_order_acquire);
+    std::string who;
+    const bool processes_quiet = quiet(&who);
+    const std::string missing = processes_quiet && also ? also() : std::string();
+    if (processes_quiet && missing.empty()) break;
+    const Nanos now = wall_now();
+    if (!swept && now - start > std::chrono::milliseconds(50)) {
+      sweep_dead();  // a process that died without a word
+      swept = true;
+      continue;
+    }
+    if (now > until) {
+      waited_ += now - start;
+      const std::string limit = seconds(options_.answer_limit) + " of wall time";
+      if (!processes_quiet) return who + " within " + limit + " after " + waiting_for;
+      return "canhil waited " + limit + " after " + waiting_for + " for " + missing;
+    }
+    const timespec a_while{0, 1'000'000};  // canhil's own condition may change without a board change
+    futex(&board_->changes, FUTEX_WAIT, seen, &a_while);
+  }
+  waited_ += wall_now() - start;
+  return {};
+}
+
+std::uint64_t Conductor::frames_sent() const noexcept {
+  std::uint64_t sum = frames_of_freed_;
+  for (const Slot& s : board_->slots) {
+    if (state_of(s) != SlotState::kFree) sum += s.frames_sent.load(std::memory_order_acquire);
+  }
+  return sum;
+}
+
+std::vector<ProcessReport> Conductor::processes() const {
+  std::vector<ProcessReport> out = freed_;
+  for (ProcessReport& r : out) r.gone = true;
+  for (const Slot& s : board_->slots) {
+    if (state_of(s) == SlotState::kFree) continue;
+    const int pid = s.pid.load();
+    auto it = std::find_if(out.begin(), out.end(), [pid](const ProcessReport& r) { return r.pid == pid; });
+    if (it == out.end()) it = out.insert(out.end(), ProcessReport{text_of(s.name, sizeof s.name), pid});
+    it->gone = state_of(s) == SlotState::kGone;
+    it->threads += 1;
+    it->blocks += s.blocks.load();
+    it->frames_sent += s.frames_sent.load();
+    it->busy_wall += Nanos(s.busy_wall_ns.load());
+  }
+  return out;
+}
+
+}  // namespace canhil::lockstep

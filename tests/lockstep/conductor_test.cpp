@@ -1,0 +1,200 @@
+// The conductor and the time shim together: a real program (lockstep_client)
+// runs under the shim while the test moves the virtual clock, and what the
+// program's clocks said at each point is checked to the nanosecond. Nothing
+// here depends on the machine's speed: the wall clock only bounds a wait.
+#include "canhil/lockstep/conductor.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/child_process.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using canhil::lockstep::Conductor;
+using canhil::lockstep::ConductorOptions;
+using canhil::lockstep::Nanos;
+using canhil::test::ChildProcess;
+
+constexpr long long kMonotonicBase = 1'000'000'000'000LL;  // ConductorOptions' default: 1000 s
+
+std::string command(const Conductor& conductor, const std::string& arguments) {
+  std::string out = "env";
+  for (const std::string& e : conductor.environment(CANHIL_TEST_TIMESHIM, nullptr)) out += " " + e;
+  return out + " " + CANHIL_TEST_LOCKSTEP_CLIENT + " " + arguments;
+}
+
+// Moves the clock as a run with only external processes would: wait until
+// they are quiet, then jump to the earliest wake-up, up to `end`.
+std::string drive(Conductor& conductor, Nanos end) {
+  for (;;) {
+    const std::string stuck = conductor.wait_quiet({}, "t = " + std::to_string(conductor.now().count()) + " ns");
+    if (!stuck.empty()) return stuck;
+    const Nanos next = conductor.next_wakeup();
+    if (next > end) {
+      conductor.set_time(end);
+      return conductor.wait_quiet({}, "the end");
+    }
+    conductor.set_time(next);
+  }
+}
+
+// "<what> <ns>" lines, as virtual ns since the run's start.
+std::multimap<std::string, long long> said(const std::string& output) {
+  std::multimap<std::string, long long> out;
+  std::istringstream in(output);
+  std::string what;
+  long long ns = 0;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    if (words >> what >> ns) out.emplace(what, ns - kMonotonicBase);
+  }
+  return out;
+}
+
+long long at(const std::multimap<std::string, long long>& lines, const std::string& what) {
+  const auto it = lines.find(what);
+  return it == lines.end() ? -1 : it->second;
+}
+
+TEST(Conductor, GivesEachProcessTheBoardAndThePreloadedShim) {
+  Conductor conductor;
+  const auto env = conductor.environment("/opt/x/libcanhil-timeshim.so", "/lib/other.so");
+  ASSERT_EQ(env.size(), 2u);
+  EXPECT_EQ(env[0], "CANHIL_LOCKSTEP=" + conductor.board_name());
+  EXPECT_EQ(env[1], "LD_PRELOAD=/opt/x/libcanhil-timeshim.so:/lib/other.so");
+  EXPECT_EQ(conductor.next_wakeup(), Nanos(canhil::lockstep::kNoWake)) << "nobody waits yet";
+}
+
+TEST(Conductor, ClocksAndSleepsFollowTheVirtualClock) {
+  Conductor conductor;
+  ChildProcess client(command(conductor, "clocks"), "/tmp/canhil_lockstep_clocks.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u) << client.output();
+  ASSERT_EQ(drive(conductor, 3s), "") << client.output();
+  const auto lines = said(client.output());
+  EXPECT_EQ(at(lines, "start"), 0) << client.output();
+  EXPECT_EQ(at(lines, "nanosleep"), 250'000'000);
+  EXPECT_EQ(at(lines, "usleep"), 350'000'000);
+  EXPECT_EQ(at(lines, "sleep"), 1'350'000'000);
+  EXPECT_EQ(at(lines, "clock_nanosleep"), 1'400'000'000) << "an absolute wake-up on CLOCK_MONOTONIC";
+  EXPECT_EQ(at(lines, "select"), 1'420'000'000) << "select with no descriptors sleeps";
+  EXPECT_NE(client.output().find("realtime 1767225600.000000 time 1767225600"), std::string::npos)
+      << "gettimeofday and time start at the run's epoch\n"
+      << client.output();
+  const auto reports = conductor.processes();
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].name, "lockstep_client");
+  EXPECT_EQ(reports[0].blocks, 5u) << "one wait per sleep";
+}
+
+TEST(Conductor, APollWaitsInVirtualTimeAndWakesWhenDataComes) {
+  const std::string fifo = "/tmp/canhil_lockstep_fifo_" + std::to_string(getpid());
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  Conductor conductor;
+  ChildProcess client(command(conductor, "fifo " + fifo), "/tmp/canhil_lockstep_fifo.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  ASSERT_EQ(drive(conductor, 700ms), "") << client.output();
+  EXPECT_EQ(at(said(client.output()), "poll-timeout"), 500'000'000) << client.output();
+  EXPECT_EQ(at(said(client.output()), "poll-readable"), -1) << "nothing written yet";
+  // At 700 ms canhil writes (as it would send a frame) and says so.
+  FILE* writer = std::fopen(fifo.c_str(), "w");
+  ASSERT_NE(writer, nullptr);
+  std::fputc('x', writer);
+  std::fflush(writer);
+  conductor.nudge();
+  ASSERT_EQ(conductor.wait_quiet({}, "the byte"), "") << client.output();
+  ASSERT_EQ(drive(conductor, 800ms), "");
+  std::fclose(writer);
+  EXPECT_EQ(at(said(client.output()), "poll-readable"), 700'000'000) << client.output();
+  std::remove(fifo.c_str());
+}
+
+TEST(Conductor, ATimerfdTicksOnTheVirtualClock) {
+  Conductor conductor;
+  ChildProcess client(command(conductor, "timerfd"), "/tmp/canhil_lockstep_timerfd.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  ASSERT_EQ(drive(conductor, 100ms), "") << client.output();
+  std::vector<long long> ticks;
+  const auto lines = said(client.output());
+  for (auto [it, end] = lines.equal_range("tick"); it != end; ++it) ticks.push_back(it->second);
+  EXPECT_EQ(ticks, (std::vector<long long>{10'000'000, 20'000'000, 30'000'000, 40'000'000, 50'000'000}))
+      << client.output();
+}
+
+TEST(Conductor, TheClockWaitsForANewThread) {
+  Conductor conductor;
+  ChildProcess client(command(conductor, "thread"), "/tmp/canhil_lockstep_thread.log");
+  ASSERT_GE(conductor.wait_attached(1, 10s), 1u) << "(its second thread may be there already)";
+  ASSERT_EQ(drive(conductor, 100ms), "") << client.output();
+  const auto lines = said(client.output());
+  EXPECT_EQ(at(lines, "worker"), 30'000'000) << client.output();
+  EXPECT_EQ(at(lines, "joined"), 30'000'000) << "joining is waiting for the other thread, not for time";
+}
+
+TEST(Conductor, TheSameProgramGivesTheSameOutputEveryTime) {
+  std::string first;
+  for (int run = 0; run < 2; ++run) {
+    Conductor conductor;
+    ChildProcess client(command(conductor, "clocks"), "/tmp/canhil_lockstep_again.log");
+    ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+    ASSERT_EQ(drive(conductor, 3s), "");
+    client.stop();
+    if (run == 0)
+      first = client.output();
+    else
+      EXPECT_EQ(client.output(), first);
+  }
+  EXPECT_FALSE(first.empty());
+}
+
+TEST(Conductor, AProcessThatNeverWaitsIsNamedWithWhatCanhilWaitedFor) {
+  ConductorOptions options;
+  options.answer_limit = 300ms;
+  Conductor conductor(options);
+  ChildProcess client(command(conductor, "spin"), "/tmp/canhil_lockstep_spin.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  const std::string stuck = conductor.wait_quiet({}, "the trigger message at t = 0.010 s");
+  EXPECT_NE(stuck.find("lockstep_client (pid "), std::string::npos) << stuck;
+  EXPECT_NE(stuck.find("kept running and did not wait again"), std::string::npos) << stuck;
+  EXPECT_NE(stuck.find("after the trigger message at t = 0.010 s"), std::string::npos) << stuck;
+  EXPECT_NE(stuck.find("0.300 s of wall time"), std::string::npos) << stuck;
+}
+
+TEST(Conductor, CanhilsOwnConditionIsWaitedForAndNamed) {
+  ConductorOptions options;
+  options.answer_limit = 200ms;
+  Conductor conductor(options);
+  int asked = 0;
+  EXPECT_EQ(conductor.wait_quiet([&] { return ++asked < 3 ? std::string("agent1's epilogue") : std::string(); }, "x"),
+            "");
+  EXPECT_EQ(asked, 3);
+  const std::string stuck = conductor.wait_quiet([] { return std::string("agent1's epilogue"); }, "the frame at 33 ms");
+  EXPECT_EQ(stuck, "canhil waited 0.200 s of wall time after the frame at 33 ms for agent1's epilogue");
+}
+
+TEST(Conductor, AProcessKilledWithoutAWordIsNoLongerWaitedFor) {
+  ConductorOptions options;
+  options.answer_limit = 5s;
+  Conductor conductor(options);
+  ChildProcess client(command(conductor, "spin"), "/tmp/canhil_lockstep_killed.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  client.kill_with(SIGKILL);
+  EXPECT_EQ(conductor.wait_quiet({}, "x"), "");
+  const auto reports = conductor.processes();
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_TRUE(reports[0].gone);
+}
+
+}  // namespace

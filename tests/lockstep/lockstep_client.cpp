@@ -1,0 +1,115 @@
+// A program that plays a team's external process under the time shim: it
+// reads the clocks, sleeps, polls, reads a timerfd, starts a thread, or
+// spins without ever waiting, and prints what its clocks said at each point
+// (lines "<what> <CLOCK_MONOTONIC in ns>"). tests/lockstep/conductor_test.cpp
+// moves the virtual clock and checks the lines.
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/select.h>
+#include <sys/time.h>
+#include <sys/timerfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <thread>
+
+namespace {
+
+long long mono_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec * 1'000'000'000LL + ts.tv_nsec;
+}
+
+void say(const char* what) {
+  std::printf("%s %lld\n", what, mono_ns());
+  std::fflush(stdout);
+}
+
+int clocks() {
+  timeval tv{};
+  gettimeofday(&tv, nullptr);
+  std::printf("realtime %lld.%06lld time %lld\n", static_cast<long long>(tv.tv_sec), static_cast<long long>(tv.tv_usec),
+              static_cast<long long>(time(nullptr)));
+  say("start");
+  const timespec quarter{0, 250'000'000};
+  nanosleep(&quarter, nullptr);
+  say("nanosleep");
+  usleep(100'000);
+  say("usleep");
+  sleep(1);
+  say("sleep");
+  timespec until{};
+  clock_gettime(CLOCK_MONOTONIC, &until);
+  until.tv_nsec += 50'000'000;
+  if (until.tv_nsec >= 1'000'000'000) {
+    until.tv_nsec -= 1'000'000'000;
+    until.tv_sec += 1;
+  }
+  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr);
+  say("clock_nanosleep");
+  timeval twenty_ms{0, 20'000};
+  select(0, nullptr, nullptr, nullptr, &twenty_ms);
+  say("select");
+  return 0;
+}
+
+int wait_on_fifo(const char* path) {
+  const int fd = open(path, O_RDONLY | O_NONBLOCK);
+  if (fd < 0) return 2;
+  pollfd p{fd, POLLIN, 0};
+  const int first = poll(&p, 1, 500);
+  say(first == 0 ? "poll-timeout" : "poll-early");
+  p.revents = 0;
+  const int second = poll(&p, 1, -1);
+  char c = 0;
+  const bool got = second == 1 && read(fd, &c, 1) == 1;
+  say(got && c == 'x' ? "poll-readable" : "poll-wrong");
+  return 0;
+}
+
+int ticks() {
+  const int fd = timerfd_create(CLOCK_MONOTONIC, 0);
+  itimerspec every{{0, 10'000'000}, {0, 10'000'000}};
+  timerfd_settime(fd, 0, &every, nullptr);
+  for (int i = 0; i < 5; ++i) {
+    std::uint64_t count = 0;
+    if (read(fd, &count, sizeof count) != sizeof count) return 2;
+    say(count == 1 ? "tick" : "tick-several");
+  }
+  return 0;
+}
+
+int thread() {
+  std::thread worker([] {
+    const timespec a_while{0, 30'000'000};
+    nanosleep(&a_while, nullptr);
+    say("worker");
+  });
+  worker.join();
+  say("joined");
+  return 0;
+}
+
+int spin() {
+  say("spinning");
+  volatile unsigned long n = 0;
+  for (;;) n = n + 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string mode = argc > 1 ? argv[1] : "";
+  if (mode == "clocks") return clocks();
+  if (mode == "fifo" && argc > 2) return wait_on_fifo(argv[2]);
+  if (mode == "timerfd") return ticks();
+  if (mode == "thread") return thread();
+  if (mode == "spin") return spin();
+  std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin\n");
+  return 2;
+}
