@@ -1,6 +1,7 @@
 // canhil/lockstep/conductor.cpp — the board's owner (conductor.hpp).
 #include "canhil/lockstep/conductor.hpp"
 
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <linux/futex.h>
 #include <signal.h>
@@ -92,10 +93,18 @@ Conductor::Conductor(ConductorOptions options) : options_(options) {
   board_->version = kVersion;
   std::atomic_thread_fence(std::memory_order_release);
   board_->magic = kMagic;
+  // The shim preloaded into canhil itself: this process's clocks follow the board too.
+  if (auto* conduct = reinterpret_cast<int (*)(void*)>(dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct"))) {
+    conduct(board_);
+    clocks_here_ = true;
+  }
 }
 
 Conductor::~Conductor() {
   if (board_ == nullptr) return;
+  if (clocks_here_) {
+    reinterpret_cast<int (*)(void*)>(dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct"))(nullptr);
+  }
   // Anyone still waiting learns at its next check that canhil is gone.
   munmap(board_, sizeof(Board));
   shm_unlink(name_.c_str());

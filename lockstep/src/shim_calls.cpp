@@ -396,7 +396,7 @@ int sendmmsg(int fd, mmsghdr* messages, unsigned int count, int flags) {
 int timerfd_create(clockid_t clock, int flags) {
   CANHIL_REAL(timerfd_create);
   std::int64_t ignored = 0;
-  if (!shim::virtual_reading(clock, ignored)) return real_timerfd_create(clock, flags);
+  if (!shim::virtual_reading(clock, ignored) || shim::conducting()) return real_timerfd_create(clock, flags);
   return shim::new_timer(clock, flags);
 }
 

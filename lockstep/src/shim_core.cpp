@@ -32,6 +32,7 @@ constexpr std::int64_t kSecond = 1'000'000'000;
 
 Board* g_board = nullptr;
 std::atomic<bool> g_detached{false};
+bool g_conducting = false;  // in canhil's own process: the clocks only
 thread_local Slot* t_slot = nullptr;
 pthread_key_t g_thread_key;
 
@@ -254,8 +255,10 @@ std::int64_t to_virtual(clockid_t clock, std::int64_t absolute_ns) noexcept {
   return absolute_ns - (realtime ? g_board->realtime_base_ns : g_board->monotonic_base_ns);
 }
 
+bool conducting() noexcept { return g_conducting; }
+
 Slot* my_slot() noexcept {
-  if (board() == nullptr) return nullptr;
+  if (board() == nullptr || g_conducting) return nullptr;
   if (t_slot == nullptr) {
     t_slot = claim(static_cast<std::int32_t>(gettid()));
     pthread_setspecific(g_thread_key, t_slot);
@@ -455,3 +458,20 @@ std::int64_t next_timer() noexcept {
 }
 
 }  // namespace canhil::lockstep::shim
+
+/// Called by canhil's Conductor, through dlsym, when the shim is preloaded into
+/// canhil itself: from then on this process's clocks read `board` (a team's
+/// library that canhil loads stamps what it writes in virtual time, as the
+/// team's processes do), while its waits stay real (canhil has no slot).
+/// nullptr ends it. Returns 0.
+extern "C" __attribute__((visibility("default"))) int canhil_timeshim_conduct(void* board) {
+  using namespace canhil::lockstep::shim;
+  if (board == nullptr) {
+    g_conducting = false;
+    g_board = nullptr;
+    return 0;
+  }
+  g_board = static_cast<canhil::lockstep::Board*>(board);
+  g_conducting = true;
+  return 0;
+}

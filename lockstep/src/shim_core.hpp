@@ -20,6 +20,9 @@ namespace canhil::lockstep::shim {
 Board* board() noexcept;
 inline bool active() noexcept { return board() != nullptr; }
 
+/// In canhil's own process (canhil_timeshim_conduct): virtual clocks, real waits.
+bool conducting() noexcept;
+
 /// Virtual time since the run's start.
 std::int64_t now_ns() noexcept;
 /// A clock's reading in virtual time, for the clocks that are virtual

@@ -87,6 +87,10 @@ class Conductor {
   std::uint64_t frames_sent() const noexcept;
   /// The processes seen over the run, in the order they attached.
   std::vector<ProcessReport> processes() const;
+  /// Whether this process's own clocks follow the board: canhil itself was
+  /// started with the shim preloaded, so a team's library it loads (an RTDB
+  /// stamping items, a PMan stamping activations) sees virtual time too.
+  bool clocks_virtual_here() const noexcept { return clocks_here_; }
   /// Wall time spent in wait_quiet (canhil waiting for the processes).
   Nanos waited_wall() const noexcept { return waited_; }
 
@@ -99,6 +103,7 @@ class Conductor {
   std::string name_;
   Board* board_ = nullptr;
   Nanos waited_{0};
+  bool clocks_here_ = false;
   std::uint64_t frames_of_freed_ = 0;
   std::vector<ProcessReport> freed_;  // reports of slots freed (processes gone)
 };
