@@ -5,11 +5,11 @@
 #include <algorithm>
 
 #include "canhil/emulator/handler_participant.hpp"
-#include "canhil/frames/candump.hpp"
 #include "canhil/laptop/agent.hpp"
 #include "canhil/laptop/agent_io.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
+#include "merged_trace.hpp"
 #include "rtdb_user.h"
 
 namespace canhil::emulator {
@@ -161,23 +161,9 @@ std::vector<RobotOutcome> VirtualDriver::outcomes() const {
 }
 
 std::string VirtualDriver::trace() const {
-  struct Line {
-    Nanos time;
-    std::size_t bus;
-    std::size_t order;
-  };
-  std::vector<Line> lines;
-  for (std::size_t r = 0; r < recorded_.size(); ++r) {
-    for (std::size_t i = 0; i < recorded_[r].size(); ++i) lines.push_back({recorded_[r][i].time, r, i});
-  }
-  std::stable_sort(lines.begin(), lines.end(),
-                   [](const Line& a, const Line& b) { return a.time != b.time ? a.time < b.time : a.bus < b.bus; });
-  std::string out;
-  for (const Line& l : lines) {
-    out += frames::format_log_line(l.time, session_.rig(l.bus).interface, recorded_[l.bus][l.order].frame);
-    out += '\n';
-  }
-  return out;
+  std::vector<std::string> names;
+  for (std::size_t r = 0; r < session_.robot_count(); ++r) names.push_back(session_.rig(r).interface);
+  return merged_trace(recorded_, names);
 }
 
 }  // namespace canhil::emulator

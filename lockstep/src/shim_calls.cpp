@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <pthread.h>
+#include <semaphore.h>
 #include <signal.h>
 #include <sys/epoll.h>
 #include <sys/select.h>
@@ -502,6 +503,37 @@ int pthread_cond_wait(pthread_cond_t* condition, pthread_mutex_t* mutex) {
   const int r = real_wait(condition, mutex);
   shim::end_signal_wait();
   return r;
+}
+
+// Semaphores (a process-shared one is how canhil's RTDB wakes its agent): a
+// try, then a wait for canhil's next change, until the virtual deadline.
+int sem_wait(sem_t* semaphore) {
+  CANHIL_REAL(sem_wait);
+  CANHIL_REAL(sem_trywait);
+  if (!shim::active()) return real_sem_wait(semaphore);
+  int result = 0;
+  const int r = wait_result("sem_wait", kNoWake, result, [&] { return real_sem_trywait(semaphore) == 0 ? 1 : 0; });
+  if (r == -2) return real_sem_wait(semaphore);
+  return r == 1 ? 0 : -1;  // -1: EINTR
+}
+
+int sem_timedwait(sem_t* semaphore, const timespec* deadline) {
+  CANHIL_REAL(sem_timedwait);
+  CANHIL_REAL(sem_trywait);
+  if (!shim::active()) return real_sem_timedwait(semaphore, deadline);
+  if (!valid(*deadline)) {
+    errno = EINVAL;
+    return -1;
+  }
+  int result = 0;
+  const int r = wait_result("sem_timedwait", shim::to_virtual(CLOCK_REALTIME, ns_of(*deadline)), result,
+                            [&] { return real_sem_trywait(semaphore) == 0 ? 1 : 0; });
+  if (r == -2) return real_sem_timedwait(semaphore, deadline);
+  if (r == 0) {
+    errno = ETIMEDOUT;
+    return -1;
+  }
+  return r == 1 ? 0 : -1;  // -1: EINTR
 }
 
 // Threads: the clock waits for a new thread from its first instruction.

@@ -1,0 +1,85 @@
+// canhil/emulator/external_driver.hpp — a session in virtual time with the
+// team's own processes (docs/lockstep.md): every robot's emulated nodes on
+// its SocketCAN interface (one socket per node, as in real time), advanced on
+// a simulated clock together with the physics, while the team's handler and
+// agent run as separate processes under the time shim. At each instant where
+// canhil sent frames, moved a process's wake-up or woke an agent through PMan,
+// the driver waits (lockstep::Conductor::wait_quiet) until every process is
+// done with that instant: blocked again, its frames seen on the bus, its
+// PMan epilogue written. Frames the processes sent are handled in the same
+// instant. Deterministic: the trace carries virtual times, in a fixed order.
+//
+// Not thread-safe: one thread drives it.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/socketcan_bus.hpp"
+#include "canhil/emulator/session.hpp"
+#include "canhil/lockstep/conductor.hpp"
+
+namespace canhil::emulator {
+
+struct ExternalOptions {
+  int receive_buffer_bytes = 1 << 20;  ///< per socket (SO_RCVBUFFORCE as root)
+  bool record_trace = true;            ///< keep every bus's frames for trace()
+};
+
+/// A process did not become quiet within the conductor's answer limit: what()
+/// names it and what canhil waited for. The run stops; its trace is kept.
+class ProcessStuck : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class ExternalDriver {
+ public:
+  /// Opens one socket per node and one observer socket per robot's interface.
+  /// SetupError: no such interface, an interface down. `session` and
+  /// `conductor` must outlive the driver.
+  ExternalDriver(Session& session, lockstep::Conductor& conductor, ExternalOptions options = {});
+  ~ExternalDriver();
+  ExternalDriver(const ExternalDriver&) = delete;
+  ExternalDriver& operator=(const ExternalDriver&) = delete;
+
+  /// Runs until the virtual clock reads `end`; the first call first waits
+  /// until the processes (attached: Conductor::wait_attached) are ready.
+  /// ProcessStuck: see above.
+  void run_until(Nanos end);
+  Nanos now() const noexcept { return clock_.now(); }
+  std::uint64_t physics_steps() const noexcept { return lockstep_.steps(); }
+  /// Frames the processes sent, as seen on the buses.
+  std::uint64_t frames_from_processes() const noexcept { return from_processes_; }
+  /// Every bus as a candump log in virtual time: by time, then robot, then arrival.
+  std::string trace() const;
+
+  class Processes;  // the external processes as one participant
+
+ private:
+  void observe();
+  std::uint64_t canhil_sent() const;
+  /// Lets the processes see this instant and waits until they are done with
+  /// it; returns how many frames they sent since the last time.
+  std::size_t settle();
+
+  Session& session_;
+  lockstep::Conductor& conductor_;
+  ExternalOptions options_;
+  can_nodes::SimulatedClock clock_;
+  std::vector<std::vector<can_nodes::SocketCanBus*>> sockets_;       // per robot, per node
+  std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
+  std::vector<std::vector<frames::TimedFrame>> recorded_;
+  std::uint64_t observed_ = 0;
+  std::uint64_t announced_ = 0;
+  bool started_ = false;  // canhil's frames the processes were told of
+  std::uint64_t from_processes_ = 0;
+  std::vector<bool> woken_;  // robots whose agents PMan activated at this instant
+  std::unique_ptr<Processes> processes_;
+  can_nodes::Lockstep lockstep_;
+};
+
+}  // namespace canhil::emulator

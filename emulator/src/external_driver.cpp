@@ -1,0 +1,143 @@
+#include "canhil/emulator/external_driver.hpp"
+
+#include <cstdio>
+
+#include "canhil/emulator/laptop_link.hpp"
+#include "canhil/rtdb/rtdb.h"
+#include "merged_trace.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+std::string at_time(Nanos t) {
+  char out[48];
+  std::snprintf(out, sizeof out, "t = %.3f s", to_seconds(t));
+  return out;
+}
+
+}  // namespace
+
+// The external processes as one participant: due when one of them asked to
+// be woken; after every round of frames, the instant is settled with them.
+class ExternalDriver::Processes final : public can_nodes::Participant {
+ public:
+  explicit Processes(ExternalDriver& driver) : d_(driver) {}
+  std::size_t poll() override { return d_.settle(); }
+  void tick(Nanos now) override {
+    d_.conductor_.set_time(now);
+    d_.settle();
+  }
+  Nanos next_wakeup() const override { return d_.conductor_.next_wakeup(); }
+
+ private:
+  ExternalDriver& d_;
+};
+
+ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor, ExternalOptions options)
+    : session_(session), conductor_(conductor), options_(options), lockstep_(clock_) {
+  const std::size_t n = session_.robot_count();
+  can_nodes::SocketCanOptions socket_options;
+  socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
+  sockets_.resize(n);
+  recorded_.resize(n);
+  woken_.assign(n, false);
+  for (std::size_t r = 0; r < n; ++r) {
+    observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
+    observers_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
+    if (observers_.back()->state() != can_nodes::BusState::kUp) {
+      const std::string& iface = session_.rig(r).interface;
+      throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
+    }
+  }
+  session_.build_nodes(
+      [this, &socket_options](std::size_t r, const std::string&) {
+        auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options);
+        sockets_[r].push_back(bus.get());
+        return std::unique_ptr<can_nodes::Bus>(std::move(bus));
+      },
+      Session::IoMode::kDirect, Nanos{0});
+  processes_ = std::make_unique<Processes>(*this);
+  for (std::size_t r = 0; r < n; ++r) {
+    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) lockstep_.add(*node);
+  }
+  lockstep_.add(*processes_);
+  // A team's agent was activated through its PMan table; canhil's own waits on canhil's RTDB's frame signal.
+  const bool builtin_rtdb = session_.scenario().laptop.rtdb_lib == "builtin";
+  session_.on_vision_frame([this, builtin_rtdb](std::size_t r, Nanos) {
+    if (builtin_rtdb) DB_signal_frame(session_.rig(r).agent);
+    woken_[r] = true;
+  });
+  lockstep_.set_step(session_.step_period(), [this](Nanos now) {
+    session_.apply_bus_changes();
+    session_.before_step();
+    session_.world().step();
+    session_.after_step(now);
+  });
+}
+
+ExternalDriver::~ExternalDriver() { session_.on_vision_frame(nullptr); }
+
+void ExternalDriver::run_until(Nanos end) {
+  if (!started_) {
+    // Nothing goes on the bus before every process is ready for it (its sockets open, waiting).
+    started_ = true;
+    const std::string stuck = conductor_.wait_quiet({}, "its start, before canhil's first frame");
+    if (!stuck.empty()) throw ProcessStuck(stuck);
+  }
+  lockstep_.run_until(end);
+}
+
+std::uint64_t ExternalDriver::canhil_sent() const {
+  std::uint64_t sent = 0;
+  for (const auto& robot : sockets_) {
+    for (const can_nodes::SocketCanBus* s : robot) sent += s->stats().sent;
+  }
+  return sent;
+}
+
+void ExternalDriver::observe() {
+  for (std::size_t r = 0; r < observers_.size(); ++r) {
+    while (auto f = observers_[r]->receive()) {
+      ++observed_;
+      if (options_.record_trace) recorded_[r].push_back({f->frame, clock_.now()});
+    }
+  }
+}
+
+std::size_t ExternalDriver::settle() {
+  conductor_.set_time(clock_.now());
+  const std::uint64_t ours = canhil_sent();
+  bool woke = false;
+  for (const bool w : woken_) woke = woke || w;
+  if (ours != announced_ || woke) {
+    announced_ = ours;
+    conductor_.nudge();  // frames on the bus, or an agent activated: everyone looks again
+  }
+  pman::Masters* masters = session_.laptop() != nullptr ? session_.laptop()->masters() : nullptr;
+  const std::string stuck = conductor_.wait_quiet(
+      [&]() -> std::string {
+        observe();
+        if (observed_ < ours + conductor_.frames_sent()) return "the frames it sent to reach the bus";
+        for (std::size_t r = 0; r < woken_.size(); ++r) {
+          if (woken_[r] && masters != nullptr && !masters->all_idle(session_.rig(r).agent)) {
+            return "agent " + std::to_string(session_.rig(r).agent) + "'s PMAN_epilogue";
+          }
+        }
+        return {};
+      },
+      "what canhil did at " + at_time(clock_.now()));
+  if (!stuck.empty()) throw ProcessStuck(stuck);
+  woken_.assign(woken_.size(), false);
+  const std::uint64_t theirs = observed_ - ours;
+  const std::uint64_t fresh = theirs - from_processes_;
+  from_processes_ = theirs;
+  return static_cast<std::size_t>(fresh);
+}
+
+std::string ExternalDriver::trace() const {
+  std::vector<std::string> names;
+  for (std::size_t r = 0; r < session_.robot_count(); ++r) names.push_back(session_.rig(r).interface);
+  return merged_trace(recorded_, names);
+}
+
+}  // namespace canhil::emulator
