@@ -55,6 +55,13 @@ const Command kCommands[] = {
                                               the reference handler and agent per robot; a candump trace
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
                                               scenarios in emulator/scenarios/
+  canhil run --external [--process "CMD"]... [--answer-limit 1] [--wait-for N] [--config SCENARIO.toml]
+             [--duration S] [--seed N] [--fault RULE]... [--trace FILE] [--world-log FILE.csv] [--quiet]
+                                              virtual time with the team's own handler and agent as
+                                              processes in lockstep (the time shim preloaded): the
+                                              scenario's [external] processes or --process, started per
+                                              robot ({agent}, {iface}); without any, waits for N started
+                                              by hand (docs/lockstep.md); exit 3 when one stops answering
   canhil run [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]... [--bit-rate B]
              [--rx-buffer-kb 1024] [--priority 40] [--save-world FILE] [--restore-world FILE] [--quiet]
              [--control PATH | --no-control] [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI]

@@ -18,6 +18,7 @@
 #include "canhil/emulator/virtual_driver.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "run_external.hpp"
 #include "run_realtime.hpp"
 
 namespace canhil::app {
@@ -161,7 +162,12 @@ void laptop_options(Args& args, emulator::LaptopSide& side) {
 }  // namespace
 
 int run_run(Args& args, const std::optional<std::string>& dbc) {
-  const bool virtual_time = args.flag("--virtual-time");
+  const bool external = args.flag("--external");
+  const bool virtual_time = args.flag("--virtual-time") || external;  // --external runs in virtual time
+  std::vector<std::string> processes;
+  while (auto p = args.option("--process")) processes.push_back(*p);
+  const std::optional<double> answer_limit = optional_number(args, "--answer-limit");
+  const std::optional<double> wait_for = optional_number(args, "--wait-for");
   const auto config = args.option("--config");
   VirtualOutputs outputs;
   outputs.trace = args.option("--trace");
@@ -197,6 +203,17 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     }
   }
   if (args.positionals().size() != 1) throw UsageError("run takes no other arguments");
+  if (!external && (!processes.empty() || answer_limit || wait_for)) {
+    throw UsageError("--process, --answer-limit and --wait-for are for runs with --external");
+  }
+  if (!processes.empty()) scenario.external.processes = processes;
+  if (answer_limit) {
+    if (!(*answer_limit >= 0.01 && *answer_limit <= 3600)) throw UsageError("--answer-limit takes 0.01..3600 s");
+    scenario.external.answer_limit_s = *answer_limit;
+  }
+  if (wait_for && !(*wait_for >= 1 && *wait_for <= 64 && *wait_for == static_cast<int>(*wait_for))) {
+    throw UsageError("--wait-for takes a number of processes, 1..64");
+  }
   if (!(duration > 0)) throw UsageError("--duration takes seconds above 0");
   if (!(outputs.log_period_s > 0)) throw UsageError("--world-log-period takes seconds above 0");
   for (const auto& f : fault_texts) {
@@ -247,6 +264,24 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
   }
   if (outputs.world_log) options.world_log_period = from_seconds(outputs.log_period_s);
+  if (external) {
+    if (outputs.save_world) throw UsageError("--save-world is not available with --external yet");
+    // Before anything is set up: canhil may start itself again, with the shim preloaded.
+    const std::string shim = find_timeshim();
+    const std::string team_preload = preload_shim_into_self(shim);
+    options.external = true;
+    const auto s = session();
+    control::Commands commands(*s);
+    const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
+    ExternalRun run;
+    run.duration_s = duration;
+    run.quiet = outputs.quiet;
+    run.trace = outputs.trace;
+    run.world_log = outputs.world_log;
+    run.log_period_s = outputs.log_period_s;
+    run.wait_for = wait_for ? static_cast<std::size_t>(*wait_for) : 0;
+    return run_external(*s, run, shim, team_preload);
+  }
   const auto s = session();
   control::Commands commands(*s);
   const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);

@@ -200,6 +200,7 @@ std::optional<TimedFrame> SocketCanBus::receive() {
       note_drops(drops);
     }
   }
+  if (options_.clock != nullptr) out.time = options_.clock->now();
   if (out.frame.kind == frames::FrameKind::kError) {
     ++stats_.errors;
   } else {

@@ -38,6 +38,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   const std::size_t n = session_.robot_count();
   can_nodes::SocketCanOptions socket_options;
   socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
+  socket_options.clock = &clock_;  // a frame arrives in the instant it is read
   sockets_.resize(n);
   recorded_.resize(n);
   woken_.assign(n, false);

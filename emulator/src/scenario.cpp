@@ -10,7 +10,7 @@
 namespace canhil::emulator {
 namespace {
 
-// One table of a scenario ([run], [coach], [laptop]): its fields with their
+// One table of a scenario ([run], [coach], [laptop], [external]): its fields with their
 // lines, unknown fields refused, mistakes as `FILE:LINE: TABLE.FIELD: ...`.
 class TableReader {
  public:
@@ -196,6 +196,23 @@ void read_laptop(const TableReader& r, Scenario& s) {
   }
 }
 
+void read_external(const TableReader& r, Scenario& s) {
+  ExternalSide& e = s.external;
+  if (const toml::array* a = r.array("processes")) {
+    for (const toml::node& n : *a) {
+      const auto v = n.value<std::string>();
+      if (!v || v->find_first_not_of(" \t") == std::string::npos) {
+        r.fail(n, "processes",
+               "must be command lines such as \"canhil-hwcomm --iface {iface}\" ({agent} and {iface} are the "
+               "robot's)");
+      }
+      e.processes.push_back(*v);
+    }
+  }
+  if (const auto v = r.number("answer_limit_s", 0.01, 3600.0)) e.answer_limit_s = *v;
+  if (const auto v = r.number("attach_limit_s", 0.1, 3600.0)) e.attach_limit_s = *v;
+}
+
 }  // namespace
 
 bool is_game_state(std::string_view name) noexcept {
@@ -204,7 +221,7 @@ bool is_game_state(std::string_view name) noexcept {
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
-  s.world = physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop"});
+  s.world = physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop", "external"});
   const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
@@ -221,6 +238,9 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
                             {"rtdb_lib", "rtdb_items", "rtdb_ini", "layout", "pman", "pman_processes", "coach_period_s",
                              "replicate", "replicate_period_s"}),
                 s);
+  }
+  if (const toml::table* external = root["external"].as_table()) {
+    read_external(TableReader(*external, "external", file_name, {"processes", "answer_limit_s", "attach_limit_s"}), s);
   }
   complete(s);
   return s;

@@ -65,7 +65,7 @@ Session::Session(Scenario scenario, SessionOptions options)
                                                             scenario_.seed + r, options_.ftt.bit_rate);
   }
   if (options_.vision_on) {
-    scenario_.laptop = resolve_laptop(scenario_.laptop, n, options_.realtime);
+    scenario_.laptop = resolve_laptop(scenario_.laptop, n, options_.realtime || options_.external);
     laptop_ = std::make_unique<LaptopLink>(scenario_.laptop, scenario_.agents, coach_);
     std::vector<vision_emu::Vision> vision;
     for (std::size_t r = 0; r < n; ++r) vision.emplace_back(options_.vision, world_->markings());

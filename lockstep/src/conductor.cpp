@@ -28,13 +28,7 @@ long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const 
   return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
 }
 
-Nanos wall_now() noexcept {
-  timespec ts{};
-  // The raw system call: in a run whose canhil is itself preloaded with the
-  // shim (a team library stamping items), clock_gettime would be virtual.
-  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
-  return std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
-}
+Nanos wall_now() noexcept { return wall_clock(); }
 
 SlotState state_of(const Slot& s) { return static_cast<SlotState>(s.state.load(std::memory_order_acquire)); }
 
@@ -71,6 +65,14 @@ bool alive(const Slot& s) {
 
 }  // namespace
 
+Nanos wall_clock() noexcept {
+  timespec ts{};
+  // The raw system call: in a run whose canhil is itself preloaded with the
+  // shim (a team library stamping items), clock_gettime would be virtual.
+  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
+  return std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
+}
+
 Conductor::Conductor(ConductorOptions options) : options_(options) {
   name_ = "/canhil-lockstep-" + std::to_string(getpid()) + "-" + std::to_string(g_boards.fetch_add(1));
   const int fd = shm_open(name_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
@@ -102,6 +104,7 @@ Conductor::Conductor(ConductorOptions options) : options_(options) {
 
 Conductor::~Conductor() {
   if (board_ == nullptr) return;
+  release();
   if (clocks_here_) {
     reinterpret_cast<int (*)(void*)>(dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct"))(nullptr);
   }
@@ -143,6 +146,12 @@ void Conductor::nudge() {
   board_->epoch.fetch_add(1, std::memory_order_acq_rel);
   futex(&board_->epoch, FUTEX_WAKE, INT_MAX, nullptr);
 }
+
+void Conductor::release() {
+  if (board_->released.exchange(1, std::memory_order_acq_rel) == 0) nudge();
+}
+
+bool Conductor::released() const noexcept { return board_->released.load(std::memory_order_acquire) != 0; }
 
 Nanos Conductor::next_wakeup() const noexcept {
   std::int64_t next = kNoWake;

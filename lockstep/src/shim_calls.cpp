@@ -24,6 +24,7 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 
 #include "shim_core.hpp"
 
@@ -86,6 +87,33 @@ bool wait_readable(const char* what, int fd, int flags) noexcept {
       return false;
     default:
       return true;
+  }
+}
+
+/// The kernel's receive time stamps (SO_TIMESTAMP, SO_TIMESTAMPNS, the
+/// software one of SO_TIMESTAMPING) are wall time: they become the virtual
+/// CLOCK_REALTIME of the read. In lockstep a frame is read in the instant it
+/// was sent, unless the reader let it wait, and then the read's time is what
+/// its clock says anyway: deterministic either way.
+void virtual_stamps(msghdr& message) noexcept {
+  std::int64_t now = 0;
+  if (message.msg_control == nullptr || !shim::virtual_reading(CLOCK_REALTIME, now)) return;
+  for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
+    if (c->cmsg_level != SOL_SOCKET) continue;
+    unsigned char* data = CMSG_DATA(c);
+    const std::size_t size = c->cmsg_len - CMSG_LEN(0);
+    if (c->cmsg_type == SO_TIMESTAMP && size >= sizeof(timeval)) {
+      const timeval tv{now / kSecond, (now % kSecond) / 1000};
+      std::memcpy(data, &tv, sizeof tv);
+    } else if (c->cmsg_type == SO_TIMESTAMPNS && size >= sizeof(timespec)) {
+      const timespec ts = timespec_of(now);
+      std::memcpy(data, &ts, sizeof ts);
+    } else if (c->cmsg_type == SO_TIMESTAMPING && size >= 3 * sizeof(timespec)) {
+      timespec stamps[3];
+      std::memcpy(stamps, data, sizeof stamps);
+      if (stamps[0].tv_sec != 0 || stamps[0].tv_nsec != 0) stamps[0] = timespec_of(now);  // the software one
+      std::memcpy(data, stamps, sizeof stamps);
+    }
   }
 }
 
@@ -354,7 +382,9 @@ ssize_t recvfrom(int fd, void* buffer, size_t size, int flags, sockaddr* from, s
 ssize_t recvmsg(int fd, msghdr* message, int flags) {
   CANHIL_REAL(recvmsg);
   if (!wait_readable("recvmsg", fd, flags)) return -1;
-  return real_recvmsg(fd, message, flags);
+  const ssize_t r = real_recvmsg(fd, message, flags);
+  if (r >= 0) virtual_stamps(*message);
+  return r;
 }
 
 // Writing: frames written to a CAN socket are counted (in flight until canhil sees them).

@@ -99,11 +99,15 @@ Slot* claim(std::int32_t tid) noexcept {
 
 void thread_ended(void* slot) noexcept { release(static_cast<Slot*>(slot)); }
 
+// Goes on in real time: canhil ended its run (released the board: expected,
+// said nothing) or died without doing so (said on stderr).
 void detach() noexcept {
-  if (!g_detached.exchange(true)) {
+  if (!g_detached.exchange(true) && g_board->released.load(std::memory_order_acquire) == 0) {
     say("canhil (pid %d) is gone: this process goes on in real time", g_board->conductor_pid);
   }
 }
+
+bool released() noexcept { return g_board->released.load(std::memory_order_acquire) != 0; }
 
 bool conductor_gone() noexcept { return kill(g_board->conductor_pid, 0) == -1 && errno == ESRCH; }
 
@@ -123,6 +127,19 @@ void mark_gone_all_of_this_process() noexcept {
     if (s.pid.load() == pid) s.state.store(static_cast<std::uint32_t>(SlotState::kGone), std::memory_order_release);
   }
   announce_change();
+}
+
+// The slots an earlier image of this process left before it called exec (a
+// shell that ran `exec PROGRAM`, a program that re-executes itself): their
+// threads are gone or are this one, so they are freed at once; the process
+// gets a fresh slot as the new program.
+void free_slots_of_earlier_image() noexcept {
+  const auto pid = static_cast<std::int32_t>(getpid());
+  for (Slot& s : g_board->slots) {
+    if (s.pid.load() != pid) continue;
+    s.state.store(static_cast<std::uint32_t>(SlotState::kFree), std::memory_order_release);
+    s.pid.store(0, std::memory_order_release);
+  }
 }
 
 void after_fork_in_child() noexcept {
@@ -154,7 +171,7 @@ __attribute__((constructor)) void attach() {
   pthread_key_create(&g_thread_key, thread_ended);
   pthread_atfork(nullptr, nullptr, after_fork_in_child);
   g_board = board;
-  mark_gone_all_of_this_process();  // slots an image of this process left before exec
+  free_slots_of_earlier_image();
   t_slot = claim(static_cast<std::int32_t>(gettid()));
   pthread_setspecific(g_thread_key, t_slot);
   announce_change();
@@ -226,7 +243,14 @@ class StartedLocked {
 
 }  // namespace
 
-Board* board() noexcept { return g_detached.load(std::memory_order_relaxed) ? nullptr : g_board; }
+Board* board() noexcept {
+  if (g_detached.load(std::memory_order_relaxed) || g_board == nullptr) return nullptr;
+  if (released()) {
+    detach();
+    return nullptr;
+  }
+  return g_board;
+}
 
 std::int64_t now_ns() noexcept { return g_board->now_ns.load(std::memory_order_acquire); }
 
@@ -295,6 +319,12 @@ Wait wait_for_change(Slot& slot, const char* what, std::uint32_t epoch, std::int
   const long r = futex(&g_board->epoch, FUTEX_WAIT, epoch, &a_second);
   const int error = r == 0 ? 0 : errno;
   mark_running(slot);
+  if (released()) {
+    // The run is over: a wait with a virtual deadline ends as if it had come
+    // (it never will); one without goes on as the real call.
+    detach();
+    return wake_at_ns == kNoWake ? Wait::kDetached : Wait::kTimedOut;
+  }
   if (error == EINTR) return Wait::kInterrupted;
   if (error == ETIMEDOUT && conductor_gone()) {
     detach();
@@ -472,6 +502,7 @@ extern "C" __attribute__((visibility("default"))) int canhil_timeshim_conduct(vo
     return 0;
   }
   g_board = static_cast<canhil::lockstep::Board*>(board);
+  g_detached = false;  // a new run (the last one's board was released)
   g_conducting = true;
   return 0;
 }

@@ -36,8 +36,13 @@ Outcome run_once(const std::string& tag, const std::string& handler_extra) {
   ChildProcess handler(env + " " + handler_extra + bin + "canhil-hwcomm --iface vcan0", "/tmp/canhil_ext_hw_" + tag);
   ChildProcess agent(env + " " + bin + "canhil-agent --pose -3,0,-90", "/tmp/canhil_ext_agent_" + tag);
   EXPECT_GE(conductor.wait_attached(2, 60s), 2u) << handler.output() << agent.output();
-  driver.run_until(6s);
+  try {
+    driver.run_until(6s);
+  } catch (const ProcessStuck& e) {
+    ADD_FAILURE() << e.what() << "\n" << handler.output() << agent.output();
+  }
   Outcome out{driver.trace(), session.snapshot().robots[0].x_m, driver.frames_from_processes(), ""};
+  conductor.release();  // the run is over: their waits end, they take their SIGINT
   handler.stop();
   agent.stop();
   out.agent_log = agent.output();

@@ -198,3 +198,25 @@ TEST(Conductor, AProcessKilledWithoutAWordIsNoLongerWaitedFor) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Conductor, ReleasingTheBoardEndsEveryVirtualWaitSoAProcessCanStop) {
+  // The run is over: a process that retries an hour's sleep after a signal
+  // (as a library's wait does) would wait for a virtual time that never comes,
+  // and never see its SIGINT. Released, the sleep ends as if its time had come.
+  Conductor conductor;
+  ChildProcess client(command(conductor, "patient"), "/tmp/canhil_lockstep_patient.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u) << client.output();
+  ASSERT_EQ(drive(conductor, 1s), "") << client.output();
+  EXPECT_EQ(at(said(client.output()), "patient"), 0) << client.output();
+  EXPECT_FALSE(conductor.released());
+  conductor.release();
+  EXPECT_TRUE(conductor.released());
+  const int status = client.stop();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << client.output();
+  EXPECT_NE(client.output().find("patient woke"), std::string::npos) << client.output();
+  EXPECT_EQ(client.output().find("is gone"), std::string::npos) << "a release is no news\n" << client.output();
+}
+
+}  // namespace

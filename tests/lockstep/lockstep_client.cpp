@@ -4,6 +4,7 @@
 // (lines "<what> <CLOCK_MONOTONIC in ns>"). tests/lockstep/conductor_test.cpp
 // moves the virtual clock and checks the lines.
 #include <fcntl.h>
+#include <signal.h>
 #include <poll.h>
 #include <sys/select.h>
 #include <sys/time.h>
@@ -11,6 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -95,6 +97,22 @@ int thread() {
   return 0;
 }
 
+// As a library that retries its wait after a signal until its deadline (the
+// builtin RTDB's DB_wait_frame): an hour's sleep, resumed after each EINTR.
+extern "C" void on_interrupt(int) {}
+
+int patient() {
+  struct sigaction action {};
+  action.sa_handler = on_interrupt;
+  sigaction(SIGINT, &action, nullptr);
+  say("patient");
+  timespec left{3600, 0};
+  while (nanosleep(&left, &left) != 0 && errno == EINTR) {
+  }
+  std::printf("patient woke\n");
+  return 0;
+}
+
 int spin() {
   say("spinning");
   volatile unsigned long n = 0;
@@ -110,6 +128,7 @@ int main(int argc, char** argv) {
   if (mode == "timerfd") return ticks();
   if (mode == "thread") return thread();
   if (mode == "spin") return spin();
+  if (mode == "patient") return patient();
   std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin\n");
   return 2;
 }

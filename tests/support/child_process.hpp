@@ -1,6 +1,8 @@
 // tests/support/child_process.hpp — a program run in the background for the
 // vcan tests (the emulator, the handler), its output captured to a file;
-// stop() sends SIGINT (its Ctrl-C) and waits. A sanitizer's report in the
+// stop() sends SIGINT (its Ctrl-C) and waits; a child that has not ended 60 s
+// later is killed (SIGKILL) and fails the test, so a hang is reported rather
+// than holding the suite until its time limit. A sanitizer's report in the
 // child's output (ASan, UBSan, TSan builds) fails the test that ran it, so a
 // finding in a child process is never lost behind an unchecked exit status.
 #pragma once
@@ -38,7 +40,19 @@ class ChildProcess {
     if (pid_ <= 0) return -1;
     ::kill(pid_, sig);
     int status = 0;
-    waitpid(pid_, &status, 0);
+    constexpr int kTenthsToEnd = 600;  // 60 s: a sanitized child in the VM runner ends well within it
+    int tenths = 0;
+    while (waitpid(pid_, &status, WNOHANG) == 0) {
+      if (++tenths > kTenthsToEnd) {
+        ADD_FAILURE() << log_ << ": the process did not end within 60 s of signal " << sig
+                      << "; killed (SIGKILL). Its output:\n"
+                      << output();
+        ::kill(pid_, SIGKILL);
+        waitpid(pid_, &status, 0);
+        break;
+      }
+      usleep(100'000);
+    }
     pid_ = -1;
     check_sanitizers();
     return status;

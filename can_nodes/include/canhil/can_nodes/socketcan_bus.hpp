@@ -16,6 +16,7 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/bus.hpp"
+#include "canhil/can_nodes/clock.hpp"
 
 namespace canhil::can_nodes {
 
@@ -32,6 +33,9 @@ struct SocketCanOptions {
   int send_retries = 50;
   /// Longest wait for the queue to drain per retry.
   std::chrono::microseconds retry_wait{200};
+  /// Received frames are timed by this clock (virtual time: the instant they
+  /// are read) instead of the kernel's stamp. Must outlive the bus.
+  const Clock* clock = nullptr;
 };
 
 /// True when this kernel can open a CAN_RAW socket at all.

@@ -66,6 +66,17 @@ struct LaptopSide {
   double replicate_period_s = 0.1;  ///< the replicator's cycle
 };
 
+/// The team's own processes in a virtual-time run (`canhil run --external`,
+/// docs/lockstep.md): started per robot by canhil under the time shim, with
+/// AGENT set, `{agent}` and `{iface}` replaced by the robot's agent number and
+/// interface. None: canhil prints what to set and waits for them to be
+/// started by hand.
+struct ExternalSide {
+  std::vector<std::string> processes;  ///< shell command lines, one process each, per robot
+  double answer_limit_s = 1.0;         ///< wall time a process may take over one instant
+  double attach_limit_s = 60.0;        ///< wall time the processes may take to start
+};
+
 struct Scenario {
   physics::WorldParams world;
   double duration_s = 20;
@@ -76,6 +87,7 @@ struct Scenario {
   std::vector<can_nodes::FaultRule> faults;
   CoachState coach;  ///< one player per robot after complete()
   LaptopSide laptop;
+  ExternalSide external;
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
 };

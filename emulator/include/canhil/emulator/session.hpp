@@ -54,6 +54,9 @@ struct SessionOptions {
   /// The run follows the wall clock, so processes outside it can take part
   /// (the laptop side's defaults: PMan masters only then, see resolve_laptop).
   bool realtime = false;
+  /// Processes outside take part in virtual time (ExternalDriver): the
+  /// laptop side's defaults are those of a real-time run.
+  bool external = false;
   Nanos world_log_period{0};  ///< 0: no world log
   /// A saved world (physics::load_state) to start from instead of the placements.
   std::optional<physics::WorldState> initial_state;

@@ -26,7 +26,7 @@
 namespace canhil::lockstep {
 
 inline constexpr std::uint32_t kMagic = 0x4C4B5354;  // "LKST"
-inline constexpr std::uint32_t kVersion = 1;
+inline constexpr std::uint32_t kVersion = 2;
 inline constexpr std::size_t kMaxSlots = 64;
 inline constexpr std::size_t kNameBytes = 32;
 inline constexpr std::size_t kWhatBytes = 24;
@@ -66,7 +66,9 @@ struct Board {
   std::uint32_t magic = 0;
   std::uint32_t version = 0;
   std::int32_t conductor_pid = 0;
-  std::uint32_t reserved = 0;
+  /// Set when canhil's run has ended (Conductor::release): every process
+  /// stops waiting on the board and goes on in real time.
+  std::atomic<std::uint32_t> released{0};
   /// CLOCK_REALTIME (and gettimeofday, time) at virtual 0; CLOCK_MONOTONIC and
   /// CLOCK_BOOTTIME read monotonic_base_ns + now.
   std::int64_t realtime_base_ns = 0;

@@ -25,6 +25,10 @@ namespace canhil::lockstep {
 
 using Nanos = std::chrono::nanoseconds;
 
+/// The machine's CLOCK_MONOTONIC by the system call itself: real even in a
+/// canhil whose own clocks follow the board (the shim preloaded into it).
+Nanos wall_clock() noexcept;
+
 struct ConductorOptions {
   /// How long (wall time) a process may take to become quiet before the run
   /// names it and stops.
@@ -73,6 +77,11 @@ class Conductor {
   /// Something a process may be waiting for happened (frames sent, a signal):
   /// every waiting process checks again.
   void nudge();
+  /// The run is over: every process stops waiting in virtual time and goes on
+  /// in real time (a wait whose virtual deadline will never come ends now, so
+  /// a process can take its SIGINT and exit). The destructor does it too.
+  void release();
+  bool released() const noexcept;
   /// The earliest virtual time a waiting process asked to be woken at.
   Nanos next_wakeup() const noexcept;
 

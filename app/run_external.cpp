@@ -1,0 +1,316 @@
+// app/run_external.cpp — `canhil run --external` (run_external.hpp).
+#include "run_external.hpp"
+
+#include <dlfcn.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "args.hpp"
+#include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/external_driver.hpp"
+#include "canhil/lockstep/conductor.hpp"
+
+namespace canhil::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kRestartedVariable = "CANHIL_TIMESHIM_RESTARTED";
+constexpr const char* kTeamPreloadVariable = "CANHIL_TEAM_PRELOAD";
+
+std::atomic<bool> g_stop{false};
+extern "C" void stop_external(int) { g_stop = true; }
+
+double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
+
+fs::path own_folder() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path() : exe.parent_path();
+}
+
+// "{agent}" and "{iface}" in a command line, replaced by the robot's.
+std::string expand(std::string command, int agent, const std::string& iface) {
+  const auto replace = [&command](const std::string& key, const std::string& value) {
+    for (std::size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size())) {
+      command.replace(at, key.size(), value);
+    }
+  };
+  replace("{agent}", std::to_string(agent));
+  replace("{iface}", iface);
+  return command;
+}
+
+// One process canhil started for a robot.
+struct Started {
+  std::string command;
+  int agent = 0;
+  pid_t pid = -1;
+  int status = 0;
+  bool ended = false;
+};
+
+// canhil's own laptop programs (canhil-hwcomm, canhil-agent) are found
+// without a path: installed beside canhil, or in the build tree's laptop/.
+std::string search_path() {
+  const fs::path here = own_folder();
+  std::string path;
+  for (const fs::path& p : {here, here.parent_path() / "laptop"}) {
+    std::error_code ec;
+    if (!p.empty() && fs::exists(p / "canhil-hwcomm", ec)) path += p.string() + ":";
+  }
+  const char* old = std::getenv("PATH");
+  return path + (old != nullptr ? old : "/usr/bin:/bin");
+}
+
+pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent,
+            const std::string& path) {
+  const pid_t pid = fork();
+  if (pid != 0) return pid;
+  for (const std::string& e : environment) {
+    const auto eq = e.find('=');
+    setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
+  }
+  setenv("AGENT", std::to_string(agent).c_str(), 1);
+  setenv("PATH", path.c_str(), 1);
+  signal(SIGINT, SIG_DFL);
+  signal(SIGTERM, SIG_DFL);
+  // exec: the process is the command's program itself (its signals reach it,
+  // and no shell stays behind in the lockstep).
+  const std::string line = "exec " + command;
+  execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+  _exit(127);
+}
+
+// Reaps what ended; says so once per process, with the virtual time.
+void reap(std::vector<Started>& started, Nanos now, FILE* out) {
+  for (Started& s : started) {
+    if (s.ended || s.pid <= 0) continue;
+    if (waitpid(s.pid, &s.status, WNOHANG) != s.pid) continue;
+    s.ended = true;
+    std::fprintf(out, "canhil run: `%s` (agent %d, pid %d) ended at t = %.3f s: %s %d\n", s.command.c_str(), s.agent,
+                 s.pid, seconds(now), WIFSIGNALED(s.status) ? "signal" : "exit status",
+                 WIFSIGNALED(s.status) ? WTERMSIG(s.status) : WEXITSTATUS(s.status));
+  }
+}
+
+// SIGINT (their Ctrl-C), then SIGKILL for any still there after five seconds.
+void stop_all(std::vector<Started>& started) {
+  for (const Started& s : started) {
+    if (!s.ended && s.pid > 0) kill(s.pid, SIGINT);
+  }
+  const Nanos until = lockstep::wall_clock() + std::chrono::seconds(5);
+  for (Started& s : started) {
+    while (!s.ended && s.pid > 0) {
+      if (waitpid(s.pid, &s.status, WNOHANG) == s.pid) {
+        s.ended = true;
+      } else if (lockstep::wall_clock() > until) {
+        std::fprintf(stderr, "canhil run: `%s` (pid %d) did not end within 5 s of SIGINT; killed\n",
+                     s.command.c_str(), s.pid);
+        kill(s.pid, SIGKILL);
+        waitpid(s.pid, &s.status, 0);
+        s.ended = true;
+      } else {
+        const timespec a_while{0, 20'000'000};
+        nanosleep(&a_while, nullptr);  // real: canhil's own waits never follow the board
+      }
+    }
+  }
+}
+
+void write_text(const std::string& path, const std::string& text, const char* what) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw UsageError("cannot write the " + std::string(what) + " to " + path);
+}
+
+void print_summary(const emulator::Session& session, const emulator::ExternalDriver& driver,
+                   const lockstep::Conductor& conductor, Nanos wall, const char* how) {
+  const double simulated = seconds(driver.now());
+  const double w = seconds(wall);
+  std::printf("canhil run: %s after %.2f s of virtual time in %.2f s of wall time (%.1fx real time)\n", how, simulated,
+              w, w > 0 ? simulated / w : 0.0);
+  const emulator::WorldSnapshot s = session.snapshot();
+  std::printf("  ball at (%.2f, %.2f)\n", s.ball.x(), s.ball.y());
+  for (const emulator::Goal& g : session.goals()) {
+    std::printf("  GOAL at %.2f s in the %s goal\n", to_seconds(g.time), g.positive_x ? "+x (opponent)" : "-x (own)");
+  }
+  for (std::size_t r = 0; r < session.robot_count(); ++r) {
+    const emulator::Rig& rig = session.rig(r);
+    std::printf("  %s agent %d: at (%.2f, %.2f)\n", rig.interface.c_str(), rig.agent, s.robots[r].x_m,
+                s.robots[r].y_m);
+  }
+  std::printf("  frames: %llu from the processes, %llu physics steps\n",
+              static_cast<unsigned long long>(driver.frames_from_processes()),
+              static_cast<unsigned long long>(driver.physics_steps()));
+  const Nanos waited = conductor.waited_wall();
+  std::printf("  wall time: canhil %.3f s (%.0f %%), waiting for the processes %.3f s (%.0f %%)\n",
+              seconds(wall - waited), w > 0 ? 100 * seconds(wall - waited) / w : 0.0, seconds(waited),
+              w > 0 ? 100 * seconds(waited) / w : 0.0);
+  for (const lockstep::ProcessReport& p : conductor.processes()) {
+    std::printf("    %-16s pid %-7d %.3f s running, %llu waits, %llu CAN frames written, %d thread(s)\n",
+                p.name.c_str(), p.pid, seconds(p.busy_wall), static_cast<unsigned long long>(p.blocks),
+                static_cast<unsigned long long>(p.frames_sent), p.threads);
+  }
+  for (const auto& c : session.fault_counts()) {
+    std::printf("  fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
+  }
+}
+
+}  // namespace
+
+std::string find_timeshim() {
+  const char* given = std::getenv("CANHIL_TIMESHIM");
+  if (given != nullptr && *given != '\0') {
+    if (!fs::exists(given)) throw SetupError(std::string("CANHIL_TIMESHIM=") + given + ": no such file");
+    return fs::absolute(given).string();
+  }
+  const fs::path here = own_folder();
+  std::vector<fs::path> places = {here.parent_path() / CANHIL_INSTALL_LIBDIR / "libcanhil-timeshim.so",
+                                  CANHIL_BUILD_TIMESHIM};
+  std::string looked;
+  for (const fs::path& p : places) {
+    std::error_code ec;
+    if (fs::exists(p, ec)) return p.string();
+    looked += (looked.empty() ? "" : ", ") + p.string();
+  }
+  throw SetupError("the time shim libcanhil-timeshim.so is not at " + looked +
+                   ": build it (target canhil_timeshim) or set CANHIL_TIMESHIM=/path/to/libcanhil-timeshim.so");
+}
+
+std::string preload_shim_into_self(const std::string& shim) {
+  if (dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct") != nullptr) {
+    // Started again with the shim: the team's processes get the preload canhil was first given.
+    const char* team = std::getenv(kTeamPreloadVariable);
+    const std::string preload = team != nullptr ? team : "";
+    if (preload.empty()) {
+      unsetenv("LD_PRELOAD");
+    } else {
+      setenv("LD_PRELOAD", preload.c_str(), 1);
+    }
+    unsetenv(kTeamPreloadVariable);
+    unsetenv(kRestartedVariable);
+    return preload;
+  }
+  if (std::getenv(kRestartedVariable) != nullptr) {
+    throw SetupError("canhil started itself again with LD_PRELOAD=" + shim +
+                     " and the shim is still not loaded: is it a library for this machine? (`ldd " + shim + "`)");
+  }
+  const char* team = std::getenv("LD_PRELOAD");
+  const std::string team_preload = team != nullptr ? team : "";
+  setenv(kTeamPreloadVariable, team_preload.c_str(), 1);
+  setenv(kRestartedVariable, "1", 1);
+  setenv("LD_PRELOAD", (team_preload.empty() ? shim : shim + ":" + team_preload).c_str(), 1);
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::string> words;
+  for (std::size_t at = 0; at < all.size();) {
+    const std::size_t end = all.find('\0', at);
+    words.push_back(all.substr(at, end - at));
+    at = end == std::string::npos ? all.size() : end + 1;
+  }
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  execv("/proc/self/exe", argv.data());
+  throw SetupError(std::string("canhil could not start itself again with the time shim: ") + std::strerror(errno));
+}
+
+int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
+                 const std::string& team_preload) {
+  const emulator::ExternalSide& side = session.scenario().external;
+  lockstep::ConductorOptions conductor_options;
+  conductor_options.answer_limit = from_seconds(side.answer_limit_s);
+  lockstep::Conductor conductor(conductor_options);
+  emulator::ExternalDriver driver(session, conductor);
+  const std::size_t robots = session.robot_count();
+  std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s, seed %llu\n", robots,
+              run.duration_s, static_cast<unsigned long long>(session.scenario().seed));
+  std::vector<Started> started;
+  std::size_t expected = 0;
+  const std::vector<std::string> environment =
+      conductor.environment(shim, team_preload.empty() ? nullptr : team_preload.c_str());
+  if (!side.processes.empty()) {
+    const std::string path = search_path();
+    for (std::size_t r = 0; r < robots; ++r) {
+      for (const std::string& c : side.processes) {
+        Started s;
+        s.agent = session.rig(r).agent;
+        s.command = expand(c, s.agent, session.rig(r).interface);
+        s.pid = start(s.command, environment, s.agent, path);
+        std::printf("  started `%s` for agent %d (pid %d)\n", s.command.c_str(), s.agent, s.pid);
+        started.push_back(s);
+      }
+    }
+    expected = started.size();
+  } else {
+    expected = run.wait_for > 0 ? run.wait_for : 2 * robots;
+    std::printf("  start your handler and agent (AGENT=N) with:\n   ");
+    for (const std::string& e : environment) std::printf(" %s", e.c_str());
+    std::printf("\n  waiting for %zu process(es), %g s at most\n", expected, side.attach_limit_s);
+  }
+  std::fflush(stdout);
+  std::signal(SIGINT, stop_external);
+  std::signal(SIGTERM, stop_external);
+  const std::size_t attached = conductor.wait_attached(expected, from_seconds(side.attach_limit_s));
+  int status = 0;
+  const char* how = "done";
+  const Nanos wall_start = lockstep::wall_clock();
+  if (attached < expected) {
+    std::fprintf(stderr, "canhil run: %zu of %zu process(es) attached within %g s (attach_limit_s in [external])\n",
+                 attached, expected, side.attach_limit_s);
+    status = kProcessStuckStatus;
+    how = "not started";
+  } else {
+    const Nanos total = from_seconds(run.duration_s);
+    try {
+      while (driver.now() < total && !g_stop) {
+        driver.run_until(std::min<Nanos>(driver.now() + std::chrono::seconds(1), total));
+        reap(started, driver.now(), stdout);
+        if (run.quiet) continue;
+        const emulator::WorldSnapshot s = session.snapshot();
+        std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", to_seconds(driver.now()), s.ball.x(), s.ball.y());
+        for (std::size_t r = 0; r < robots; ++r) {
+          std::printf("  %s (%5.2f, %5.2f)", session.rig(r).interface.c_str(), s.robots[r].x_m, s.robots[r].y_m);
+        }
+        std::printf("\n");
+        std::fflush(stdout);
+      }
+    } catch (const emulator::ProcessStuck& e) {
+      std::fprintf(stderr, "canhil run: stopped at t = %.3f s: %s\n", seconds(driver.now()), e.what());
+      status = kProcessStuckStatus;
+      how = "stopped (a process did not answer)";
+    }
+    if (g_stop && status == 0) {
+      status = 130;
+      how = "stopped";
+    }
+  }
+  const Nanos wall = lockstep::wall_clock() - wall_start;
+  conductor.release();  // the run is over: their waits end, they take their SIGINT
+  stop_all(started);
+  print_summary(session, driver, conductor, wall, how);
+  if (run.trace) {
+    write_text(*run.trace, driver.trace(), "trace");
+    std::printf("trace written to %s (candump log in virtual time)\n", run.trace->c_str());
+  }
+  if (run.world_log) {
+    write_text(*run.world_log, session.world_log(), "world log");
+    std::printf("world log written to %s\n", run.world_log->c_str());
+  }
+  return status;
+}
+
+}  // namespace canhil::app
