@@ -127,7 +127,10 @@ std::size_t ExternalDriver::settle() {
         return {};
       },
       "what canhil did at " + at_time(clock_.now()));
-  if (!stuck.empty()) throw ProcessStuck(stuck);
+  if (!stuck.empty()) {
+    observe();  // what reached the bus up to the stop belongs in the trace
+    throw ProcessStuck(stuck);
+  }
   woken_.assign(woken_.size(), false);
   const std::uint64_t theirs = observed_ - ours;
   const std::uint64_t fresh = theirs - from_processes_;

@@ -1,15 +1,20 @@
 // canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] [--rt-priority N] [--busy-poll]
 //               [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]
+//               [--slow-ms MS]
 //
 // The reference low-level communication handler: this robot's RTDB (AGENT)
 // on one side, its CAN bus on the other. The RTDB is canhil's, or the team's
 // own library loaded at run time (its rtdb.ini and generated rtdb_user.h),
 // every item in the team's layout (cambada for a team library unless told).
 // Runs until Ctrl-C (or --duration) and prints a summary, with the latency
-// from each frame's kernel receive timestamp to its RTDB write.
+// from each frame's kernel receive timestamp to its RTDB write. --slow-ms
+// plays a slow machine: after each batch of frames it spends MS of wall time
+// (by the system call itself, which canhil's time shim does not see), so that
+// a lockstep run can show its outcome does not depend on the machine's speed.
 #include <poll.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/syscall.h>
 #include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -43,7 +48,8 @@ int usage(const char* why) {
       stderr,
       "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] "
       "[--rt-priority N] [--busy-poll]\n"
-      "         [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]\n",
+      "         [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]\n"
+      "         [--slow-ms MS]\n",
       why);
   return 2;
 }
@@ -57,6 +63,7 @@ int main(int argc, char** argv) {
   double duration_s = 0;
   int rt_priority = 0;
   bool busy_poll = false;
+  double slow_ms = 0;
   std::string rtdb_lib, rtdb_items, rtdb_ini, layout_name;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -82,6 +89,9 @@ int main(int argc, char** argv) {
         rtdb_ini = argv[++i];
       } else if (a == "--layout") {
         layout_name = argv[++i];
+      } else if (a == "--slow-ms") {
+        slow_ms = canhil::laptop::parse_number(a, argv[++i]);
+        if (!(slow_ms >= 0 && slow_ms <= 60'000)) return usage("--slow-ms takes 0..60000 ms");
       } else if (a == "--rt-priority") {
         rt_priority = static_cast<int>(canhil::laptop::parse_number(a, argv[++i]));
       } else {
@@ -149,7 +159,16 @@ int main(int argc, char** argv) {
         std::uint64_t n = 0;
         [[maybe_unused]] const auto r = ::read(timer, &n, sizeof n);
       }
-      while (auto f = can.receive()) hw.on_frame(f->frame, f->time);
+      bool got = false;
+      while (auto f = can.receive()) {
+        hw.on_frame(f->frame, f->time);
+        got = true;
+      }
+      if (got && slow_ms > 0) {
+        const auto ns = static_cast<long long>(slow_ms * 1e6);
+        const timespec wall{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+        syscall(SYS_nanosleep, &wall, nullptr);
+      }
       if (wall_now() >= hw.next_deadline()) hw.on_time(wall_now());
     }
     ::close(timer);

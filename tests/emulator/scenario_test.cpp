@@ -55,6 +55,25 @@ TEST(Scenarios, TheLaptopTableNamesTheTeamsSoftwareRelativeToTheFile) {
   EXPECT_NE(error_of("[laptop]\npman_lib = \"x\"\n").find("laptop.pman_lib: unknown field"), std::string::npos);
 }
 
+TEST(Scenarios, TheExternalTableGivesTheTeamsProcessesAndTheirLimits) {
+  const Scenario none = parse_scenario("", "s.toml");
+  EXPECT_TRUE(none.external.processes.empty()) << "none: started by hand";
+  EXPECT_DOUBLE_EQ(none.external.answer_limit_s, 1.0);
+  const Scenario s = parse_scenario(
+      "[external]\nprocesses = [\"./hwcomm --iface {iface}\", \"./agent\"]\nanswer_limit_s = 2.5\n"
+      "attach_limit_s = 10\n",
+      "s.toml");
+  EXPECT_EQ(s.external.processes, (std::vector<std::string>{"./hwcomm --iface {iface}", "./agent"}));
+  EXPECT_DOUBLE_EQ(s.external.answer_limit_s, 2.5);
+  EXPECT_DOUBLE_EQ(s.external.attach_limit_s, 10);
+  EXPECT_NE(error_of("[external]\nprocesses = [\"  \"]\n").find("bad.toml:2: external.processes: must be command"),
+            std::string::npos)
+      << error_of("[external]\nprocesses = [\"  \"]\n");
+  EXPECT_NE(error_of("[external]\nanswer_limit_s = 0\n").find("external.answer_limit_s: must be a number from 0.01"),
+            std::string::npos);
+  EXPECT_NE(error_of("[external]\nprocess = []\n").find("external.process: unknown field"), std::string::npos);
+}
+
 TEST(Scenarios, CompleteFillsInTheDefaultsOnce) {
   Scenario s;
   complete(s);
