@@ -116,8 +116,8 @@ void stop_all(std::vector<Started>& started) {
       if (waitpid(s.pid, &s.status, WNOHANG) == s.pid) {
         s.ended = true;
       } else if (lockstep::wall_clock() > until) {
-        std::fprintf(stderr, "canhil run: `%s` (pid %d) did not end within 5 s of SIGINT; killed\n",
-                     s.command.c_str(), s.pid);
+        std::fprintf(stderr, "canhil run: `%s` (pid %d) did not end within 5 s of SIGINT; killed\n", s.command.c_str(),
+                     s.pid);
         kill(s.pid, SIGKILL);
         waitpid(s.pid, &s.status, 0);
         s.ended = true;
@@ -148,8 +148,7 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
   }
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
-    std::printf("  %s agent %d: at (%.2f, %.2f)\n", rig.interface.c_str(), rig.agent, s.robots[r].x_m,
-                s.robots[r].y_m);
+    std::printf("  %s agent %d: at (%.2f, %.2f)\n", rig.interface.c_str(), rig.agent, s.robots[r].x_m, s.robots[r].y_m);
   }
   std::printf("  frames: %llu from the processes, %llu physics steps\n",
               static_cast<unsigned long long>(driver.frames_from_processes()),
@@ -193,7 +192,7 @@ std::string preload_shim_into_self(const std::string& shim) {
   if (dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct") != nullptr) {
     // Started again with the shim: the team's processes get the preload canhil was first given.
     const char* team = std::getenv(kTeamPreloadVariable);
-    const std::string preload = team != nullptr ? team : "";
+    std::string preload = team != nullptr ? team : "";
     if (preload.empty()) {
       unsetenv("LD_PRELOAD");
     } else {
@@ -221,6 +220,7 @@ std::string preload_shim_into_self(const std::string& shim) {
     at = end == std::string::npos ? all.size() : end + 1;
   }
   std::vector<char*> argv;
+  argv.reserve(words.size() + 1);
   for (std::string& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
   std::fflush(stdout);

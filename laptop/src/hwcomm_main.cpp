@@ -44,13 +44,12 @@ canhil::Nanos wall_now() {
 }
 
 int usage(const char* why) {
-  std::fprintf(
-      stderr,
-      "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] "
-      "[--rt-priority N] [--busy-poll]\n"
-      "         [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]\n"
-      "         [--slow-ms MS]\n",
-      why);
+  std::fprintf(stderr,
+               "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] "
+               "[--rt-priority N] [--busy-poll]\n"
+               "         [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]\n"
+               "         [--slow-ms MS]\n",
+               why);
   return 2;
 }
 

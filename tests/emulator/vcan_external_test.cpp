@@ -42,14 +42,30 @@ Finished canhil(const std::string& arguments, const std::string& tag) {
   return f;
 }
 
+// The first line where two traces part, with the line before.
+std::string first_difference(const std::string& a, const std::string& b) {
+  std::istringstream in_a(a), in_b(b);
+  std::string line_a, line_b, before;
+  for (int line = 1;; ++line) {
+    const bool more_a = static_cast<bool>(std::getline(in_a, line_a));
+    const bool more_b = static_cast<bool>(std::getline(in_b, line_b));
+    if (!more_a && !more_b) return "none";
+    if (!more_a || !more_b || line_a != line_b) {
+      return "line " + std::to_string(line) + ", after " + before + "\n  a: " + (more_a ? line_a : "(end)") +
+             "\n  b: " + (more_b ? line_b : "(end)");
+    }
+    before = line_a;
+  }
+}
+
 int exit_status(const Finished& f) { return WIFEXITED(f.status) ? WEXITSTATUS(f.status) : -1; }
 
 std::string trace_path(const std::string& tag) {
   return "/tmp/canhil_external_" + tag + "_" + std::to_string(getpid()) + ".log";
 }
 
-const std::string kRun = "run --no-control --quiet --config " + canhil::test::source_dir() +
-                         "/emulator/scenarios/one_robot.toml";
+const std::string kRun =
+    "run --no-control --quiet --config " + canhil::test::source_dir() + "/emulator/scenarios/one_robot.toml";
 const std::string kAgent = " --process \"canhil-agent --pose -3,0,-90\"";
 
 // "GOAL at T s in the +x (opponent) goal": T, or -1.
@@ -70,7 +86,8 @@ TEST(VcanExternal, TheReferenceHandlerAndAgentGiveTheSameTraceTwiceAndScoreAsInP
   EXPECT_GT(trace_a.size(), 10'000u) << "six seconds of a robot's bus";
   EXPECT_NE(trace_a.find(" vcan0 131#"), std::string::npos) << "the handler's M6_1 is on the bus";
   EXPECT_TRUE(trace_a == trace_b) << "same scenario, same binaries: the same trace (" << trace_a.size() << " and "
-                                  << trace_b.size() << " bytes)";
+                                  << trace_b.size() << " bytes); first difference:\n"
+                                  << first_difference(trace_a, trace_b);
   EXPECT_NE(a.output.find("canhil-hwcomm"), std::string::npos) << "the summary names each process\n" << a.output;
   EXPECT_NE(a.output.find("x real time)"), std::string::npos) << a.output;
   const Finished in_process = canhil(kRun + " --virtual-time --duration 6", "in_process");

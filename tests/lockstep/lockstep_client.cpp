@@ -4,8 +4,8 @@
 // (lines "<what> <CLOCK_MONOTONIC in ns>"). tests/lockstep/conductor_test.cpp
 // moves the virtual clock and checks the lines.
 #include <fcntl.h>
-#include <signal.h>
 #include <poll.h>
+#include <signal.h>
 #include <sys/select.h>
 #include <sys/time.h>
 #include <sys/timerfd.h>
