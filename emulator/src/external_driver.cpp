@@ -41,8 +41,10 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   socket_options.clock = &clock_;  // a frame arrives in the instant it is read
   sockets_.resize(n);
   recorded_.resize(n);
+  fenced_.assign(n, 0);
   woken_.assign(n, false);
   for (std::size_t r = 0; r < n; ++r) {
+    if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
     observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
     observers_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
     if (observers_.back()->state() != can_nodes::BusState::kUp) {
@@ -100,9 +102,22 @@ void ExternalDriver::observe() {
   for (std::size_t r = 0; r < observers_.size(); ++r) {
     while (auto f = observers_[r]->receive()) {
       ++observed_;
+      if (can_nodes::DeliveryFence::counts(f->frame)) ++fenced_[r];
       if (options_.record_trace) recorded_[r].push_back({f->frame, clock_.now()});
     }
   }
+}
+
+std::string ExternalDriver::in_flight(std::uint64_t sent) {
+  observe();
+  if (observed_ < sent) return "the frames sent to reach the bus";
+  // The observer is among the first sockets a frame reaches; the fence is the last.
+  fence_.drain();
+  for (std::size_t r = 0; r < fenced_.size(); ++r) {
+    if (fence_.delivered(r) < fenced_[r])
+      return "the frames on " + session_.rig(r).interface + " to reach every socket";
+  }
+  return {};
 }
 
 std::size_t ExternalDriver::settle() {
@@ -110,26 +125,35 @@ std::size_t ExternalDriver::settle() {
   const std::uint64_t ours = canhil_sent();
   bool woke = false;
   for (const bool w : woken_) woke = woke || w;
-  if (ours != announced_ || woke) {
-    announced_ = ours;
-    conductor_.nudge();  // frames on the bus, or an agent activated: everyone looks again
-  }
+  bool agents_due = false;  // set once a woken agent has been told to look
   pman::Masters* masters = session_.laptop() != nullptr ? session_.laptop()->masters() : nullptr;
-  const std::string stuck = conductor_.wait_quiet(
-      [&]() -> std::string {
-        observe();
-        if (observed_ < ours + conductor_.frames_sent()) return "the frames it sent to reach the bus";
-        for (std::size_t r = 0; r < woken_.size(); ++r) {
-          if (woken_[r] && masters != nullptr && !masters->all_idle(session_.rig(r).agent)) {
-            return "agent " + std::to_string(session_.rig(r).agent) + "'s PMAN_epilogue";
+  // Until nothing new happens: wait for the processes to be quiet and for every
+  // frame sent to have reached every socket; then, if frames are new to the
+  // processes or an agent was activated, nudge them to look again.
+  for (;;) {
+    std::uint64_t sent = 0;
+    const std::string stuck = conductor_.wait_quiet(
+        [&]() -> std::string {
+          sent = ours + conductor_.frames_sent();
+          std::string missing = in_flight(sent);
+          if (!missing.empty() || !agents_due || masters == nullptr) return missing;
+          for (std::size_t r = 0; r < woken_.size(); ++r) {
+            if (woken_[r] && !masters->all_idle(session_.rig(r).agent)) {
+              return "agent " + std::to_string(session_.rig(r).agent) + "'s PMAN_epilogue";
+            }
           }
-        }
-        return {};
-      },
-      "what canhil did at " + at_time(clock_.now()));
-  if (!stuck.empty()) {
-    observe();  // what reached the bus up to the stop belongs in the trace
-    throw ProcessStuck(stuck);
+          return {};
+        },
+        "what canhil did at " + at_time(clock_.now()));
+    if (!stuck.empty()) {
+      observe();  // what reached the bus up to the stop belongs in the trace
+      throw ProcessStuck(stuck);
+    }
+    if (sent == announced_ && !woke) break;
+    announced_ = sent;
+    agents_due = agents_due || woke;
+    woke = false;
+    conductor_.nudge();
   }
   woken_.assign(woken_.size(), false);
   const std::uint64_t theirs = observed_ - ours;

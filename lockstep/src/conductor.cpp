@@ -122,10 +122,14 @@ std::vector<std::string> Conductor::environment(const std::filesystem::path& shi
 std::size_t Conductor::wait_attached(std::size_t count, Nanos limit) {
   const Nanos until = wall_now() + limit;
   for (;;) {
-    std::size_t attached = 0;
+    // Processes, not threads: a handler with two threads is one of `count`.
+    std::vector<std::int32_t> pids;
     for (const Slot& s : board_->slots) {
-      if (state_of(s) != SlotState::kFree) ++attached;
+      const std::int32_t pid = s.pid.load(std::memory_order_acquire);
+      if (state_of(s) != SlotState::kFree && std::find(pids.begin(), pids.end(), pid) == pids.end())
+        pids.push_back(pid);
     }
+    const std::size_t attached = pids.size();
     if (attached >= count || wall_now() > until) return attached;
     const std::uint32_t seen = board_->changes.load(std::memory_order_acquire);
     const timespec a_while{0, 20'000'000};

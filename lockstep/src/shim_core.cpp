@@ -72,25 +72,31 @@ void copy_text(char* to, std::size_t size, const char* from) noexcept {
   to[i] = '\0';
 }
 
+// Fills a slot this process holds for thread `tid`, running; the state is
+// set last, so the conductor never sees half a slot.
+void fill(Slot& s, std::int32_t tid) noexcept {
+  s.tid.store(tid);
+  char name[17] = {};
+  prctl(PR_GET_NAME, name);
+  copy_text(s.name, sizeof s.name, name);
+  copy_text(s.what, sizeof s.what, "starting");
+  s.frames_sent.store(0);
+  s.blocks.store(0);
+  s.busy_wall_ns.store(0);
+  s.running_since_wall_ns.store(wall_ns());
+  s.wake_at_ns.store(kNoWake);
+  s.signal_wait.store(0);
+  s.join_tid.store(0);
+  s.seen_epoch.store(0);
+  s.state.store(static_cast<std::uint32_t>(SlotState::kRunning), std::memory_order_release);
+}
+
 Slot* claim(std::int32_t tid) noexcept {
   const auto pid = static_cast<std::int32_t>(getpid());
   for (Slot& s : g_board->slots) {
     std::int32_t free_pid = 0;
     if (!s.pid.compare_exchange_strong(free_pid, pid)) continue;
-    s.tid.store(tid);
-    char name[17] = {};
-    prctl(PR_GET_NAME, name);
-    copy_text(s.name, sizeof s.name, name);
-    copy_text(s.what, sizeof s.what, "starting");
-    s.frames_sent.store(0);
-    s.blocks.store(0);
-    s.busy_wall_ns.store(0);
-    s.running_since_wall_ns.store(wall_ns());
-    s.wake_at_ns.store(kNoWake);
-    s.signal_wait.store(0);
-    s.join_tid.store(0);
-    s.seen_epoch.store(0);
-    s.state.store(static_cast<std::uint32_t>(SlotState::kRunning), std::memory_order_release);
+    fill(s, tid);
     return &s;
   }
   say("all %zu slots of the board are taken: thread %d runs unseen by canhil's clock", kMaxSlots, tid);
@@ -131,15 +137,24 @@ void mark_gone_all_of_this_process() noexcept {
 
 // The slots an earlier image of this process left before it called exec (a
 // shell that ran `exec PROGRAM`, a program that re-executes itself): their
-// threads are gone or are this one, so they are freed at once; the process
-// gets a fresh slot as the new program.
-void free_slots_of_earlier_image() noexcept {
+// threads are gone or are this one. The new program takes over the first of
+// them in place and frees the rest; the process never looks absent to the
+// conductor, which might otherwise start the run in that gap.
+Slot* take_over_earlier_image(std::int32_t tid) noexcept {
   const auto pid = static_cast<std::int32_t>(getpid());
+  Slot* mine = nullptr;
   for (Slot& s : g_board->slots) {
     if (s.pid.load() != pid) continue;
+    if (mine == nullptr && s.state.load(std::memory_order_acquire) != static_cast<std::uint32_t>(SlotState::kFree)) {
+      mine = &s;
+      s.state.store(static_cast<std::uint32_t>(SlotState::kRunning), std::memory_order_release);
+      fill(s, tid);
+      continue;
+    }
     s.state.store(static_cast<std::uint32_t>(SlotState::kFree), std::memory_order_release);
     s.pid.store(0, std::memory_order_release);
   }
+  return mine != nullptr ? mine : claim(tid);
 }
 
 void after_fork_in_child() noexcept {
@@ -171,8 +186,7 @@ __attribute__((constructor)) void attach() {
   pthread_key_create(&g_thread_key, thread_ended);
   pthread_atfork(nullptr, nullptr, after_fork_in_child);
   g_board = board;
-  free_slots_of_earlier_image();
-  t_slot = claim(static_cast<std::int32_t>(gettid()));
+  t_slot = take_over_earlier_image(static_cast<std::int32_t>(gettid()));
   pthread_setspecific(g_thread_key, t_slot);
   announce_change();
 }

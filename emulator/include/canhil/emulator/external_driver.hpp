@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "canhil/can_nodes/delivery_fence.hpp"
 #include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/session.hpp"
@@ -61,6 +62,9 @@ class ExternalDriver {
 
  private:
   void observe();
+  /// What is still on its way: empty once every frame sent so far has reached
+  /// every socket (the observers and the fence agree).
+  std::string in_flight(std::uint64_t sent);
   std::uint64_t canhil_sent() const;
   /// Lets the processes see this instant and waits until they are done with
   /// it; returns how many frames they sent since the last time.
@@ -71,11 +75,13 @@ class ExternalDriver {
   ExternalOptions options_;
   can_nodes::SimulatedClock clock_;
   std::vector<std::vector<can_nodes::SocketCanBus*>> sockets_;       // per robot, per node
+  can_nodes::DeliveryFence fence_;                                   // opened before any other socket
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
+  std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
   std::vector<std::vector<frames::TimedFrame>> recorded_;
   std::uint64_t observed_ = 0;
-  std::uint64_t announced_ = 0;
-  bool started_ = false;  // canhil's frames the processes were told of
+  std::uint64_t announced_ = 0;  // frames on the buses when the processes were last nudged
+  bool started_ = false;
   std::uint64_t from_processes_ = 0;
   std::vector<bool> woken_;  // robots whose agents PMan activated at this instant
   std::unique_ptr<Processes> processes_;

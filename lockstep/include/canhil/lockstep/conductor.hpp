@@ -66,8 +66,8 @@ class Conductor {
   /// (the shim first, then whatever `preload_already` holds).
   std::vector<std::string> environment(const std::filesystem::path& shim, const char* preload_already) const;
 
-  /// Waits (wall time, up to `limit`) until `count` threads have attached;
-  /// returns how many did.
+  /// Waits (wall time, up to `limit`) until `count` processes have attached
+  /// (a process's threads count once); returns how many did.
   std::size_t wait_attached(std::size_t count, Nanos limit);
 
   /// Moves the virtual clock to `now` (never back). Wakes the processes if
