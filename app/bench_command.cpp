@@ -8,7 +8,11 @@
 //            clock_nanosleep loop on the same period; target at most 1.2x
 //   vcan     the highest frame rate through the interface with no loss, canhil's
 //            sockets against can-utils' `cangen -g 0`; target at least 0.8x
-// The last two need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
+//   external the one-robot real-time factor with the reference handler and
+//            agent as processes in lockstep, next to in-process, one core;
+//            target at least 20x (bench_external.cpp)
+// The last three need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
+#include <sched.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -20,6 +24,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_external.hpp"
 #include "bench_realtime.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/ftt.hpp"
@@ -28,6 +33,7 @@
 #include "canhil/emulator/virtual_driver.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "run_external.hpp"
 
 namespace canhil::app {
 namespace {
@@ -135,16 +141,18 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const double rt_seconds = number_option(args, "--rt-seconds", 10);
   const double rate_frames = number_option(args, "--frames", 200'000);
   const std::string iface = args.option("--iface").value_or("vcan0");
-  const std::string parts = args.option("--part").value_or("virtual,jitter,vcan");
+  const std::string parts = args.option("--part").value_or("virtual,jitter,vcan,external");
   const double priority_option = number_option(args, "--priority", 40);
   const auto config = args.option("--config");
+  const double cpu_option = number_option(args, "--cpu", 0);
   if (args.positionals().size() != 1) throw UsageError("bench takes no other arguments");
   if (!(seconds > 0)) throw UsageError("--seconds takes a number above 0");
   if (!(rt_seconds >= 2)) throw UsageError("--rt-seconds takes 2 or more");
   if (!(rate_frames >= 1000 && rate_frames <= 1e8)) throw UsageError("--frames takes 1000..100000000");
   if (!(priority_option >= 0 && priority_option <= 99)) throw UsageError("--priority takes 0..99");
+  if (!(cpu_option >= -1 && cpu_option < CPU_SETSIZE)) throw UsageError("--cpu takes a core number, or -1 for none");
   const int priority = static_cast<int>(priority_option);
-  bool want_virtual = false, want_jitter = false, want_vcan = false;
+  bool want_virtual = false, want_jitter = false, want_vcan = false, want_external = false;
   {
     std::istringstream in(parts);
     for (std::string part; std::getline(in, part, ',');) {
@@ -154,10 +162,18 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
         want_jitter = true;
       } else if (part == "vcan") {
         want_vcan = true;
+      } else if (part == "external") {
+        want_external = true;
       } else {
-        throw UsageError("--part takes virtual, jitter and vcan, comma-separated; got '" + part + "'");
+        throw UsageError("--part takes virtual, jitter, vcan and external, comma-separated; got '" + part + "'");
       }
     }
+  }
+  ExternalBench external;
+  if (want_external && can_nodes::kernel_has_can()) {
+    // Before anything is measured: canhil may start itself again, with the time shim preloaded.
+    external.shim = find_timeshim();
+    external.team_preload = preload_shim_into_self(external.shim);
   }
   if (std::getenv("RTDB_KEY") == nullptr) {
     setenv("RTDB_KEY", std::to_string(0x57000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
@@ -165,15 +181,21 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const auto messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   bool all_met = true;
   if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;
-  if (!want_jitter && !want_vcan) return all_met ? 0 : 1;
+  if (!want_jitter && !want_vcan && !want_external) return all_met ? 0 : 1;
   if (!can_nodes::kernel_has_can()) {
     std::printf(
-        "canhil bench: release jitter and vcan rate NOT MEASURED: this kernel has no SocketCAN; run "
-        "`vcan_setup/with-vcan.sh -- canhil bench` (or --part virtual)\n");
+        "canhil bench: release jitter, vcan rate and external processes NOT MEASURED: this kernel has no SocketCAN; "
+        "run `vcan_setup/with-vcan.sh -- canhil bench` (or --part virtual)\n");
     return 1;
   }
   if (want_jitter) all_met = bench_jitter(iface, rt_seconds, priority, messages) && all_met;
   if (want_vcan) all_met = bench_vcan(iface, static_cast<std::uint64_t>(rate_frames)) && all_met;
+  if (want_external) {
+    external.iface = iface;
+    external.seconds = seconds;
+    external.cpu = static_cast<int>(cpu_option);
+    all_met = bench_external(external, messages) && all_met;
+  }
   return all_met ? 0 : 1;
 }
 

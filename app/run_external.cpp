@@ -229,7 +229,7 @@ std::string preload_shim_into_self(const std::string& shim) {
 }
 
 int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
-                 const std::string& team_preload) {
+                 const std::string& team_preload, ExternalFigures* figures) {
   const emulator::ExternalSide& side = session.scenario().external;
   lockstep::ConductorOptions conductor_options;
   conductor_options.answer_limit = from_seconds(side.answer_limit_s);
@@ -302,6 +302,8 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   conductor.release();  // the run is over: their waits end, they take their SIGINT
   stop_all(started);
   print_summary(session, driver, conductor, wall, how);
+  if (figures != nullptr)
+    *figures = ExternalFigures{driver.now(), wall, conductor.waited_wall(), conductor.processes()};
   if (run.trace) {
     write_text(*run.trace, driver.trace(), "trace");
     std::printf("trace written to %s (candump log in virtual time)\n", run.trace->c_str());

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "canhil/emulator/session.hpp"
+#include "canhil/lockstep/conductor.hpp"
 
 namespace canhil::app {
 
@@ -21,6 +22,14 @@ struct ExternalRun {
   std::optional<std::string> trace, world_log;
   double log_period_s = 0.05;
   std::size_t wait_for = 0;  ///< processes started by hand to wait for (0: two per robot)
+};
+
+/// What a run measured: `canhil bench --part external` reads it.
+struct ExternalFigures {
+  Nanos simulated{0};  ///< virtual time reached
+  Nanos wall{0};       ///< from the processes' start to the run's end
+  Nanos waited{0};     ///< of `wall`, canhil waiting for the processes
+  std::vector<lockstep::ProcessReport> processes;
 };
 
 /// Exit status 3: a process stopped answering (named on stderr); the trace
@@ -40,6 +49,6 @@ std::string preload_shim_into_self(const std::string& shim);
 
 /// Runs the session; returns the exit status (0, 130 after Ctrl-C, kProcessStuckStatus).
 int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
-                 const std::string& team_preload);
+                 const std::string& team_preload, ExternalFigures* figures = nullptr);
 
 }  // namespace canhil::app
