@@ -174,6 +174,7 @@ std::optional<TimedFrame> SocketCanBus::receive() {
   msg.msg_iovlen = 1;
   msg.msg_control = control;
   msg.msg_controllen = sizeof control;
+  if (options_.told_when_readable && !may_be_readable_) return std::nullopt;
   ssize_t n = 0;
   do {
     n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
@@ -181,11 +182,17 @@ std::optional<TimedFrame> SocketCanBus::receive() {
   if (n < 0) {
     const int err = errno;
     if (err != EAGAIN && err != EWOULDBLOCK) note_errno(err);
+    may_be_readable_ = false;
     // Queue empty: drops after the last received frame are reported with no
     // later frame's SO_RXQ_OVFL, so read the socket's drop counter directly.
-    read_drop_counter();
+    // Only a full queue drops, so an empty queue that stayed empty has none new.
+    if (read_since_drop_check_ && !options_.told_when_readable) {  // that mode reads it in stats() only
+      read_drop_counter();
+      read_since_drop_check_ = false;
+    }
     return std::nullopt;
   }
+  read_since_drop_check_ = true;
   if (n != static_cast<ssize_t>(sizeof k)) return std::nullopt;  // CAN FD on this socket is not enabled
   TimedFrame out{from_kernel(k), Nanos{0}};
   for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
@@ -232,6 +239,24 @@ BusStats SocketCanBus::stats() const {
   return stats_;
 }
 
+void SocketCanBus::note_frame_on_bus(const CanFrame& frame) noexcept {
+  if (may_be_readable_) return;
+  if (frame.kind == frames::FrameKind::kError) {
+    may_be_readable_ = (frame.id & error_mask_) != 0;
+    return;
+  }
+  if (filters_.empty()) {
+    may_be_readable_ = !filters_set_empty_;
+    return;
+  }
+  for (const Filter& f : filters_) {
+    if (f.matches(frame)) {
+      may_be_readable_ = true;
+      return;
+    }
+  }
+}
+
 void SocketCanBus::set_filters(std::span<const Filter> filters) {
   std::vector<can_filter> k;
   k.reserve(filters.size());
@@ -248,6 +273,9 @@ void SocketCanBus::set_filters(std::span<const Filter> filters) {
     throw SetupError("cannot set " + std::to_string(k.size()) + " receive filters on " + iface_ + ": " +
                      errno_text(err) + " (the kernel limits the count to CAN_RAW_FILTER_MAX, 512)");
   }
+  filters_.assign(filters.begin(), filters.end());
+  filters_set_empty_ = filters.empty();  // no filter at all: the socket hears nothing
+  may_be_readable_ = true;
 }
 
 void SocketCanBus::set_error_mask(std::uint32_t mask) {
@@ -256,6 +284,7 @@ void SocketCanBus::set_error_mask(std::uint32_t mask) {
     const int err = errno;
     throw SetupError("cannot set the error-frame mask on " + iface_ + ": " + errno_text(err));
   }
+  error_mask_ = m;
 }
 
 bool SocketCanBus::wait_readable(std::chrono::microseconds timeout) const {

@@ -52,9 +52,12 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
     }
   }
+  // The nodes' sockets read only when the observer saw a frame they take.
+  can_nodes::SocketCanOptions node_options = socket_options;
+  node_options.told_when_readable = true;
   session_.build_nodes(
-      [this, &socket_options](std::size_t r, const std::string&) {
-        auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options);
+      [this, &node_options](std::size_t r, const std::string&) {
+        auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, node_options);
         sockets_[r].push_back(bus.get());
         return std::unique_ptr<can_nodes::Bus>(std::move(bus));
       },
@@ -93,7 +96,7 @@ void ExternalDriver::run_until(Nanos end) {
 std::uint64_t ExternalDriver::canhil_sent() const {
   std::uint64_t sent = 0;
   for (const auto& robot : sockets_) {
-    for (const can_nodes::SocketCanBus* s : robot) sent += s->stats().sent;
+    for (const can_nodes::SocketCanBus* s : robot) sent += s->frames_sent();
   }
   return sent;
 }
@@ -103,6 +106,7 @@ void ExternalDriver::observe() {
     while (auto f = observers_[r]->receive()) {
       ++observed_;
       if (can_nodes::DeliveryFence::counts(f->frame)) ++fenced_[r];
+      for (can_nodes::SocketCanBus* s : sockets_[r]) s->note_frame_on_bus(f->frame);
       if (options_.record_trace) recorded_[r].push_back({f->frame, clock_.now()});
     }
   }
@@ -125,6 +129,12 @@ std::size_t ExternalDriver::settle() {
   const std::uint64_t ours = canhil_sent();
   bool woke = false;
   for (const bool w : woken_) woke = woke || w;
+  if (settled_once_ && !woke && ours == settled_ours_ && conductor_.epoch() == settled_epoch_ &&
+      ours + conductor_.frames_sent() == announced_) {
+    // Nothing happened since the processes were last quiet: no frame, no
+    // activation, no wake-up due (set_time() nudges then). Most instants.
+    return 0;
+  }
   bool agents_due = false;  // set once a woken agent has been told to look
   pman::Masters* masters = session_.laptop() != nullptr ? session_.laptop()->masters() : nullptr;
   // Until nothing new happens: wait for the processes to be quiet and for every
@@ -156,9 +166,15 @@ std::size_t ExternalDriver::settle() {
     conductor_.nudge();
   }
   woken_.assign(woken_.size(), false);
-  const std::uint64_t theirs = observed_ - ours;
-  const std::uint64_t fresh = theirs - from_processes_;
-  from_processes_ = theirs;
+  settled_once_ = true;
+  settled_ours_ = ours;
+  settled_epoch_ = conductor_.epoch();
+  from_processes_ = observed_ - ours;
+  // Every frame new on the buses, canhil's own too: the nodes read them in
+  // the next round, now that the fence says they are in every socket (a
+  // node polling before this settle may have looked too early).
+  const std::uint64_t fresh = observed_ - observed_at_settle_;
+  observed_at_settle_ = observed_;
   return static_cast<std::size_t>(fresh);
 }
 

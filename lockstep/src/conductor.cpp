@@ -151,6 +151,8 @@ void Conductor::nudge() {
   futex(&board_->epoch, FUTEX_WAKE, INT_MAX, nullptr);
 }
 
+std::uint32_t Conductor::epoch() const noexcept { return board_->epoch.load(std::memory_order_acquire); }
+
 void Conductor::release() {
   if (board_->released.exchange(1, std::memory_order_acq_rel) == 0) nudge();
 }

@@ -87,6 +87,31 @@ TEST(SocketCan, KernelFiltersPassOnlyWhatWasAskedFor) {
   EXPECT_EQ(got, (std::vector<std::uint32_t>{0x111, 0x112, 0x131, 0x131}));
 }
 
+TEST(SocketCan, ASocketToldWhenReadableAsksTheKernelOnlyAfterAFrameItsFiltersPass) {
+  auto tx = SocketCanBus::open("vcan0");
+  SocketCanOptions options;
+  options.filters = {Filter::exact(0x131)};
+  options.told_when_readable = true;
+  auto rx = SocketCanBus::open("vcan0", options);
+  EXPECT_FALSE(rx->receive()) << "nothing queued yet: the first read asks the kernel";
+  const frames::CanFrame m6 = make_data_frame(0x131, {1});
+  ASSERT_EQ(tx->send(m6), SendStatus::kOk);
+  ASSERT_TRUE(rx->wait_readable(2s));
+  EXPECT_FALSE(rx->receive()) << "queued, but nobody said so: no read";
+  rx->note_frame_on_bus(make_data_frame(0x132, {}));
+  EXPECT_FALSE(rx->receive()) << "a frame its filter does not pass says nothing";
+  rx->note_frame_on_bus(m6);
+  const auto got = rx->receive();
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->frame, m6);
+  EXPECT_FALSE(rx->receive()) << "empty again";
+  ASSERT_EQ(tx->send(m6), SendStatus::kOk);
+  ASSERT_TRUE(rx->wait_readable(2s));
+  EXPECT_FALSE(rx->receive()) << "after an empty read it waits to be told again";
+  rx->note_frame_on_bus(m6);
+  EXPECT_TRUE(rx->receive());
+}
+
 TEST(SocketCan, FiltersGivenAtOpenAreInPlaceBeforeAnyFrameArrives) {
   auto tx = SocketCanBus::open("vcan0");
   // A sender busy before and while the socket opens: with the filters set

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "support/test_paths.hpp"
 
@@ -116,6 +117,49 @@ TEST(VcanExternal, AHandlerSpendingFiftyMillisecondsOfWallTimePerBatchGivesTheSa
   if (a != b) return;  // both traces kept for a look
   std::remove(trace_path("fast").c_str());
   std::remove(trace_path("slow").c_str());
+}
+
+// "team_agent: cycles N, before vision B, ..." (the last one): N and B.
+std::pair<long, long> agent_cycles(const std::string& output) {
+  long cycles = -1, before_vision = -1;
+  const auto at = output.rfind("team_agent: cycles ");
+  if (at != std::string::npos)
+    std::sscanf(output.c_str() + at, "team_agent: cycles %ld, before vision %ld", &cycles, &before_vision);
+  return {cycles, before_vision};
+}
+
+TEST(VcanExternal, TheTeamsAgentOnItsOwnLibrariesRunsOncePerVisionFrameAndGivesTheSameTraceTwice) {
+  // The CAMBADA-like agent (PMan client, one cycle per SIGCONT) on the team's
+  // RTDB library and a PMan library with CAMBADA's API, as in the real-time
+  // test, and the handler on the same RTDB; all in virtual time.
+  setenv("TEAM_RTDB_KEY", std::to_string(0x7E300000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  const std::string team = canhil::test::source_dir() + "/tests/support/cambada_like/";
+  const std::string libs = std::string(" --rtdb-lib ") + CANHIL_TEST_TEAM_RTDB + " --rtdb-items " + team +
+                           "rtdb_user.h --rtdb-ini " + team + "config/rtdb.ini --layout cambada";
+  const std::string run = kRun + libs + " --pman-lib " + CANHIL_TEST_LIBPMAN +
+                          " --external --duration 3 --process \"canhil-hwcomm --iface {iface}" + libs +
+                          "\" --process \"" + CANHIL_TEST_TEAM_AGENT + " --ini " + team + "config/rtdb.ini\"";
+  const Finished a = canhil(run + " --trace " + trace_path("team_a"), "team_a");
+  const Finished b = canhil(run + " --trace " + trace_path("team_b"), "team_b");
+  ASSERT_EQ(exit_status(a), 0) << a.output;
+  ASSERT_EQ(exit_status(b), 0) << b.output;
+  // Vision writes 30 frames a second, from t = 0: 91 in [0, 3 s]; the agent's
+  // last cycle may be the one the run ended in.
+  const auto [cycles, before_vision] = agent_cycles(a.output);
+  EXPECT_GE(cycles, 90) << "activated once per vision frame\n" << a.output;
+  EXPECT_LE(cycles, 91) << "and only then\n" << a.output;
+  EXPECT_EQ(before_vision, 0) << a.output;
+  EXPECT_EQ(agent_cycles(b.output), agent_cycles(a.output)) << b.output;
+  EXPECT_NE(a.output.find("team_agent: coach says play"), std::string::npos) << a.output;
+  const std::string trace_a = read_file(trace_path("team_a"));
+  const std::string trace_b = read_file(trace_path("team_b"));
+  EXPECT_NE(trace_a.find(" vcan0 131#"), std::string::npos) << "the handler's M6_1 is on the bus";
+  EXPECT_TRUE(trace_a == trace_b) << "the same trace (" << trace_a.size() << " and " << trace_b.size()
+                                  << " bytes); first difference:\n"
+                                  << first_difference(trace_a, trace_b);
+  if (trace_a != trace_b) return;  // both traces kept for a look
+  std::remove(trace_path("team_a").c_str());
+  std::remove(trace_path("team_b").c_str());
 }
 
 TEST(VcanExternal, AHandlerThatStopsAnsweringIsNamedAndTheTraceIsKept) {

@@ -36,6 +36,11 @@ struct SocketCanOptions {
   /// Received frames are timed by this clock (virtual time: the instant they
   /// are read) instead of the kernel's stamp. Must outlive the bus.
   const Clock* clock = nullptr;
+  /// receive() asks the kernel only after note_frame_on_bus() named a frame
+  /// this socket's filters pass (and until the queue is empty again): a driver
+  /// that sees every frame on the interface (lockstep with external processes)
+  /// spares the empty reads. Off: receive() always asks.
+  bool told_when_readable = false;
 };
 
 /// True when this kernel can open a CAN_RAW socket at all.
@@ -58,6 +63,11 @@ class SocketCanBus final : public Bus {
   BusStats stats() const override;
   const std::string& name() const override { return iface_; }
 
+  /// A frame went on this socket's interface (told_when_readable): when the
+  /// socket's filters pass it, the next receive() asks the kernel again.
+  void note_frame_on_bus(const CanFrame& frame) noexcept;
+  /// Frames sent so far (stats().sent without asking the kernel anything).
+  std::uint64_t frames_sent() const noexcept { return stats_.sent; }
   /// The socket, for poll()/epoll in a real-time loop. Owned by this object.
   int fd() const { return fd_; }
   /// Waits up to `timeout` for a frame to be readable; true if one is.
@@ -78,6 +88,11 @@ class SocketCanBus final : public Bus {
   BusState state_ = BusState::kUp;
   mutable BusStats stats_;  // rx_overflow is refreshed from the kernel in const stats()
   mutable std::uint32_t last_drop_count_ = 0;
+  bool read_since_drop_check_ = false;  // a frame came since the drop counter was last read
+  bool may_be_readable_ = true;         // told_when_readable: a frame for us may be queued
+  std::vector<Filter> filters_;         // as set, for note_frame_on_bus(); empty: every frame
+  bool filters_set_empty_ = false;      // set_filters({}): no frame at all
+  std::uint32_t error_mask_ = 0;
 };
 
 }  // namespace canhil::can_nodes

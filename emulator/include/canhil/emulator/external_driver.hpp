@@ -80,7 +80,11 @@ class ExternalDriver {
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
   std::vector<std::vector<frames::TimedFrame>> recorded_;
   std::uint64_t observed_ = 0;
-  std::uint64_t announced_ = 0;  // frames on the buses when the processes were last nudged
+  std::uint64_t observed_at_settle_ = 0;
+  std::uint64_t announced_ = 0;      // frames on the buses when the processes were last nudged
+  std::uint64_t settled_ours_ = 0;   // canhil's frames at the last settle's end
+  std::uint32_t settled_epoch_ = 0;  // the epoch the processes were quiet at then
+  bool settled_once_ = false;
   bool started_ = false;
   std::uint64_t from_processes_ = 0;
   std::vector<bool> woken_;  // robots whose agents PMan activated at this instant

@@ -82,6 +82,9 @@ class Conductor {
   /// a process can take its SIGINT and exit). The destructor does it too.
   void release();
   bool released() const noexcept;
+  /// Bumped by every nudge (set_time's too): a caller that saw the processes
+  /// quiet at epoch E knows nothing woke them while epoch() == E.
+  std::uint32_t epoch() const noexcept;
   /// The earliest virtual time a waiting process asked to be woken at.
   Nanos next_wakeup() const noexcept;
 
