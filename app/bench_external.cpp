@@ -94,6 +94,8 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
               seconds_of(in_process));
   std::printf("  external processes in lockstep:                 %7.1fx real time (wall %.3f s)  target >= %gx: %s\n",
               factor, wall, kTarget, factor >= kTarget ? "met" : "MISSED");
+  std::printf("  external / in-process, in this run:             %7.2f (the share of the in-process speed kept)\n",
+              factor / factor_in);
   // Where the external run's wall time went.
   const double canhil_own = wall - seconds_of(fig.waited);
   const double emulation = std::min(seconds_of(in_process), canhil_own);
