@@ -234,7 +234,9 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   lockstep::ConductorOptions conductor_options;
   conductor_options.answer_limit = from_seconds(side.answer_limit_s);
   lockstep::Conductor conductor(conductor_options);
-  emulator::ExternalDriver driver(session, conductor);
+  emulator::ExternalOptions driver_options;
+  driver_options.start_limit = from_seconds(side.attach_limit_s);
+  emulator::ExternalDriver driver(session, conductor, driver_options);
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s, seed %llu\n", robots,
               run.duration_s, static_cast<unsigned long long>(session.scenario().seed));

@@ -87,7 +87,7 @@ void ExternalDriver::run_until(Nanos end) {
   if (!started_) {
     // Nothing goes on the bus before every process is ready for it (its sockets open, waiting).
     started_ = true;
-    const std::string stuck = conductor_.wait_quiet({}, "its start, before canhil's first frame");
+    const std::string stuck = conductor_.wait_quiet({}, "its start, before canhil's first frame", options_.start_limit);
     if (!stuck.empty()) throw ProcessStuck(stuck);
   }
   lockstep_.run_until(end);

@@ -223,9 +223,11 @@ void Conductor::sweep_dead() {
   }
 }
 
-std::string Conductor::wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for) {
+std::string Conductor::wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
+                                  std::optional<Nanos> limit) {
+  const Nanos answer_limit = limit.value_or(options_.answer_limit);
   const Nanos start = wall_now();
-  const Nanos until = start + options_.answer_limit;
+  const Nanos until = start + answer_limit;
   bool swept = false;
   for (;;) {
     const std::uint32_t seen = board_->changes.load(std::memory_order_acquire);
@@ -241,9 +243,9 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
     }
     if (now > until) {
       waited_ += now - start;
-      const std::string limit = seconds(options_.answer_limit) + " of wall time";
-      if (!processes_quiet) return who + " within " + limit + " after " + waiting_for;
-      return "canhil waited " + limit + " after " + waiting_for + " for " + missing;
+      const std::string within = seconds(answer_limit) + " of wall time";
+      if (!processes_quiet) return who + " within " + within + " after " + waiting_for;
+      return "canhil waited " + within + " after " + waiting_for + " for " + missing;
     }
     const timespec a_while{0, 1'000'000};  // canhil's own condition may change without a board change
     futex(&board_->changes, FUTEX_WAIT, seen, &a_while);

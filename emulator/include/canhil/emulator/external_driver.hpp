@@ -28,6 +28,10 @@ namespace canhil::emulator {
 struct ExternalOptions {
   int receive_buffer_bytes = 1 << 20;  ///< per socket (SO_RCVBUFFORCE as root)
   bool record_trace = true;            ///< keep every bus's frames for trace()
+  /// Wall time the processes may take from their start until they first all
+  /// wait (loading configuration, building tables); then each instant has the
+  /// conductor's answer limit.
+  Nanos start_limit = std::chrono::seconds(60);
 };
 
 /// A process did not become quiet within the conductor's answer limit: what()

@@ -74,7 +74,7 @@ struct LaptopSide {
 struct ExternalSide {
   std::vector<std::string> processes;  ///< shell command lines, one process each, per robot
   double answer_limit_s = 1.0;         ///< wall time a process may take over one instant
-  double attach_limit_s = 60.0;        ///< wall time the processes may take to start
+  double attach_limit_s = 60.0;        ///< wall time the processes may take to start, until they first all wait
 };
 
 struct Scenario {

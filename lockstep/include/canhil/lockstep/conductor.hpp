@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -93,7 +94,10 @@ class Conductor {
   /// the frames in flight seen, PMan's epilogues). Empty on success; after
   /// the answer limit, a sentence naming who did not answer and what canhil
   /// waited for (`waiting_for`, e.g. "the trigger message at t = 1.230 s").
-  std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for);
+  /// `limit`, when given, replaces the answer limit (a program's start may
+  /// take longer than an instant).
+  std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
+                         std::optional<Nanos> limit = std::nullopt);
 
   /// CAN frames the processes wrote (counted by the shim), over the run.
   std::uint64_t frames_sent() const noexcept;
