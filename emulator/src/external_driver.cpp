@@ -129,8 +129,7 @@ std::size_t ExternalDriver::settle() {
   const std::uint64_t ours = canhil_sent();
   bool woke = false;
   for (const bool w : woken_) woke = woke || w;
-  if (settled_once_ && !woke && ours == settled_ours_ && conductor_.epoch() == settled_epoch_ &&
-      ours + conductor_.frames_sent() == announced_) {
+  if (settled_once_ && !woke && conductor_.epoch() == settled_epoch_ && ours + conductor_.frames_sent() == announced_) {
     // Nothing happened since the processes were last quiet: no frame, no
     // activation, no wake-up due (set_time() nudges then). Most instants.
     return 0;
@@ -167,7 +166,6 @@ std::size_t ExternalDriver::settle() {
   }
   woken_.assign(woken_.size(), false);
   settled_once_ = true;
-  settled_ours_ = ours;
   settled_epoch_ = conductor_.epoch();
   from_processes_ = observed_ - ours;
   // Every frame new on the buses, canhil's own too: the nodes read them in

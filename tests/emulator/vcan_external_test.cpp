@@ -78,8 +78,8 @@ double opponent_goal_at(const std::string& output) {
 
 TEST(VcanExternal, TheReferenceHandlerAndAgentGiveTheSameTraceTwiceAndScoreAsInProcess) {
   const std::string external = kRun + " --external --duration 6 --process \"canhil-hwcomm --iface {iface}\"" + kAgent;
-  const Finished a = canhil(external + " --trace " + trace_path("a"), "a");
-  const Finished b = canhil(external + " --trace " + trace_path("b"), "b");
+  const Finished a = canhil(external + " --trace " + trace_path("a") + " --world-log " + trace_path("world_a"), "a");
+  const Finished b = canhil(external + " --trace " + trace_path("b") + " --world-log " + trace_path("world_b"), "b");
   ASSERT_EQ(exit_status(a), 0) << a.output;
   ASSERT_EQ(exit_status(b), 0) << b.output;
   const std::string trace_a = read_file(trace_path("a"));
@@ -90,6 +90,9 @@ TEST(VcanExternal, TheReferenceHandlerAndAgentGiveTheSameTraceTwiceAndScoreAsInP
                                   << trace_b.size() << " bytes); first difference:\n"
                                   << first_difference(trace_a, trace_b);
   if (trace_a != trace_b) return;  // both traces kept for a look
+  const std::string world_a = read_file(trace_path("world_a"));
+  EXPECT_GT(world_a.size(), 1'000u) << "the world log is written";
+  EXPECT_TRUE(world_a == read_file(trace_path("world_b"))) << "and is the same too";
   EXPECT_NE(a.output.find("canhil-hwcomm"), std::string::npos) << "the summary names each process\n" << a.output;
   EXPECT_NE(a.output.find("x real time)"), std::string::npos) << a.output;
   const Finished in_process = canhil(kRun + " --virtual-time --duration 6", "in_process");
@@ -98,8 +101,7 @@ TEST(VcanExternal, TheReferenceHandlerAndAgentGiveTheSameTraceTwiceAndScoreAsInP
   ASSERT_GT(goal_in_process, 0) << in_process.output;
   EXPECT_GT(goal_external, 0) << "the robot scores with the handler and agent as processes\n" << a.output;
   EXPECT_NEAR(goal_external, goal_in_process, 0.5) << a.output << in_process.output;
-  std::remove(trace_path("a").c_str());
-  std::remove(trace_path("b").c_str());
+  for (const char* tag : {"a", "b", "world_a", "world_b"}) std::remove(trace_path(tag).c_str());
 }
 
 TEST(VcanExternal, AHandlerSpendingFiftyMillisecondsOfWallTimePerBatchGivesTheSameTrace) {

@@ -86,8 +86,7 @@ class ExternalDriver {
   std::uint64_t observed_ = 0;
   std::uint64_t observed_at_settle_ = 0;
   std::uint64_t announced_ = 0;      // frames on the buses when the processes were last nudged
-  std::uint64_t settled_ours_ = 0;   // canhil's frames at the last settle's end
-  std::uint32_t settled_epoch_ = 0;  // the epoch the processes were quiet at then
+  std::uint32_t settled_epoch_ = 0;  // the epoch the processes were quiet at, at the last settle
   bool settled_once_ = false;
   bool started_ = false;
   std::uint64_t from_processes_ = 0;
