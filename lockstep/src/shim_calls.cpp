@@ -34,16 +34,12 @@ using shim::Wait;
 
 namespace {
 
-constexpr std::int64_t kSecond = 1'000'000'000;
-
-template <class F>
-F next_symbol(const char* name) noexcept {
-  return reinterpret_cast<F>(dlsym(RTLD_NEXT, name));
-}
+using shim::kSecond;
+using shim::next_symbol;
+using shim::ns_of;
+using shim::timespec_of;
 #define CANHIL_REAL(fn) static const auto real_##fn = next_symbol<decltype(&::fn)>(#fn)
 
-std::int64_t ns_of(const timespec& ts) noexcept { return ts.tv_sec * kSecond + ts.tv_nsec; }
-timespec timespec_of(std::int64_t ns) noexcept { return timespec{ns / kSecond, ns % kSecond}; }
 bool valid(const timespec& ts) noexcept { return ts.tv_sec >= 0 && ts.tv_nsec >= 0 && ts.tv_nsec < kSecond; }
 
 std::int64_t after(std::int64_t delay_ns) noexcept {
@@ -180,6 +176,16 @@ void* start_thread(void* p) {
   std::free(p);
   shim::adopt(start.slot);
   return start.start(start.argument);
+}
+
+// Runs `call` (the real blocking call) with the slot marked as waiting for a
+// signal or for another thread: quiet at any epoch.
+template <class Call>
+auto in_signal_wait(const char* what, Call call) noexcept {
+  shim::begin_signal_wait(what);
+  const auto r = call();
+  shim::end_signal_wait();
+  return r;
 }
 
 }  // namespace
@@ -452,34 +458,22 @@ int close(int fd) {
 // Waiting for a signal: quiet at any epoch (what ends it is canhil's business: PMan's SIGCONT).
 int sigsuspend(const sigset_t* mask) {
   CANHIL_REAL(sigsuspend);
-  shim::begin_signal_wait("sigsuspend");
-  const int r = real_sigsuspend(mask);
-  shim::end_signal_wait();
-  return r;
+  return in_signal_wait("sigsuspend", [&] { return real_sigsuspend(mask); });
 }
 
 int pause() {
   CANHIL_REAL(pause);
-  shim::begin_signal_wait("pause");
-  const int r = real_pause();
-  shim::end_signal_wait();
-  return r;
+  return in_signal_wait("pause", [&] { return real_pause(); });
 }
 
 int sigwaitinfo(const sigset_t* set, siginfo_t* info) {
   CANHIL_REAL(sigwaitinfo);
-  shim::begin_signal_wait("sigwaitinfo");
-  const int r = real_sigwaitinfo(set, info);
-  shim::end_signal_wait();
-  return r;
+  return in_signal_wait("sigwaitinfo", [&] { return real_sigwaitinfo(set, info); });
 }
 
 int sigwait(const sigset_t* set, int* signal) {
   CANHIL_REAL(sigwait);
-  shim::begin_signal_wait("sigwait");
-  const int r = real_sigwait(set, signal);
-  shim::end_signal_wait();
-  return r;
+  return in_signal_wait("sigwait", [&] { return real_sigwait(set, signal); });
 }
 
 int sigtimedwait(const sigset_t* set, siginfo_t* info, const timespec* timeout) {
@@ -503,10 +497,7 @@ int sigtimedwait(const sigset_t* set, siginfo_t* info, const timespec* timeout) 
 pid_t waitpid(pid_t pid, int* status, int options) {
   CANHIL_REAL(waitpid);
   if ((options & WNOHANG) != 0) return real_waitpid(pid, status, options);
-  shim::begin_signal_wait("waitpid");
-  const pid_t r = real_waitpid(pid, status, options);
-  shim::end_signal_wait();
-  return r;
+  return in_signal_wait("waitpid", [&] { return real_waitpid(pid, status, options); });
 }
 
 pid_t wait(int* status) { return waitpid(-1, status, 0); }
@@ -529,10 +520,7 @@ int pthread_join(pthread_t thread, void** result) {
 int pthread_cond_wait(pthread_cond_t* condition, pthread_mutex_t* mutex) {
   static const auto real_wait = reinterpret_cast<int (*)(pthread_cond_t*, pthread_mutex_t*)>(
       dlvsym(RTLD_NEXT, "pthread_cond_wait", "GLIBC_2.3.2"));
-  shim::begin_signal_wait("pthread_cond_wait");
-  const int r = real_wait(condition, mutex);
-  shim::end_signal_wait();
-  return r;
+  return in_signal_wait("pthread_cond_wait", [&] { return real_wait(condition, mutex); });
 }
 
 // Semaphores (a process-shared one is how canhil's RTDB wakes its agent): a

@@ -28,18 +28,11 @@
 namespace canhil::lockstep::shim {
 namespace {
 
-constexpr std::int64_t kSecond = 1'000'000'000;
-
 Board* g_board = nullptr;
 std::atomic<bool> g_detached{false};
 bool g_conducting = false;  // in canhil's own process: the clocks only
 thread_local Slot* t_slot = nullptr;
 pthread_key_t g_thread_key;
-
-template <class F>
-F next_symbol(const char* name) noexcept {
-  return reinterpret_cast<F>(dlsym(RTLD_NEXT, name));
-}
 
 std::int64_t wall_ns() noexcept {
   static const auto real = next_symbol<int (*)(clockid_t, timespec*)>("clock_gettime");
@@ -205,26 +198,12 @@ struct Timer {
 std::array<Timer, 64> g_timers;
 std::atomic_flag g_timers_lock = ATOMIC_FLAG_INIT;
 
-class TimersLocked {
- public:
-  TimersLocked() noexcept {
-    while (g_timers_lock.test_and_set(std::memory_order_acquire)) {
-    }
-  }
-  ~TimersLocked() { g_timers_lock.clear(std::memory_order_release); }
-  TimersLocked(const TimersLocked&) = delete;
-  TimersLocked& operator=(const TimersLocked&) = delete;
-};
-
 Timer* find_timer(int fd) noexcept {
   for (Timer& t : g_timers) {
     if (t.fd == fd) return &t;
   }
   return nullptr;
 }
-
-std::int64_t ns_of(const timespec& ts) noexcept { return ts.tv_sec * kSecond + ts.tv_nsec; }
-timespec timespec_of(std::int64_t ns) noexcept { return timespec{ns / kSecond, ns % kSecond}; }
 
 void drain(int fd) noexcept {
   static const auto real_read = next_symbol<ssize_t (*)(int, void*, size_t)>("read");
@@ -243,17 +222,6 @@ struct Started {
 };
 std::array<Started, 256> g_started;
 std::atomic_flag g_started_lock = ATOMIC_FLAG_INIT;
-
-class StartedLocked {
- public:
-  StartedLocked() noexcept {
-    while (g_started_lock.test_and_set(std::memory_order_acquire)) {
-    }
-  }
-  ~StartedLocked() { g_started_lock.clear(std::memory_order_release); }
-  StartedLocked(const StartedLocked&) = delete;
-  StartedLocked& operator=(const StartedLocked&) = delete;
-};
 
 }  // namespace
 
@@ -360,7 +328,7 @@ void begin_signal_wait(const char* what) noexcept {
 }
 
 void remember_started(pthread_t thread, Slot* slot) noexcept {
-  const StartedLocked locked;
+  const SpinLocked locked(g_started_lock);
   Started* entry = nullptr;
   for (Started& s : g_started) {
     if (s.slot != nullptr && pthread_equal(s.thread, thread) != 0) {
@@ -375,7 +343,7 @@ void remember_started(pthread_t thread, Slot* slot) noexcept {
 std::int32_t take_started(pthread_t thread) noexcept {
   Slot* slot = nullptr;
   {
-    const StartedLocked locked;
+    const SpinLocked locked(g_started_lock);
     for (Started& s : g_started) {
       if (s.slot != nullptr && pthread_equal(s.thread, thread) != 0) {
         slot = s.slot;
@@ -416,14 +384,14 @@ void count_sent(int fd, std::int64_t frames) noexcept {
 }
 
 bool is_timer(int fd) noexcept {
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   return find_timer(fd) != nullptr;
 }
 
 int new_timer(clockid_t clock, int flags) noexcept {
   const int fd = eventfd(0, flags & (TFD_NONBLOCK | TFD_CLOEXEC));
   if (fd < 0) return -1;
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   Timer* t = find_timer(-1);
   if (t == nullptr) {
     close(fd);
@@ -436,7 +404,7 @@ int new_timer(clockid_t clock, int flags) noexcept {
 }
 
 int set_timer(int fd, int flags, const itimerspec* value, itimerspec* old) noexcept {
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   Timer* t = find_timer(fd);
   if (t == nullptr || value == nullptr) {
     errno = t == nullptr ? EINVAL : EFAULT;
@@ -459,7 +427,7 @@ int set_timer(int fd, int flags, const itimerspec* value, itimerspec* old) noexc
 }
 
 int get_timer(int fd, itimerspec* value) noexcept {
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   const Timer* t = find_timer(fd);
   if (t == nullptr) {
     errno = EINVAL;
@@ -471,14 +439,14 @@ int get_timer(int fd, itimerspec* value) noexcept {
 }
 
 void forget_timer(int fd) noexcept {
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   if (Timer* t = find_timer(fd)) *t = Timer{};
 }
 
 void fire_timers() noexcept {
   static const auto real_write = next_symbol<ssize_t (*)(int, const void*, size_t)>("write");
   const std::int64_t now = now_ns();
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   for (Timer& t : g_timers) {
     if (t.fd < 0 || t.next_ns > now) continue;
     std::uint64_t expirations = 1;
@@ -493,7 +461,7 @@ void fire_timers() noexcept {
 }
 
 std::int64_t next_timer() noexcept {
-  const TimersLocked locked;
+  const SpinLocked locked(g_timers_lock);
   std::int64_t next = kNoWake;
   for (const Timer& t : g_timers) {
     if (t.fd >= 0 && t.next_ns < next) next = t.next_ns;
