@@ -243,6 +243,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
     read_external(TableReader(*external, "external", file_name, {"processes", "answer_limit_s", "attach_limit_s"}), s);
   }
   complete(s);
+  s.source_toml = std::string(toml_text);
   return s;
 }
 

@@ -1,6 +1,7 @@
 #include "canhil/emulator/session.hpp"
 
 #include <algorithm>
+#include <condition_variable>
 #include <cmath>
 #include <cstdio>
 
@@ -38,8 +39,20 @@ std::vector<std::string> robot_node_names() { return {can_nodes::kNodeNames.begi
 
 }  // namespace
 
+// Whoever wants the whole world's state waits here until the stepping thread saves it.
+struct Session::StateRequests {
+  std::mutex mutex;
+  std::condition_variable saved;
+  std::atomic<bool> asked{false};
+  std::uint64_t generation = 0;
+  physics::WorldState state;
+};
+
 Session::Session(Scenario scenario, SessionOptions options)
-    : scenario_(std::move(scenario)), options_(std::move(options)), goals_(scenario_.world) {
+    : scenario_(std::move(scenario)),
+      options_(std::move(options)),
+      goals_(scenario_.world),
+      state_requests_(std::make_unique<StateRequests>()) {
   complete(scenario_);
   coach_ = scenario_.coach;
   if (!options_.messages) throw SetupError("a run needs a message set");
@@ -72,6 +85,14 @@ Session::Session(Scenario scenario, SessionOptions options)
     vision_ = std::make_unique<vision_emu::VisionRunner>(
         std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
           laptop_->vision_frame(r, f);
+          if (r == vision_watched_.load(std::memory_order_relaxed)) {
+            if (!vision_seen_) vision_seen_.emplace();
+            vision_seen_->robot = r;
+            vision_seen_->time_s = to_seconds(now_);
+            vision_seen_->lines = f.lines;
+            vision_seen_->obstacles = f.obstacles;
+            vision_seen_->balls = f.balls;
+          }
           if (frame_hook_) frame_hook_(r, now_);
         });
   }
@@ -111,16 +132,47 @@ void Session::build_nodes(const Endpoints& endpoints, IoMode mode, Nanos start) 
   }
 }
 
-void Session::before_step() {
-  if (any_world_change_.load(std::memory_order_acquire)) {
-    std::vector<Change> changes;
-    {
-      const std::lock_guard lock(changes_mutex_);
-      changes.swap(world_changes_);
-      any_world_change_ = false;
-    }
-    for (const Change& c : changes) apply_now(c);
+void Session::apply_world_changes() {
+  if (!any_world_change_.load(std::memory_order_acquire)) return;
+  std::vector<Change> changes;
+  {
+    const std::lock_guard lock(changes_mutex_);
+    changes.swap(world_changes_);
+    any_world_change_ = false;
   }
+  for (const Change& c : changes) apply_now(c);
+}
+
+void Session::serve_state_requests() {
+  StateRequests& q = *state_requests_;
+  if (!q.asked.load(std::memory_order_acquire)) return;
+  physics::WorldState state = world_->save();
+  const std::lock_guard lock(q.mutex);
+  q.state = std::move(state);
+  ++q.generation;
+  q.asked = false;
+  q.saved.notify_all();
+}
+
+std::optional<physics::WorldState> Session::saved_state(std::chrono::milliseconds wait) const {
+  StateRequests& q = *state_requests_;
+  std::unique_lock lock(q.mutex);
+  const std::uint64_t before = q.generation;
+  q.asked = true;
+  if (!q.saved.wait_for(lock, wait, [&] { return q.generation != before; })) return std::nullopt;
+  return q.state;
+}
+
+void Session::settle() {
+  apply_bus_changes();
+  apply_world_changes();
+  serve_state_requests();
+  publish(steps_);
+}
+
+void Session::before_step() {
+  apply_world_changes();
+  serve_state_requests();
   for (Rig& rig : rigs_) {
     if (rig.shared != nullptr) rig.shared->apply_commands();
   }
@@ -172,6 +224,13 @@ void Session::apply(Change change) {
     }
     if (c->role && c->role->empty()) throw SetupError("a role needs a name, e.g. \"striker\"");
   }
+  if (const auto* w = std::get_if<RestoreWorld>(&change)) {
+    if (w->state.robots.size() != rigs_.size() || w->state.obstacles.size() != world_->obstacle_count()) {
+      throw SetupError("the saved world has " + std::to_string(w->state.robots.size()) + " robot(s) and " +
+                       std::to_string(w->state.obstacles.size()) + " obstacle(s); this run has " +
+                       std::to_string(rigs_.size()) + " and " + std::to_string(world_->obstacle_count()));
+    }
+  }
   const bool bus = std::holds_alternative<InjectFault>(change);
   if (bus) {
     const can_nodes::FaultRule& rule = std::get<InjectFault>(change).rule;
@@ -213,6 +272,15 @@ void Session::apply_now(const Change& change) {
     world_->place_obstacle(o->obstacle, o->x_m, o->y_m);
   } else if (const auto* f = std::get_if<InjectFault>(&change)) {
     for (Rig& rig : rigs_) rig.faults->add_rule(f->rule);
+  } else if (const auto* w = std::get_if<RestoreWorld>(&change)) {
+    // The world's clock goes on: the saved bodies come back, not the saved time.
+    physics::WorldState state = w->state;
+    const double shift = world_->time_s() - state.time_s;
+    state.time_s += shift;
+    for (physics::RobotState& r : state.robots) {
+      if (r.last_kick_time_s >= 0) r.last_kick_time_s += shift;
+    }
+    world_->restore(state);
   } else if (const auto* c = std::get_if<SetCoach>(&change)) {
     CoachState next = coach_;
     if (c->game_state) next.game_state = *c->game_state;
@@ -242,11 +310,40 @@ void Session::publish(std::uint64_t step) {
   for (std::size_t o = 0; o < s.obstacles.size(); ++o) s.obstacles[o] = world_->obstacle_position(o);
   if (s.goals.size() != goals_.goals().size()) s.goals = goals_.goals();
   if (s.coach != coach_) s.coach = coach_;
+  if (detail_asked_.exchange(false, std::memory_order_acq_rel)) {
+    s.detail.resize(rigs_.size());
+    for (const Rig& rig : rigs_) {
+      RobotDetail& d = s.detail[rig.index];
+      d.achieved = world_->robot(rig.index).twist();
+      d.odometry = laptop_ ? laptop_->reported_pose(rig.index) : std::nullopt;
+      // The base node's state belongs to the nodes' thread: read only when that is this one.
+      d.commanded = rig.shared == nullptr && rig.nodes ? rig.nodes->pic_base().commanded() : std::nullopt;
+    }
+    if (vision_watched_.load(std::memory_order_relaxed) == kNoRobot) {
+      s.vision.reset();
+    } else {
+      s.vision = vision_seen_;
+    }
+    if (detail_hook_) detail_hook_(s);
+  }
 }
 
 WorldSnapshot Session::snapshot() const {
   const std::lock_guard lock(snapshot_mutex_);
   return snapshot_;
+}
+
+WorldSnapshot Session::detailed_snapshot() const {
+  detail_asked_.store(true, std::memory_order_release);
+  return snapshot();
+}
+
+void Session::watch_vision(std::optional<std::size_t> robot) {
+  if (robot && *robot >= rigs_.size()) {
+    throw SetupError("no robot " + std::to_string(*robot) + "; the run has " + std::to_string(rigs_.size()));
+  }
+  if (robot && !vision_) throw SetupError("this run has no vision (canhil nodes)");
+  vision_watched_.store(robot.value_or(kNoRobot), std::memory_order_relaxed);
 }
 
 std::vector<can_nodes::FaultCount> Session::fault_counts() const {

@@ -109,6 +109,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     if (laptops_[r]->handler) lockstep_.add(*laptops_[r]->handler);
     if (laptops_[r]->agent) lockstep_.add(*laptops_[r]->agent);
   }
+  session_.on_detail([this](WorldSnapshot& s) { fill_detail(s); });
   session_.on_vision_frame([this](std::size_t r, Nanos now) {
     if (laptops_[r]->agent) laptops_[r]->agent->frame_ready(now);
   });
@@ -121,7 +122,10 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   });
 }
 
-VirtualDriver::~VirtualDriver() { session_.on_vision_frame(nullptr); }
+VirtualDriver::~VirtualDriver() {
+  session_.on_vision_frame(nullptr);
+  session_.on_detail(nullptr);
+}
 
 void VirtualDriver::run_until(Nanos end) {
   lockstep_.run_until(end);
@@ -134,7 +138,30 @@ void VirtualDriver::record() {
   for (std::size_t r = 0; r < recorders_.size(); ++r) {
     while (auto f = recorders_[r]->receive()) {
       ++frame_counts_[r];
+      if (!bus_stats_.empty()) bus_stats_[r].add(*f);
       if (options_.record_trace) recorded_[r].push_back(*f);
+    }
+  }
+}
+
+void VirtualDriver::fill_detail(WorldSnapshot& s) {
+  if (recorders_.empty()) return;  // no listener on the buses: nothing measured
+  if (bus_stats_.empty()) {
+    for (std::size_t r = 0; r < session_.robot_count(); ++r) {
+      bus_stats_.emplace_back(session_.options().messages, session_.options().ftt.bit_rate);
+    }
+  }
+  s.buses.resize(bus_stats_.size());
+  for (std::size_t r = 0; r < bus_stats_.size(); ++r) {
+    timing::LiveBusStats& stats = bus_stats_[r];
+    stats.advance(clock_.now());
+    BusDetail& b = s.buses[r];
+    b.frames = frame_counts_[r];
+    b.load = stats.load();
+    b.jitter_ms = stats.jitter_ms();
+    b.handler_latency_ms.reset();
+    if (const laptop::HwComm* h = handler(r); h != nullptr && !h->stats().latencies.empty()) {
+      b.handler_latency_ms = to_ms(h->stats().latencies.back());
     }
   }
 }

@@ -61,6 +61,12 @@ class PicBase final : public Node {
   /// True while braking because M6 stopped arriving.
   bool watchdog_tripped(Nanos now) const noexcept;
   const std::array<int, 3>& setpoints() const noexcept { return setpoints_; }
+  /// The velocity the laptop last commanded (M6_1 and M6_2, robot frame), or
+  /// nullopt before the first M6.
+  std::optional<kinematics::Twist> commanded() const noexcept {
+    if (last_m6_ == kLongAgo) return std::nullopt;
+    return kinematics::Twist{m6_1_.vx, m6_1_.vy, m6_2_.va};
+  }
 
  protected:
   void on_frame(const frames::TimedFrame& frame) override;

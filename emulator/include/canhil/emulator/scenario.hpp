@@ -88,6 +88,7 @@ struct Scenario {
   CoachState coach;  ///< one player per robot after complete()
   LaptopSide laptop;
   ExternalSide external;
+  std::string source_toml;  ///< the text it was parsed from (empty: built in code)
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
 };

@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -73,6 +74,29 @@ struct Rig {
   std::unique_ptr<can_nodes::FaultInjector> faults;  ///< always there (maybe without rules)
 };
 
+/// What a watcher (the viewer) sees of a robot beyond its pose.
+struct RobotDetail {
+  std::optional<kinematics::Pose> odometry;    ///< what its handler reports in the RTDB
+  std::optional<kinematics::Twist> commanded;  ///< what the laptop last sent its base (M6), robot frame
+  kinematics::Twist achieved;                  ///< its velocity, robot frame
+};
+
+/// A robot's bus as a driver that sees every frame measures it (VirtualDriver).
+struct BusDetail {
+  std::uint64_t frames = 0;
+  double load = 0;  ///< 0..1, over the last whole second of bus time
+  /// Per periodic message, the worst |period - nominal| in that second, ms.
+  std::vector<std::pair<std::string, double>> jitter_ms;
+  std::optional<double> handler_latency_ms;  ///< the reference handler's last receive -> RTDB write
+};
+
+/// One robot's vision frame as its agent received it, points in the robot's frame.
+struct VisionDetail {
+  std::size_t robot = 0;
+  double time_s = 0;
+  std::vector<Eigen::Vector2d> lines, obstacles, balls;
+};
+
 /// The world as the last step left it, for whoever watches the run.
 struct WorldSnapshot {
   double time_s = 0;  ///< world time
@@ -83,6 +107,10 @@ struct WorldSnapshot {
   std::vector<Eigen::Vector3d> obstacles;
   std::vector<Goal> goals;
   CoachState coach;  ///< the base station's orders now
+  // Only in a snapshot(true) (filled at most one step late):
+  std::vector<RobotDetail> detail;       ///< per robot
+  std::vector<BusDetail> buses;          ///< per robot, when the driver measures them
+  std::optional<VisionDetail> vision;    ///< the watched robot's last frame (watch_vision)
 };
 
 /// Changes to a running world. A moved body is a physics state change like any
@@ -103,7 +131,11 @@ struct MoveObstacle {
 struct InjectFault {
   can_nodes::FaultRule rule;
 };
-using Change = std::variant<MoveRobot, MoveBall, MoveObstacle, InjectFault, SetCoach>;
+/// The whole world put back into a saved state (a snapshot loaded while running).
+struct RestoreWorld {
+  physics::WorldState state;
+};
+using Change = std::variant<MoveRobot, MoveBall, MoveObstacle, InjectFault, SetCoach, RestoreWorld>;
 
 class Session {
  public:
@@ -155,9 +187,25 @@ class Session {
   const LaptopLink* laptop() const noexcept { return laptop_.get(); }
   /// Called after robot r's VISION_INFO is written (wake its agent).
   void on_vision_frame(std::function<void(std::size_t robot, Nanos now)> hook) { frame_hook_ = std::move(hook); }
+  /// The driver's part of a detailed snapshot (its bus measurements), called
+  /// on the stepping thread when a watcher asked for details.
+  void on_detail(std::function<void(WorldSnapshot&)> hook) { detail_hook_ = std::move(hook); }
+  /// While the world is not stepping (paused): applies the queued changes,
+  /// answers state requests and publishes the snapshot, as a step would.
+  void settle();
 
   // --- the narrow surface (any thread) ----------------------------------------
   WorldSnapshot snapshot() const;
+  /// The same with the details (odometry, commanded and achieved velocity,
+  /// buses, vision) filled at the next step: one step late, and only worked
+  /// out while someone asks, so a run nobody watches pays nothing.
+  WorldSnapshot detailed_snapshot() const;
+  /// Puts robot `robot`'s vision frames into the detailed snapshot (nullopt:
+  /// none). SetupError for an unknown robot or a run without vision.
+  void watch_vision(std::optional<std::size_t> robot);
+  /// The whole world's state (physics::World::save) as the next step (or
+  /// settle()) finds it; nullopt when the run does not get there within `wait`.
+  std::optional<physics::WorldState> saved_state(std::chrono::milliseconds wait) const;
   /// Queues a change for the next step; SetupError for an unknown robot or
   /// obstacle, a fault rule whose target does not exist, a game state canhil
   /// does not know, or too many changes waiting (kMaxPendingChanges: a flood
@@ -180,6 +228,8 @@ class Session {
   void log_world(Nanos now);
   void publish(std::uint64_t step);
   void apply_now(const Change& change);
+  void apply_world_changes();
+  void serve_state_requests();
 
   Scenario scenario_;
   SessionOptions options_;
@@ -192,6 +242,7 @@ class Session {
   GoalWatcher goals_;
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
+  std::function<void(WorldSnapshot&)> detail_hook_;
   std::unique_ptr<LaptopLink> laptop_;  // with vision: the team's RTDB, layout, PMan, coach, replicator
   std::string world_log_;
   std::string error_frames_refused_;  // empty: allowed
@@ -201,6 +252,12 @@ class Session {
 
   mutable std::mutex snapshot_mutex_;
   WorldSnapshot snapshot_;
+  mutable std::atomic<bool> detail_asked_{false};
+  std::atomic<std::size_t> vision_watched_{kNoRobot};  // kNoRobot: none
+  static constexpr std::size_t kNoRobot = static_cast<std::size_t>(-1);
+  std::optional<VisionDetail> vision_seen_;  // the stepping thread's copy
+  struct StateRequests;
+  std::unique_ptr<StateRequests> state_requests_;
   std::mutex changes_mutex_;
   std::vector<Change> world_changes_, bus_changes_;
   std::atomic<bool> any_world_change_{false}, any_bus_change_{false};  // set under the mutex; read first without it

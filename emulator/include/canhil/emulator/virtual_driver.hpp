@@ -18,6 +18,7 @@
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/laptop/hwcomm.hpp"
+#include "canhil/timing/live.hpp"
 
 namespace canhil::emulator {
 
@@ -68,6 +69,7 @@ class VirtualDriver {
 
  private:
   void record();
+  void fill_detail(WorldSnapshot& s);
 
   Session& session_;
   VirtualOptions options_;
@@ -76,6 +78,8 @@ class VirtualDriver {
   std::vector<std::unique_ptr<can_nodes::MemoryEndpoint>> recorders_;
   std::vector<std::vector<frames::TimedFrame>> recorded_;  // kept only when record_trace
   std::vector<std::uint64_t> frame_counts_;
+  // Measured once someone watches the run in detail (the viewer's plots); until then no cost.
+  std::vector<timing::LiveBusStats> bus_stats_;
   std::vector<std::unique_ptr<Laptop>> laptops_;
   can_nodes::Lockstep lockstep_;
 };
