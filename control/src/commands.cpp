@@ -4,49 +4,10 @@
 #include <nlohmann/json.hpp>
 
 #include "canhil/base/setup_error.hpp"
+#include "arguments.hpp"
 
 namespace canhil::control {
 namespace {
-
-using nlohmann::json;
-
-// Positions must be on or near the field: nothing a hostile number can put far away.
-constexpr double kMaxCoordinateM = 50.0;
-constexpr double kMaxSpeedMps = 40.0;
-
-double number(const json& request, const char* key, double low, double high) {
-  const auto it = request.find(key);
-  if (it == request.end()) throw SetupError(std::string("give \"") + key + "\" (a number)");
-  if (!it->is_number()) throw SetupError(std::string("\"") + key + "\" must be a number");
-  const double v = it->get<double>();
-  if (!std::isfinite(v) || v < low || v > high) {
-    throw SetupError(std::string("\"") + key + "\" must be a number from " + std::to_string(low) + " to " +
-                     std::to_string(high));
-  }
-  return v;
-}
-
-double number_or(const json& request, const char* key, double fallback, double low, double high) {
-  return request.contains(key) ? number(request, key, low, high) : fallback;
-}
-
-std::size_t index(const json& request, const char* key) {
-  const auto it = request.find(key);
-  if (it == request.end() || !it->is_number_unsigned()) {
-    throw SetupError(std::string("give \"") + key + "\" as a whole number, 0 or more");
-  }
-  const auto v = it->get<std::uint64_t>();
-  if (v > 1000) throw SetupError(std::string("\"") + key + "\" is out of range");
-  return static_cast<std::size_t>(v);
-}
-
-std::string text(const json& request, const char* key, std::size_t longest = 200) {
-  const auto it = request.find(key);
-  if (it == request.end() || !it->is_string()) throw SetupError(std::string("give \"") + key + "\" as a text");
-  std::string v = it->get<std::string>();
-  if (v.empty() || v.size() > longest) throw SetupError(std::string("\"") + key + "\" is empty or too long");
-  return v;
-}
 
 // Deeper than this is refused before parsing (the parsed value's destruction recurses).
 constexpr int kMaxNesting = 32;
@@ -81,13 +42,52 @@ json error(const std::string& what, const json& request) {
   return reply;
 }
 
+json pose_json(const kinematics::Pose& p) {
+  return {{"x", p.x_m}, {"y", p.y_m}, {"heading_deg", p.heading_rad * 180.0 / M_PI}};
+}
+
+json twist_json(const kinematics::Twist& t) { return {{"vx", t.vx_mps}, {"vy", t.vy_mps}, {"w", t.va_radps}}; }
+
+json points_json(const std::vector<Eigen::Vector2d>& points) {
+  json out = json::array();
+  for (const Eigen::Vector2d& p : points) out.push_back({p.x(), p.y()});
+  return out;
+}
+
+// What a detailed snapshot adds: per robot its odometry, commanded and achieved
+// velocity; per bus its load and jitter; the watched robot's vision.
+void add_detail(json& out, const emulator::WorldSnapshot& s) {
+  json& robots = out["robots"];
+  for (std::size_t r = 0; r < s.detail.size() && r < robots.size(); ++r) {
+    const emulator::RobotDetail& d = s.detail[r];
+    robots[r]["odometry"] = d.odometry ? pose_json(*d.odometry) : json(nullptr);
+    robots[r]["commanded"] = d.commanded ? twist_json(*d.commanded) : json(nullptr);
+    robots[r]["achieved"] = twist_json(d.achieved);
+  }
+  json buses = json::array();
+  json latency = json::array();
+  for (const emulator::BusDetail& b : s.buses) {
+    json jitter = json::object();
+    for (const auto& [name, ms] : b.jitter_ms) jitter[name] = ms;
+    buses.push_back({{"frames", b.frames}, {"load", b.load}, {"jitter_ms", jitter}});
+    latency.push_back(b.handler_latency_ms ? json(*b.handler_latency_ms) : json(nullptr));
+  }
+  out["buses"] = buses;
+  out["handler_latency_ms"] = latency;
+  if (s.vision) {
+    out["vision"] = {{"robot", s.vision->robot},
+                     {"time_s", s.vision->time_s},
+                     {"lines", points_json(s.vision->lines)},
+                     {"obstacles", points_json(s.vision->obstacles)},
+                     {"balls", points_json(s.vision->balls)}};
+  }
+}
+
 }  // namespace
 
 json to_json(const emulator::WorldSnapshot& s) {
   json robots = json::array();
-  for (const kinematics::Pose& p : s.robots) {
-    robots.push_back({{"x", p.x_m}, {"y", p.y_m}, {"heading_deg", p.heading_rad * 180.0 / M_PI}});
-  }
+  for (const kinematics::Pose& p : s.robots) robots.push_back(pose_json(p));
   json obstacles = json::array();
   for (const auto& o : s.obstacles) obstacles.push_back({{"x", o.x()}, {"y", o.y()}});
   json goals = json::array();
@@ -97,7 +97,7 @@ json to_json(const emulator::WorldSnapshot& s) {
   for (const emulator::CoachPlayer& p : s.coach.players) {
     players.push_back({{"running", p.running}, {"role", p.role}, {"role_auto", p.role_auto}});
   }
-  return {{"time_s", s.time_s},
+  json out = {{"time_s", s.time_s},
           {"steps", s.steps},
           {"ball", {{"x", s.ball.x()}, {"y", s.ball.y()}, {"z", s.ball.z()}}},
           {"ball_velocity", {{"x", s.ball_velocity.x()}, {"y", s.ball_velocity.y()}, {"z", s.ball_velocity.z()}}},
@@ -105,10 +105,23 @@ json to_json(const emulator::WorldSnapshot& s) {
           {"obstacles", obstacles},
           {"goals", goals},
           {"coach", {{"game_state", s.coach.game_state}, {"players", players}}}};
+  if (!s.detail.empty()) add_detail(out, s);
+  return out;
 }
 
 Commands::Commands(emulator::Session& session) : session_(session) {
-  add("snapshot", {}, [this](const json&) { return json{{"snapshot", to_json(session_.snapshot())}}; });
+  add(
+      "snapshot", {"detail"},
+      [this](const json& r) {
+        const bool detail = r.contains("detail") && r["detail"].is_boolean() && r["detail"].get<bool>();
+        return json{{"snapshot", to_json(detail ? session_.detailed_snapshot() : session_.snapshot())}};
+      },
+      Effect::kReads);
+  add("watch_vision", {"robot"}, [this](const json& r) {
+    if (!r.contains("robot")) throw SetupError("give \"robot\" (a robot's index, or null to stop)");
+    session_.watch_vision(r["robot"].is_null() ? std::nullopt : std::optional<std::size_t>(index(r, "robot")));
+    return json::object();
+  });
   add("move_robot", {"robot", "x", "y", "heading_deg"}, [this](const json& r) {
     session_.apply(
         emulator::MoveRobot{index(r, "robot"), physics::Placement{number(r, "x", -kMaxCoordinateM, kMaxCoordinateM),
@@ -151,11 +164,42 @@ Commands::Commands(emulator::Session& session) : session_(session) {
 
 Commands::~Commands() = default;
 
-void Commands::add(const std::string& name, std::vector<std::string> arguments, Handler handler) {
-  commands_[name] = Entry{std::move(arguments), std::move(handler)};
+void Commands::add(const std::string& name, std::vector<std::string> arguments, Handler handler, Effect effect) {
+  const std::lock_guard lock(mutex_);
+  commands_[name] = Entry{std::move(arguments), std::move(handler), effect};
 }
 
-json Commands::handle_json(const json& request) {
+void Commands::on_done(std::function<void(const std::string&)> log) {
+  const std::lock_guard lock(mutex_);
+  log_ = std::move(log);
+}
+
+static std::string describe_request(const json& request) {
+  std::string line = request.value("command", std::string("?"));
+  for (const auto& [key, value] : request.items()) {
+    if (key == "command" || key == "id") continue;
+    line += " " + key + "=" + (value.is_string() ? value.get<std::string>() : dumped(value));
+  }
+  return line;
+}
+
+json Commands::handle_json(const json& request, std::string_view from) {
+  json reply = dispatch(request);
+  if (reply.value("ok", false) && request.is_object()) {
+    std::function<void(const std::string&)> log;
+    Effect effect = Effect::kReads;
+    {
+      const std::lock_guard lock(mutex_);
+      log = log_;
+      const auto e = commands_.find(request.at("command").get<std::string>());
+      if (e != commands_.end()) effect = e->second.effect;
+    }
+    if (log && effect == Effect::kChanges) log(std::string(from) + ": " + describe_request(request));
+  }
+  return reply;
+}
+
+json Commands::dispatch(const json& request) {
   if (!request.is_object()) {
     ++refused_;
     return error("a request is a JSON object with a \"command\"", request);
@@ -165,23 +209,28 @@ json Commands::handle_json(const json& request) {
     ++refused_;
     return error("give \"command\" as a text", request);
   }
-  const auto entry = commands_.find(command->get<std::string>());
-  if (entry == commands_.end()) {
-    ++refused_;
-    std::string list;
-    for (const auto& [name, e] : commands_) list += (list.empty() ? "" : ", ") + name;
-    return error("unknown command; the commands are " + list, request);
+  Entry entry;
+  {
+    const std::lock_guard lock(mutex_);
+    const auto found = commands_.find(command->get<std::string>());
+    if (found == commands_.end()) {
+      ++refused_;
+      std::string list;
+      for (const auto& [name, e] : commands_) list += (list.empty() ? "" : ", ") + name;
+      return error("unknown command; the commands are " + list, request);
+    }
+    entry = found->second;
   }
   for (const auto& [key, value] : request.items()) {
     if (key == "command" || key == "id") continue;
-    const auto& known = entry->second.arguments;
+    const auto& known = entry.arguments;
     if (std::find(known.begin(), known.end(), key) == known.end()) {
       ++refused_;
-      return error("\"" + entry->first + "\" takes no \"" + key + "\"", request);
+      return error("\"" + command->get<std::string>() + "\" takes no \"" + key + "\"", request);
     }
   }
   try {
-    json reply = entry->second.handler(request);
+    json reply = entry.handler(request);
     reply["ok"] = true;
     if (request.contains("id")) reply["id"] = request["id"];
     return reply;
@@ -191,21 +240,25 @@ json Commands::handle_json(const json& request) {
   }
 }
 
-std::string Commands::handle(std::string_view request) {
+json Commands::handle_text(std::string_view request, std::string_view from) {
   if (request.size() > kMaxRequestBytes) {
     ++refused_;
-    return dumped(error("the request is over " + std::to_string(kMaxRequestBytes) + " bytes", json()));
+    return error("the request is over " + std::to_string(kMaxRequestBytes) + " bytes", json());
   }
   if (nested_too_deep(request)) {
     ++refused_;
-    return dumped(error("the request nests deeper than " + std::to_string(kMaxNesting) + " levels", json()));
+    return error("the request nests deeper than " + std::to_string(kMaxNesting) + " levels", json());
   }
   const json parsed = json::parse(request, nullptr, /*allow_exceptions=*/false);
   if (parsed.is_discarded()) {
     ++refused_;
-    return dumped(error("the request is not JSON", json()));
+    return error("the request is not JSON", json());
   }
-  return dumped(handle_json(parsed));
+  return handle_json(parsed, from);
+}
+
+std::string Commands::handle(std::string_view request, std::string_view from) {
+  return dumped(handle_text(request, from));
 }
 
 }  // namespace canhil::control

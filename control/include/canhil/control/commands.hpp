@@ -9,13 +9,18 @@
 //   reply    {"ok": true, ...} or {"ok": false, "error": "what is wrong; what to send"}
 //
 // Commands:
-//   snapshot                                     the world as the last step left it
+//   snapshot [detail]                            the world as the last step left it
+//   watch_vision {robot | null}                  a robot's vision points in the detailed snapshot
 //   move_robot {robot, x, y, heading_deg}         metres, degrees (the scenario's units)
 //   move_ball {x, y, [z], [vx, vy, vz]}           metres, m/s
 //   move_obstacle {obstacle, x, y}
 //   fault {rule}                                  a fault rule as --fault takes it
 //   coach {game_state} | {robot, [running], [role]}   the base station's orders
-//   (a driver adds its own: pause, resume, step, speed; see Commands::add)
+//   (a driver adds its own: pause, resume, step, speed, run_commands.hpp;
+//   the viewer its saves, save_commands.hpp; see Commands::add)
+//
+// Every command that changes the run is logged through on_done() ("viewer:
+// move_robot robot=0 x=1 ..."), so the run's log shows what was done from outside.
 //
 // Hostile input is refused and changes nothing: not JSON, not an object, an
 // unknown command or argument, a wrong type, a number that is not finite or
@@ -25,6 +30,7 @@
 
 #include <functional>
 #include <map>
+#include <mutex>
 #include <string>
 #include <string_view>
 
@@ -41,6 +47,7 @@ class Commands {
   /// A command of the caller's (a driver's): arguments in, reply fields out;
   /// throws SetupError for a bad argument (the reply then says why).
   using Handler = std::function<nlohmann::json(const nlohmann::json& request)>;
+  enum class Effect : std::uint8_t { kChanges, kReads };  ///< kReads: not logged
 
   /// `session` must outlive this.
   explicit Commands(emulator::Session& session);
@@ -49,11 +56,17 @@ class Commands {
   Commands& operator=(const Commands&) = delete;
 
   /// Adds (or replaces) a command; `arguments` lists the keys it accepts.
-  void add(const std::string& name, std::vector<std::string> arguments, Handler handler);
-  /// One request, one reply (both JSON text, the reply on one line).
-  std::string handle(std::string_view request);
+  void add(const std::string& name, std::vector<std::string> arguments, Handler handler,
+           Effect effect = Effect::kChanges);
+  /// Called with a line for every command that changed the run (any thread).
+  void on_done(std::function<void(const std::string&)> log);
+  /// One request, one reply (both JSON text, the reply on one line); `from`
+  /// names the transport in the log ("control", "viewer").
+  std::string handle(std::string_view request, std::string_view from = "control");
+  /// The same, the reply as JSON.
+  nlohmann::json handle_text(std::string_view request, std::string_view from = "control");
   /// The same on parsed JSON.
-  nlohmann::json handle_json(const nlohmann::json& request);
+  nlohmann::json handle_json(const nlohmann::json& request, std::string_view from = "control");
   /// Requests refused so far (malformed or hostile).
   std::uint64_t refused() const noexcept { return refused_; }
 
@@ -61,9 +74,14 @@ class Commands {
   struct Entry {
     std::vector<std::string> arguments;
     Handler handler;
+    Effect effect = Effect::kChanges;
   };
+  nlohmann::json dispatch(const nlohmann::json& request);
+
   emulator::Session& session_;
+  mutable std::mutex mutex_;  // the table (add() may come while requests are served)
   std::map<std::string, Entry> commands_;
+  std::function<void(const std::string&)> log_;
   std::atomic<std::uint64_t> refused_{0};
 };
 
