@@ -50,7 +50,7 @@ const Command kCommands[] = {
     {"run", "a scenario: the whole loop in virtual time, or real time on SocketCAN",
      R"(  canhil run --virtual-time [--config SCENARIO.toml] [--duration S] [--seed N] [--fault RULE]...
              [--trace FILE] [--world-log FILE.csv] [--world-log-period 0.05] [--kick-power P] [--quiet]
-             [--save-world FILE] [--restore-world FILE]
+             [--save-world FILE] [--restore-world FILE] [--speed max|X] [--paused]
                                               the whole loop in virtual time: nodes, physics, vision,
                                               the reference handler and agent per robot; a candump trace
                                               of every bus; faults like drop:M4_1:0.1 (docs/faults.md);
@@ -71,8 +71,29 @@ const Command kCommands[] = {
                                               in the team's layout), each agent woken through PMan; run
                                               your handler and agent (or canhil-hwcomm, canhil-agent) with
                                               AGENT=N next to it (docs/own-software.md)
+  viewer (every run but --external): [--view-port 8765] [--view-listen 127.0.0.1] [--no-view]
+             [--view-hold S] [--save-dir canhil-saves]
+                                              a web page at http://127.0.0.1:8765/ shows the world and
+                                              changes it: drag robots and the ball, pause, step, speed,
+                                              coach, faults, saves (docs/viewer.md)
 )",
      canhil::app::run_run},
+    {"view", "a recorded run (world log and trace) in the web viewer, with a timeline",
+     R"(  canhil view WORLD_LOG.csv [--trace FILE] [--config SCENARIO.toml] [--view-port 8765]
+             [--view-listen 127.0.0.1] [--duration S]
+                                              serves the viewer on a world log (canhil run --world-log):
+                                              play, pause, scrub, speed, jump to goals and kicks; the
+                                              trace's frames around the cursor, decoded (docs/viewer.md)
+)",
+     canhil::app::run_view},
+    {"play", "a recorded bus put back on an interface, at any speed",
+     R"(  canhil play TRACE --iface IFACE [--speed 1] [--loop] [--map FROM=TO]...
+                                              sends a candump log's frames on IFACE, paced from their
+                                              timestamps with absolute deadlines, at --speed (0.5: half,
+                                              2: twice as fast); --loop starts again at the end; frames of
+                                              every interface in the log go to IFACE unless --map says
+)",
+     canhil::app::run_play},
     {"bench", "the performance figures against their targets",
      R"(  canhil bench [--part virtual,jitter,vcan,external] [--seconds 60] [--config S] [--iface vcan0]
                [--rt-seconds 10] [--frames 200000] [--priority 40] [--cpu 0]

@@ -12,14 +12,19 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "canhil/control/run_commands.hpp"
+#include "canhil/control/save_commands.hpp"
 #include "canhil/control/unix_server.hpp"
+#include "canhil/emulator/run_control.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/viewer/live_feed.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "run_external.hpp"
 #include "run_realtime.hpp"
+#include "run_view.hpp"
 
 namespace canhil::app {
 namespace {
@@ -72,7 +77,13 @@ struct VirtualOutputs {
   bool quiet = false;
 };
 
-int run_virtual(emulator::Session& session, double duration, const VirtualOutputs& out) {
+Nanos wall_now() { return std::chrono::steady_clock::now().time_since_epoch(); }
+
+// The run's clock as the viewer and the control socket set it (pause, step,
+// speed): virtual time goes as far as RunControl's plan says, and while it
+// stands the session still takes changes (a robot dragged while paused moves).
+int run_virtual(emulator::Session& session, double duration, const VirtualOutputs& out,
+                emulator::RunControl& control, viewer::LiveFeed& feed) {
   emulator::VirtualOptions options;
   options.record_trace = out.trace.has_value();  // a long run without --trace keeps no frames
   emulator::VirtualDriver driver(session, options);
@@ -84,8 +95,18 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
   std::signal(SIGTERM, stop_run);
   const Nanos total = from_seconds(duration);
   const auto wall_start = std::chrono::steady_clock::now();
+  Nanos next_report = std::chrono::seconds(1);
   while (driver.now() < total && !g_stop) {
-    driver.run_for(std::min<Nanos>(std::chrono::seconds(1), total - driver.now()));
+    const emulator::RunControl::Plan plan = control.next(driver.now(), wall_now(), total);
+    if (plan.run_to > driver.now()) {
+      driver.run_until(plan.run_to);
+    } else {
+      session.settle();
+      control.wait(std::min<Nanos>(plan.wall_wait, std::chrono::milliseconds(100)));
+      continue;
+    }
+    if (driver.now() < next_report && driver.now() < total) continue;
+    while (next_report <= driver.now()) next_report += std::chrono::seconds(1);
     if (out.quiet) continue;
     const emulator::WorldSnapshot s = session.snapshot();
     const auto o = driver.outcomes();
@@ -97,6 +118,7 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
     std::printf("\n");
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  feed.set_ended();
   // The files are written after the summary: a path that cannot be written must not cost the run's outcome.
   print_virtual_summary(session, driver, wall);
   if (out.trace) {
@@ -146,6 +168,15 @@ std::unique_ptr<control::UnixServer> serve_control(control::Commands& commands, 
   return server;
 }
 
+// What the viewer and the control socket do shows in the run's log, and on every page.
+void log_commands(control::Commands& commands, viewer::Server* shown) {
+  commands.on_done([shown](const std::string& line) {
+    std::printf("canhil run: %s\n", line.c_str());
+    std::fflush(stdout);
+    if (shown != nullptr) shown->log(line);
+  });
+}
+
 // The team's laptop side from the command line, over the scenario's [laptop].
 void laptop_options(Args& args, emulator::LaptopSide& side) {
   if (auto v = args.option("--rtdb-lib")) side.rtdb_lib = *v;
@@ -179,6 +210,9 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const auto seed_text = args.option("--seed");
   outputs.quiet = args.flag("--quiet");
   const auto control_path = args.option("--control");
+  const ViewChoice view = view_options(args);
+  const auto speed_text = args.option("--speed");
+  const bool start_paused = args.flag("--paused");
   const bool no_control = args.flag("--no-control");
   if (control_path && no_control) throw UsageError("give --control PATH or --no-control, not both");
   emulator::Scenario scenario =
@@ -215,6 +249,18 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     throw UsageError("--wait-for takes a number of processes, 1..64");
   }
   if (!(duration > 0)) throw UsageError("--duration takes seconds above 0");
+  double speed = 0;  // as fast as possible
+  if (speed_text && *speed_text != "max") {
+    char* end = nullptr;
+    speed = std::strtod(speed_text->c_str(), &end);
+    if (end != speed_text->c_str() + speed_text->size() ||
+        !(speed == 0 || (speed >= emulator::RunControl::kMinSpeed && speed <= emulator::RunControl::kMaxSpeed))) {
+      throw UsageError("--speed takes max, or virtual seconds per wall second from 0.01 to 1000 (1: real time)");
+    }
+  }
+  if ((speed_text || start_paused) && (!virtual_time || external)) {
+    throw UsageError("--speed and --paused are for --virtual-time runs (without --external)");
+  }
   if (!(outputs.log_period_s > 0)) throw UsageError("--world-log-period takes seconds above 0");
   for (const auto& f : fault_texts) {
     try {
@@ -256,8 +302,15 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     output.save_world = outputs.save_world;
     const auto s = session();
     control::Commands commands(*s);
+    control::add_save_commands(commands, *s, view.save_dir);
     const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
-    return run_realtime(*s, rt, output);
+    viewer::LiveFeed feed(*s, commands, nullptr, view.save_dir);
+    const auto shown = start_viewer(view, feed, "canhil run", stdout);
+    log_commands(commands, shown.get());
+    const int status = run_realtime(*s, rt, output);
+    feed.set_ended();
+    hold_viewer(view, shown.get(), "canhil run", g_stop, stdout);
+    return status;
   }
   if (std::getenv("RTDB_KEY") == nullptr) {
     // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
@@ -270,6 +323,10 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     const std::string shim = find_timeshim();
     const std::string team_preload = preload_shim_into_self(shim);
     options.external = true;
+    if (view.on) {
+      std::printf("canhil run: no viewer with --external yet (its server would run under the time shim); watch the "
+                  "run with --world-log and canhil view\n");
+    }
     const auto s = session();
     control::Commands commands(*s);
     const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
@@ -284,8 +341,17 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   }
   const auto s = session();
   control::Commands commands(*s);
+  emulator::RunControl clock(options.ftt.elementary_cycle, speed, start_paused);
+  control::add_run_commands(commands, clock);
+  control::add_save_commands(commands, *s, view.save_dir);
   const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
-  return run_virtual(*s, duration, outputs);
+  viewer::LiveFeed feed(*s, commands, &clock, view.save_dir);
+  const auto shown = start_viewer(view, feed, "canhil run", stdout);
+  log_commands(commands, shown.get());
+  if (start_paused) std::printf("canhil run: paused at the start (resume or step from the viewer or the control socket)\n");
+  const int status = run_virtual(*s, duration, outputs, clock, feed);
+  hold_viewer(view, shown.get(), "canhil run", g_stop, stdout);
+  return status;
 }
 
 }  // namespace canhil::app
