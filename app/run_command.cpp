@@ -25,6 +25,7 @@
 #include "run_external.hpp"
 #include "run_realtime.hpp"
 #include "run_view.hpp"
+#include "virtual_loop.hpp"
 
 namespace canhil::app {
 namespace {
@@ -77,8 +78,6 @@ struct VirtualOutputs {
   bool quiet = false;
 };
 
-Nanos wall_now() { return std::chrono::steady_clock::now().time_since_epoch(); }
-
 // The run's clock as the viewer and the control socket set it (pause, step,
 // speed): virtual time goes as far as RunControl's plan says, and while it
 // stands the session still takes changes (a robot dragged while paused moves).
@@ -95,19 +94,8 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
   std::signal(SIGTERM, stop_run);
   const Nanos total = from_seconds(duration);
   const auto wall_start = std::chrono::steady_clock::now();
-  Nanos next_report = std::chrono::seconds(1);
-  while (driver.now() < total && !g_stop) {
-    const emulator::RunControl::Plan plan = control.next(driver.now(), wall_now(), total);
-    if (plan.run_to > driver.now()) {
-      driver.run_until(plan.run_to);
-    } else {
-      session.settle();
-      control.wait(std::min<Nanos>(plan.wall_wait, std::chrono::milliseconds(100)));
-      continue;
-    }
-    if (driver.now() < next_report && driver.now() < total) continue;
-    while (next_report <= driver.now()) next_report += std::chrono::seconds(1);
-    if (out.quiet) continue;
+  drive_virtual(driver, session, control, total, g_stop, [&] {
+    if (out.quiet) return;
     const emulator::WorldSnapshot s = session.snapshot();
     const auto o = driver.outcomes();
     std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", to_seconds(driver.now()), s.ball.x(), s.ball.y());
@@ -116,7 +104,8 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
                   o[r].kicks);
     }
     std::printf("\n");
-  }
+    std::fflush(stdout);
+  });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   feed.set_ended();
   // The files are written after the summary: a path that cannot be written must not cost the run's outcome.
