@@ -18,20 +18,33 @@ packages=(
   qemu-system-x86 linux-image-amd64 busybox-static cpio
   # independent DBC decoder for the cross-check tests
   python3 python3-canmatrix
+  # the viewer's browser tests (headless, driven by puppeteer-core from npm)
+  chromium
 )
+
+# The viewer's page takes its one library (uPlot) from npm; the build copies it next to the page.
+npm_install() {
+  local dir="$1"
+  if [[ ! -d "$dir/node_modules" || "$dir/package-lock.json" -nt "$dir/node_modules" ]]; then
+    command -v npm >/dev/null || { echo "install-deps: npm is missing (Node.js with npm)" >&2; exit 2; }
+    (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+    touch "$dir/node_modules"
+  fi
+}
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if [[ ${#missing[@]} -eq 0 ]]; then
-  exit 0
+if [[ ${#missing[@]} -gt 0 ]]; then
+  if [[ $(id -u) -ne 0 ]]; then
+    echo "install-deps: missing ${missing[*]}; run as root: apt-get update && apt-get install ${missing[*]}" >&2
+    exit 2
+  fi
+  echo "install-deps: installing ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-if [[ $(id -u) -ne 0 ]]; then
-  echo "install-deps: missing ${missing[*]}; run as root: apt-get update && apt-get install ${missing[*]}" >&2
-  exit 2
-fi
-echo "install-deps: installing ${missing[*]}" >&2
-export DEBIAN_FRONTEND=noninteractive
-apt-get update -qq
-apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+npm_install viewer/web
