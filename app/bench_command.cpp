@@ -27,8 +27,8 @@
 #include <thread>
 
 #include "bench_external.hpp"
-#include "bench_view.hpp"
 #include "bench_realtime.hpp"
+#include "bench_view.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"

@@ -61,8 +61,8 @@ struct Round {
 };
 
 // One run as `canhil run --virtual-time --quiet` makes it, with or without a page watching.
-Round one_round(const emulator::Scenario& sc, const std::shared_ptr<const frames::MessageSet>& messages,
-                double seconds, bool watched) {
+Round one_round(const emulator::Scenario& sc, const std::shared_ptr<const frames::MessageSet>& messages, double seconds,
+                bool watched) {
   emulator::SessionOptions options;
   options.messages = messages;
   emulator::Session session(sc, options);
@@ -99,9 +99,10 @@ bool bench_view(const std::optional<std::string>& config, double seconds,
   const std::filesystem::path path =
       config ? std::filesystem::path(*config) : emulator::shipped_scenario("five_robots.toml");
   const emulator::Scenario sc = emulator::load_scenario(path);
-  std::printf("canhil bench: the viewer: %s, %zu robot(s), %g s of virtual time per round, rounds alternating "
-              "without and with a page taking the 30 Hz stream\n",
-              path.string().c_str(), sc.robot_count(), seconds);
+  std::printf(
+      "canhil bench: the viewer: %s, %zu robot(s), %g s of virtual time per round, rounds alternating "
+      "without and with a page taking the 30 Hz stream\n",
+      path.string().c_str(), sc.robot_count(), seconds);
   // Alternating rounds, the best of each: the machine's noise falls on both alike.
   Round bare, watched;
   for (int k = 0; k < 3; ++k) {

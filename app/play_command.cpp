@@ -47,7 +47,8 @@ int run_play(Args& args, const std::optional<std::string>&) {
   std::map<std::string, std::string> map;
   while (auto m = args.option("--map")) {
     const auto eq = m->find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == m->size()) throw UsageError("--map takes FROM=TO, e.g. vcan0=can0");
+    if (eq == std::string::npos || eq == 0 || eq + 1 == m->size())
+      throw UsageError("--map takes FROM=TO, e.g. vcan0=can0");
     map[m->substr(0, eq)] = m->substr(eq + 1);
   }
   if (!iface && map.empty()) throw UsageError("give --iface IFACE (where to play), or --map FROM=TO per interface");
@@ -99,11 +100,11 @@ int run_play(Args& args, const std::optional<std::string>&) {
       ++dropped;
     }
   }
-  std::printf("canhil play: %s: %llu frame(s) sent in %llu pass(es), %llu not sent (interface down or queue full), "
-              "%llu not mapped; worst lateness %.3f ms\n",
-              g_stop ? "stopped" : "done", static_cast<unsigned long long>(sent),
-              static_cast<unsigned long long>(passes), static_cast<unsigned long long>(dropped),
-              static_cast<unsigned long long>(skipped), to_ms(worst_late));
+  std::printf(
+      "canhil play: %s: %llu frame(s) sent in %llu pass(es), %llu not sent (interface down or queue full), "
+      "%llu not mapped; worst lateness %.3f ms\n",
+      g_stop ? "stopped" : "done", static_cast<unsigned long long>(sent), static_cast<unsigned long long>(passes),
+      static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(skipped), to_ms(worst_late));
   return g_stop ? 130 : (dropped > 0 ? 1 : 0);
 }
 

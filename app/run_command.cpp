@@ -81,8 +81,8 @@ struct VirtualOutputs {
 // The run's clock as the viewer and the control socket set it (pause, step,
 // speed): virtual time goes as far as RunControl's plan says, and while it
 // stands the session still takes changes (a robot dragged while paused moves).
-int run_virtual(emulator::Session& session, double duration, const VirtualOutputs& out,
-                emulator::RunControl& control, viewer::LiveFeed& feed) {
+int run_virtual(emulator::Session& session, double duration, const VirtualOutputs& out, emulator::RunControl& control,
+                viewer::LiveFeed& feed) {
   emulator::VirtualOptions options;
   options.record_trace = out.trace.has_value();  // a long run without --trace keeps no frames
   emulator::VirtualDriver driver(session, options);
@@ -313,8 +313,9 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     const std::string team_preload = preload_shim_into_self(shim);
     options.external = true;
     if (view.on) {
-      std::printf("canhil run: no viewer with --external yet (its server would run under the time shim); watch the "
-                  "run with --world-log and canhil view\n");
+      std::printf(
+          "canhil run: no viewer with --external yet (its server would run under the time shim); watch the "
+          "run with --world-log and canhil view\n");
     }
     const auto s = session();
     control::Commands commands(*s);
@@ -337,7 +338,8 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   viewer::LiveFeed feed(*s, commands, &clock, view.save_dir);
   const auto shown = start_viewer(view, feed, "canhil run", stdout);
   log_commands(commands, shown.get());
-  if (start_paused) std::printf("canhil run: paused at the start (resume or step from the viewer or the control socket)\n");
+  if (start_paused)
+    std::printf("canhil run: paused at the start (resume or step from the viewer or the control socket)\n");
   const int status = run_virtual(*s, duration, outputs, clock, feed);
   hold_viewer(view, shown.get(), "canhil run", g_stop, stdout);
   return status;

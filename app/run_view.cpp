@@ -14,7 +14,8 @@ ViewChoice view_options(Args& args) {
   const auto listen = args.option("--view-listen");
   const auto hold = optional_number(args, "--view-hold");
   const auto dir = args.option("--save-dir");
-  if (off && (port || listen || hold)) throw UsageError("--no-view and --view-port/--view-listen/--view-hold: pick one");
+  if (off && (port || listen || hold))
+    throw UsageError("--no-view and --view-port/--view-listen/--view-hold: pick one");
   c.on = !off;
   if (port) {
     if (!(*port >= 0 && *port <= 65535 && *port == static_cast<int>(*port))) {
@@ -59,8 +60,8 @@ std::unique_ptr<viewer::Server> start_viewer(const ViewChoice& choice, viewer::F
   }
 }
 
-void hold_viewer(const ViewChoice& choice, const viewer::Server* server, const char* who,
-                 const std::atomic<bool>& stop, FILE* out) {
+void hold_viewer(const ViewChoice& choice, const viewer::Server* server, const char* who, const std::atomic<bool>& stop,
+                 FILE* out) {
   if (server == nullptr || choice.hold_s <= 0) return;
   std::fprintf(out, "%s: the viewer stays up %g s more at %s (Ctrl-C ends it)\n", who, choice.hold_s,
                server->url().c_str());

@@ -33,7 +33,7 @@ std::unique_ptr<viewer::Server> start_viewer(const ViewChoice& choice, viewer::F
                                              bool required = false);
 
 /// After a run: keeps the viewer up for choice.hold_s (until `stop`), saying so.
-void hold_viewer(const ViewChoice& choice, const viewer::Server* server, const char* who,
-                 const std::atomic<bool>& stop, FILE* out);
+void hold_viewer(const ViewChoice& choice, const viewer::Server* server, const char* who, const std::atomic<bool>& stop,
+                 FILE* out);
 
 }  // namespace canhil::app

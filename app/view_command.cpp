@@ -30,8 +30,8 @@ int run_view(Args& args, const std::optional<std::string>& dbc) {
   const std::string world_log = args.positionals()[1];
   emulator::Scenario scenario;
   try {
-    scenario = emulator::load_scenario(config ? std::filesystem::path(*config)
-                                              : emulator::shipped_scenario("one_robot.toml"));
+    scenario =
+        emulator::load_scenario(config ? std::filesystem::path(*config) : emulator::shipped_scenario("one_robot.toml"));
   } catch (const SetupError& e) {
     throw UsageError(std::string(config ? *config + ": " : "") + e.what());
   }

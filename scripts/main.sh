@@ -57,3 +57,8 @@ section "what happened"
 goal=$(grep -m1 "GOAL" "$out/demo.txt" | sed 's/^ *//' || true)
 echo "   virtual time: ${goal:-no goal}; $(grep -m1 'real time)' "$out/demo.txt" | sed 's/^canhil run: //')"
 echo "   files: $out/ (demo.log: candump trace, demo.csv: world log, vision.svg); docs/user-guide.md goes on from here"
+
+section "watch it: the demo again at twice real time in the viewer, with plots (docs/viewer.md; saves in $out/saves)"
+echo "   open the address below in a browser; drag the robot or the ball, pause, step"
+"$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --quiet --speed 2 --duration 10 \
+  --view-hold "${VIEW_HOLD:-10}" --save-dir "$out/saves" --no-control | grep -E "viewer|done after"

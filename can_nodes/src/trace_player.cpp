@@ -24,8 +24,7 @@ std::optional<PlaySchedule::Due> PlaySchedule::next() {
     ++pass_;
   }
   const frames::LogEntry& e = entries_[at_++];
-  const Nanos trace_time =
-      (e.time - entries_.front().time) + static_cast<std::int64_t>(pass_) * (span_ + gap_);
+  const Nanos trace_time = (e.time - entries_.front().time) + static_cast<std::int64_t>(pass_) * (span_ + gap_);
   const Nanos at{static_cast<std::int64_t>(std::llround(static_cast<double>(trace_time.count()) / speed_))};
   return Due{at, &e, pass_};
 }

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "canhil/base/setup_error.hpp"
 #include "arguments.hpp"
+#include "canhil/base/setup_error.hpp"
 
 namespace canhil::control {
 namespace {
@@ -98,13 +98,13 @@ json to_json(const emulator::WorldSnapshot& s) {
     players.push_back({{"running", p.running}, {"role", p.role}, {"role_auto", p.role_auto}});
   }
   json out = {{"time_s", s.time_s},
-          {"steps", s.steps},
-          {"ball", {{"x", s.ball.x()}, {"y", s.ball.y()}, {"z", s.ball.z()}}},
-          {"ball_velocity", {{"x", s.ball_velocity.x()}, {"y", s.ball_velocity.y()}, {"z", s.ball_velocity.z()}}},
-          {"robots", robots},
-          {"obstacles", obstacles},
-          {"goals", goals},
-          {"coach", {{"game_state", s.coach.game_state}, {"players", players}}}};
+              {"steps", s.steps},
+              {"ball", {{"x", s.ball.x()}, {"y", s.ball.y()}, {"z", s.ball.z()}}},
+              {"ball_velocity", {{"x", s.ball_velocity.x()}, {"y", s.ball_velocity.y()}, {"z", s.ball_velocity.z()}}},
+              {"robots", robots},
+              {"obstacles", obstacles},
+              {"goals", goals},
+              {"coach", {{"game_state", s.coach.game_state}, {"players", players}}}};
   if (!s.detail.empty()) add_detail(out, s);
   return out;
 }

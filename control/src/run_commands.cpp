@@ -26,7 +26,10 @@ void add_run_commands(Commands& commands, emulator::RunControl& control) {
     return json::object();
   });
   commands.add(
-      "run_state", {}, [&control](const json&) { return json{{"paused", control.paused()}, {"speed", control.speed()}}; },
+      "run_state", {},
+      [&control](const json&) {
+        return json{{"paused", control.paused()}, {"speed", control.speed()}};
+      },
       Commands::Effect::kReads);
 }
 

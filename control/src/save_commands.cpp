@@ -42,11 +42,10 @@ void load_scenario_into(emulator::Session& session, const fs::path& path) {
   const emulator::Scenario sc = emulator::load_scenario(path);
   const auto& w = sc.world;
   if (w.robots.size() != session.robot_count() || w.obstacles.size() != session.world().obstacle_count()) {
-    throw SetupError(path.filename().string() + " has " + std::to_string(w.robots.size()) + " robot(s) and " +
-                     std::to_string(w.obstacles.size()) + " obstacle(s); this run has " +
-                     std::to_string(session.robot_count()) + " and " +
-                     std::to_string(session.world().obstacle_count()) +
-                     " (start a new run with --config to change them)");
+    throw SetupError(
+        path.filename().string() + " has " + std::to_string(w.robots.size()) + " robot(s) and " +
+        std::to_string(w.obstacles.size()) + " obstacle(s); this run has " + std::to_string(session.robot_count()) +
+        " and " + std::to_string(session.world().obstacle_count()) + " (start a new run with --config to change them)");
   }
   // As the file would have placed them at the start: each a change like a drag from the viewer.
   for (std::size_t r = 0; r < w.robots.size(); ++r) session.apply(emulator::MoveRobot{r, w.robots[r]});
@@ -101,7 +100,8 @@ void add_save_commands(Commands& commands, emulator::Session& session, fs::path 
   commands.add("load", {"name", "kind"}, [&session, folder](const json& r) {
     const fs::path path = folder / (save_name(r) + extension(r));
     std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) throw SetupError("no save " + path.filename().string() + " in " + folder.string());
+    if (!fs::is_regular_file(path, ec))
+      throw SetupError("no save " + path.filename().string() + " in " + folder.string());
     if (path.extension() == ".toml") {
       load_scenario_into(session, path);
     } else {

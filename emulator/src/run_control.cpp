@@ -92,8 +92,9 @@ RunControl::Plan RunControl::next(Nanos now, Nanos wall, Nanos end) {
   const Nanos run_to = std::min(boundary_at_or_before(target), end);
   if (run_to > now) return Plan{run_to, Nanos{0}};
   // Ahead: wait until the next EC is due.
-  const Nanos next_due = anchor_wall_ + Nanos{static_cast<std::int64_t>(
-                                            static_cast<double>((now + ec_ - anchor_virtual_).count()) / speed_)};
+  const Nanos next_due =
+      anchor_wall_ +
+      Nanos{static_cast<std::int64_t>(static_cast<double>((now + ec_ - anchor_virtual_).count()) / speed_)};
   return Plan{now, std::max(next_due - wall, Nanos{0})};
 }
 

@@ -1,8 +1,8 @@
 #include "canhil/emulator/session.hpp"
 
 #include <algorithm>
-#include <condition_variable>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 
 #include "canhil/base/setup_error.hpp"

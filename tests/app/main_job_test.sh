@@ -6,7 +6,7 @@
 set -euo pipefail
 build=$1
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
-out=$(CANHIL_BUILD="$build" bash scripts/main.sh --no-realtime 2>&1)
+out=$(VIEW_HOLD=1 CANHIL_BUILD="$build" bash scripts/main.sh --no-realtime 2>&1)
 fail() { echo "FAIL: $*"; echo "$out"; exit 1; }
 lines=$(echo "$out" | wc -l)
 [[ $lines -le 110 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
@@ -16,6 +16,7 @@ echo "$out" | grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log
 echo "$out" | grep -q 'GOAL at' || fail "the demo's outcome is missing"
 echo "$out" | grep -q 'FTT compliance: no violations' || fail "the demo's timing report is missing"
 echo "$out" | grep -q '^   virtual time: GOAL at' || fail "no closing line with the outcome"
+echo "$out" | tail -3 | grep -qE 'viewer (at|stays up)|no viewer' || fail "the main job does not end with the viewer's address"
 while IFS= read -r header; do
   [[ "$header" == *"("*")"* ]] || fail "section header without where its files are: $header"
 done < <(echo "$out" | grep '^== [0-9]')

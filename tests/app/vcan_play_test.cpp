@@ -28,8 +28,8 @@ std::string write_trace() {
     f.len = 2;
     f.data[0] = static_cast<std::uint8_t>(i);
     f.data[1] = 0xAB;
-    out << canhil::frames::format_log_line(std::chrono::seconds(1'700'000'000) + i * 2ms, i % 5 == 4 ? "vcan1" : "vcan0",
-                                           f)
+    out << canhil::frames::format_log_line(std::chrono::seconds(1'700'000'000) + i * 2ms,
+                                           i % 5 == 4 ? "vcan1" : "vcan0", f)
         << '\n';
   }
   return path;
@@ -48,9 +48,7 @@ std::vector<canhil::frames::CanFrame> drain(SocketCanBus& bus, std::size_t want,
   return got;
 }
 
-std::string canhil_play(const std::string& args) {
-  return canhil::test::build_dir() + "/app/canhil play " + args;
-}
+std::string canhil_play(const std::string& args) { return canhil::test::build_dir() + "/app/canhil play " + args; }
 
 bool ended(const canhil::test::ChildProcess& p, std::chrono::seconds limit) {
   const auto until = std::chrono::steady_clock::now() + limit;
@@ -83,7 +81,8 @@ TEST(VcanPlay, MappedInterfacesOnlyAndALoopGoesRoundUntilCtrlC) {
   auto bus1 = SocketCanBus::open("vcan1");
   {
     // Only what was recorded on vcan1, onto vcan1: 8 frames, 32 not mapped.
-    canhil::test::ChildProcess play(canhil_play(trace + " --map vcan1=vcan1 --speed 8"), "/tmp/canhil_vcan_play_map.log");
+    canhil::test::ChildProcess play(canhil_play(trace + " --map vcan1=vcan1 --speed 8"),
+                                    "/tmp/canhil_vcan_play_map.log");
     const auto got = drain(*bus1, 8, 60s);
     ASSERT_TRUE(ended(play, 60s)) << play.output();
     play.stop();
@@ -92,7 +91,8 @@ TEST(VcanPlay, MappedInterfacesOnlyAndALoopGoesRoundUntilCtrlC) {
     EXPECT_NE(play.output().find("32 not mapped"), std::string::npos) << play.output();
   }
   auto bus0 = SocketCanBus::open("vcan0");
-  canhil::test::ChildProcess loop(canhil_play(trace + " --iface vcan0 --speed 8 --loop"), "/tmp/canhil_vcan_play_loop.log");
+  canhil::test::ChildProcess loop(canhil_play(trace + " --iface vcan0 --speed 8 --loop"),
+                                  "/tmp/canhil_vcan_play_loop.log");
   const auto got = drain(*bus0, 100, 90s);
   const int status = loop.stop();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 130) << loop.output();

@@ -23,8 +23,7 @@ class ReplayFeedTest : public ::testing::Test {
   ReplayFeed feed(const std::filesystem::path& log, std::optional<std::filesystem::path> trace = std::nullopt) {
     return ReplayFeed(log, trace, physics::WorldParams{}, frames::MessageSet::load(test::shipped_dbc()));
   }
-  std::filesystem::path dir_ =
-      std::filesystem::temp_directory_path() / ("canhil-replay-" + std::to_string(getpid()));
+  std::filesystem::path dir_ = std::filesystem::temp_directory_path() / ("canhil-replay-" + std::to_string(getpid()));
 };
 
 const char* kHeader =
@@ -92,8 +91,7 @@ TEST_F(ReplayFeedTest, MalformedFilesAreNamedWithTheirLine) {
   EXPECT_NE(message("a,b,c\n1,2,3\n").find("bad.csv:1: not a world log"), std::string::npos);
   EXPECT_NE(message(std::string(kHeader) + "0,0,0,0.11,-3,0,-90,-3,0\n").find("bad.csv:2: 9 values"),
             std::string::npos);
-  EXPECT_NE(message(std::string(kHeader) + "0,0,x,0.11,-3,0,-90,-3,0,-90\n").find("bad.csv:2: 'x'"),
-            std::string::npos);
+  EXPECT_NE(message(std::string(kHeader) + "0,0,x,0.11,-3,0,-90,-3,0,-90\n").find("bad.csv:2: 'x'"), std::string::npos);
   EXPECT_NE(message(std::string(kHeader) + "1,0,0,0.11,-3,0,-90,-3,0,-90\n0,0,0,0.11,-3,0,-90,-3,0,-90\n")
                 .find("bad.csv:3: time goes back"),
             std::string::npos);

@@ -53,8 +53,8 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
                      "not a world log: its header starts time_s,ball_x_m,ball_y_m,ball_z_m (write one with canhil run "
                      "--virtual-time --world-log FILE)");
   }
-  while (robots_ < 1000 && std::find(columns_.begin(), columns_.end(), "robot" + std::to_string(robots_) + "_x_m") !=
-                               columns_.end()) {
+  while (robots_ < 1000 &&
+         std::find(columns_.begin(), columns_.end(), "robot" + std::to_string(robots_) + "_x_m") != columns_.end()) {
     ++robots_;
   }
   if (columns_.size() != first.size() + 6 * robots_) {
@@ -138,8 +138,9 @@ void ReplayFeed::find_kicks() {
       frames::M7 k{};
       if (messages_->m7.decode(e.frame, k).status != frames::DecodeStatus::kOk) continue;
       if ((k.kick & 0x7F) == 0) continue;
-      events_.push_back({to_seconds(e.time), "kick",
-                         e.iface + " kick, power " + std::to_string(k.kick & 0x7F) + ((k.kick & 0x80) ? " (low)" : "")});
+      events_.push_back(
+          {to_seconds(e.time), "kick",
+           e.iface + " kick, power " + std::to_string(k.kick & 0x7F) + ((k.kick & 0x80) ? " (low)" : "")});
     }
     return;
   }
@@ -172,7 +173,8 @@ json ReplayFeed::hello() {
 }
 
 json ReplayFeed::request(std::string_view) {
-  return {{"ok", false}, {"error", "a replay takes no commands; it is played in the page (canhil run changes a world)"}};
+  return {{"ok", false},
+          {"error", "a replay takes no commands; it is played in the page (canhil run changes a world)"}};
 }
 
 json ReplayFeed::frames_between(double from_s, double to_s, std::size_t most) const {

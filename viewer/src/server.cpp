@@ -289,9 +289,8 @@ Server::~Server() {
 std::uint16_t Server::port() const noexcept { return impl_->port; }
 
 std::string Server::url() const {
-  const std::string host = impl_->options.listen == "0.0.0.0" || impl_->options.listen == "::"
-                               ? "127.0.0.1"
-                               : impl_->options.listen;
+  const std::string host =
+      impl_->options.listen == "0.0.0.0" || impl_->options.listen == "::" ? "127.0.0.1" : impl_->options.listen;
   const std::string shown = host.find(':') != std::string::npos ? "[" + host + "]" : host;
   std::string u = "http://" + shown + ":" + std::to_string(impl_->port) + "/";
   if (!impl_->options.token.empty()) u += "?token=" + impl_->options.token;

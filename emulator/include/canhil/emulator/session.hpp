@@ -108,9 +108,9 @@ struct WorldSnapshot {
   std::vector<Goal> goals;
   CoachState coach;  ///< the base station's orders now
   // Only in a snapshot(true) (filled at most one step late):
-  std::vector<RobotDetail> detail;       ///< per robot
-  std::vector<BusDetail> buses;          ///< per robot, when the driver measures them
-  std::optional<VisionDetail> vision;    ///< the watched robot's last frame (watch_vision)
+  std::vector<RobotDetail> detail;     ///< per robot
+  std::vector<BusDetail> buses;        ///< per robot, when the driver measures them
+  std::optional<VisionDetail> vision;  ///< the watched robot's last frame (watch_vision)
 };
 
 /// Changes to a running world. A moved body is a physics state change like any

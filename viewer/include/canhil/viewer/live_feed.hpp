@@ -18,9 +18,9 @@
 namespace canhil::viewer {
 
 /// The fault rules the page offers in its list (any rule --fault takes can be typed in).
-inline constexpr const char* kFaultExamples[] = {
-    "drop:M4_1:0.1",  "drop:M6_1:0.5", "delay:M1:4",         "corrupt:M4_2:0:0.1", "duplicate:M3_1",
-    "silence:Motor2:0", "error:M1:0.01", "battery:power24:1"};
+inline constexpr const char* kFaultExamples[] = {"drop:M4_1:0.1",      "drop:M6_1:0.5",    "delay:M1:4",
+                                                 "corrupt:M4_2:0:0.1", "duplicate:M3_1",   "silence:Motor2:0",
+                                                 "error:M1:0.01",      "battery:power24:1"};
 
 class LiveFeed final : public Feed {
  public:
