@@ -393,7 +393,8 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   EXPECT_EQ(canhil("bench --seconds -1").status, 2);
   const CliRun bad = canhil("bench --part speed");
   EXPECT_EQ(bad.status, 2);
-  EXPECT_TRUE(has(bad, "--part takes virtual, jitter, vcan and external, comma-separated; got 'speed'")) << bad.out;
+  EXPECT_TRUE(has(bad, "--part takes virtual, view, jitter, vcan and external, comma-separated; got 'speed'"))
+      << bad.out;
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
   EXPECT_TRUE(has(bad_cpu, "--cpu takes a core number, or -1 for none")) << bad_cpu.out;

@@ -25,7 +25,7 @@ TEST(LiveBusStats, LoadAndWorstPeriodDeviationPerWholeWindow) {
   // Every period on time, but one frame 2 ms late.
   int count = 0;
   for (Nanos t = 0ns; t < 100ms; t += period, ++count) {
-    stats.add({f, t == 5 * period ? t + 2ms : t});
+    stats.add({f, t == 2 * period ? t + 2ms : t});
   }
   EXPECT_EQ(stats.load(), 0);  // the first window is not whole yet
   stats.advance(100ms);

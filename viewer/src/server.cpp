@@ -24,9 +24,10 @@ namespace net = boost::asio;
 using tcp = net::ip::tcp;
 using nlohmann::json;
 
-constexpr std::size_t kMaxHttpBody = 64 * 1024;
-constexpr std::size_t kMaxWsMessage = 1024 * 1024;  // the commands refuse anything over 64 KiB with a reply
-constexpr std::size_t kMaxQueued = 256;             // replies and logs waiting for a page that reads nothing
+constexpr std::size_t kMaxHttpBody = std::size_t{64} * 1024;
+constexpr std::size_t kMaxWsMessage =
+    std::size_t{1024} * 1024;            // the commands refuse anything over 64 KiB with a reply
+constexpr std::size_t kMaxQueued = 256;  // replies and logs waiting for a page that reads nothing
 constexpr auto kHttpTimeout = std::chrono::seconds(30);
 
 std::string dumped(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
@@ -58,7 +59,7 @@ class Server::Impl::WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(Impl& server, tcp::socket socket) : server_(server), ws_(std::move(socket)), timer_(ws_.get_executor()) {}
 
-  void start(http::request<http::string_body> upgrade) {
+  void start(const http::request<http::string_body>& upgrade) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(kMaxWsMessage);
     ws_.async_accept(upgrade, [self = shared_from_this()](beast::error_code ec) {
@@ -185,7 +186,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         std::erase_if(server_.sessions, [](const auto& w) { return w.expired(); });
         server_.sessions.push_back(ws);
       }
-      ws->start(std::move(req));
+      ws->start(req);
       return;
     }
     if (req.method() != http::verb::get && req.method() != http::verb::head) {
