@@ -149,7 +149,8 @@ function showStatus() {
   $('st-time').textContent = `t ${s.time_s.toFixed(2)} s`;
   const speed = s.speed === 0 ? 'max speed' : `${s.speed}x`;
   $('st-run').textContent = s.ended ? 'ended' : s.paused ? `paused (${speed})` : speed;
-  $('st-rtf').textContent = typeof s.real_time_factor === 'number' ? `${s.real_time_factor.toFixed(2)}× real time` : '';
+  const rtf = typeof s.real_time_factor === 'number' && !s.paused && !s.ended;
+  $('st-rtf').textContent = rtf ? `${s.real_time_factor.toFixed(2)}× real time` : '';
   $('st-goals').textContent = goalsText(s.goals);
   const game = s.coach ? s.coach.game_state : '';
   $('st-game').textContent = game ? `coach: ${game}` : '';

@@ -17,10 +17,13 @@ const axis = (extra = {}) => ({
   ...extra,
 });
 
-// The x range: the last WINDOW_S seconds, or what there is so far.
-function xRange(u, min, max) {
-  if (min === null || max === null) return [0, WINDOW_S];
-  return [Math.max(min, max - WINDOW_S), Math.max(max, min + 1)];
+// The x range: always WINDOW_S wide, ending at the newest point once there
+// are WINDOW_S seconds of them (a steady axis from the start, then scrolling).
+function xWindow(times) {
+  if (!times.length) return { min: 0, max: WINDOW_S };
+  const first = times[0], last = times[times.length - 1];
+  const min = Math.max(first, last - WINDOW_S);
+  return { min, max: min + WINDOW_S };
 }
 
 /** One chart in a card of its own; `series`: [{label, scale?, colour?}]. */
@@ -30,7 +33,7 @@ class Chart {
     this.card.className = 'plot';
     parent.appendChild(this.card);
     this.data = [[], ...series.map(() => [])];
-    const scales = { x: { time: false, range: xRange } };
+    const scales = { x: { time: false, auto: false, range: (u, min, max) => [min, max] } };
     scales.y = yRange ? { range: yRange } : { range: (u, min, max) => autoRange(min, max) };
     const axes = [axis({ label: 't (s)', size: 32, labelSize: 14 }), axis({ label: yLabel, scale: 'y', size: 46, labelSize: 14 })];
     if (y2Label) {
@@ -55,6 +58,7 @@ class Chart {
         points: { show: false },
       }))],
     }, this.data, this.card);
+    this.show();
   }
 
   width() {
@@ -78,7 +82,10 @@ class Chart {
   }
 
   show() {
-    this.plot.setData(this.data);
+    this.plot.batch(() => {
+      this.plot.setData(this.data);
+      this.plot.setScale('x', xWindow(this.data[0]));
+    });
   }
 
   remove() {
@@ -160,10 +167,18 @@ export function livePlots(parent, hello) {
       }
       latency.add(t, hello.robots.map((_, i) => lat[i] ?? null));
     }
+    redraw();
+  }
+
+  // At most every REDRAW_MS; the last change is always drawn (a paused run sends no more).
+  let pendingDraw = null;
+  function redraw() {
     const now = performance.now();
     if (now - lastDraw >= REDRAW_MS) {
       lastDraw = now;
       for (const c of charts()) c.show();
+    } else if (!pendingDraw) {
+      pendingDraw = setTimeout(() => { pendingDraw = null; redraw(); }, REDRAW_MS - (now - lastDraw) + 1);
     }
   }
 

@@ -220,7 +220,10 @@ export class Replay {
       const tr = body.insertRow();
       const d = Math.abs(f.time_s - t);
       if (d < best) { best = d; nearest = tr; }
-      const cells = [f.time_s.toFixed(4), f.interface, f.name || `0x${Number(f.id).toString(16)}`, f.signals || f.data];
+      // The decoded text starts with the message's name already; the raw bytes when undecoded.
+      const name = f.name || `0x${Number(f.id).toString(16)}`;
+      const text = f.signals ? (f.signals.startsWith(name) ? f.signals : `${name} ${f.signals}`) : `${name} ${f.data}`;
+      const cells = [f.time_s.toFixed(4), f.interface, text];
       for (const v of cells) tr.insertCell().textContent = v;
       tr.title = `id 0x${Number(f.id).toString(16)} data ${f.data}`;
     }

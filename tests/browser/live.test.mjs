@@ -1,0 +1,222 @@
+// The viewer page against a live `canhil run` (virtual time), in headless
+// chromium: what it draws is where the world has it; a drag moves a robot in
+// the physics world; a ctrl-drag gives the ball the velocity the page sent;
+// pause and step advance exactly one EC; a scenario saved from the page loads
+// back. Every test starts its own canhil and reads the world back through a
+// WebSocket of its own (`snapshot`), not through the page.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { existsSync } from 'node:fs';
+import { join } from 'node:path';
+import {
+  SOURCE, launchBrowser, startCanhil, openPage, shot, Control, dragWorld, dist, sleep, workDir,
+} from './support.mjs';
+
+const FIVE = join(SOURCE, 'emulator/scenarios/five_robots.toml');
+let browser;
+const cleanups = [];
+
+before(async () => { browser = await launchBrowser(); });
+after(async () => {
+  for (const c of cleanups.reverse()) await c();
+  if (browser) await browser.close();
+});
+
+// A paused, long virtual-time run with its viewer on a free port, the page
+// open on it and the test's own connection.
+async function live(extra = [], { config = FIVE, beforeLoad = null } = {}) {
+  const dir = workDir('live');
+  const args = ['run', '--virtual-time', '--duration', '600', '--view-port', '0', '--no-control', ...extra];
+  if (config) args.push('--config', config);
+  const run = await startCanhil(args, dir);
+  cleanups.push(run.stop);
+  const page = await openPage(browser, run.url, { beforeLoad });
+  cleanups.push(() => page.close());
+  const control = await Control.open(run.url, page);
+  cleanups.push(() => control.close());
+  return { run, page, control, dir };
+}
+
+const drawn = (page) => page.evaluate(() => window.canhilView.drawn());
+const pageState = (page) => page.evaluate(() => {
+  const s = window.canhilView.state();
+  return { time_s: s.time_s, steps: s.steps, paused: s.paused };
+});
+
+function assertDrawnAt(d, s, tolerance) {
+  assert.equal(d.robots.length, s.robots.length, 'every robot drawn');
+  s.robots.forEach((r, i) => {
+    assert.ok(dist(d.robots[i], r) <= tolerance,
+      `robot ${i} drawn at (${d.robots[i].x.toFixed(3)}, ${d.robots[i].y.toFixed(3)}), world (${r.x.toFixed(3)}, ${r.y.toFixed(3)})`);
+    const dh = Math.abs(((d.robots[i].heading_deg - r.heading_deg + 540) % 360) - 180);
+    assert.ok(dh <= 1, `robot ${i} drawn heading ${d.robots[i].heading_deg}, world ${r.heading_deg}`);
+  });
+  assert.ok(d.ball && dist(d.ball, s.ball) <= tolerance,
+    `ball drawn at ${JSON.stringify(d.ball)}, world (${s.ball.x}, ${s.ball.y})`);
+}
+
+// Waits until the page has drawn the state of the run's time `t`.
+async function pageAt(page, t) {
+  await page.waitForFunction((want) => Math.abs(window.canhilView.state().time_s - want) < 1e-9, { timeout: 10000 }, t);
+  await sleep(100);  // one animation frame or more
+}
+
+test('1. the page loads and draws the robots and the ball where the world has them', async () => {
+  const { page, control } = await live(['--paused']);
+  const hello = await page.evaluate(() => window.canhilView.hello());
+  assert.equal(hello.mode, 'live');
+  assert.equal(hello.robots.length, 5);
+  let s = await control.snapshot();
+  await pageAt(page, s.time_s);
+  await shot(page, '1-loaded');
+  assertDrawnAt(await drawn(page), s, 0.05);
+  // Run 3 s of virtual time: the robots move, the page follows.
+  await control.must('step', { count: Math.round(3 / hello.ec_s) });
+  s = await control.until((x) => x.time_s >= 2.99, 'three seconds stepped');
+  s = await control.snapshot();
+  await pageAt(page, s.time_s);
+  assertDrawnAt(await drawn(page), s, 0.05);
+  await shot(page, '1-after-3s');
+  // The labels: agent and interface, from the hello.
+  assert.deepEqual(hello.robots.map((r) => r.interface), ['vcan0', 'vcan1', 'vcan2', 'vcan3', 'vcan4']);
+  assert.deepEqual(page.errors, []);
+});
+
+test('2. a mouse drag of a robot moves it in the physics world; a right-drag turns it', async () => {
+  const { page, control } = await live(['--paused']);
+  const s0 = await control.snapshot();
+  await pageAt(page, s0.time_s);
+  const target = { x: 1, y: -3 };
+  const drag = await dragWorld(page, s0.robots[0], target);
+  await sleep(100);
+  // While dragging the page draws the robot under the mouse, before any command.
+  const during = await drawn(page);
+  assert.ok(dist(during.robots[0], target) < 0.1, `drawn during the drag at ${JSON.stringify(during.robots[0])}`);
+  assert.ok(dist((await control.snapshot()).robots[0], s0.robots[0]) < 0.01, 'the world has not moved it yet');
+  await shot(page, '2-dragging');
+  await drag.release();
+  const s1 = await control.until((x) => dist(x.robots[0], target) < 0.15, 'robot 0 near the drop point');
+  assert.ok(dist(s1.robots[0], target) < 0.15);
+  await pageAt(page, s1.time_s);
+  await shot(page, '2-dropped');
+  // Right button: its front (+y) follows the mouse; toward field +y is heading 0.
+  const turn = await dragWorld(page, s1.robots[0], { x: s1.robots[0].x, y: s1.robots[0].y + 2 }, { button: 'right' });
+  await turn.release();
+  const s2 = await control.until((x) => Math.abs(x.robots[0].heading_deg) < 3, 'robot 0 turned to face +y');
+  assert.ok(dist(s2.robots[0], target) < 0.15, 'turning left it in place');
+  assert.deepEqual(page.errors, []);
+});
+
+// Records what the page sends on its WebSocket (page side, before its scripts run).
+function recordSent() {
+  window.__sent = [];
+  const send = WebSocket.prototype.send;
+  WebSocket.prototype.send = function recorded(data) {
+    try { window.__sent.push(JSON.parse(data)); } catch { /* not ours */ }
+    return send.call(this, data);
+  };
+}
+
+test('3. a ctrl-drag from the ball gives it the velocity the page sent', async () => {
+  const { page, control } = await live(['--paused'], { beforeLoad: recordSent });
+  const s0 = await control.snapshot();
+  await pageAt(page, s0.time_s);
+  const ball = s0.ball;
+  // 1.5 m along +x and 1 m along +y from the ball: 2 m/s per metre -> (3, 2) m/s.
+  const drag = await dragWorld(page, ball, { x: ball.x + 1.5, y: ball.y + 1.0 }, { modifier: 'Control' });
+  await sleep(100);
+  await shot(page, '3-kick-arrow');
+  await drag.release();
+  await page.waitForFunction(() => window.__sent.some((m) => m.command === 'move_ball'), { timeout: 5000 });
+  const sent = await page.evaluate(() => window.__sent.filter((m) => m.command === 'move_ball').pop());
+  assert.ok(Math.abs(sent.x - ball.x) < 1e-6 && Math.abs(sent.y - ball.y) < 1e-6, `sent from the ball's place: ${JSON.stringify(sent)}`);
+  assert.ok(Math.hypot(sent.vx - 3, sent.vy - 2) < 0.15, `the page sent (${sent.vx}, ${sent.vy}) m/s for a (1.5, 1) m drag`);
+  const ec = (await page.evaluate(() => window.canhilView.hello())).ec_s;
+  await control.must('step', { count: 1 });
+  const s1 = await control.until((x) => x.time_s >= s0.time_s + ec * 0.5, 'one step');
+  const v = s1.ball_velocity || { x: s1.ball.vx, y: s1.ball.vy };
+  const speed = Math.hypot(v.x, v.y), sentSpeed = Math.hypot(sent.vx, sent.vy);
+  const angle = (Math.atan2(v.y, v.x) * 180) / Math.PI, sentAngle = (Math.atan2(sent.vy, sent.vx) * 180) / Math.PI;
+  console.log(`kick: sent ${sentSpeed.toFixed(3)} m/s at ${sentAngle.toFixed(1)} deg; after one step ${speed.toFixed(3)} m/s at ${angle.toFixed(1)} deg`);
+  assert.ok(Math.abs(angle - sentAngle) <= 10, `direction ${angle} deg, sent ${sentAngle} deg`);
+  assert.ok(Math.abs(speed - sentSpeed) <= 0.15 * sentSpeed, `speed ${speed} m/s, sent ${sentSpeed} m/s`);
+  await control.must('step', { count: 20 });
+  await sleep(300);
+  await shot(page, '3-ball-rolling');
+  assert.deepEqual(page.errors, []);
+});
+
+test('4. pause, then each step advances exactly one EC', async () => {
+  const { page, control } = await live(['--speed', '1']);
+  const hello = await page.evaluate(() => window.canhilView.hello());
+  assert.equal(hello.virtual_time, true);
+  assert.equal(await page.$eval('#step', (b) => b.disabled), false);
+  await page.click('#pause');
+  await page.waitForFunction(() => window.canhilView.state().paused === true, { timeout: 10000 });
+  // Paused: the steps counter stands still.
+  let s = await control.snapshot();
+  await sleep(400);
+  const still = await control.snapshot();
+  assert.equal(still.steps, s.steps, 'paused: no steps');
+  assert.equal(still.time_s, s.time_s);
+  for (let k = 1; k <= 3; k++) {
+    await page.click('#step');
+    const next = await control.until((x) => x.steps > s.steps, `step ${k}`);
+    await sleep(300);  // nothing more comes
+    const settled = await control.snapshot();
+    assert.equal(settled.steps, s.steps + 1, `step ${k}: steps ${s.steps} -> ${settled.steps}`);
+    assert.equal(settled.steps, next.steps);
+    assert.ok(Math.abs(settled.time_s - (s.time_s + hello.ec_s)) < 1e-9,
+      `step ${k}: time ${s.time_s} -> ${settled.time_s}, EC ${hello.ec_s}`);
+    await pageAt(page, settled.time_s);
+    const shown = await pageState(page);
+    assert.equal(shown.steps, settled.steps, 'the page shows the step');
+    s = settled;
+  }
+  const status = await page.$eval('#st-time', (e) => e.textContent);
+  assert.equal(status, `t ${s.time_s.toFixed(2)} s`);
+  await shot(page, '4-stepped');
+  assert.deepEqual(page.errors, []);
+});
+
+test('5. a scenario saved from the page loads back', async () => {
+  const { page, control, dir } = await live(['--paused', '--save-dir', 'saves']);
+  const s0 = await control.snapshot();
+  await pageAt(page, s0.time_s);
+  const saved = { x: 2, y: 2 };
+  let d = await dragWorld(page, s0.robots[0], saved);
+  await d.release();
+  await control.until((x) => dist(x.robots[0], saved) < 0.15, 'robot 0 at (2, 2)');
+  await page.type('#save-name', 't1');
+  await page.select('#save-kind', 'scenario');
+  await page.click('#save');
+  await page.waitForSelector('#saves button[data-name="t1"][data-kind="scenario"]', { timeout: 10000 });
+  assert.ok(existsSync(join(dir, 'saves', 't1.toml')), 'the scenario file written');
+  const list = await control.must('saves');
+  assert.ok(list.saves.some((x) => x.name === 't1' && x.kind === 'scenario'));
+  // Elsewhere, then load t1: back at the saved place.
+  const s1 = await control.snapshot();
+  await pageAt(page, s1.time_s);
+  d = await dragWorld(page, s1.robots[0], { x: -3, y: -4 });
+  await d.release();
+  await control.until((x) => dist(x.robots[0], { x: -3, y: -4 }) < 0.15, 'robot 0 moved away');
+  await shot(page, '5-before-load');
+  await page.click('#saves button[data-name="t1"][data-kind="scenario"]');
+  const s2 = await control.until((x) => dist(x.robots[0], saved) < 0.15, 'robot 0 back at the saved place');
+  await pageAt(page, s2.time_s);
+  assertDrawnAt(await drawn(page), s2, 0.05);
+  await shot(page, '5-loaded');
+  const logText = await page.$eval('#log', (e) => e.textContent);
+  assert.match(logText, /loaded scenario t1/);
+  assert.deepEqual(page.errors, []);
+});
+
+test('an error reply shows in the log', async () => {
+  const { page } = await live(['--paused']);
+  await page.type('#fault-text', 'no-such-rule');
+  await page.click('#inject');
+  await page.waitForSelector('#log li.error', { timeout: 10000 });
+  const text = await page.$eval('#log li.error', (e) => e.textContent);
+  assert.match(text, /fault refused/);
+  assert.deepEqual(page.errors, []);
+});
