@@ -104,6 +104,12 @@ test('2. a mouse drag of a robot moves it in the physics world; a right-drag tur
   await turn.release();
   const s2 = await control.until((x) => Math.abs(x.robots[0].heading_deg) < 3, 'robot 0 turned to face +y');
   assert.ok(dist(s2.robots[0], target) < 0.15, 'turning left it in place');
+  // An obstacle (the movable keeper) dragged as well.
+  const keeper = s2.obstacles[4];
+  const spot = { x: keeper.x - 1.5, y: keeper.y - 1 };
+  const od = await dragWorld(page, keeper, spot);
+  await od.release();
+  await control.until((x) => dist(x.obstacles[4], spot) < 0.15, 'obstacle 4 near its drop point');
   assert.deepEqual(page.errors, []);
 });
 
@@ -219,4 +225,57 @@ test('an error reply shows in the log', async () => {
   const text = await page.$eval('#log li.error', (e) => e.textContent);
   assert.match(text, /fault refused/);
   assert.deepEqual(page.errors, []);
+});
+
+test('the view: wheel and buttons zoom, the middle button pans, follow the ball; a stopped server shows as disconnected', async () => {
+  const { run, page, control } = await live(['--paused']);
+  const s0 = await control.snapshot();
+  await pageAt(page, s0.time_s);
+  const scale = () => page.evaluate(() => {
+    const a = window.canhilView.toScreen(0, 0), b = window.canhilView.toScreen(1, 0);
+    return b.x - a.x;
+  });
+  const at = (x, y) => page.evaluate((px, py) => window.canhilView.toScreen(px, py), x, y);
+  const k0 = await scale();
+  assert.ok(k0 > 20, `${k0} pixels per metre at the start`);
+  // The whole field in view at the start.
+  const box = await (await page.$('#field')).boundingBox();
+  const hello = await page.evaluate(() => window.canhilView.hello());
+  const corner = await at(hello.field.length_m / 2, hello.field.width_m / 2);
+  assert.ok(corner.x < box.x + box.width && corner.y > box.y, 'the field\'s corner in view');
+  const p = await at(2, 1);
+  await page.mouse.move(p.x, p.y);
+  await page.mouse.wheel({ deltaY: -100 });
+  await page.mouse.wheel({ deltaY: -100 });
+  await sleep(100);
+  const k1 = await scale();
+  assert.ok(k1 > k0 * 1.2, `wheel up zooms in: ${k0} -> ${k1}`);
+  const p1 = await at(2, 1);
+  assert.ok(Math.hypot(p1.x - p.x, p1.y - p.y) < 1.5, 'the point under the mouse stays under it');
+  await page.click('#zoom-out');
+  assert.ok((await scale()) < k1, 'the - button zooms out');
+  await page.click('#zoom-in');
+  // Middle button: pan by 120 px to the right, 40 down.
+  const o0 = await at(0, 0);
+  await page.mouse.move(box.x + 200, box.y + 200);
+  await page.mouse.down({ button: 'middle' });
+  await page.mouse.move(box.x + 260, box.y + 220);
+  await page.mouse.move(box.x + 320, box.y + 240);
+  await page.mouse.up({ button: 'middle' });
+  const o1 = await at(0, 0);
+  assert.ok(Math.abs(o1.x - o0.x - 120) < 2 && Math.abs(o1.y - o0.y - 40) < 2, `panned by (${o1.x - o0.x}, ${o1.y - o0.y})`);
+  assert.ok(dist((await control.snapshot()).robots[0], s0.robots[0]) < 1e-6, 'panning moved nothing in the world');
+  // Follow the ball: it goes to the middle of the view.
+  await page.click('#follow-ball');
+  await sleep(100);
+  const b = await at(s0.ball.x, s0.ball.y);
+  assert.ok(Math.abs(b.x - (box.x + box.width / 2)) < 2 && Math.abs(b.y - (box.y + box.height / 2)) < 2, 'the ball in the middle');
+  await shot(page, 'view-zoomed-following');
+  await page.click('#zoom-fit');
+  // The server goes away: the page says so, and keeps trying.
+  await run.stop();
+  await page.waitForSelector('#conn.conn-closed', { timeout: 10000 });
+  assert.equal(await page.$eval('#overlay', (e) => e.hidden), false);
+  assert.match(await page.$eval('#conn', (e) => e.textContent), /disconnected/);
+  await shot(page, 'view-disconnected');
 });

@@ -38,10 +38,27 @@ function logAt(log, t) {
   return { ball: { x: at(c('ball_x_m')), y: at(c('ball_y_m')) }, robots };
 }
 
-async function view(args) {
+// Records the addresses the page opens (WebSocket and fetch), before its scripts run.
+function recordUrls() {
+  window.__urls = [];
+  const Ws = window.WebSocket;
+  window.WebSocket = function recorded(url, ...rest) {
+    window.__urls.push(String(url));
+    return new Ws(url, ...rest);
+  };
+  window.WebSocket.prototype = Ws.prototype;
+  Object.assign(window.WebSocket, { CONNECTING: 0, OPEN: 1, CLOSING: 2, CLOSED: 3 });
+  const f = window.fetch;
+  window.fetch = (url, ...rest) => {
+    window.__urls.push(String(url));
+    return f(url, ...rest);
+  };
+}
+
+async function view(args, { query = '' } = {}) {
   const v = await startCanhil(['view', ...args, '--view-port', '0'], workDir('view'));
   cleanups.push(v.stop);
-  const page = await openPage(browser, v.url);
+  const page = await openPage(browser, v.url + query, { beforeLoad: recordUrls });
   cleanups.push(() => page.close());
   await page.waitForFunction(() => window.canhilView.replayTime() !== null, { timeout: 20000 });
   return { v, page };
@@ -54,7 +71,8 @@ test('6. replay: scrubbing the timeline to t shows the recorded positions', asyn
     '--no-view', '--no-control'], { cwd: dir, env: rtdbEnv(), stdio: ['ignore', 'ignore', 'pipe'] });
   const log = readLog(worldLog);
   assert.ok(log.rows.length > 20, `${log.rows.length} rows in the world log`);
-  const { page } = await view([worldLog, '--trace', trace]);
+  // With ?token=: the page passes it on to /ws and /api (a loopback server needs none, takes any).
+  const { page } = await view([worldLog, '--trace', trace], { query: '?token=t0k3n' });
   const hello = await page.evaluate(() => window.canhilView.hello());
   assert.equal(hello.mode, 'replay');
   // Live-only controls are hidden, the timeline shown.
@@ -76,11 +94,16 @@ test('6. replay: scrubbing the timeline to t shows the recorded positions', asyn
       `t=${t}: robot ${i} drawn at ${JSON.stringify(d.robots[i])}, logged ${JSON.stringify(r)}`));
   }
   // The bus panel: the trace's frames within 0.1 s of the cursor, decoded.
-  await page.waitForFunction(() => document.querySelectorAll('#frames tr').length > 0, { timeout: 10000 });
+  await page.waitForFunction(() => document.querySelectorAll('#frames tr').length > 0 &&
+    Number(document.getElementById('frames').dataset.at) === window.canhilView.replayTime(), { timeout: 10000 });
   const t = await page.evaluate(() => window.canhilView.replayTime());
   const times = await page.$$eval('#frames tr td:first-child', (tds) => tds.map((td) => Number(td.textContent)));
   assert.ok(times.every((x) => Math.abs(x - t) <= 0.1 + 1e-3), `frames around ${t}: ${times.slice(0, 5)}…`);
   await shot(page, '6-replay-scrubbed');
+  const urls = await page.evaluate(() => window.__urls);
+  assert.ok(urls.some((u) => /\/ws\?token=t0k3n$/.test(u)), `the WebSocket with the token: ${urls}`);
+  assert.ok(urls.some((u) => /^\/api\/replay\?token=t0k3n$/.test(u)), `/api/replay with the token: ${urls}`);
+  assert.ok(urls.some((u) => /^\/api\/frames\?from=.*&token=t0k3n$/.test(u)), `/api/frames with the token: ${urls}`);
   // Next kick (when the recording has one) puts the cursor on it.
   const events = await page.evaluate(async () => (await (await fetch('/api/replay')).json()).events);
   const kick = events.find((e) => e.kind === 'kick' && e.time_s > 0);
@@ -133,6 +156,14 @@ test('7. ten robots play back at 30 frames per second or more', async () => {
   const fps2 = await page.evaluate(() => window.canhilView.fps());
   console.log(`ten robots at 1x: ${fps.toFixed(1)} frames drawn per second over ${wall.toFixed(2)} s (page's own figure over 2 s: ${fps2.toFixed(1)}); replay advanced ${(t1 - t0).toFixed(2)} s`);
   await shot(page, '7-ten-robots');
+  // The ball in the air (the log lifts it to 0.71 m around t = 1.57 s): its height is shown.
+  await page.click('#rp-play');
+  const box = await (await page.$('#rp-scrub')).boundingBox();
+  await page.mouse.click(box.x + 8 + (box.width - 16) * (1.57 / 20), box.y + box.height / 2);
+  await sleep(150);
+  const z = await page.evaluate(() => window.canhilView.state().ball.z);
+  assert.ok(z > 0.6, `ball at ${z} m`);
+  await shot(page, '7-ball-in-the-air');
   const d = await page.evaluate(() => window.canhilView.drawn());
   assert.equal(d.robots.length, 10);
   assert.ok(Math.abs((t1 - t0) - wall) < 0.5, `1x: ${t1 - t0} s of replay in ${wall} s`);

@@ -32,7 +32,7 @@ export function headingToward(from, to) {
 export class Interaction {
   /**
    * deps: {view, state(), hello(), live(), kickMode(), send(command, args) -> Promise<reply>,
-   *        select(robotIndex), changed(), panned()}
+   *        select(robotIndex), changed(), zoomed(), panned()}
    */
   constructor(canvas, deps) {
     this.canvas = canvas;
@@ -47,6 +47,7 @@ export class Interaction {
     canvas.addEventListener('wheel', (e) => {
       const p = this.point(e);
       deps.view.zoom(Math.exp(-Math.sign(e.deltaY) * 0.15), p.px, p.py);
+      deps.zoomed();
       deps.changed();
       e.preventDefault();
     }, { passive: false });

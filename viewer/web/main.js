@@ -22,6 +22,7 @@ let live = null;          // the latest live state
 let replay = null;        // the Replay in replay mode
 let plots = null;
 let fitted = false;
+let autoFit = true;       // refit on resize until the user zooms or pans
 let dirty = true;
 let lastDrawn = { robots: [], ball: null };
 const frameTimes = [];    // when each of the last 2 s of frames was drawn
@@ -52,6 +53,7 @@ $('log-clear').onclick = () => { $('log').textContent = ''; };
 
 // --- the connection ----------------------------------------------------------------
 
+let lastConn = null;
 const connection = new Connection({
   hello: onHello,
   state: onState,
@@ -63,7 +65,9 @@ const connection = new Connection({
     el.textContent = text;
     $('overlay').hidden = kind !== 'closed';
     $('overlay').textContent = kind === 'closed' ? 'disconnected — reconnecting…' : '';
-    if (kind === 'closed' && hello) log(`disconnected from the server; ${text.replace(/^disconnected — /, '')}`, true);
+    if (kind === 'closed' && lastConn === 'open') log('disconnected from the server; reconnecting', true);
+    if (kind === 'open' && lastConn === 'closed') log('connected again');
+    if (kind !== 'connecting') lastConn = kind;
   },
 });
 const send = (command, args) => connection.ask(command, args);
@@ -179,7 +183,7 @@ function resize() {
   sizeCanvas(canvas, r.width, r.height);
   const e = eye.getBoundingClientRect();
   sizeCanvas(eye, e.width, e.height);
-  if (hello && !fitted) fitView();
+  if (hello && (!fitted || autoFit)) fitView();
   dirty = true;
 }
 new ResizeObserver(resize).observe($('canvas-box'));
@@ -194,12 +198,13 @@ function fitView() {
 
 function zoomCentre(factor) {
   view.zoom(factor, view.width / 2, view.height / 2);
+  autoFit = false;
   dirty = true;
 }
 $('zoom-in').onclick = () => zoomCentre(1.25);
 $('zoom-out').onclick = () => zoomCentre(1 / 1.25);
-$('zoom-fit').onclick = () => { $('follow-ball').checked = false; fitView(); };
-$('follow-ball').onchange = changed;
+$('zoom-fit').onclick = () => { $('follow-ball').checked = false; autoFit = true; fitView(); };
+$('follow-ball').onchange = () => { if ($('follow-ball').checked) autoFit = false; dirty = true; };
 
 const interaction = new Interaction(canvas, {
   view,
@@ -214,7 +219,8 @@ const interaction = new Interaction(canvas, {
     robotPicked();
   },
   changed,
-  panned: () => { $('follow-ball').checked = false; },
+  zoomed: () => { autoFit = false; },
+  panned: () => { $('follow-ball').checked = false; autoFit = false; },
 });
 
 // --- drawing ----------------------------------------------------------------------------

@@ -232,6 +232,7 @@ export class Replay {
       const box = this.el.frames.parentElement;
       box.scrollTop = Math.max(0, nearest.offsetTop - box.clientHeight / 2);
     }
+    this.el.frames.dataset.at = String(t);  // the cursor these frames are around
     this.el.framesNote.textContent = `${frames.length}${frames.length >= 500 ? '+' : ''} frames within ±${FRAMES_AROUND_S} s of ${t.toFixed(3)} s`;
   }
 
