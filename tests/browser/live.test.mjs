@@ -278,4 +278,18 @@ test('the view: wheel and buttons zoom, the middle button pans, follow the ball;
   assert.equal(await page.$eval('#overlay', (e) => e.hidden), false);
   assert.match(await page.$eval('#conn', (e) => e.textContent), /disconnected/);
   await shot(page, 'view-disconnected');
+  // A run on the same port again: the page reconnects by itself and shows the new world.
+  const port = new URL(run.url).port;
+  const again = await startCanhil(['run', '--virtual-time', '--duration', '600', '--view-port', port, '--no-control', '--paused'], workDir('again'));
+  cleanups.push(again.stop);
+  await page.waitForSelector('#conn.conn-open', { timeout: 15000 });
+  await page.waitForFunction(() => window.canhilView.hello().robots.length === 1, { timeout: 10000 });
+  assert.equal(await page.$eval('#overlay', (e) => e.hidden), true);
+  const againControl = await Control.open(again.url, page);
+  cleanups.push(() => againControl.close());
+  const s = await againControl.snapshot();
+  await pageAt(page, s.time_s);
+  assertDrawnAt(await drawn(page), s, 0.05);
+  await shot(page, 'view-reconnected');
+  assert.deepEqual(page.errors, []);
 });

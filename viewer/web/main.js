@@ -84,7 +84,10 @@ function onHello(h) {
   const pick = $('robot-pick');
   const was = pick.value;
   pick.textContent = '';
-  for (const r of h.robots || []) pick.add(new Option(`agent ${r.agent} · ${r.interface} (robot ${r.index})`, r.index));
+  for (const r of h.robots || []) {
+    const where = r.interface === `robot ${r.index}` ? r.interface : `${r.interface} (robot ${r.index})`;
+    pick.add(new Option(`agent ${r.agent} · ${where}`, r.index));
+  }
   if (was && Number(was) < (h.robots || []).length) pick.value = was;
 
   if (isLive()) setupLive(h);
