@@ -189,6 +189,11 @@ export class Interaction {
       args = { obstacle: d.index, x: d.to.x, y: d.to.y };
       pose = { x: d.to.x, y: d.to.y };
     }
+    // Millimetres, hundredths of a degree: the pixel a drag ends on is no finer.
+    for (const key of Object.keys(args)) {
+      if (key === 'robot' || key === 'obstacle') continue;
+      args[key] = Math.round(args[key] * (key === 'heading_deg' ? 100 : 1000)) / (key === 'heading_deg' ? 100 : 1000);
+    }
     const settle = pose ? { kind: d.kind, index: d.index, pose, statesLeft: null, until: performance.now() + SETTLE_MS } : null;
     this.settle = settle;
     this.deps.send(command, args).then((reply) => {
