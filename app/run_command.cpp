@@ -242,10 +242,14 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   if (speed_text && *speed_text != "max") {
     char* end = nullptr;
     speed = std::strtod(speed_text->c_str(), &end);
-    if (end != speed_text->c_str() + speed_text->size() ||
-        !(speed == 0 || (speed >= emulator::RunControl::kMinSpeed && speed <= emulator::RunControl::kMaxSpeed))) {
-      throw UsageError("--speed takes max, or virtual seconds per wall second from 0.01 to 1000 (1: real time)");
+    bool fine = end == speed_text->c_str() + speed_text->size();
+    try {
+      emulator::RunControl::check_speed(speed);
+    } catch (const SetupError&) {
+      fine = false;
     }
+    if (!fine)
+      throw UsageError("--speed takes max, or virtual seconds per wall second from 0.01 to 1000 (1: real time)");
   }
   if ((speed_text || start_paused) && (!virtual_time || external)) {
     throw UsageError("--speed and --paused are for --virtual-time runs (without --external)");

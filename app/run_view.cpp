@@ -66,7 +66,11 @@ void hold_viewer(const ViewChoice& choice, const viewer::Server* server, const c
   std::fprintf(out, "%s: the viewer stays up %g s more at %s (Ctrl-C ends it)\n", who, choice.hold_s,
                server->url().c_str());
   std::fflush(out);
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(choice.hold_s);
+  serve_until(stop, choice.hold_s);
+}
+
+void serve_until(const std::atomic<bool>& stop, double seconds) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
   while (!stop && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 

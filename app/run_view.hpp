@@ -32,6 +32,9 @@ ViewChoice view_options(Args& args);
 std::unique_ptr<viewer::Server> start_viewer(const ViewChoice& choice, viewer::Feed& feed, const char* who, FILE* out,
                                              bool required = false);
 
+/// Waits until `stop` is set or `seconds` of wall time have passed (the viewer serves meanwhile).
+void serve_until(const std::atomic<bool>& stop, double seconds);
+
 /// After a run: keeps the viewer up for choice.hold_s (until `stop`), saying so.
 void hold_viewer(const ViewChoice& choice, const viewer::Server* server, const char* who, const std::atomic<bool>& stop,
                  FILE* out);

@@ -3,7 +3,6 @@
 // shows the trace's frames around its cursor. Serves until Ctrl-C (or --duration).
 #include <atomic>
 #include <csignal>
-#include <thread>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/viewer/replay_feed.hpp"
@@ -48,8 +47,7 @@ int run_view(Args& args, const std::optional<std::string>& dbc) {
   const auto server = start_viewer(view, *feed, "canhil view", stdout, /*required=*/true);
   std::signal(SIGINT, stop_view);
   std::signal(SIGTERM, stop_view);
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration.value_or(1e9));
-  while (!g_stop && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  serve_until(g_stop, duration.value_or(1e9));
   return 0;
 }
 

@@ -184,22 +184,20 @@ static std::string describe_request(const json& request) {
 }
 
 json Commands::handle_json(const json& request, std::string_view from) {
-  json reply = dispatch(request);
-  if (reply.value("ok", false) && request.is_object()) {
+  Effect effect = Effect::kReads;
+  json reply = dispatch(request, effect);
+  if (effect == Effect::kChanges && reply.value("ok", false)) {
     std::function<void(const std::string&)> log;
-    Effect effect = Effect::kReads;
     {
       const std::lock_guard lock(mutex_);
       log = log_;
-      const auto e = commands_.find(request.at("command").get<std::string>());
-      if (e != commands_.end()) effect = e->second.effect;
     }
-    if (log && effect == Effect::kChanges) log(std::string(from) + ": " + describe_request(request));
+    if (log) log(std::string(from) + ": " + describe_request(request));
   }
   return reply;
 }
 
-json Commands::dispatch(const json& request) {
+json Commands::dispatch(const json& request, Effect& effect) {
   if (!request.is_object()) {
     ++refused_;
     return error("a request is a JSON object with a \"command\"", request);
@@ -231,6 +229,7 @@ json Commands::dispatch(const json& request) {
   }
   try {
     json reply = entry.handler(request);
+    effect = entry.effect;
     reply["ok"] = true;
     if (request.contains("id")) reply["id"] = request["id"];
     return reply;

@@ -37,11 +37,15 @@ void RunControl::step(std::uint32_t count) {
   changed_.notify_all();
 }
 
-void RunControl::set_speed(double factor) {
+void RunControl::check_speed(double factor) {
   if (!(factor == 0 || (std::isfinite(factor) && factor >= kMinSpeed && factor <= kMaxSpeed))) {
     throw SetupError("speed takes 0 (as fast as possible) or " + std::to_string(kMinSpeed) + ".." +
                      std::to_string(kMaxSpeed) + " (virtual seconds per wall second)");
   }
+}
+
+void RunControl::set_speed(double factor) {
+  check_speed(factor);
   const std::lock_guard lock(mutex_);
   speed_ = factor;
   anchored_ = false;

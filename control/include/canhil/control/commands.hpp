@@ -76,7 +76,8 @@ class Commands {
     Handler handler;
     Effect effect = Effect::kChanges;
   };
-  nlohmann::json dispatch(const nlohmann::json& request);
+  /// The reply; `effect` is the command's when it was carried out.
+  nlohmann::json dispatch(const nlohmann::json& request, Effect& effect);
 
   emulator::Session& session_;
   mutable std::mutex mutex_;  // the table (add() may come while requests are served)

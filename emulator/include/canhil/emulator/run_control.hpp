@@ -29,6 +29,8 @@ class RunControl {
   void set_speed(double factor);
   static constexpr double kMinSpeed = 0.01;
   static constexpr double kMaxSpeed = 1000;
+  /// The check set_speed makes: SetupError saying what a speed may be.
+  static void check_speed(double factor);
 
   bool paused() const;
   double speed() const;

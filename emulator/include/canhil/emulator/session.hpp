@@ -107,7 +107,7 @@ struct WorldSnapshot {
   std::vector<Eigen::Vector3d> obstacles;
   std::vector<Goal> goals;
   CoachState coach;  ///< the base station's orders now
-  // Only in a snapshot(true) (filled at most one step late):
+  // Filled for detailed_snapshot() (at most one step late; a plain snapshot() may carry older ones):
   std::vector<RobotDetail> detail;     ///< per robot
   std::vector<BusDetail> buses;        ///< per robot, when the driver measures them
   std::optional<VisionDetail> vision;  ///< the watched robot's last frame (watch_vision)
