@@ -113,7 +113,8 @@ Commands::Commands(emulator::Session& session) : session_(session) {
   add(
       "snapshot", {"detail"},
       [this](const json& r) {
-        const bool detail = r.contains("detail") && r["detail"].is_boolean() && r["detail"].get<bool>();
+        if (r.contains("detail") && !r["detail"].is_boolean()) throw SetupError("\"detail\" must be true or false");
+        const bool detail = r.contains("detail") && r["detail"].get<bool>();
         return json{{"snapshot", to_json(detail ? session_.detailed_snapshot() : session_.snapshot())}};
       },
       Effect::kReads);

@@ -247,6 +247,7 @@ TEST_F(ViewerServerTest, HostileOrMistakenMessagesGetAnErrorReplyAndChangeNothin
       R"({"command":"save","name":"../../etc/passwd","kind":"scenario"})",
       R"({"command":"load","name":"nothing-here","kind":"snapshot"})",
       R"({"command":"speed","factor":-3})",
+      R"({"command":"snapshot","detail":"yes"})",
       R"({"command":"step"})",  // paused: fine; the next line un-pauses
       std::string(70 * 1024, ' ') + "{}",
       std::string(100, '[') + std::string(100, ']'),
