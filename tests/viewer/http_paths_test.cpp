@@ -26,16 +26,20 @@ TEST(HttpPaths, OnlyFilesUnderTheRoot) {
   std::ofstream(root / "web" / "lib" / "a.js") << "a";
   std::ofstream(root / "outside") << "o";
   const auto web = std::filesystem::canonical(root / "web");
-  EXPECT_EQ(file_under(web, "/"), web / "index.html");
-  EXPECT_EQ(file_under(web, "/lib/a.js"), web / "lib" / "a.js");
-  EXPECT_EQ(file_under(web, "//lib//a.js"), web / "lib" / "a.js");
-  EXPECT_FALSE(file_under(web, "/../outside"));
-  EXPECT_FALSE(file_under(web, "/lib/../../outside"));
-  EXPECT_FALSE(file_under(web, "/lib/./a.js"));
-  EXPECT_FALSE(file_under(web, "/lib\\..\\..\\outside"));
-  EXPECT_FALSE(file_under(web, "relative"));
-  EXPECT_FALSE(file_under(web, "/lib/"));  // a folder without an index
-  EXPECT_FALSE(file_under(web, "/missing.js"));
+  using Kind = WebFile::Kind;
+  EXPECT_EQ(file_under(web, "/").file, web / "index.html");
+  EXPECT_EQ(file_under(web, "/lib/a.js").file, web / "lib" / "a.js");
+  EXPECT_EQ(file_under(web, "//lib//a.js").file, web / "lib" / "a.js");
+  EXPECT_EQ(file_under(web, "/lib/a.js").kind, Kind::kFound);
+  EXPECT_EQ(file_under(web, "/../outside").kind, Kind::kRefused);
+  EXPECT_EQ(file_under(web, "/lib/../../outside").kind, Kind::kRefused);
+  EXPECT_EQ(file_under(web, "/lib/./a.js").kind, Kind::kRefused);
+  EXPECT_EQ(file_under(web, "/lib\\..\\..\\outside").kind, Kind::kRefused);
+  EXPECT_EQ(file_under(web, "relative").kind, Kind::kRefused);
+  EXPECT_EQ(file_under(web, "/lib/").kind, Kind::kMissing);  // a folder without an index
+  EXPECT_EQ(file_under(web, "/missing.js").kind, Kind::kMissing);
+  EXPECT_EQ(file_under(web, "/lib/missing/deeper.js").kind, Kind::kMissing);
+  EXPECT_TRUE(file_under(web, "/missing.js").file.empty());
   std::filesystem::remove_all(root);
 }
 

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <vector>
 
 #include "support/test_paths.hpp"
 
@@ -45,13 +46,39 @@ TEST_F(ReplayFeedTest, RowsGoalsAndKicksFromTheBallAlone) {
   EXPECT_NEAR(f.events()[0].time_s, 0.3, 1e-9);
   EXPECT_EQ(f.events()[1].kind, "goal");
   EXPECT_NEAR(f.events()[1].time_s, 0.7, 1e-9);
+  EXPECT_EQ(f.events()[1].positive_x, true);
+  EXPECT_FALSE(f.events()[0].positive_x);  // a kick has no side
   ReplayFeed copy = feed(write("w.csv", log));
   const auto body = nlohmann::json::parse(*copy.api("replay", ""));
   EXPECT_EQ(body["rows"].size(), 10u);
+  EXPECT_EQ(body["events"][1]["positive_x"], true);
+  EXPECT_FALSE(body["events"][0].contains("positive_x"));
   EXPECT_EQ(body["rows"][3][1], 6.0);
   EXPECT_EQ(copy.hello()["mode"], "replay");
   EXPECT_FALSE(copy.api("nothing", ""));
   EXPECT_EQ(copy.request("{}")["ok"], false);
+}
+
+TEST_F(ReplayFeedTest, AGoalInTheMinusXGoalSaysSoAndTheHelloGivesTheLength) {
+  std::string log = kHeader;
+  const double xs[] = {-8.0, -9.0, -9.6, -9.6, -8.0, -9.6};  // in, out again, in again: two goals
+  for (int i = 0; i < 6; ++i) {
+    log += std::to_string(i * 0.1) + "," + std::to_string(xs[i]) + ",0.2,0.11,-3,0,-90,-3,0,-90\n";
+  }
+  auto f = feed(write("w.csv", log));
+  std::vector<double> goals;
+  for (const auto& e : f.events()) {
+    if (e.kind != "goal") continue;
+    goals.push_back(e.time_s);
+    EXPECT_EQ(e.positive_x, false) << e.text;
+  }
+  ASSERT_EQ(goals.size(), 2u);
+  EXPECT_NEAR(goals[0], 0.2, 1e-9);
+  EXPECT_NEAR(goals[1], 0.5, 1e-9);
+  const auto hello = f.hello();
+  EXPECT_NEAR(hello["duration_s"].get<double>(), 0.5, 1e-9);
+  EXPECT_EQ(hello["rows"], 6u);
+  EXPECT_EQ(hello["has_trace"], false);
 }
 
 TEST_F(ReplayFeedTest, KicksFromTheTraceAndFramesAroundATimeDecoded) {
@@ -63,6 +90,7 @@ TEST_F(ReplayFeedTest, KicksFromTheTraceAndFramesAroundATimeDecoded) {
       "(0.500000) vcan0 0B0#8A00000000000000\n"
       "(0.600000) vcan0 0B0#0000000000000000\n";
   auto f = feed(write("w.csv", log), write("t.log", trace));
+  EXPECT_EQ(f.hello()["has_trace"], true);
   ASSERT_EQ(f.events().size(), 1u);
   EXPECT_EQ(f.events()[0].kind, "kick");
   EXPECT_NEAR(f.events()[0].time_s, 0.5, 1e-9);

@@ -282,7 +282,7 @@ TEST_F(ViewerServerTest, FilesOnlyFromThePagesFolder) {
   EXPECT_EQ(get(port, "/lib/..%2f..%2fsecret.txt").first, 403);
   EXPECT_EQ(get(port, "/link.txt").first, 403);  // a link out of the folder
   EXPECT_EQ(get(port, "/.hidden").first, 403);
-  EXPECT_EQ(get(port, "/nothing.js").first, 403);
+  EXPECT_EQ(get(port, "/nothing.js").first, 404);  // inside the folder, just not there
   EXPECT_EQ(get(port, "/api/replay").first, 404);  // a live run has no replay
   EXPECT_GE(server_->counters().http_refused, 7u);
 }

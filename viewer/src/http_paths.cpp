@@ -62,15 +62,16 @@ std::string query_value(std::string_view target, std::string_view key) {
   return {};
 }
 
-std::optional<std::filesystem::path> file_under(const std::filesystem::path& root, const std::string& path) {
-  if (path.empty() || path[0] != '/' || path.find('\\') != std::string::npos) return std::nullopt;
+WebFile file_under(const std::filesystem::path& root, const std::string& path) {
+  const WebFile kRefused{WebFile::Kind::kRefused, {}};
+  if (path.empty() || path[0] != '/' || path.find('\\') != std::string::npos) return kRefused;
   std::filesystem::path rel;
   std::size_t start = 1;
   while (start <= path.size()) {
     const auto slash = path.find('/', start);
     const std::string part = path.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
     if (!part.empty()) {
-      if (part[0] == '.') return std::nullopt;  // "..", ".hidden"
+      if (part[0] == '.') return kRefused;  // "..", ".hidden"
       rel /= part;
     }
     if (slash == std::string::npos) break;
@@ -79,12 +80,13 @@ std::optional<std::filesystem::path> file_under(const std::filesystem::path& roo
   if (rel.empty() || path.back() == '/') rel /= "index.html";
   std::error_code ec;
   const auto full = std::filesystem::weakly_canonical(root / rel, ec);
-  if (ec) return std::nullopt;
+  if (ec) return kRefused;
   // A symbolic link out of the root is refused as well.
   const auto [r, f] = std::mismatch(root.begin(), root.end(), full.begin(), full.end());
-  if (r != root.end()) return std::nullopt;
-  if (!std::filesystem::is_regular_file(full, ec)) return std::nullopt;
-  return full;
+  if (r != root.end()) return kRefused;
+  if (!std::filesystem::exists(full, ec)) return {WebFile::Kind::kMissing, {}};
+  if (!std::filesystem::is_regular_file(full, ec)) return kRefused;
+  return {WebFile::Kind::kFound, full};
 }
 
 std::string content_type(const std::filesystem::path& file) {

@@ -109,7 +109,11 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
   find_kicks();
   std::sort(events_.begin(), events_.end(), [](const auto& a, const auto& b) { return a.time_s < b.time_s; });
   json events = json::array();
-  for (const ReplayEvent& e : events_) events.push_back({{"time_s", e.time_s}, {"kind", e.kind}, {"text", e.text}});
+  for (const ReplayEvent& e : events_) {
+    json event{{"time_s", e.time_s}, {"kind", e.kind}, {"text", e.text}};
+    if (e.positive_x) event["positive_x"] = *e.positive_x;
+    events.push_back(std::move(event));
+  }
   replay_json_ = json{{"columns", columns_}, {"robots", robots_}, {"rows", rows_}, {"events", events}}.dump();
 }
 
@@ -123,7 +127,7 @@ void ReplayFeed::find_goals() {
     const bool in = std::fabs(x) > f.length_m / 2 + r && std::fabs(y) < f.goal.width_m / 2 && z < f.goal.height_m &&
                     std::fabs(x) < f.length_m / 2 + f.goal.depth_m + r;
     if (in && !was_in) {
-      events_.push_back({row[0], "goal", x > 0 ? "goal in the +x goal" : "goal in the -x goal"});
+      events_.push_back({row[0], "goal", x > 0 ? "goal in the +x goal" : "goal in the -x goal", x > 0});
     }
     was_in = in;
   }
@@ -138,9 +142,9 @@ void ReplayFeed::find_kicks() {
       frames::M7 k{};
       if (messages_->m7.decode(e.frame, k).status != frames::DecodeStatus::kOk) continue;
       if ((k.kick & 0x7F) == 0) continue;
-      events_.push_back(
-          {to_seconds(e.time), "kick",
-           e.iface + " kick, power " + std::to_string(k.kick & 0x7F) + ((k.kick & 0x80) ? " (low)" : "")});
+      events_.push_back({to_seconds(e.time), "kick",
+                         e.iface + " kick, power " + std::to_string(k.kick & 0x7F) + ((k.kick & 0x80) ? " (low)" : ""),
+                         std::nullopt});
     }
     return;
   }
@@ -151,7 +155,7 @@ void ReplayFeed::find_kicks() {
       return std::hypot(rows_[k][1] - rows_[k - 1][1], rows_[k][2] - rows_[k - 1][2]) / dt;
     };
     if (i >= 2 && speed(i) - speed(i - 1) > kKickSpeedJump) {
-      events_.push_back({rows_[i][0], "kick", "the ball sped up (a kick?)"});
+      events_.push_back({rows_[i][0], "kick", "the ball sped up (a kick?)", std::nullopt});
     }
   }
 }

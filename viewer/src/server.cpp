@@ -199,13 +199,16 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       if (!body) return respond(error(req, http::status::not_found, "no such data"));
       return respond(reply(req, http::status::ok, "application/json", *body));
     }
-    const auto file = file_under(server_.options.web_root, path);
-    if (!file) return respond(error(req, http::status::forbidden, "not a file of the viewer"));
-    std::ifstream in(*file, std::ios::binary);
+    const WebFile file = file_under(server_.options.web_root, path);
+    if (file.kind == WebFile::Kind::kMissing) return respond(error(req, http::status::not_found, "no such file"));
+    if (file.kind != WebFile::Kind::kFound) {
+      return respond(error(req, http::status::forbidden, "not a file of the viewer"));
+    }
+    std::ifstream in(file.file, std::ios::binary);
     if (!in) return respond(error(req, http::status::not_found, "no such file"));
     std::ostringstream body;
     body << in.rdbuf();
-    respond(reply(req, http::status::ok, content_type(*file), body.str()));
+    respond(reply(req, http::status::ok, content_type(file.file), body.str()));
   }
 
   static http::response<http::string_body> reply(const http::request<http::string_body>& req, http::status status,

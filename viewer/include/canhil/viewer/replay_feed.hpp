@@ -22,6 +22,7 @@ struct ReplayEvent {
   double time_s = 0;
   std::string kind;  ///< "goal" or "kick"
   std::string text;
+  std::optional<bool> positive_x;  ///< a goal's side: in the +x goal (as live `goals` say)
 };
 
 class ReplayFeed final : public Feed {
