@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 constexpr std::chrono::milliseconds kStateWait{3000};
 
 std::string save_name(const json& r) {
-  const std::string name = text(r, "name", 64);
+  std::string name = text(r, "name", 64);
   const bool fine = name[0] != '.' && std::all_of(name.begin(), name.end(), [](char c) {
                       return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_' || c == '.';
                     });
@@ -74,7 +74,7 @@ std::vector<std::pair<std::string, std::string>> list_saves(const fs::path& fold
   return out;
 }
 
-void add_save_commands(Commands& commands, emulator::Session& session, fs::path folder) {
+void add_save_commands(Commands& commands, emulator::Session& session, const fs::path& folder) {
   commands.add("save", {"name", "kind"}, [&session, folder](const json& r) {
     const fs::path path = folder / (save_name(r) + extension(r));
     std::error_code ec;

@@ -63,15 +63,15 @@ std::string query_value(std::string_view target, std::string_view key) {
 }
 
 WebFile file_under(const std::filesystem::path& root, const std::string& path) {
-  const WebFile kRefused{WebFile::Kind::kRefused, {}};
-  if (path.empty() || path[0] != '/' || path.find('\\') != std::string::npos) return kRefused;
+  const auto refused = [] { return WebFile{WebFile::Kind::kRefused, {}}; };
+  if (path.empty() || path[0] != '/' || path.find('\\') != std::string::npos) return refused();
   std::filesystem::path rel;
   std::size_t start = 1;
   while (start <= path.size()) {
     const auto slash = path.find('/', start);
     const std::string part = path.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
     if (!part.empty()) {
-      if (part[0] == '.') return kRefused;  // "..", ".hidden"
+      if (part[0] == '.') return refused();  // "..", ".hidden"
       rel /= part;
     }
     if (slash == std::string::npos) break;
@@ -80,12 +80,12 @@ WebFile file_under(const std::filesystem::path& root, const std::string& path) {
   if (rel.empty() || path.back() == '/') rel /= "index.html";
   std::error_code ec;
   const auto full = std::filesystem::weakly_canonical(root / rel, ec);
-  if (ec) return kRefused;
+  if (ec) return refused();
   // A symbolic link out of the root is refused as well.
   const auto [r, f] = std::mismatch(root.begin(), root.end(), full.begin(), full.end());
-  if (r != root.end()) return kRefused;
+  if (r != root.end()) return refused();
   if (!std::filesystem::exists(full, ec)) return {WebFile::Kind::kMissing, {}};
-  if (!std::filesystem::is_regular_file(full, ec)) return kRefused;
+  if (!std::filesystem::is_regular_file(full, ec)) return refused();
   return {WebFile::Kind::kFound, full};
 }
 

@@ -167,7 +167,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
  private:
-  void handle(http::request<http::string_body> req) {
+  void handle(const http::request<http::string_body>& req) {
     const std::string target(req.target());
     if (websocket::is_upgrade(req)) {
       if (path_of(target) != "/ws") return respond(error(req, http::status::not_found, "the WebSocket is /ws"));

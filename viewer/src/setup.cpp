@@ -37,7 +37,7 @@ std::filesystem::path default_web_root() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
-    const fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "viewer";
+    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "viewer";
     if (fs::is_regular_file(installed / "index.html", ec)) return installed;
   }
   return CANHIL_BUILD_VIEWER_ROOT;

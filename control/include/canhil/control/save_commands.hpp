@@ -17,7 +17,7 @@
 namespace canhil::control {
 
 /// Adds them to `commands`; `session` must outlive it. The folder is made at the first save.
-void add_save_commands(Commands& commands, emulator::Session& session, std::filesystem::path folder);
+void add_save_commands(Commands& commands, emulator::Session& session, const std::filesystem::path& folder);
 
 /// The saves in `folder`: (name, "scenario" | "snapshot"), sorted.
 std::vector<std::pair<std::string, std::string>> list_saves(const std::filesystem::path& folder);
