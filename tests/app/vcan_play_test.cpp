@@ -21,7 +21,7 @@ using canhil::can_nodes::SocketCanBus;
 
 // 40 frames, 2 ms apart: ids 0x200.. from vcan0 and every fifth from vcan1.
 std::string write_trace() {
-  const std::string path = "/tmp/canhil_vcan_play_trace.log";
+  std::string path = "/tmp/canhil_vcan_play_trace.log";
   std::ofstream out(path);
   for (int i = 0; i < 40; ++i) {
     canhil::frames::CanFrame f{static_cast<std::uint32_t>(0x200 + i), false};
