@@ -4,23 +4,16 @@
 // pause and step advance exactly one EC; a scenario saved from the page loads
 // back. Every test starts its own canhil and reads the world back through a
 // WebSocket of its own (`snapshot`), not through the page.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
 import { join } from 'node:path';
 import {
-  SOURCE, launchBrowser, startCanhil, openPage, shot, Control, dragWorld, dist, sleep, workDir,
+  SOURCE, sharedBrowser, startCanhil, openPage, shot, Control, dragWorld, dist, sleep, workDir,
 } from './support.mjs';
 
 const FIVE = join(SOURCE, 'emulator/scenarios/five_robots.toml');
-let browser;
-const cleanups = [];
-
-before(async () => { browser = await launchBrowser(); });
-after(async () => {
-  for (const c of cleanups.reverse()) await c();
-  if (browser) await browser.close();
-});
+const shared = sharedBrowser();
 
 // A paused, long virtual-time run with its viewer on a free port, the page
 // open on it and the test's own connection.
@@ -29,11 +22,11 @@ async function live(extra = [], { config = FIVE, beforeLoad = null } = {}) {
   const args = ['run', '--virtual-time', '--duration', '600', '--view-port', '0', '--no-control', ...extra];
   if (config) args.push('--config', config);
   const run = await startCanhil(args, dir);
-  cleanups.push(run.stop);
-  const page = await openPage(browser, run.url, { beforeLoad });
-  cleanups.push(() => page.close());
+  shared.cleanup(run.stop);
+  const page = await openPage(shared.browser, run.url, { beforeLoad });
+  shared.cleanup(() => page.close());
   const control = await Control.open(run.url, page);
-  cleanups.push(() => control.close());
+  shared.cleanup(() => control.close());
   return { run, page, control, dir };
 }
 
@@ -281,12 +274,12 @@ test('the view: wheel and buttons zoom, the middle button pans, follow the ball;
   // A run on the same port again: the page reconnects by itself and shows the new world.
   const port = new URL(run.url).port;
   const again = await startCanhil(['run', '--virtual-time', '--duration', '600', '--view-port', port, '--no-control', '--paused'], workDir('again'));
-  cleanups.push(again.stop);
+  shared.cleanup(again.stop);
   await page.waitForSelector('#conn.conn-open', { timeout: 15000 });
   await page.waitForFunction(() => window.canhilView.hello().robots.length === 1, { timeout: 10000 });
   assert.equal(await page.$eval('#overlay', (e) => e.hidden), true);
   const againControl = await Control.open(again.url, page);
-  cleanups.push(() => againControl.close());
+  shared.cleanup(() => againControl.close());
   const s = await againControl.snapshot();
   await pageAt(page, s.time_s);
   assertDrawnAt(await drawn(page), s, 0.05);

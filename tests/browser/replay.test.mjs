@@ -2,21 +2,14 @@
 // scrubber, moved with the mouse, shows the recorded positions; the bus panel
 // lists the trace's frames around the cursor; ten robots play at 30 frames per
 // second or more.
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { CANHIL, launchBrowser, startCanhil, openPage, shot, sleep, workDir, rtdbEnv, dist } from './support.mjs';
+import { CANHIL, sharedBrowser, startCanhil, openPage, shot, sleep, workDir, rtdbEnv, dist } from './support.mjs';
 
-let browser;
-const cleanups = [];
-
-before(async () => { browser = await launchBrowser(); });
-after(async () => {
-  for (const c of cleanups.reverse()) await c();
-  if (browser) await browser.close();
-});
+const shared = sharedBrowser();
 
 function readLog(path) {
   const lines = readFileSync(path, 'utf8').trim().split('\n');
@@ -57,9 +50,9 @@ function recordUrls() {
 
 async function view(args, { query = '' } = {}) {
   const v = await startCanhil(['view', ...args, '--view-port', '0'], workDir('view'));
-  cleanups.push(v.stop);
-  const page = await openPage(browser, v.url + query, { beforeLoad: recordUrls });
-  cleanups.push(() => page.close());
+  shared.cleanup(v.stop);
+  const page = await openPage(shared.browser, v.url + query, { beforeLoad: recordUrls });
+  shared.cleanup(() => page.close());
   await page.waitForFunction(() => window.canhilView.replayTime() !== null, { timeout: 20000 });
   return { v, page };
 }

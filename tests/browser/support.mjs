@@ -6,6 +6,7 @@ import { spawn } from 'node:child_process';
 import { mkdtempSync, mkdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { before, after } from 'node:test';
 import puppeteer from 'puppeteer-core';
 
 export const CANHIL = process.env.CANHIL;
@@ -89,6 +90,19 @@ export function startCanhil(args, cwd) {
 }
 
 /** Opens the page and waits for the server's hello and a first state. */
+// One browser for a test file, launched before its tests and closed after
+// them, with what its tests started (runs, pages, connections) stopped first,
+// newest first: `const shared = sharedBrowser(); ... shared.cleanup(run.stop)`.
+export function sharedBrowser() {
+  const shared = { browser: null, cleanups: [], cleanup(fn) { this.cleanups.push(fn); } };
+  before(async () => { shared.browser = await launchBrowser(); });
+  after(async () => {
+    for (const c of shared.cleanups.reverse()) await c();
+    if (shared.browser) await shared.browser.close();
+  });
+  return shared;
+}
+
 export async function openPage(browser, url, { viewport = { width: 1400, height: 950 }, beforeLoad = null } = {}) {
   const page = await browser.newPage();
   await page.setViewport(viewport);
