@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/goal_watcher.hpp"
 #include "canhil/frames/describe.hpp"
 #include "canhil/viewer/live_feed.hpp"
 #include "http_paths.hpp"
@@ -117,15 +118,12 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
   replay_json_ = json{{"columns", columns_}, {"robots", robots_}, {"rows", rows_}, {"events", events}}.dump();
 }
 
-// The rule GoalWatcher applies, on the logged ball.
+// GoalWatcher's rule, on the logged ball.
 void ReplayFeed::find_goals() {
-  const auto& f = world_.field;
-  const double r = world_.ball.radius_m;
   bool was_in = false;
   for (const auto& row : rows_) {
-    const double x = row[1], y = row[2], z = row[3];
-    const bool in = std::fabs(x) > f.length_m / 2 + r && std::fabs(y) < f.goal.width_m / 2 && z < f.goal.height_m &&
-                    std::fabs(x) < f.length_m / 2 + f.goal.depth_m + r;
+    const double x = row[1];
+    const bool in = emulator::ball_in_goal(world_, {x, row[2], row[3]});
     if (in && !was_in) {
       events_.push_back({row[0], "goal", x > 0 ? "goal in the +x goal" : "goal in the -x goal", x > 0});
     }

@@ -13,6 +13,10 @@ struct Goal {
   bool positive_x = true;  ///< the goal at +x (the one the reference agents attack)
 };
 
+/// Whether a ball at `ball` is in a goal: wholly past a goal line, between the
+/// posts, under the bar, inside the net (the rule GoalWatcher and a replay apply).
+bool ball_in_goal(const physics::WorldParams& world, const Eigen::Vector3d& ball) noexcept;
+
 /// Counts the ball's entries into either goal. Used by the thread that steps the world.
 class GoalWatcher {
  public:
