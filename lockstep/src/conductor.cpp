@@ -170,6 +170,18 @@ Nanos Conductor::next_wakeup() const noexcept {
 }
 
 bool Conductor::quiet(std::string* who) {
+  // A thread that ends wakes the threads joining it: once one has been
+  // retired in a pass, a joiner counted quiet earlier in that pass may be
+  // running now, so the pass is made again.
+  bool retired = true;
+  while (retired) {
+    retired = false;
+    if (!quiet_pass(who, retired)) return false;
+  }
+  return true;
+}
+
+bool Conductor::quiet_pass(std::string* who, bool& retired) {
   const std::uint32_t epoch = board_->epoch.load(std::memory_order_acquire);
   for (Slot& s : board_->slots) {
     const SlotState state = state_of(s);
@@ -179,6 +191,7 @@ bool Conductor::quiet(std::string* who) {
       // then a thread joining it has not been woken.
       if (!alive(s)) {
         retire(s);
+        retired = true;
         continue;
       }
     } else if (state == SlotState::kBlocked) {

@@ -112,6 +112,7 @@ class Conductor {
 
  private:
   bool quiet(std::string* who);
+  bool quiet_pass(std::string* who, bool& retired);
   void sweep_dead();
   void retire(Slot& slot);
 
