@@ -10,17 +10,21 @@
 extern "C" {
 #endif
 
-/* Attaches to every agent's database, creating them as needed. `second_rtdb`
- * is accepted and ignored (CAMBADA's second team never worked). Returns 0, or
- * -1 with a message on stderr (nothing stays attached then). Calls nest: each
- * successful DB_init_all needs its DB_free_all. */
+/* Attaches to every agent's database, creating them as needed: the first
+ * set's (memory spaces 0..N-1, N the table's agents) or, with `second_rtdb`
+ * non-zero, the second team's (spaces N..2N-1, as CAMBADA's simulator
+ * numbers them). The second set's keys are the first's plus 64: its agents
+ * run with SECOND_RTDB=1, or with RTDB_KEY set 64 higher. Returns 0, or -1
+ * with a message on stderr (nothing of that set stays attached then). Calls
+ * nest per set: each successful DB_init_all needs its DB_free_all. */
 int DB_init_all(int second_rtdb);
 
-/* Detaches from every agent's database (after the last nested DB_init_all). */
+/* Detaches from that set's databases (after its last nested DB_init_all). */
 void DB_free_all(int second_rtdb);
 
-/* As in rtdb_api.h: writes item `id` of agent `to_agent` into agent `agent`'s
- * database, aged `life` ms. Returns the item's size, or -1. */
+/* As in rtdb_api.h: writes item `id` of agent `to_agent` into memory space
+ * `agent`'s database (N + a for agent a of the second set; `to_agent` is an
+ * agent of the same set), aged `life` ms. Returns the item's size, or -1. */
 int DB_put_in(int agent, int to_agent, int id, void* value, int life);
 
 /* Reads, from agent `agent`'s database, item `id` of agent `from_agent`

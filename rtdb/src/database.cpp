@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <map>
 #include <mutex>
 #include <set>
+#include <string>
+#include <string_view>
 #include <utility>
 
 #include "canhil/base/demand.hpp"
@@ -30,11 +33,17 @@ struct CApi {
   int (*item_size)(int) = nullptr;  // canhil's extension, where the library has it
 };
 
-// The libraries open in this process: a second Database on one would share
-// (and free) the first one's globals.
-std::set<void*>& open_libraries() {
-  static std::set<void*> open;
+// The libraries open in this process, with the set (team) each serves: a
+// second Database on one set would share (and free) the first one's globals;
+// the two sets of one library are apart (DB_init_all(0) and (1)).
+std::set<std::pair<void*, int>>& open_libraries() {
+  static std::set<std::pair<void*, int>> open;
   return open;
+}
+// The configuration file each open library was given (both sets read one).
+std::map<void*, std::string>& library_configs() {
+  static std::map<void*, std::string> configs;
+  return configs;
 }
 std::mutex& open_libraries_mutex() {
   static std::mutex m;
@@ -44,7 +53,7 @@ std::mutex& open_libraries_mutex() {
 // A library loaded and registered as open; unloaded with it.
 class LoadedLibrary {
  public:
-  explicit LoadedLibrary(const std::filesystem::path& so) : path_(so.string()) {
+  LoadedLibrary(const std::filesystem::path& so, int set, const std::string& config) : path_(so.string()), set_(set) {
     handle_ = dlopen(path_.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (handle_ == nullptr) {
       const char* why = dlerror();
@@ -52,21 +61,36 @@ class LoadedLibrary {
                        "; give the path of the team's RTDB shared library (its librtdb.so)");
     }
     const std::lock_guard<std::mutex> lock(open_libraries_mutex());
-    if (!open_libraries().insert(handle_).second) {
+    if (!open_libraries().insert({handle_, set_}).second) {
       dlclose(handle_);
-      throw SetupError("the RTDB library " + path_ +
-                       " is already open in this process; open it once (its state is global) and share that Database");
+      throw SetupError("the RTDB library " + path_ + " is already open in this process for " +
+                       (set_ == 0 ? "the first" : "the second") +
+                       " team; open it once per team (its state is global) and share that Database");
     }
+    const bool other_set_open = open_libraries().count({handle_, 1 - set_}) != 0;
+    if (other_set_open && library_configs()[handle_] != config) {
+      open_libraries().erase({handle_, set_});
+      dlclose(handle_);
+      throw SetupError("the RTDB library " + path_ + " already serves the other team with " +
+                       library_configs()[handle_] + ", and one library reads one item table: give both teams the " +
+                       "same rtdb.ini, or this team a copy of the library under another path");
+    }
+    shares_table_ = other_set_open;
+    library_configs()[handle_] = config;
   }
   ~LoadedLibrary() {
     {
       const std::lock_guard<std::mutex> lock(open_libraries_mutex());
-      open_libraries().erase(handle_);
+      open_libraries().erase({handle_, set_});
+      if (open_libraries().count({handle_, 1 - set_}) == 0) library_configs().erase(handle_);
     }
     dlclose(handle_);
   }
   LoadedLibrary(const LoadedLibrary&) = delete;
   LoadedLibrary& operator=(const LoadedLibrary&) = delete;
+
+  /// The other team's set was open already, with this configuration file.
+  bool shares_table() const noexcept { return shares_table_; }
 
   /// The function `name`, or nullptr (and `name` added to `missing` when given).
   template <class F>
@@ -78,6 +102,8 @@ class LoadedLibrary {
 
  private:
   std::string path_;
+  int set_ = 0;
+  bool shares_table_ = false;
   void* handle_ = nullptr;
 };
 
@@ -90,14 +116,18 @@ std::string join(const std::vector<std::string>& words) {
 // Both backends: canhil's linked library and a loaded one, through CApi.
 class CApiDatabase final : public Database {
  public:
+  // `set`: the team's set of databases (0 or 1); its memory spaces are
+  // set * agents + agent in the library's calls.
   CApiDatabase(ItemTable items, Scope scope, std::vector<int> spaces, std::string library, const CApi& api,
-               std::unique_ptr<LoadedLibrary> loaded)
+               std::unique_ptr<LoadedLibrary> loaded, int set)
       : Database(std::move(items), scope, std::move(spaces), std::move(library)),
         api_(api),
-        loaded_(std::move(loaded)) {}
+        loaded_(std::move(loaded)),
+        set_(set),
+        first_space_(set * this->items().agent_count()) {}
   ~CApiDatabase() override {  // frees, then (loaded_) unloads
     if (scope() == Scope::kAllAgents) {
-      api_.free_all(0);
+      api_.free_all(set_);
     } else {
       api_.free_one();
     }
@@ -115,7 +145,7 @@ class CApiDatabase final : public Database {
     } else {
       CANHIL_DEMAND(api_.put_in != nullptr,
                     (library() + " has no DB_put_in: it writes only its own items, unaged").c_str());
-      written = api_.put_in(space, owner, id, value, life_ms);
+      written = api_.put_in(first_space_ + space, owner, id, value, life_ms);
     }
     CANHIL_DEMAND(written >= 0,
                   (library() + " refused " + slot_name(space, owner, id) + ", which it had at open").c_str());
@@ -164,7 +194,8 @@ class CApiDatabase final : public Database {
 
  private:
   int raw_get(int space, int owner, int id, void* value) const {
-    return scope() == Scope::kAllAgents ? api_.get_from(space, owner, id, value) : api_.get_one(owner, id, value);
+    return scope() == Scope::kAllAgents ? api_.get_from(first_space_ + space, owner, id, value)
+                                        : api_.get_one(owner, id, value);
   }
   std::string slot_name(int space, int owner, int id) const {
     return "item " + items().name(id) + " (id " + std::to_string(id) + ") of agent " + std::to_string(owner) +
@@ -173,6 +204,8 @@ class CApiDatabase final : public Database {
 
   CApi api_;
   std::unique_ptr<LoadedLibrary> loaded_;
+  int set_ = 0;
+  int first_space_ = 0;
 };
 
 // A library without Whoami: its agent is AGENT's (verify() checks it).
@@ -185,6 +218,18 @@ std::vector<int> all_agents(const ItemTable& t) {
   std::vector<int> out(static_cast<std::size_t>(t.agent_count()));
   for (std::size_t a = 0; a < out.size(); ++a) out[a] = static_cast<int>(a);
   return out;
+}
+
+// SECOND_RTDB as canhil's library reads it (a one-agent Database's set).
+int set_from_environment() {
+  const char* s = std::getenv("SECOND_RTDB");
+  return s != nullptr && *s != '\0' && std::string_view(s) != "0" ? 1 : 0;
+}
+
+void check_set(int set) {
+  if (set != 0 && set != 1) {
+    throw SetupError("RTDB set " + std::to_string(set) + ": a run has two teams at most (sets 0 and 1)");
+  }
 }
 
 }  // namespace
@@ -244,7 +289,8 @@ int Database::require(std::string_view item, std::size_t size, int space) const 
   return *id;
 }
 
-std::unique_ptr<Database> open_builtin(Scope scope) {
+std::unique_ptr<Database> open_builtin(Scope scope, int set) {
+  check_set(set);
   CApi api;
   api.init_all = &DB_init_all;
   api.free_all = &DB_free_all;
@@ -257,8 +303,12 @@ std::unique_ptr<Database> open_builtin(Scope scope) {
   api.whoami = &Whoami;
   api.item_size = &DB_item_size;
   std::vector<int> spaces;
+  if (scope == Scope::kOneAgent) set = set_from_environment();
   if (scope == Scope::kAllAgents) {
-    if (DB_init_all(0) != 0) throw SetupError("cannot attach to canhil's RTDB (the reason is above)");
+    if (DB_init_all(set) != 0) {
+      throw SetupError(std::string("cannot attach to canhil's RTDB") + (set == 1 ? " (the second team's set)" : "") +
+                       " (the reason is above)");
+    }
   } else {
     if (DB_init() != 0)
       throw SetupError("cannot attach to canhil's RTDB as this process's agent (the reason is above)");
@@ -268,17 +318,20 @@ std::unique_ptr<Database> open_builtin(Scope scope) {
   try {
     table = ItemTable::builtin();
   } catch (...) {
-    scope == Scope::kAllAgents ? DB_free_all(0) : DB_free();
+    scope == Scope::kAllAgents ? DB_free_all(set) : DB_free();
     throw;
   }
   if (scope == Scope::kAllAgents) spaces = all_agents(*table);
   std::string library = table->source();
-  return std::make_unique<CApiDatabase>(std::move(*table), scope, std::move(spaces), std::move(library), api, nullptr);
+  return std::make_unique<CApiDatabase>(std::move(*table), scope, std::move(spaces), std::move(library), api, nullptr,
+                                        set);
 }
 
 std::unique_ptr<Database> open_library(const std::filesystem::path& so, ItemTable table, Scope scope,
-                                       std::optional<std::filesystem::path> config_file) {
-  auto loaded = std::make_unique<LoadedLibrary>(so);
+                                       std::optional<std::filesystem::path> config_file, int set) {
+  check_set(set);
+  if (scope == Scope::kOneAgent) set = set_from_environment();
+  auto loaded = std::make_unique<LoadedLibrary>(so, set, config_file ? config_file->string() : std::string());
   CApi api;
   std::vector<std::string> missing;
   if (scope == Scope::kAllAgents) {
@@ -303,13 +356,14 @@ std::unique_ptr<Database> open_library(const std::filesystem::path& so, ItemTabl
                      "DB_put_in and DB_get_from; one agent DB_init, DB_free, DB_put and DB_get" +
                      (config_file ? "; a configuration file DB_set_config_file" : "") + ")");
   }
-  if (config_file) api.set_config_file(config_file->c_str());
+  if (config_file && !loaded->shares_table()) api.set_config_file(config_file->c_str());
   const std::string table_file =
       config_file ? config_file->string() : "its default item table (../config/rtdb.ini from the working directory)";
   std::vector<int> spaces;
   if (scope == Scope::kAllAgents) {
-    if (api.init_all(0) != 0) {
+    if (api.init_all(set) != 0) {
       throw SetupError("DB_init_all failed in " + library + " (its messages are above): check " + table_file +
+                       (set == 1 ? " (the second team's set, DB_init_all(1))" : "") +
                        ", and that no database of another configuration is in the way");
     }
     spaces = all_agents(table);
@@ -321,7 +375,8 @@ std::unique_ptr<Database> open_library(const std::filesystem::path& so, ItemTabl
     }
     spaces.push_back(api.whoami != nullptr ? api.whoami() : agent_from_environment());
   }
-  auto db = std::make_unique<CApiDatabase>(std::move(table), scope, std::move(spaces), library, api, std::move(loaded));
+  auto db =
+      std::make_unique<CApiDatabase>(std::move(table), scope, std::move(spaces), library, api, std::move(loaded), set);
   db->verify();  // throws after the free, by db's destruction
   return db;
 }

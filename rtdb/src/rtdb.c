@@ -46,11 +46,17 @@ static canhil_rtdb_table* g_loaded = NULL;      /* g_table when read from an rtd
 static char* g_config_file = NULL;              /* DB_set_config_file's */
 static int g_table_stale = 0;                   /* DB_set_config_file since g_table was chosen */
 static int g_table_failed = 0;                  /* reading it failed; only an init tries again */
-static int g_me = -1;
-static int g_me_nesting = 0;                /* DB_init calls not yet freed */
-static int g_all = 0;                       /* DB_init_all calls not yet freed */
-static void* g_seg[CANHIL_RTDB_MAX_AGENTS]; /* attached segments, by agent */
-static int g_shmid[CANHIL_RTDB_MAX_AGENTS];
+/* A memory space is an agent of one of the two sets (teams): space a is
+ * agent a of the first, space n_agents + a agent a of the second (CAMBADA's
+ * DB_init_all(1) and SECOND_RTDB). The second set's keys and semaphores are
+ * the first's plus CANHIL_RTDB_SET_STRIDE: a process of the second team may
+ * equally set RTDB_KEY to the first's base plus the stride. */
+#define SETS 2
+static int g_me = -1;                              /* this process's memory space (DB_init) */
+static int g_me_nesting = 0;                       /* DB_init calls not yet freed */
+static int g_all[SETS] = {0, 0};                   /* DB_init_all calls not yet freed, per set */
+static void* g_seg[SETS * CANHIL_RTDB_MAX_AGENTS]; /* attached segments, by memory space */
+static int g_shmid[SETS * CANHIL_RTDB_MAX_AGENTS];
 static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
 static uint64_t g_sizes[CANHIL_RTDB_MAX_AGENTS];
 static sem_t* g_frame_sem = NULL;
@@ -66,7 +72,12 @@ static int64_t now_ns(void) {
   return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
-static int attached(void) { return g_me >= 0 || g_all > 0; }
+static int attached(void) { return g_me >= 0 || g_all[0] > 0 || g_all[1] > 0; }
+
+/* Memory space -> agent (its layout) and set. */
+static int agent_of(int space) { return space % (int)g_table->n_agents; }
+static int set_of(int space) { return space / (int)g_table->n_agents; }
+static int spaces(void) { return SETS * (int)g_table->n_agents; }
 
 /* The item table: DB_set_config_file's rtdb.ini, else the linked one, else
  * (librtdb.so) $CANHIL_RTDB_INI or CONFIG_FILE. Chosen once and kept while
@@ -139,6 +150,12 @@ static key_t base_key(void) {
   return (key_t)(0x52400000u | ((unsigned)getuid() & 0xFFFu) << 8);
 }
 
+/* The key base of a memory space's set. */
+static key_t set_key(int space) { return base_key() + (key_t)(set_of(space) * CANHIL_RTDB_SET_STRIDE); }
+
+/* "agent 3" or "agent 3 of the second set", for messages. */
+static const char* set_name(int space) { return set_of(space) == 0 ? "" : " of the second set"; }
+
 static int64_t* offset_at(int seg, int owner, int item) {
   const uint32_t na = g_table->n_agents;
   const uint32_t ni = g_table->n_items;
@@ -198,10 +215,12 @@ static void init_segment(void* seg, int agent) {
   atomic_store_explicit(&h->magic, RTDB_MAGIC, memory_order_release);
 }
 
-/* Attaches to agent's segment, creating it or reclaiming a stale one. */
-static int attach(int agent) {
-  if (g_seg[agent] != NULL) return 0;
-  const key_t key = base_key() + agent;
+/* Attaches to a memory space's segment, creating it or reclaiming a stale one. */
+static int attach(int space) {
+  if (g_seg[space] != NULL) return 0;
+  const int agent = agent_of(space);
+  const char* set = set_name(space);
+  const key_t key = set_key(space) + agent;
   const size_t size = (size_t)g_sizes[agent];
   for (int attempt = 0; attempt < 3; ++attempt) {
     int created = 1;
@@ -211,8 +230,9 @@ static int attach(int agent) {
       id = shmget(key, 0, 0600);
       if (id < 0) {
         fprintf(stderr,
-                "rtdb: the database of agent %d (key 0x%x) exists but is not ours: %s; set RTDB_KEY to another value\n",
-                agent, (unsigned)key, strerror(errno));
+                "rtdb: the database of agent %d%s (key 0x%x) exists but is not ours: %s; set RTDB_KEY to another "
+                "value\n",
+                agent, set, (unsigned)key, strerror(errno));
         return -1;
       }
       struct shmid_ds ds;
@@ -222,7 +242,7 @@ static int attach(int agent) {
       const int wrong_size = ds.shm_segsz != size;
       if (stale || (wrong_size && ds.shm_nattch == 0)) {
         if (verbose() || stale) {
-          fprintf(stderr, "rtdb: reclaiming agent %d's database left by %s (pid %d)\n", agent,
+          fprintf(stderr, "rtdb: reclaiming agent %d%s's database left by %s (pid %d)\n", agent, set,
                   stale ? "a crashed run" : "another configuration", (int)ds.shm_cpid);
         }
         shmctl(id, IPC_RMID, NULL);
@@ -230,18 +250,18 @@ static int attach(int agent) {
       }
       if (wrong_size) {
         fprintf(stderr,
-                "rtdb: agent %d's database (key 0x%x) is in use by a program built with another RTDB configuration "
+                "rtdb: agent %d%s's database (key 0x%x) is in use by a program built with another RTDB configuration "
                 "(%zu bytes, this one needs %zu); use the same configuration or set RTDB_KEY\n",
-                agent, (unsigned)key, (size_t)ds.shm_segsz, size);
+                agent, set, (unsigned)key, (size_t)ds.shm_segsz, size);
         return -1;
       }
     } else if (id < 0) {
-      fprintf(stderr, "rtdb: cannot create agent %d's database (%zu bytes): %s\n", agent, size, strerror(errno));
+      fprintf(stderr, "rtdb: cannot create agent %d%s's database (%zu bytes): %s\n", agent, set, size, strerror(errno));
       return -1;
     }
     void* seg = shmat(id, NULL, 0);
     if (seg == (void*)-1) {  // NOLINT(performance-no-int-to-ptr): shmat's error value
-      fprintf(stderr, "rtdb: cannot attach agent %d's database: %s\n", agent, strerror(errno));
+      fprintf(stderr, "rtdb: cannot attach agent %d%s's database: %s\n", agent, set, strerror(errno));
       return -1;
     }
     segment_header* h = (segment_header*)seg;
@@ -255,41 +275,49 @@ static int attach(int agent) {
       if (atomic_load_explicit(&h->magic, memory_order_acquire) != RTDB_MAGIC || h->version != RTDB_VERSION ||
           h->config_hash != config_hash()) {
         fprintf(stderr,
-                "rtdb: agent %d's database was made by a program with another RTDB configuration or version; "
+                "rtdb: agent %d%s's database was made by a program with another RTDB configuration or version; "
                 "rebuild both with the same configuration, or set RTDB_KEY\n",
-                agent);
+                agent, set);
         shmdt(seg);
         return -1;
       }
     }
-    g_seg[agent] = seg;
-    g_shmid[agent] = id;
-    if (verbose())
-      fprintf(stderr, "rtdb: %s agent %d's database (%zu bytes)\n", created ? "created" : "attached", agent, size);
+    g_seg[space] = seg;
+    g_shmid[space] = id;
+    if (verbose()) {
+      fprintf(stderr, "rtdb: %s agent %d%s's database (%zu bytes)\n", created ? "created" : "attached", agent, set,
+              size);
+    }
     return 0;
   }
-  fprintf(stderr, "rtdb: could not get agent %d's database after reclaiming it; try again\n", agent);
+  fprintf(stderr, "rtdb: could not get agent %d%s's database after reclaiming it; try again\n", agent, set);
   return -1;
 }
 
-static void detach(int agent) {
-  if (g_seg[agent] == NULL) return;
-  shmdt(g_seg[agent]);
-  g_seg[agent] = NULL;
+/* The frame semaphore's name of a memory space (its set's key base and agent). */
+static void frame_sem_name(int space, char* name, size_t size) {
+  snprintf(name, size, "/canhil-rtdb-%x-%d", (unsigned)set_key(space), agent_of(space));
+}
+
+static void detach(int space) {
+  if (g_seg[space] == NULL) return;
+  shmdt(g_seg[space]);
+  g_seg[space] = NULL;
   struct shmid_ds ds;
-  if (shmctl(g_shmid[agent], IPC_STAT, &ds) == 0 && ds.shm_nattch == 0) {
-    shmctl(g_shmid[agent], IPC_RMID, NULL); /* the last one out removes it */
+  if (shmctl(g_shmid[space], IPC_STAT, &ds) == 0 && ds.shm_nattch == 0) {
+    shmctl(g_shmid[space], IPC_RMID, NULL); /* the last one out removes it */
     char name[64];
-    snprintf(name, sizeof name, "/canhil-rtdb-%x-%d", (unsigned)base_key(), agent);
+    frame_sem_name(space, name, sizeof name);
     sem_unlink(name);
   }
 }
 
-static slot_header* slot(int seg, int owner, int item) {
-  if (!attached() || seg < 0 || (uint32_t)seg >= g_table->n_agents || g_seg[seg] == NULL) return NULL;
+/* `owner` is an agent of the space's own set (SELF already replaced). */
+static slot_header* slot(int space, int owner, int item) {
+  if (!attached() || space < 0 || space >= spaces() || g_seg[space] == NULL) return NULL;
   if (owner < 0 || (uint32_t)owner >= g_table->n_agents || item < 0 || (uint32_t)item >= g_table->n_items) return NULL;
-  const int64_t off = *offset_at(seg, owner, item);
-  return off < 0 ? NULL : (slot_header*)(void*)((char*)g_seg[seg] + off);
+  const int64_t off = *offset_at(agent_of(space), owner, item);
+  return off < 0 ? NULL : (slot_header*)(void*)((char*)g_seg[space] + off);
 }
 
 /* The payload moves in relaxed atomic 8-byte words (slots are 8-aligned and
@@ -374,14 +402,21 @@ static int parse_agent(void) {
   return (int)n;
 }
 
+/* SECOND_RTDB set (and not "0"): this process is an agent of the second set. */
+static int second_set_from_environment(void) {
+  const char* s = getenv("SECOND_RTDB");
+  return s != NULL && *s != '\0' && strcmp(s, "0") != 0;
+}
+
 RTDB_EXPORT int DB_init(void) {
   if (g_me >= 0) {
     ++g_me_nesting;
     return 0;
   }
   if (table(1) == NULL) return -1;
-  const int me = parse_agent();
-  if (me < 0 || (!attached() && compute_layout() < 0)) return -1;
+  const int agent = parse_agent();
+  if (agent < 0 || (!attached() && compute_layout() < 0)) return -1;
+  const int me = agent + (second_set_from_environment() ? (int)g_table->n_agents : 0);
   if (attach(me) < 0) return -1;
   g_me = me;
   g_me_nesting = 1;
@@ -394,55 +429,61 @@ RTDB_EXPORT void DB_free(void) {
     sem_close(g_frame_sem);
     g_frame_sem = NULL;
   }
-  if (g_all == 0) detach(g_me);
+  if (g_all[set_of(g_me)] == 0) detach(g_me);
   g_me = -1;
 }
 
 RTDB_EXPORT int DB_init_all(int second_rtdb) {
-  (void)second_rtdb;
-  if (g_all > 0) {
-    ++g_all;
+  const int set = second_rtdb != 0;
+  if (g_all[set] > 0) {
+    ++g_all[set];
     return 0;
   }
   if (table(1) == NULL || (!attached() && compute_layout() < 0)) return -1;
-  for (uint32_t a = 0; a < g_table->n_agents; ++a) {
-    if (attach((int)a) < 0) {
-      for (uint32_t b = 0; b < a; ++b) {
-        if ((int)b != g_me) detach((int)b);
+  const int first = set * (int)g_table->n_agents;
+  for (int a = 0; a < (int)g_table->n_agents; ++a) {
+    if (attach(first + a) < 0) {
+      for (int b = 0; b < a; ++b) {
+        if (first + b != g_me) detach(first + b);
       }
       return -1;
     }
   }
-  g_all = 1;
+  g_all[set] = 1;
   return 0;
 }
 
 RTDB_EXPORT void DB_free_all(int second_rtdb) {
-  (void)second_rtdb;
-  if (g_all == 0 || --g_all > 0) return;
-  for (uint32_t a = 0; a < g_table->n_agents; ++a) {
-    if ((int)a != g_me) detach((int)a);
+  const int set = second_rtdb != 0;
+  if (g_all[set] == 0 || --g_all[set] > 0) return;
+  const int first = set * (int)g_table->n_agents;
+  for (int a = 0; a < (int)g_table->n_agents; ++a) {
+    if (first + a != g_me) detach(first + a);
   }
 }
 
-RTDB_EXPORT int Whoami(void) { return g_me; }
+/* The agent number (AGENT), as CAMBADA's: the same in either set. */
+RTDB_EXPORT int Whoami(void) { return g_me < 0 ? -1 : agent_of(g_me); }
 
 /* The API's calls go through these (never through an exported symbol that
- * another library could interpose). */
-static int put_in(int agent, int to_agent, int id, const void* value, int life) {
-  slot_header* s = slot(agent, to_agent == SELF ? agent : to_agent, id);
+ * another library could interpose). `space` is a memory space; `owner` an
+ * agent of its set, or SELF. */
+static int put_in(int space, int to_agent, int id, const void* value, int life) {
+  if (!attached() || space < 0) return -1;
+  slot_header* s = slot(space, to_agent == SELF ? agent_of(space) : to_agent, id);
   if (s == NULL || value == NULL || life < 0) return -1;
   write_slot(s, value, now_ns() - (int64_t)life * 1000000);
   return (int)s->size;
 }
 
-static int get_from(int agent, int from_agent, int id, void* value) {
-  const slot_header* s = slot(agent, from_agent == SELF ? agent : from_agent, id);
+static int get_from(int space, int from_agent, int id, void* value) {
+  if (!attached() || space < 0) return -1;
+  const slot_header* s = slot(space, from_agent == SELF ? agent_of(space) : from_agent, id);
   if (s == NULL || value == NULL) return -1;
   return read_slot(s, value);
 }
 
-RTDB_EXPORT int DB_put(int id, void* value) { return put_in(g_me, g_me, id, value, 0); }
+RTDB_EXPORT int DB_put(int id, void* value) { return g_me < 0 ? -1 : put_in(g_me, agent_of(g_me), id, value, 0); }
 
 RTDB_EXPORT int DB_get(int from_agent, int id, void* value) { return get_from(g_me, from_agent, id, value); }
 
@@ -466,8 +507,8 @@ RTDB_EXPORT void DB_set_config_file(const char* cf) {
 RTDB_EXPORT int DB_comm_put(int agent, int id, int size, void* value, int life) {
   (void)size; /* the table has it */
   if (g_me < 0) return -1;
-  if (agent == SELF || agent == g_me) {
-    fprintf(stderr, "rtdb: DB_comm_put: agent %d is this process's own; write its items with DB_put\n", g_me);
+  if (agent == SELF || agent == agent_of(g_me)) {
+    fprintf(stderr, "rtdb: DB_comm_put: agent %d is this process's own; write its items with DB_put\n", agent_of(g_me));
     return -1;
   }
   if (agent < 0 || (uint32_t)agent >= g_table->n_agents || id < 0 || (uint32_t)id >= g_table->n_items ||
@@ -480,15 +521,16 @@ RTDB_EXPORT int DB_comm_put(int agent, int id, int size, void* value, int life) 
 
 RTDB_EXPORT int DB_comm_ini(RTDBconf_var* rec) {
   if (g_me < 0 || rec == NULL) return -1;
+  const int me = agent_of(g_me);
   int n = 0;
-  for (uint32_t id = 0; id < g_table->n_items; ++id) n += g_table->agents[g_me].membership[id] == 1;
+  for (uint32_t id = 0; id < g_table->n_items; ++id) n += g_table->agents[me].membership[id] == 1;
   if (n > MAX_RECS) {
-    fprintf(stderr, "rtdb: DB_comm_ini: agent %d has %d shared items, more than MAX_RECS (%d)\n", g_me, n, MAX_RECS);
+    fprintf(stderr, "rtdb: DB_comm_ini: agent %d has %d shared items, more than MAX_RECS (%d)\n", me, n, MAX_RECS);
     return -1;
   }
   n = 0;
   for (uint32_t id = 0; id < g_table->n_items; ++id) {
-    if (g_table->agents[g_me].membership[id] != 1) continue;
+    if (g_table->agents[me].membership[id] != 1) continue;
     rec[n++] = (RTDBconf_var){(int)id, (int)g_table->items[id].size, (int)g_table->items[id].period};
   }
   return n;
@@ -530,17 +572,17 @@ RTDB_EXPORT const char* DB_config_source(void) {
   return t != NULL ? t->source : NULL;
 }
 
-static sem_t* frame_sem(int agent) {
+static sem_t* frame_sem(int space) {
   char name[64];
-  snprintf(name, sizeof name, "/canhil-rtdb-%x-%d", (unsigned)base_key(), agent);
+  frame_sem_name(space, name, sizeof name);
   sem_t* s = sem_open(name, O_CREAT, 0600, 0);
   return s == SEM_FAILED ? NULL : s;
 }
 
-RTDB_EXPORT int DB_signal_frame(int agent) {
+RTDB_EXPORT int DB_signal_frame(int space) {
   const canhil_rtdb_table* t = table(0);
-  if (t == NULL || agent < 0 || (uint32_t)agent >= t->n_agents) return -1;
-  sem_t* s = frame_sem(agent);
+  if (t == NULL || space < 0 || space >= SETS * (int)t->n_agents) return -1;
+  sem_t* s = frame_sem(space);
   if (s == NULL) return -1;
   int value = 0;
   if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);

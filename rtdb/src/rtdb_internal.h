@@ -7,6 +7,9 @@
 /* Agents one table may have (CAMBADA's MAX_AGENTS, in rtdbdefs.h, is 7). */
 #define CANHIL_RTDB_MAX_AGENTS 64
 
+/* The second set's (team's) keys: the first's plus this (see rtdb.c). */
+#define CANHIL_RTDB_SET_STRIDE CANHIL_RTDB_MAX_AGENTS
+
 /* The API of librtdb.so, which is built with hidden visibility: only what
  * carries this is exported. */
 #define RTDB_EXPORT __attribute__((visibility("default")))

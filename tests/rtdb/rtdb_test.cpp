@@ -41,7 +41,7 @@ class Rtdb : public ::testing::Test {
  protected:
   void SetUp() override {
     static int counter = 0;
-    key_ = 0x5A000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6);
+    key_ = 0x5A000000 + ((getpid() & 0xFFF) << 12) + ((++counter & 0x1F) << 7);  // 64 keys a set, two sets
     setenv("RTDB_KEY", std::to_string(key_).c_str(), 1);
     setenv("AGENT", "1", 1);
   }

@@ -19,12 +19,12 @@ namespace canhil::test {
 
 class RtdbKeys {
  public:
-  static constexpr int kKeysEach = 64;  ///< agents (memory spaces) a test may use
+  static constexpr int kKeysEach = 128;  ///< keys a base spans: 64 agents a set, two sets (teams)
 
   /// Sets RTDB_KEY and TEAM_RTDB_KEY in the environment to fresh bases.
   RtdbKeys() {
     static int counter = 0;
-    const int slot = ((getpid() & 0xFFF) << 12) + ((++counter & 0x3F) << 6);
+    const int slot = ((getpid() & 0xFFF) << 12) + ((++counter & 0x1F) << 7);
     canhil_ = 0x5B000000 + slot;
     team_ = 0x7E000000 + slot;
     setenv("RTDB_KEY", std::to_string(canhil_).c_str(), 1);

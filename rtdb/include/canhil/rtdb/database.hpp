@@ -84,8 +84,11 @@ class Database {
 /// canhil's linked RTDB (canhil::rtdb): every agent (DB_init_all) or this
 /// process's agent (DB_init, AGENT). Its table is ItemTable::builtin().
 /// SetupError when it cannot attach (the library's reason is on stderr).
-/// Several may be open at once (canhil's inits nest).
-std::unique_ptr<Database> open_builtin(Scope scope);
+/// Several may be open at once (canhil's inits nest). `set` 1 is the second
+/// team's set of databases (DB_init_all(1): keys 64 higher), 0 the first;
+/// kOneAgent takes its set from SECOND_RTDB instead. Either way the spaces
+/// put() and get() take are the team's agent numbers.
+std::unique_ptr<Database> open_builtin(Scope scope, int set = 0);
 
 /// A team's RTDB library (its librtdb.so, or canhil's), loaded with
 /// dlopen(RTLD_NOW | RTLD_LOCAL): DB_set_config_file(config_file) when given,
@@ -95,8 +98,11 @@ std::unique_ptr<Database> open_builtin(Scope scope);
 /// every item the table gives a space is read once through the library (and,
 /// where the library is canhil's, its sizes compared). SetupError saying what
 /// to do: no such library, a missing symbol (named), the library already open
-/// in this process, init failed, a table the library contradicts.
+/// in this process for that set, init failed, a table the library
+/// contradicts. `set` as for open_builtin: the second team's set is
+/// DB_init_all(1) and memory spaces N + agent (CAMBADA's numbering when its
+/// table has MAX_AGENTS agents); both sets of one library read one rtdb.ini.
 std::unique_ptr<Database> open_library(const std::filesystem::path& so, ItemTable table, Scope scope,
-                                       std::optional<std::filesystem::path> config_file);
+                                       std::optional<std::filesystem::path> config_file, int set = 0);
 
 }  // namespace canhil::rtdb

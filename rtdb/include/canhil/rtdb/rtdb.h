@@ -36,6 +36,8 @@
  *   RTDB_KEY           base System V key (default: derived from the user id),
  *                      so that several independent teams or test runs share a
  *                      machine; agent N's segment has key RTDB_KEY + N
+ *   SECOND_RTDB        set (not "0"): DB_init joins the second team's set
+ *                      (keys RTDB_KEY + 64 + N), as CAMBADA's simulator names it
  *   RTDB_VERBOSE       1 prints what DB_init does to stderr
  *   CANHIL_RTDB_INI    librtdb.so: the rtdb.ini when the program names none
  *   CANHIL_RTDB_USER_H the rtdb_user.h that names an rtdb.ini's items
@@ -71,11 +73,12 @@ int DB_item_shared(int agent, int id);
 const char* DB_config_source(void);
 
 /* The vision-to-agent wake-up: after writing VISION_INFO, the vision process
- * calls DB_signal_frame(agent); the agent blocks in DB_wait_frame until then
+ * calls DB_signal_frame(space) (the agent's memory space: the agent, or N +
+ * the agent in the second set); the agent blocks in DB_wait_frame until then
  * (or until timeout_ms passes; -1 waits forever). A POSIX named semaphore per
- * agent and RTDB_KEY. DB_wait_frame returns 0 when woken, 1 on timeout, -1 on
+ * agent and key base. DB_wait_frame returns 0 when woken, 1 on timeout, -1 on
  * error. Several posts while the agent was busy wake it once. */
-int DB_signal_frame(int agent);
+int DB_signal_frame(int space);
 int DB_wait_frame(int timeout_ms);
 
 #ifdef __cplusplus
