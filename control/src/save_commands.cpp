@@ -53,9 +53,13 @@ void load_scenario_into(emulator::Session& session, const fs::path& path) {
     session.apply(emulator::MoveObstacle{o, w.obstacles[o].at.x_m, w.obstacles[o].at.y_m});
   }
   session.apply(emulator::MoveBall{{w.ball_start.x_m, w.ball_start.y_m, w.ball_start.z_m}, Eigen::Vector3d::Zero()});
-  session.apply(emulator::SetCoach{sc.coach.game_state, std::nullopt, std::nullopt, std::nullopt});
+  session.apply(emulator::SetCoach{sc.coach.game_state, std::nullopt, std::nullopt, std::nullopt, std::nullopt});
+  for (std::size_t t = 0; t < sc.coach.team_game_states.size(); ++t) {
+    session.apply(emulator::SetCoach{sc.coach.team_game_states[t], std::nullopt, std::nullopt, std::nullopt, t});
+  }
   for (std::size_t r = 0; r < sc.coach.players.size(); ++r) {
-    session.apply(emulator::SetCoach{std::nullopt, r, sc.coach.players[r].running, sc.coach.players[r].role});
+    session.apply(
+        emulator::SetCoach{std::nullopt, r, sc.coach.players[r].running, sc.coach.players[r].role, std::nullopt});
   }
 }
 

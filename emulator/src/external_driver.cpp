@@ -70,7 +70,8 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   // A team's agent was activated through its PMan table; canhil's own waits on canhil's RTDB's frame signal.
   const bool builtin_rtdb = session_.scenario().laptop.rtdb_lib == "builtin";
   session_.on_vision_frame([this, builtin_rtdb](std::size_t r, Nanos) {
-    if (builtin_rtdb) DB_signal_frame(session_.rig(r).agent);
+    if (builtin_rtdb)
+      DB_signal_frame(static_cast<int>(session_.rig(r).team) * DB_agent_count() + session_.rig(r).agent);
     woken_[r] = true;
   });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) {

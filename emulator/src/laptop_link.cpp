@@ -35,10 +35,10 @@ rtdb::Layout load_layout(const std::string& name) {
   return rtdb::Layout::load(name);
 }
 
-std::unique_ptr<rtdb::Database> open_database(const LaptopSide& side) {
-  if (side.rtdb_lib == "builtin") return rtdb::open_builtin(rtdb::Scope::kAllAgents);
+std::unique_ptr<rtdb::Database> open_database(const LaptopSide& side, int set) {
+  if (side.rtdb_lib == "builtin") return rtdb::open_builtin(rtdb::Scope::kAllAgents, set);
   return rtdb::open_library(side.rtdb_lib, rtdb::ItemTable::from_files(side.rtdb_items, side.rtdb_ini),
-                            rtdb::Scope::kAllAgents, std::filesystem::path(side.rtdb_ini));
+                            rtdb::Scope::kAllAgents, std::filesystem::path(side.rtdb_ini), set);
 }
 
 std::unique_ptr<pman::Masters> open_masters(const std::string& pman) {
@@ -60,8 +60,10 @@ struct LaptopLink::Robot {
   rtdb::Quantity pos_x, pos_y, pos_heading;
 };
 
-LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, const CoachState& coach)
-    : db_(open_database(side)), layout_(load_layout(side.layout)), coach_period_(from_seconds(side.coach_period_s)) {
+LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, const CoachState& coach, int rtdb_set)
+    : db_(open_database(side, rtdb_set)),
+      layout_(load_layout(side.layout)),
+      coach_period_(from_seconds(side.coach_period_s)) {
   const rtdb::ItemLayout& vision = rtdb::require(layout_, "VISION_INFO", {"lines", "obstacles", "balls"});
   const rtdb::ItemLayout* pos = layout_.item("CMD_POS");
   if (pos != nullptr && !(pos->has("x") && pos->has("y") && pos->has("heading"))) pos = nullptr;
@@ -122,6 +124,11 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
                        "; share it from the base station in the team's rtdb.conf, or remove it from the layout");
     }
     coach_items_.push_back(std::move(c));
+  }
+  if (rtdb_set != 0 && side.pman != "none") {
+    throw SetupError(
+        "PMan's tables have fixed keys (0x9011 + 2 x agent), so only the first team can use PMan on "
+        "one computer; give the second team pman = \"none\" in its [teams.laptop]");
   }
   masters_ = open_masters(side.pman);
   if (masters_) {

@@ -73,7 +73,9 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
   loop_->on_pass([this] { session_.apply_bus_changes(); });
   // canhil's own agent waits on canhil's RTDB's frame signal; a team's agents on their PMan.
   if (session_.scenario().laptop.rtdb_lib == "builtin") {
-    session_.on_vision_frame([this](std::size_t r, Nanos) { DB_signal_frame(session_.rig(r).agent); });
+    session_.on_vision_frame([this](std::size_t r, Nanos) {
+      DB_signal_frame(static_cast<int>(session_.rig(r).team) * DB_agent_count() + session_.rig(r).agent);
+    });
   }
 }
 

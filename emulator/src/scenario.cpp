@@ -6,80 +6,12 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
+#include "table_reader.hpp"
 
 namespace canhil::emulator {
 namespace {
 
-// One table of a scenario ([run], [coach], [laptop], [external]): its fields with their
-// lines, unknown fields refused, mistakes as `FILE:LINE: TABLE.FIELD: ...`.
-class TableReader {
- public:
-  TableReader(const toml::table& table, std::string name, const std::string& file, std::vector<std::string> known)
-      : table_(table), name_(std::move(name)), file_(file) {
-    for (const auto& [k, v] : table_) {
-      if (std::find(known.begin(), known.end(), k.str()) != known.end()) continue;
-      std::string list;
-      for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
-      fail(v, std::string(k.str()), "unknown field; known here: " + list);
-    }
-  }
-  [[noreturn]] void fail(const toml::node& at, const std::string& key, const std::string& what) const {
-    throw physics::ConfigError(file_, static_cast<int>(at.source().begin.line), name_ + "." + key, what);
-  }
-  const toml::node* get(const std::string& key) const { return table_.get(key); }
-  const toml::array* array(const std::string& key) const {
-    const toml::node* n = get(key);
-    if (n == nullptr) return nullptr;
-    if (!n->is_array()) fail(*n, key, "must be a list, e.g. " + key + " = [...]");
-    return n->as_array();
-  }
-  std::optional<std::string> text(const std::string& key, const char* example) const {
-    const toml::node* n = get(key);
-    if (n == nullptr) return std::nullopt;
-    const auto v = n->value<std::string>();
-    if (!v || v->empty()) fail(*n, key, std::string("must be a text, e.g. ") + key + " = " + example);
-    return *v;
-  }
-  std::optional<double> number(const std::string& key, double lo, double hi) const {
-    const toml::node* n = get(key);
-    if (n == nullptr) return std::nullopt;
-    const auto v = n->value<double>();
-    if (!v || !(*v >= lo && *v <= hi)) {
-      char range[96];
-      std::snprintf(range, sizeof range, "must be a number from %g to %g", lo, hi);
-      fail(*n, key, range);
-    }
-    return *v;
-  }
-  std::optional<bool> boolean(const std::string& key) const {
-    const toml::node* n = get(key);
-    if (n == nullptr) return std::nullopt;
-    if (!n->is_boolean()) fail(*n, key, "must be true or false");
-    return n->value<bool>();
-  }
-  // A list with one entry per robot.
-  template <class T>
-  std::vector<T> per_robot(const std::string& key, std::size_t robots, const char* what) const {
-    std::vector<T> out;
-    const toml::array* a = array(key);
-    if (a == nullptr) return out;
-    for (const toml::node& e : *a) {
-      const auto v = e.value<T>();
-      if (!v) fail(e, key, std::string("must be ") + what);
-      out.push_back(*v);
-    }
-    if (out.size() != robots) {
-      fail(*get(key), key, "give one per robot: the file places " + std::to_string(robots) + " robot(s)");
-    }
-    return out;
-  }
-  const std::string& file() const { return file_; }
-
- private:
-  const toml::table& table_;
-  std::string name_;
-  const std::string& file_;
-};
+using detail::TableReader;
 
 void read_run(const TableReader& r, Scenario& s, std::size_t robots) {
   if (const toml::node* n = r.get("duration_s")) {
@@ -159,6 +91,10 @@ void read_coach(const TableReader& r, Scenario& s, std::size_t robots) {
   }
 }
 
+}  // namespace
+
+namespace detail {
+
 // A path in the file, relative to the file's folder.
 std::string beside(const std::string& file, const std::string& path) {
   const std::filesystem::path p(path);
@@ -166,8 +102,11 @@ std::string beside(const std::string& file, const std::string& path) {
   return (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
 }
 
-void read_laptop(const TableReader& r, Scenario& s) {
-  LaptopSide& l = s.laptop;
+}  // namespace detail
+
+namespace detail {
+
+void read_laptop(const TableReader& r, LaptopSide& l) {
   if (const auto v = r.text("rtdb_lib", "\"builtin\" or \"/path/to/librtdb.so\"")) {
     l.rtdb_lib = *v == "builtin" ? *v : beside(r.file(), *v);
   }
@@ -196,8 +135,7 @@ void read_laptop(const TableReader& r, Scenario& s) {
   }
 }
 
-void read_external(const TableReader& r, Scenario& s) {
-  ExternalSide& e = s.external;
+void read_external(const TableReader& r, ExternalSide& e) {
   if (const toml::array* a = r.array("processes")) {
     for (const toml::node& n : *a) {
       const auto v = n.value<std::string>();
@@ -213,7 +151,12 @@ void read_external(const TableReader& r, Scenario& s) {
   if (const auto v = r.number("attach_limit_s", 0.1, 3600.0)) e.attach_limit_s = *v;
 }
 
-}  // namespace
+const std::vector<std::string> kLaptopFields = {"rtdb_lib",       "rtdb_items", "rtdb_ini",
+                                                "layout",         "pman",       "pman_processes",
+                                                "coach_period_s", "replicate",  "replicate_period_s"};
+const std::vector<std::string> kExternalFields = {"processes", "answer_limit_s", "attach_limit_s"};
+
+}  // namespace detail
 
 bool is_game_state(std::string_view name) noexcept {
   return std::find(kGameStates.begin(), kGameStates.end(), name) != kGameStates.end();
@@ -221,26 +164,26 @@ bool is_game_state(std::string_view name) noexcept {
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
-  s.world = physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop", "external"});
+  s.world = physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop", "external", "teams"});
   const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
+  const bool teams = detail::read_teams(root, file_name, s);   // places the teams' robots
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
   if (const toml::table* run = root["run"].as_table()) {
-    read_run(
-        TableReader(*run, "run", file_name, {"duration_s", "seed", "kick_power", "interfaces", "agents", "faults"}), s,
-        robots);
+    std::vector<std::string> fields = {"duration_s", "seed", "kick_power", "faults"};
+    if (!teams) fields.insert(fields.end(), {"interfaces", "agents"});  // a team gives its robots'
+    read_run(TableReader(*run, "run", file_name, fields), s, robots);
   }
   if (const toml::table* coach = root["coach"].as_table()) {
-    read_coach(TableReader(*coach, "coach", file_name, {"game_state", "running", "roles", "role_auto"}), s, robots);
+    std::vector<std::string> fields = {"game_state"};
+    if (!teams) fields.insert(fields.end(), {"running", "roles", "role_auto"});  // a team gives its robots'
+    read_coach(TableReader(*coach, "coach", file_name, fields), s, robots);
   }
   if (const toml::table* laptop = root["laptop"].as_table()) {
-    read_laptop(TableReader(*laptop, "laptop", file_name,
-                            {"rtdb_lib", "rtdb_items", "rtdb_ini", "layout", "pman", "pman_processes", "coach_period_s",
-                             "replicate", "replicate_period_s"}),
-                s);
+    detail::read_laptop(TableReader(*laptop, "laptop", file_name, detail::kLaptopFields), s.laptop);
   }
   if (const toml::table* external = root["external"].as_table()) {
-    read_external(TableReader(*external, "external", file_name, {"processes", "answer_limit_s", "attach_limit_s"}), s);
+    detail::read_external(TableReader(*external, "external", file_name, detail::kExternalFields), s.external);
   }
   complete(s);
   s.source_toml = std::string(toml_text);
@@ -250,29 +193,43 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
 void complete(Scenario& s) {
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
+  detail::complete_teams(s);
   constexpr std::size_t kMostRobots = kLastAgent - kFirstAgent + 1;
-  if (robots > kMostRobots) {
-    throw SetupError("a run takes at most " + std::to_string(kMostRobots) +
-                     " robots (agents CAMBADA_1..6); this one places " + std::to_string(robots));
-  }
-  if (s.interfaces.empty()) {
-    for (std::size_t k = 0; k < robots; ++k) s.interfaces.push_back("vcan" + std::to_string(k));
-  }
-  if (s.agents.empty()) {
-    for (std::size_t k = 0; k < robots; ++k) s.agents.push_back(kFirstAgent + static_cast<int>(k));
-  }
+  if (s.interfaces.empty()) s.interfaces.resize(robots);
+  if (s.agents.empty()) s.agents.resize(robots, 0);
   if (s.interfaces.size() != robots || s.agents.size() != robots) {
     throw SetupError("give one interface and one agent number per robot (" + std::to_string(robots) + " robots, " +
                      std::to_string(s.interfaces.size()) + " interfaces, " + std::to_string(s.agents.size()) +
                      " agents)");
   }
-  for (const int a : s.agents) {
-    if (a < kFirstAgent || a > kLastAgent) {
-      throw SetupError("agent numbers are " + std::to_string(kFirstAgent) + ".." + std::to_string(kLastAgent) +
-                       ", got " + std::to_string(a));
+  for (std::size_t k = 0; k < robots; ++k) {
+    if (s.interfaces[k].empty()) s.interfaces[k] = "vcan" + std::to_string(k);
+  }
+  for (const Team& team : s.teams) {
+    const auto first = s.agents.begin() + static_cast<std::ptrdiff_t>(team.first_robot);
+    const auto last = first + static_cast<std::ptrdiff_t>(team.robots);
+    if (team.robots > kMostRobots) {
+      throw SetupError("a team takes at most " + std::to_string(kMostRobots) + " robots (agents CAMBADA_1..6); " +
+                       (s.teams.size() > 1 ? "team " + team.name + " has " : "this run places ") +
+                       std::to_string(team.robots));
     }
-    if (std::count(s.agents.begin(), s.agents.end(), a) > 1) {
-      throw SetupError("agent " + std::to_string(a) + " is given to two robots; give each robot its own");
+    for (auto a = first; a != last; ++a) {
+      if (*a == 0) *a = kFirstAgent + static_cast<int>(a - first);  // the team's next agent number
+    }
+    for (auto a = first; a != last; ++a) {
+      if (*a < kFirstAgent || *a > kLastAgent) {
+        throw SetupError("agent numbers are " + std::to_string(kFirstAgent) + ".." + std::to_string(kLastAgent) +
+                         ", got " + std::to_string(*a));
+      }
+      if (std::count(first, last, *a) > 1) {
+        throw SetupError("agent " + std::to_string(*a) + " is given to two robots" +
+                         (s.teams.size() > 1 ? " of team " + team.name : std::string()) + "; give each robot its own");
+      }
+    }
+  }
+  for (std::size_t k = 0; k < robots; ++k) {
+    if (std::count(s.interfaces.begin(), s.interfaces.end(), s.interfaces[k]) > 1) {
+      throw SetupError("interface " + s.interfaces[k] + " is given to two robots; each robot has its own bus");
     }
   }
   if (!is_game_state(s.coach.game_state)) {

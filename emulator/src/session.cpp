@@ -73,6 +73,7 @@ Session::Session(Scenario scenario, SessionOptions options)
   for (std::size_t r = 0; r < n; ++r) {
     Rig& rig = rigs_[r];
     rig.index = r;
+    rig.team = scenario_.team_of(r);
     rig.agent = scenario_.agents[r];
     rig.interface = scenario_.interfaces[r];
     // Robot r draws from seed + r: robots' faults are independent and repeatable.
@@ -81,13 +82,28 @@ Session::Session(Scenario scenario, SessionOptions options)
                                                             scenario_.seed + r, options_.ftt.bit_rate);
   }
   if (options_.vision_on) {
-    scenario_.laptop = resolve_laptop(scenario_.laptop, n, options_.realtime || options_.external);
-    laptop_ = std::make_unique<LaptopLink>(scenario_.laptop, scenario_.agents, coach_);
+    const bool realtime = options_.realtime || options_.external;
+    for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
+      Team& team = scenario_.teams[t];
+      if (team.laptop) team.laptop = resolve_laptop(*team.laptop, team.robots, realtime);
+    }
+    const bool replicate_given = scenario_.laptop.replicate.has_value();
+    scenario_.laptop =
+        resolve_laptop(scenario_.laptop, scenario_.teams.size() == 1 ? n : scenario_.teams[0].robots, realtime);
+    for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
+      const Team& team = scenario_.teams[t];
+      LaptopSide side = scenario_.laptop_of(t);
+      if (!team.laptop && t > 0 && !replicate_given) side.replicate = team.robots > 1;
+      const auto first = scenario_.agents.begin() + static_cast<std::ptrdiff_t>(team.first_robot);
+      const std::vector<int> agents(first, first + static_cast<std::ptrdiff_t>(team.robots));
+      team_coaches_.push_back(team_coach(t));
+      laptops_.push_back(std::make_unique<LaptopLink>(side, agents, team_coaches_.back(), static_cast<int>(t)));
+    }
     std::vector<vision_emu::Vision> vision;
     for (std::size_t r = 0; r < n; ++r) vision.emplace_back(options_.vision, world_->markings());
     vision_ = std::make_unique<vision_emu::VisionRunner>(
         std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
-          laptop_->vision_frame(r, f);
+          laptops_[rigs_[r].team]->vision_frame(local_index(r), f);
           if (r == vision_watched_.load(std::memory_order_relaxed)) {
             if (!vision_seen_) vision_seen_.emplace();
             vision_seen_->robot = r;
@@ -181,6 +197,22 @@ void Session::before_step() {
   }
 }
 
+CoachState Session::team_coach(std::size_t team) const {
+  const Team& t = scenario_.teams.at(team);
+  CoachState c;
+  c.game_state = coach_.state_of(team);
+  const auto first = coach_.players.begin() + static_cast<std::ptrdiff_t>(t.first_robot);
+  c.players.assign(first, first + static_cast<std::ptrdiff_t>(t.robots));
+  return c;
+}
+
+void Session::write_coaches() {
+  for (std::size_t t = 0; t < laptops_.size(); ++t) {
+    team_coaches_[t] = team_coach(t);
+    laptops_[t]->write_coach(team_coaches_[t]);
+  }
+}
+
 void Session::after_step(Nanos now) {
   ++steps_;
   now_ = now;
@@ -189,7 +221,7 @@ void Session::after_step(Nanos now) {
     world_->robot(rig.index).drain(rig.faults->battery_drain_until(now));
   }
   if (vision_) vision_->on_step(*world_);
-  if (laptop_) laptop_->step(now, coach_);
+  for (std::size_t t = 0; t < laptops_.size(); ++t) laptops_[t]->step(now, team_coaches_[t]);
   log_world(now);
   goals_.step(*world_, now);
   publish(steps_);
@@ -226,6 +258,11 @@ void Session::apply(Change change) {
       throw SetupError("no robot " + std::to_string(*c->robot) + "; the run has " + std::to_string(rigs_.size()));
     }
     if (c->role && c->role->empty()) throw SetupError("a role needs a name, e.g. \"striker\"");
+    if (c->team && *c->team >= scenario_.teams.size()) {
+      throw SetupError("no team " + std::to_string(*c->team) + "; the run has " +
+                       std::to_string(scenario_.teams.size()));
+    }
+    if (c->team && !c->game_state) throw SetupError("a team's order is its game state: give game_state");
   }
   if (const auto* w = std::get_if<RestoreWorld>(&change)) {
     if (w->state.robots.size() != rigs_.size() || w->state.obstacles.size() != world_->obstacle_count()) {
@@ -286,7 +323,13 @@ void Session::apply_now(const Change& change) {
     world_->restore(state);
   } else if (const auto* c = std::get_if<SetCoach>(&change)) {
     CoachState next = coach_;
-    if (c->game_state) next.game_state = *c->game_state;
+    if (c->game_state && c->team) {
+      if (next.team_game_states.empty()) next.team_game_states.assign(scenario_.teams.size(), next.game_state);
+      next.team_game_states.at(*c->team) = *c->game_state;
+    } else if (c->game_state) {
+      next.game_state = *c->game_state;
+      next.team_game_states.clear();
+    }
     if (c->robot) {
       CoachPlayer& p = next.players.at(*c->robot);
       if (c->running) p.running = *c->running;
@@ -294,7 +337,7 @@ void Session::apply_now(const Change& change) {
     }
     if (next != coach_) {
       coach_ = std::move(next);
-      if (laptop_) laptop_->write_coach(coach_);
+      write_coaches();
       if (coach_hook_) coach_hook_(coach_);
     }
   }
@@ -318,7 +361,7 @@ void Session::publish(std::uint64_t step) {
     for (const Rig& rig : rigs_) {
       RobotDetail& d = s.detail[rig.index];
       d.achieved = world_->robot(rig.index).twist();
-      d.odometry = laptop_ ? laptop_->reported_pose(rig.index) : std::nullopt;
+      d.odometry = !laptops_.empty() ? laptops_[rig.team]->reported_pose(local_index(rig.index)) : std::nullopt;
       // The base node's state belongs to the nodes' thread: read only when that is this one.
       d.commanded = rig.shared == nullptr && rig.nodes ? rig.nodes->pic_base().commanded() : std::nullopt;
     }
@@ -373,7 +416,8 @@ void Session::log_world(Nanos now) {
     const kinematics::Pose p = world_->robot(rig.index).pose();
     // The pose as stored (a float in canhil's layout), so the log reads as before.
     const kinematics::Pose reported =
-        laptop_ ? laptop_->reported_pose(rig.index).value_or(kinematics::Pose{}) : kinematics::Pose{};
+        !laptops_.empty() ? laptops_[rig.team]->reported_pose(local_index(rig.index)).value_or(kinematics::Pose{})
+                          : kinematics::Pose{};
     std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.2f,%.4f,%.4f,%.2f", p.x_m, p.y_m, p.heading_rad * 180 / M_PI,
                   reported.x_m, reported.y_m, reported.heading_rad * 180 / M_PI);
     world_log_ += buf;

@@ -18,7 +18,7 @@ namespace {
 // The reference agent, woken after each of its vision frames.
 class AgentParticipant final : public can_nodes::Participant {
  public:
-  AgentParticipant(int agent, const laptop::AgentConfig& config) : io_(agent), logic_(config) {}
+  AgentParticipant(int space, const laptop::AgentConfig& config) : io_(space), logic_(config) {}
   void frame_ready(Nanos now) { wake_ = now; }
   std::size_t poll() override { return 0; }
   Nanos next_wakeup() const override { return wake_; }
@@ -39,14 +39,15 @@ class AgentParticipant final : public can_nodes::Participant {
 
 // A fresh database for the run: every item of the agent zeroed, and the
 // handler asked to put the odometry where the robot stands.
-void prepare_rtdb(int agent, const kinematics::Pose& at) {
+// `space` is the agent's memory space (its team's set).
+void prepare_rtdb(int space, int agent, const kinematics::Pose& at) {
   for (int item = 0; item < DB_item_count(); ++item) {
     if (DB_item_shared(agent, item) < 0) continue;
     std::vector<unsigned char> zero(static_cast<std::size_t>(DB_item_size(item)), 0);
-    DB_put_in(agent, agent, item, zero.data(), 0);
+    DB_put_in(space, agent, item, zero.data(), 0);
   }
   CMD_SetPose pose{static_cast<float>(at.x_m), static_cast<float>(at.y_m), static_cast<float>(at.heading_rad), 0, 1};
-  DB_put_in(agent, agent, CMD_SETPOSE, &pose, 0);
+  DB_put_in(space, agent, CMD_SETPOSE, &pose, 0);
 }
 
 }  // namespace
@@ -61,8 +62,8 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   if (options_.reference_laptop && !session_.options().vision_on) {
     throw SetupError("the reference laptop stack needs the vision and the RTDB (SessionOptions::vision_on)");
   }
-  if (options_.reference_laptop) {
-    const LaptopSide& side = session_.scenario().laptop;
+  for (std::size_t t = 0; options_.reference_laptop && t < session_.scenario().teams.size(); ++t) {
+    const LaptopSide& side = session_.scenario().laptop_of(t);
     if (side.rtdb_lib != "builtin" || side.layout != "canhil") {
       throw SetupError(
           "the in-process reference laptop (canhil's handler and agent) works on canhil's linked RTDB in canhil's "
@@ -81,7 +82,6 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       },
       Session::IoMode::kDirect, Nanos{0});
   laptop::AgentConfig agent_cfg;
-  agent_cfg.goal_x_m = session_.scenario().world.field.length_m / 2;
   agent_cfg.kick_power = session_.scenario().kick_power;
   const auto& messages = session_.options().messages;
   const Nanos ec = session_.options().ftt.elementary_cycle;
@@ -91,11 +91,15 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     const Rig& rig = session_.rig(r);
     auto laptop = std::make_unique<Laptop>();
     if (options_.reference_laptop) {
-      prepare_rtdb(rig.agent, session_.world().robot(r).pose());
-      LaptopLink& link = *session_.laptop();
+      // The team's set of canhil's databases: its agents' memory spaces follow the first set's.
+      const int space = static_cast<int>(rig.team) * DB_agent_count() + rig.agent;
+      prepare_rtdb(space, rig.agent, session_.world().robot(r).pose());
+      LaptopLink& link = *session_.laptop(rig.team);
       laptop->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
                                                              link.layout(), rig.agent);
-      laptop->agent = std::make_unique<AgentParticipant>(rig.agent, agent_cfg);
+      const double goal_x = session_.scenario().world.field.length_m / 2;
+      agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
+      laptop->agent = std::make_unique<AgentParticipant>(space, agent_cfg);
     }
     if (options_.count_frames || options_.record_trace) {
       recorders_.push_back(buses_[r]->attach("trace", 1 << 20));

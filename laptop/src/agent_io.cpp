@@ -8,31 +8,31 @@ namespace canhil::laptop {
 AgentInput AgentIo::read(double dt_s) {
   AgentInput in;
   in.dt_s = dt_s;
-  DB_get_from(agent_, agent_, VISION_INFO, vision_.get());
+  DB_get_from(space_, SELF, VISION_INFO, vision_.get());
   in.ball_seen = vision_->nBalls > 0;
   if (in.ball_seen) {
     in.ball_x_m = vision_->ball[0].x;
     in.ball_y_m = vision_->ball[0].y;
   }
   CMD_Pos pos;
-  DB_get_from(agent_, agent_, CMD_POS, &pos);
+  DB_get_from(space_, SELF, CMD_POS, &pos);
   in.x_m = pos.px;
   in.y_m = pos.py;
   in.heading_rad = pos.pa;
   CMD_Grabber_Info gi;
-  DB_get_from(agent_, agent_, CMD_GRABBER_INFO, &gi);
+  DB_get_from(space_, SELF, CMD_GRABBER_INFO, &gi);
   in.ball_engaged = gi.ballEngaged != 0;
   return in;
 }
 
 void AgentIo::write(const AgentOutput& out) {
   CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps), false};
-  DB_put_in(agent_, agent_, CMD_VEL, &vel, 0);
+  DB_put_in(space_, SELF, CMD_VEL, &vel, 0);
   CMD_Grabber grab{static_cast<unsigned char>(out.grabber)};
-  DB_put_in(agent_, agent_, CMD_GRABBER, &grab, 0);
+  DB_put_in(space_, SELF, CMD_GRABBER, &grab, 0);
   if (out.kick != 0) {
     CMD_Kicker kick{out.kick, 0, 0};
-    DB_put_in(agent_, agent_, CMD_KICKER, &kick, 0);
+    DB_put_in(space_, SELF, CMD_KICKER, &kick, 0);
   }
 }
 

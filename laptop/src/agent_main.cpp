@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
               config.goal_x_m);
   std::fflush(stdout);
   canhil::laptop::Agent agent(config);
-  canhil::laptop::AgentIo io(Whoami());
+  canhil::laptop::AgentIo io(DB_space());
   const double start = monotonic_s();
   double last = start;
   long frames = 0;

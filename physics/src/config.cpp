@@ -357,7 +357,14 @@ WorldParams parse_world_params(std::string_view toml_text, const std::string& fi
   WorldParams w;
   Reader reader(root, "", file_name);
   read_all(reader, w);
-  for (const std::string& t : other_tables) reader.table(t, [](Reader& r) { r.skip_rest(); });
+  for (const std::string& t : other_tables) {  // another layer's: a [table] or [[tables]]
+    const auto skip = [](Reader& r) { r.skip_rest(); };
+    if (const toml::node* n = root.get(t); n != nullptr && n->is_array()) {
+      reader.array_of_tables(t, skip);
+    } else {
+      reader.table(t, skip);
+    }
+  }
   reader.finish();
   return w;
 }

@@ -465,6 +465,8 @@ RTDB_EXPORT void DB_free_all(int second_rtdb) {
 /* The agent number (AGENT), as CAMBADA's: the same in either set. */
 RTDB_EXPORT int Whoami(void) { return g_me < 0 ? -1 : agent_of(g_me); }
 
+RTDB_EXPORT int DB_space(void) { return g_me; }
+
 /* The API's calls go through these (never through an exported symbol that
  * another library could interpose). `space` is a memory space; `owner` an
  * agent of its set, or SELF. */

@@ -31,17 +31,25 @@ struct CoachPlayer {
 };
 
 struct CoachState {
-  std::string game_state = "start";
-  std::vector<CoachPlayer> players;  ///< one per robot
+  std::string game_state = "start";  ///< every team's, unless team_game_states says otherwise
+  std::vector<CoachPlayer> players;  ///< one per robot (of every team, in the scenario's order)
+  /// Each team's own game state (two teams: "our_kickoff" for one is
+  /// "their_kickoff" for the other); empty: game_state for all.
+  std::vector<std::string> team_game_states;
+  const std::string& state_of(std::size_t team) const noexcept {
+    return team < team_game_states.size() ? team_game_states[team] : game_state;
+  }
   friend bool operator==(const CoachState&, const CoachState&) = default;
 };
 
-/// A change of the coach's orders: the game state, or one robot's (what is given).
+/// A change of the coach's orders: the game state (of one team, or of all),
+/// or one robot's (what is given).
 struct SetCoach {
   std::optional<std::string> game_state;
   std::optional<std::size_t> robot;
   std::optional<bool> running;
   std::optional<std::string> role;
+  std::optional<std::size_t> team;  ///< with game_state: only this team's
 };
 
 }  // namespace canhil::emulator

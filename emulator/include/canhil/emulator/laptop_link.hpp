@@ -50,8 +50,10 @@ LaptopSide resolve_laptop(LaptopSide side, std::size_t robots, bool realtime);
 
 class LaptopLink {
  public:
-  /// `side` as resolve_laptop() gives it; `agents` the robots' agent numbers.
-  LaptopLink(const LaptopSide& side, const std::vector<int>& agents, const CoachState& coach);
+  /// `side` as resolve_laptop() gives it; `agents` the team's robots' agent
+  /// numbers, `coach` the team's orders (its robots' players); `rtdb_set` the
+  /// team's set of databases (0, or 1 for the second team: rtdb::open_builtin).
+  LaptopLink(const LaptopSide& side, const std::vector<int>& agents, const CoachState& coach, int rtdb_set = 0);
   ~LaptopLink();
   LaptopLink(const LaptopLink&) = delete;
   LaptopLink& operator=(const LaptopLink&) = delete;

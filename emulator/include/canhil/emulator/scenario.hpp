@@ -26,6 +26,15 @@
 //   replicate = true                 # the wireless: shared items copied between agents
 //   replicate_period_s = 0.1
 //
+//   [[teams]]                        # two teams on one computer (docs/teams.md); instead
+//   name = "new"                     #   of [[robots]], run.interfaces/agents and the
+//   attacks = "+x"                   #   coach's per-robot lists
+//   game_state = "start"             # this team's coach state (default [coach].game_state)
+//   [teams.laptop]                   # its own laptop side (default: [laptop])
+//   [teams.external]                 # its own processes (default: [external])
+//   [[teams.robots]]                 # x_m, y_m, heading_deg, interface, agent,
+//   x_m = -2.0                       #   running, role, role_auto
+//
 // Paths are relative to the scenario file. A physics world file (no [run]) is a scenario too. The defaults are filled
 // in, and the rules checked, in one place (complete()), for files and for
 // scenarios built in code alike. Mistakes in a file are physics::ConfigError:
@@ -77,6 +86,22 @@ struct ExternalSide {
   double attach_limit_s = 60.0;        ///< wall time the processes may take to start, until they first all wait
 };
 
+/// Robots that play together: one goal to attack, one RTDB set (the first
+/// team's agents are spaces 1..6 of the first set, the second team's of the
+/// second: both use agent numbers 1..6), one coach. A scenario without
+/// [[teams]] is one team attacking +x, named "canhil".
+struct Team {
+  std::string name;
+  bool attacks_positive_x = true;  ///< the goal it scores in: at +x (length/2) or at -x
+  std::size_t first_robot = 0;     ///< its robots are world.robots[first_robot .. first_robot + robots)
+  std::size_t robots = 0;
+  std::optional<LaptopSide> laptop;      ///< its own laptop side; none: the scenario's [laptop]
+  std::optional<ExternalSide> external;  ///< its own processes; none: the scenario's [external]
+};
+
+/// At most two teams (CAMBADA's RTDB has two sets of databases).
+inline constexpr std::size_t kMostTeams = 2;
+
 struct Scenario {
   physics::WorldParams world;
   double duration_s = 20;
@@ -89,15 +114,23 @@ struct Scenario {
   LaptopSide laptop;
   ExternalSide external;
   std::string source_toml;  ///< the text it was parsed from (empty: built in code)
+  std::vector<Team> teams;  ///< one or two after complete(), covering every robot in order
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
+  /// The team robot r plays in (after complete()).
+  std::size_t team_of(std::size_t robot) const noexcept;
+  /// A team's laptop side and processes: its own, else the scenario's.
+  const LaptopSide& laptop_of(std::size_t team) const noexcept;
+  const ExternalSide& external_of(std::size_t team) const noexcept;
 };
 
 /// Fills in what the scenario leaves out — one robot at kDefaultPlacement when
-/// it places none, interfaces vcan0, vcan1, ... and agents 1, 2, ... — and
-/// checks the rest: at most kLastAgent robots, one interface and one agent
-/// each, agents in range and all different. Throws SetupError saying what to
-/// change. Idempotent.
+/// it places none, interfaces vcan0, vcan1, ... and agents 1, 2, ... per
+/// team, one team "canhil" attacking +x when it names none — and checks the
+/// rest: at most two teams, each of at most kLastAgent robots, one interface
+/// and one agent each, interfaces all different, agents in range and
+/// different within a team. Throws SetupError saying what to change.
+/// Idempotent.
 void complete(Scenario& scenario);
 
 /// Parses and completes a scenario (or a physics world file).

@@ -66,7 +66,8 @@ struct SessionOptions {
 /// One robot's part of a run.
 struct Rig {
   std::size_t index = 0;
-  int agent = 0;
+  std::size_t team = 0;  ///< its team (Scenario::teams); also its RTDB set
+  int agent = 0;         ///< its agent number within its team
   std::string interface;
   std::unique_ptr<can_nodes::RobotIo> io;  ///< PhysicsRobotIo or SharedRobotIo
   SharedRobotIo* shared = nullptr;         ///< io, when the nodes run on another thread than the physics
@@ -183,8 +184,13 @@ class Session {
   void refuse_error_frames(std::string why);
   /// The seam to the team's laptop software (RTDB, layout, PMan, coach,
   /// replicator), or nullptr without vision.
-  LaptopLink* laptop() noexcept { return laptop_.get(); }
-  const LaptopLink* laptop() const noexcept { return laptop_.get(); }
+  /// A team's laptop link (the first team's by default), or nullptr without vision.
+  LaptopLink* laptop(std::size_t team = 0) noexcept { return team < laptops_.size() ? laptops_[team].get() : nullptr; }
+  const LaptopLink* laptop(std::size_t team = 0) const noexcept {
+    return team < laptops_.size() ? laptops_[team].get() : nullptr;
+  }
+  /// A team's coach orders as its laptop link writes them: its game state, its robots' players.
+  CoachState team_coach(std::size_t team) const;
   /// Called after robot r's VISION_INFO is written (wake its agent).
   void on_vision_frame(std::function<void(std::size_t robot, Nanos now)> hook) { frame_hook_ = std::move(hook); }
   /// The driver's part of a detailed snapshot (its bus measurements), called
@@ -243,7 +249,13 @@ class Session {
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
   std::function<void(WorldSnapshot&)> detail_hook_;
-  std::unique_ptr<LaptopLink> laptop_;  // with vision: the team's RTDB, layout, PMan, coach, replicator
+  // With vision, per team: its RTDB set, layout, PMan, coach, replicator.
+  std::vector<std::unique_ptr<LaptopLink>> laptops_;
+  std::vector<CoachState> team_coaches_;                       // team_coach(t), kept with coach_
+  std::size_t local_index(std::size_t robot) const noexcept {  // robot's index in its team
+    return robot - scenario_.teams[rigs_[robot].team].first_robot;
+  }
+  void write_coaches();
   std::string world_log_;
   std::string error_frames_refused_;  // empty: allowed
   Nanos next_log_{0};

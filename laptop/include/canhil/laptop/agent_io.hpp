@@ -2,7 +2,9 @@
 // before deciding (VISION_INFO, CMD_POS, CMD_GRABBER_INFO) and what it writes
 // after (CMD_VEL, CMD_GRABBER, and CMD_KICKER once per kick), for one agent.
 // Used by canhil-agent (its own agent) and by the virtual-time run (each
-// robot's agent in one process). DB_init or DB_init_all first.
+// robot's agent in one process). DB_init or DB_init_all first. It works in one
+// memory space: the agent's number in the first team's set, N + it in the
+// second's (DB_space() for a process's own).
 #pragma once
 
 #include <memory>
@@ -14,13 +16,13 @@ namespace canhil::laptop {
 
 class AgentIo {
  public:
-  explicit AgentIo(int agent) : agent_(agent), vision_(std::make_unique<VisionInfo>()) {}
+  explicit AgentIo(int space) : space_(space), vision_(std::make_unique<VisionInfo>()) {}
   /// The inputs as the agent's database holds them now; `dt_s` since the last decision.
   AgentInput read(double dt_s);
   void write(const AgentOutput& out);
 
  private:
-  int agent_;
+  int space_;
   std::unique_ptr<VisionInfo> vision_;  // large: kept, not on the stack or allocated per frame
 };
 

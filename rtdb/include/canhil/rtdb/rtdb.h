@@ -79,6 +79,9 @@ const char* DB_config_source(void);
  * agent and key base. DB_wait_frame returns 0 when woken, 1 on timeout, -1 on
  * error. Several posts while the agent was busy wake it once. */
 int DB_signal_frame(int space);
+/* This process's memory space after DB_init: its agent, or N + its agent in
+ * the second set (SECOND_RTDB); -1 before. What DB_put_in / DB_get_from take. */
+int DB_space(void);
 int DB_wait_frame(int timeout_ms);
 
 #ifdef __cplusplus

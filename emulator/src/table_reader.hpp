@@ -1,0 +1,102 @@
+// emulator/src/table_reader.hpp — one table of a scenario file ([run],
+// [coach], [laptop], [external], [[teams]], ...): its fields with their lines,
+// unknown fields refused, mistakes as `FILE:LINE: TABLE.FIELD: ...`. Shared by
+// scenario.cpp and scenario_teams.cpp; not installed.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/physics/config.hpp"
+
+namespace canhil::emulator::detail {
+
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string name, const std::string& file, std::vector<std::string> known)
+      : table_(table), name_(std::move(name)), file_(file) {
+    for (const auto& [k, v] : table_) {
+      if (std::find(known.begin(), known.end(), k.str()) != known.end()) continue;
+      std::string list;
+      for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
+      fail(v, std::string(k.str()), "unknown field; known here: " + list);
+    }
+  }
+  [[noreturn]] void fail(const toml::node& at, const std::string& key, const std::string& what) const {
+    throw physics::ConfigError(file_, static_cast<int>(at.source().begin.line), name_ + "." + key, what);
+  }
+  const toml::node* get(const std::string& key) const { return table_.get(key); }
+  const toml::array* array(const std::string& key) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return nullptr;
+    if (!n->is_array()) fail(*n, key, "must be a list, e.g. " + key + " = [...]");
+    return n->as_array();
+  }
+  std::optional<std::string> text(const std::string& key, const char* example) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return std::nullopt;
+    const auto v = n->value<std::string>();
+    if (!v || v->empty()) fail(*n, key, std::string("must be a text, e.g. ") + key + " = " + example);
+    return *v;
+  }
+  std::optional<double> number(const std::string& key, double lo, double hi) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return std::nullopt;
+    const auto v = n->value<double>();
+    if (!v || !(*v >= lo && *v <= hi)) {
+      char range[96];
+      std::snprintf(range, sizeof range, "must be a number from %g to %g", lo, hi);
+      fail(*n, key, range);
+    }
+    return *v;
+  }
+  std::optional<bool> boolean(const std::string& key) const {
+    const toml::node* n = get(key);
+    if (n == nullptr) return std::nullopt;
+    if (!n->is_boolean()) fail(*n, key, "must be true or false");
+    return n->value<bool>();
+  }
+  // A list with one entry per robot.
+  template <class T>
+  std::vector<T> per_robot(const std::string& key, std::size_t robots, const char* what) const {
+    std::vector<T> out;
+    const toml::array* a = array(key);
+    if (a == nullptr) return out;
+    for (const toml::node& e : *a) {
+      const auto v = e.value<T>();
+      if (!v) fail(e, key, std::string("must be ") + what);
+      out.push_back(*v);
+    }
+    if (out.size() != robots) {
+      fail(*get(key), key, "give one per robot: the file places " + std::to_string(robots) + " robot(s)");
+    }
+    return out;
+  }
+  const std::string& file() const { return file_; }
+
+ private:
+  const toml::table& table_;
+  std::string name_;
+  const std::string& file_;
+};
+
+// The scenario's tables a team may give again (scenario.cpp).
+void read_laptop(const TableReader& r, LaptopSide& l);
+void read_external(const TableReader& r, ExternalSide& e);
+extern const std::vector<std::string> kLaptopFields;
+extern const std::vector<std::string> kExternalFields;
+
+/// [[teams]] (scenario_teams.cpp): the teams, their robots placed into
+/// s.world.robots (refused next to [[robots]]), their interfaces, agents and
+/// coach players. False when the file has no teams.
+bool read_teams(const toml::table& root, const std::string& file, Scenario& s);
+/// The teams' checks and defaults, for files and code alike (complete()).
+void complete_teams(Scenario& s);
+
+}  // namespace canhil::emulator::detail

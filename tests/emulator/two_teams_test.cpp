@@ -1,0 +1,171 @@
+// Two teams on one computer, in virtual time: both teams' loops closed on
+// their own RTDB sets (both use agents 1..5 and never see each other's
+// items), the second team attacks -x and scores there, and a [[teams]] file's
+// mistakes are named.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/emulator/session.hpp"
+#include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/frames/messages.hpp"
+#include "canhil/rtdb/cambada_types.h"
+#include "canhil/rtdb/rtdb.h"
+#include "rtdb_user.h"
+#include "support/error_of.hpp"
+#include "support/rtdb_ipc.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+using namespace std::chrono_literals;
+
+class TwoTeams : public ::testing::Test {
+ protected:
+  SessionOptions options() const {
+    SessionOptions o;
+    o.messages = frames::MessageSet::load(test::shipped_dbc());
+    return o;
+  }
+  test::RtdbKeys keys_;
+};
+
+TEST_F(TwoTeams, BothTeamsLoopsCloseOnTheirOwnRtdbSets) {
+  const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  ASSERT_EQ(s.teams.size(), 2u);
+  ASSERT_EQ(s.robot_count(), 10u);
+  EXPECT_EQ(s.agents, (std::vector<int>{1, 2, 3, 4, 5, 1, 2, 3, 4, 5})) << "each team numbers its own";
+  Session session(s, options());
+  VirtualDriver driver(session, {});
+  driver.run_for(2s);
+  for (std::size_t r = 0; r < 10; ++r) {  // every agent acts: drives to the ball, or turns to find it
+    const auto& start = s.world.robots[r];
+    const auto pose = session.world().robot(r).pose();
+    const double moved = std::hypot(pose.x_m - start.x_m, pose.y_m - start.y_m);
+    const double turned = std::fabs(std::remainder(pose.heading_rad - start.heading_deg * M_PI / 180, 2 * M_PI));
+    EXPECT_TRUE(moved > 0.2 || turned > 0.3) << "robot " << r << " moved " << moved << " m, turned " << turned;
+  }
+  // Each team's agent 1 reads its own robot's odometry from its own set.
+  ASSERT_EQ(DB_init_all(0), 0);
+  ASSERT_EQ(DB_init_all(1), 0);
+  CMD_Pos first{}, second{};
+  ASSERT_GE(DB_get_from(CAMBADA_1, CAMBADA_1, CMD_POS, &first), 0);
+  ASSERT_GE(DB_get_from(N_AGENTS + CAMBADA_1, CAMBADA_1, CMD_POS, &second), 0);
+  const auto a = session.world().robot(0).pose();
+  const auto b = session.world().robot(5).pose();
+  EXPECT_NEAR(first.px, a.x_m, 0.3);
+  EXPECT_NEAR(second.px, b.x_m, 0.3);
+  EXPECT_GT(std::fabs(first.px - second.px), 0.5) << "two robots, two databases";
+  // A shared item of the second team's agent 1 reaches its team mates only.
+  RobotWS mark{0, 0, 0, 1, 777};
+  ASSERT_GT(DB_put_in(N_AGENTS + CAMBADA_1, CAMBADA_1, ROBOT_WS, &mark, 0), 0);
+  driver.run_for(500ms);  // replicator cycles
+  RobotWS seen{};
+  ASSERT_GE(DB_get_from(N_AGENTS + CAMBADA_2, CAMBADA_1, ROBOT_WS, &seen), 0);
+  EXPECT_EQ(seen.frame, 777u) << "its team mate has it";
+  ASSERT_GE(DB_get_from(CAMBADA_2, CAMBADA_1, ROBOT_WS, &seen), 0);
+  EXPECT_NE(seen.frame, 777u) << "the other team's agent 2 must not";
+  DB_free_all(1);
+  DB_free_all(0);
+}
+
+TEST_F(TwoTeams, TheSecondTeamAttacksMinusXAndScoresThere) {
+  Scenario s = parse_scenario(R"(
+[run]
+duration_s = 8
+[ball_start]
+x_m = -3.0
+y_m = 0.0
+z_m = 0.11
+[[teams]]
+name = "far"
+[[teams.robots]]
+x_m = 8.0
+y_m = 5.5
+heading_deg = 90.0
+[[teams]]
+name = "near"
+attacks = "-x"
+[[teams.robots]]
+x_m = -1.5
+y_m = 0.0
+heading_deg = 90.0
+)",
+                              "inline.toml");
+  EXPECT_FALSE(s.teams[1].attacks_positive_x);
+  Session session(s, options());
+  VirtualDriver driver(session, {});
+  driver.run_for(8s);
+  ASSERT_FALSE(session.goals().empty()) << "ball at " << session.world().ball_position().transpose();
+  EXPECT_FALSE(session.goals().front().positive_x) << "in the -x goal, the one the second team attacks";
+}
+
+TEST_F(TwoTeams, MistakesInTeamsAreNamedWithTheirLine) {
+  const auto error = [](const std::string& text) { return test::error_of([&] { parse_scenario(text, "t.toml"); }); };
+  const std::string robot = "[[teams.robots]]\nx_m = -2.0\n";
+  EXPECT_NE(error("[[robots]]\nx_m = 1.0\n[[teams]]\n" + robot).find("t.toml:1: robots: with [[teams]]"),
+            std::string::npos)
+      << error("[[robots]]\nx_m = 1.0\n[[teams]]\n" + robot);
+  EXPECT_NE(error("[[teams]]\nname = \"a\"\n").find("a team needs its robots"), std::string::npos);
+  EXPECT_NE(error("[[teams]]\nattacks = \"up\"\n" + robot).find("t.toml:2: teams.attacks"), std::string::npos);
+  EXPECT_NE(error("[[teams]]\n" + robot + "[[teams]]\n" + robot + "[[teams]]\n" + robot).find("two teams at most"),
+            std::string::npos);
+  EXPECT_NE(error("[[teams]]\nattacks = \"+x\"\n" + robot + "[[teams]]\nattacks = \"+x\"\n" + robot)
+                .find("both teams attack the +x goal"),
+            std::string::npos);
+  EXPECT_NE(error("[[teams]]\n" + robot + "agent = 2\n" + robot + "agent = 2\n").find("agent 2 is given to two robots"),
+            std::string::npos);
+  EXPECT_NE(error("[[teams]]\n" + robot + "interface = \"can0\"\n[[teams]]\n" + robot + "interface = \"can0\"\n")
+                .find("interface can0 is given to two robots"),
+            std::string::npos);
+  EXPECT_NE(error("[run]\nagents = [1]\n[[teams]]\n" + robot).find("run.agents: unknown field"), std::string::npos);
+  EXPECT_NE(error("[[teams]]\n" + robot + "speed = 3\n").find("teams.robots.speed: unknown field"), std::string::npos);
+  std::string seven = "[[teams]]\n";
+  for (int k = 0; k < 7; ++k) seven += robot;
+  EXPECT_NE(error(seven).find("at most 6 robots"), std::string::npos);
+  // Two teams of six: twelve robots, agents 1..6 each.
+  std::string twelve = "[[teams]]\n";
+  for (int k = 0; k < 6; ++k) twelve += robot;
+  twelve += "[[teams]]\n";
+  for (int k = 0; k < 6; ++k) twelve += robot;
+  const Scenario s = parse_scenario(twelve, "t.toml");
+  EXPECT_EQ(s.robot_count(), 12u);
+  EXPECT_EQ(s.agents[11], 6);
+  EXPECT_EQ(s.interfaces[11], "vcan11");
+  EXPECT_EQ(s.team_of(6), 1u);
+  EXPECT_FALSE(s.teams[1].attacks_positive_x) << "the second attacks -x unless told";
+}
+
+TEST_F(TwoTeams, OneTeamScenariosAreOneImplicitTeam) {
+  const Scenario s = load_scenario(shipped_scenario("five_robots.toml"));
+  ASSERT_EQ(s.teams.size(), 1u);
+  EXPECT_EQ(s.teams[0].name, "canhil");
+  EXPECT_TRUE(s.teams[0].attacks_positive_x);
+  EXPECT_EQ(s.teams[0].robots, 5u);
+}
+
+TEST_F(TwoTeams, EachTeamHasItsOwnGameState) {
+  Scenario s = parse_scenario(
+      "[coach]\ngame_state = \"stop\"\n[[teams]]\ngame_state = \"our_kickoff\"\n[[teams.robots]]\nx_m = -2.0\n"
+      "[[teams]]\n[[teams.robots]]\nx_m = 2.0\n",
+      "t.toml");
+  EXPECT_EQ(s.coach.state_of(0), "our_kickoff");
+  EXPECT_EQ(s.coach.state_of(1), "stop") << "[coach]'s where the team says nothing";
+  Session session(s, options());
+  EXPECT_EQ(session.team_coach(1).game_state, "stop");
+  EXPECT_EQ(session.team_coach(1).players.size(), 1u);
+  session.apply(SetCoach{"their_kickoff", std::nullopt, std::nullopt, std::nullopt, 1});
+  session.before_step();
+  EXPECT_EQ(session.coach().state_of(1), "their_kickoff");
+  EXPECT_EQ(session.coach().state_of(0), "our_kickoff");
+  EXPECT_THROW(session.apply(SetCoach{"stop", std::nullopt, std::nullopt, std::nullopt, 2}), SetupError);
+}
+
+}  // namespace
+}  // namespace canhil::emulator
