@@ -74,7 +74,8 @@ std::string search_path() {
   return path + (old != nullptr ? old : "/usr/bin:/bin");
 }
 
-pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent,
+// `second_set`: a process of the second team (its RTDB set: SECOND_RTDB=1).
+pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent, bool second_set,
             const std::string& path) {
   const pid_t pid = fork();
   if (pid != 0) return pid;
@@ -83,6 +84,11 @@ pid_t start(const std::string& command, const std::vector<std::string>& environm
     setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
   }
   setenv("AGENT", std::to_string(agent).c_str(), 1);
+  if (second_set) {
+    setenv("SECOND_RTDB", "1", 1);
+  } else {
+    unsetenv("SECOND_RTDB");
+  }
   setenv("PATH", path.c_str(), 1);
   signal(SIGINT, SIG_DFL);
   signal(SIGTERM, SIG_DFL);
@@ -244,15 +250,20 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   std::size_t expected = 0;
   const std::vector<std::string> environment =
       conductor.environment(shim, team_preload.empty() ? nullptr : team_preload.c_str());
-  if (!side.processes.empty()) {
+  const emulator::Scenario& scenario = session.scenario();
+  bool any_processes = false;
+  for (std::size_t t = 0; t < scenario.teams.size(); ++t) any_processes |= !scenario.external_of(t).processes.empty();
+  if (any_processes) {
     const std::string path = search_path();
     for (std::size_t r = 0; r < robots; ++r) {
-      for (const std::string& c : side.processes) {
+      const std::size_t team = session.rig(r).team;
+      for (const std::string& c : scenario.external_of(team).processes) {
         Started s;
         s.agent = session.rig(r).agent;
         s.command = expand(c, s.agent, session.rig(r).interface);
-        s.pid = start(s.command, environment, s.agent, path);
-        std::printf("  started `%s` for agent %d (pid %d)\n", s.command.c_str(), s.agent, s.pid);
+        s.pid = start(s.command, environment, s.agent, team > 0, path);
+        std::printf("  started `%s` for agent %d%s (pid %d)\n", s.command.c_str(), s.agent,
+                    scenario.teams.size() > 1 ? (" of team " + scenario.teams[team].name).c_str() : "", s.pid);
         started.push_back(s);
       }
     }
