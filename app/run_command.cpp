@@ -55,15 +55,33 @@ void print_virtual_summary(const emulator::Session& session, const emulator::Vir
               g_stop ? "stopped" : "done", simulated, wall_s, wall_s > 0 ? simulated / wall_s : 0.0);
   const Eigen::Vector3d b = session.world().ball_position();
   std::printf("  ball at (%.2f, %.2f)\n", b.x(), b.y());
+  const auto& teams = session.scenario().teams;
   for (const emulator::Goal& g : session.goals()) {
-    std::printf("  GOAL at %.2f s in the %s goal\n", to_seconds(g.time), g.positive_x ? "+x (opponent)" : "-x (own)");
+    if (teams.size() == 1) {
+      std::printf("  GOAL at %.2f s in the %s goal\n", to_seconds(g.time), g.positive_x ? "+x (opponent)" : "-x (own)");
+      continue;
+    }
+    const std::size_t scorer = teams[0].attacks_positive_x == g.positive_x ? 0 : 1;
+    std::printf("  GOAL at %.2f s in the %s goal, for %s\n", to_seconds(g.time), g.positive_x ? "+x" : "-x",
+                teams[scorer].name.c_str());
+  }
+  if (const emulator::Referee* referee = session.referee()) {
+    std::printf("  referee: %zu call(s)", referee->calls().size());
+    for (std::size_t t = 0; t < teams.size(); ++t) {
+      std::printf("%s %s %d", t == 0 ? ", score" : " :", teams[t].name.c_str(), referee->score()[t]);
+    }
+    std::printf("\n");
+    for (const emulator::RefereeCall& c : referee->calls()) {
+      std::printf("    %7.2f s  %s\n", to_seconds(c.time), c.text.c_str());
+    }
   }
   const auto outcomes = driver.outcomes();
   for (std::size_t r = 0; r < outcomes.size(); ++r) {
     const auto& o = outcomes[r];
     const emulator::Rig& rig = session.rig(r);
-    std::printf("  %s agent %d: at (%.2f, %.2f), %d kick(s), %llu frames, %llu bad, 24 V pack %.1f V (%.0f %%)\n",
-                rig.interface.c_str(), rig.agent, o.pose.x_m, o.pose.y_m, o.kicks,
+    const std::string team = teams.size() > 1 ? " (" + teams[rig.team].name + ")" : "";
+    std::printf("  %s agent %d%s: at (%.2f, %.2f), %d kick(s), %llu frames, %llu bad, 24 V pack %.1f V (%.0f %%)\n",
+                rig.interface.c_str(), rig.agent, team.c_str(), o.pose.x_m, o.pose.y_m, o.kicks,
                 static_cast<unsigned long long>(o.frames), static_cast<unsigned long long>(o.bad_frames),
                 o.battery.power24_v, 100 * o.charge[2]);
   }

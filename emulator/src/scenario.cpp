@@ -164,7 +164,8 @@ bool is_game_state(std::string_view name) noexcept {
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
-  s.world = physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop", "external", "teams"});
+  s.world =
+      physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop", "external", "teams", "referee"});
   const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
   const bool teams = detail::read_teams(root, file_name, s);   // places the teams' robots
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
@@ -181,6 +182,20 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   }
   if (const toml::table* laptop = root["laptop"].as_table()) {
     detail::read_laptop(TableReader(*laptop, "laptop", file_name, detail::kLaptopFields), s.laptop);
+  }
+  if (const toml::table* referee = root["referee"].as_table()) {
+    const TableReader r(*referee, "referee", file_name,
+                        {"enabled", "kickoff_after_goal", "out_of_play", "dropped_ball", "stuck_s", "stuck_radius_m",
+                         "restart_pause_s", "touch_distance_m"});
+    RefereeRules& rules = s.referee;
+    if (const auto v = r.boolean("enabled")) rules.enabled = *v;
+    if (const auto v = r.boolean("kickoff_after_goal")) rules.kickoff_after_goal = *v;
+    if (const auto v = r.boolean("out_of_play")) rules.out_of_play = *v;
+    if (const auto v = r.boolean("dropped_ball")) rules.dropped_ball = *v;
+    if (const auto v = r.number("stuck_s", 0.1, 3600.0)) rules.stuck_s = *v;
+    if (const auto v = r.number("stuck_radius_m", 0.0, 20.0)) rules.stuck_radius_m = *v;
+    if (const auto v = r.number("restart_pause_s", 0.0, 60.0)) rules.restart_pause_s = *v;
+    if (const auto v = r.number("touch_distance_m", 0.0, 2.0)) rules.touch_distance_m = *v;
   }
   if (const toml::table* external = root["external"].as_table()) {
     detail::read_external(TableReader(*external, "external", file_name, detail::kExternalFields), s.external);

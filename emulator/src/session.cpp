@@ -4,6 +4,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <numbers>
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/laptop_link.hpp"
@@ -68,6 +69,11 @@ Session::Session(Scenario scenario, SessionOptions options)
     }
   }
   step_period_ = from_seconds(scenario_.world.simulation.step_s);
+  if (scenario_.referee.enabled.value_or(scenario_.teams.size() > 1)) {
+    std::vector<RefereeTeam> teams;
+    for (const Team& t : scenario_.teams) teams.push_back({t.name, t.attacks_positive_x, t.first_robot, t.robots});
+    referee_ = std::make_unique<Referee>(scenario_.world, std::move(teams), scenario_.referee, scenario_.seed);
+  }
   const std::size_t n = scenario_.robot_count();
   rigs_.resize(n);
   for (std::size_t r = 0; r < n; ++r) {
@@ -213,6 +219,55 @@ void Session::write_coaches() {
   }
 }
 
+void Session::referee_step(Nanos now, bool scored) {
+  RefereeView& v = referee_view_;
+  v.ball = world_->ball_position();
+  v.ball_velocity = world_->ball_velocity();
+  v.robots.resize(rigs_.size());
+  for (std::size_t r = 0; r < rigs_.size(); ++r) {
+    const kinematics::Pose p = world_->robot(r).pose();
+    v.robots[r] = {p.x_m, p.y_m};
+  }
+  const auto goal = scored ? std::optional<bool>(goals_.goals().back().positive_x) : std::nullopt;
+  if (const auto call = referee_->step(v, now, goal)) {
+    carry_out(*call);
+  } else if (referee_->resume_due(now)) {
+    set_team_states(std::vector<std::string>(scenario_.teams.size(), "start"));
+  }
+}
+
+// The call carried out at once, on the stepping thread: the ball to its spot,
+// at a kick-off the robots back to their places, each team's restart state.
+void Session::carry_out(const RefereeCall& call) {
+  world_->place_ball({call.spot.x(), call.spot.y(), scenario_.world.ball.radius_m}, Eigen::Vector3d::Zero());
+  if (call.restart == Restart::kKickoff) {
+    for (std::size_t r = 0; r < rigs_.size(); ++r) world_->robot(r).place(scenario_.world.robots[r]);
+  } else {
+    // Every robot keeps its distance from a restart (1 m): one nearer steps back towards its own goal.
+    constexpr double kDistance = 1.0;
+    for (std::size_t r = 0; r < rigs_.size(); ++r) {
+      const kinematics::Pose p = world_->robot(r).pose();
+      if (std::hypot(p.x_m - call.spot.x(), p.y_m - call.spot.y()) >= kDistance) continue;
+      const double own = scenario_.teams[rigs_[r].team].attacks_positive_x ? -1.0 : 1.0;
+      const double heading_deg = p.heading_rad * 180.0 / std::numbers::pi;
+      world_->robot(r).place({call.spot.x() + own * kDistance, p.y_m, heading_deg});
+    }
+  }
+  std::vector<std::string> states;
+  for (std::size_t t = 0; t < scenario_.teams.size(); ++t) states.push_back(referee_->state_for(call, t));
+  set_team_states(std::move(states));
+  if (referee_hook_) referee_hook_(call);
+}
+
+void Session::set_team_states(std::vector<std::string> states) {
+  CoachState next = coach_;
+  next.team_game_states = std::move(states);
+  if (next == coach_) return;
+  coach_ = std::move(next);
+  write_coaches();
+  if (coach_hook_) coach_hook_(coach_);
+}
+
 void Session::after_step(Nanos now) {
   ++steps_;
   now_ = now;
@@ -223,7 +278,8 @@ void Session::after_step(Nanos now) {
   if (vision_) vision_->on_step(*world_);
   for (std::size_t t = 0; t < laptops_.size(); ++t) laptops_[t]->step(now, team_coaches_[t]);
   log_world(now);
-  goals_.step(*world_, now);
+  const bool scored = goals_.step(*world_, now);
+  if (referee_) referee_step(now, scored);
   publish(steps_);
 }
 

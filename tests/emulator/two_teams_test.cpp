@@ -104,6 +104,46 @@ heading_deg = 90.0
   driver.run_for(8s);
   ASSERT_FALSE(session.goals().empty()) << "ball at " << session.world().ball_position().transpose();
   EXPECT_FALSE(session.goals().front().positive_x) << "in the -x goal, the one the second team attacks";
+  // The referee (on with two teams): the goal is near's, far kicks off from the centre.
+  ASSERT_NE(session.referee(), nullptr);
+  EXPECT_EQ(session.referee()->score()[1], 1);
+  const RefereeCall& call = session.referee()->calls().front();
+  EXPECT_EQ(call.restart, Restart::kKickoff);
+  EXPECT_EQ(call.team, 0u);
+  EXPECT_EQ(call.time, session.goals().front().time);
+}
+
+TEST_F(TwoTeams, ABallKickedOutComesBackOnTheLineForTheOtherTeamTheSameTwice) {
+  const auto run = [this] {
+    Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+    s.world.ball_start = {3.0, 5.5, 0.11};
+    Session session(s, options());
+    session.apply(MoveBall{{3.0, 5.5, 0.11}, {0.0, 3.0, 0.0}});  // rolling out over the +y touch line
+    std::vector<std::string> states;
+    session.on_coach_change([&](const CoachState& c) { states.push_back(c.state_of(0) + "/" + c.state_of(1)); });
+    VirtualDriver driver(session, {});
+    driver.run_for(4s);
+    EXPECT_NE(session.referee(), nullptr);
+    const auto& calls = session.referee()->calls();
+    EXPECT_FALSE(calls.empty());
+    if (calls.empty()) return std::string();
+    EXPECT_EQ(calls.front().restart, Restart::kThrowIn) << calls.front().text;
+    EXPECT_NEAR(calls.front().spot.y(), 6.0, 1e-9);
+    EXPECT_NEAR(calls.front().spot.x(), 3.0, 0.3);
+    EXPECT_FALSE(states.empty());
+    if (!states.empty()) {
+      EXPECT_NE(states.front().find("throwin"), std::string::npos) << states.front();
+    }
+    std::string all;
+    for (const auto& c : calls) all += std::to_string(c.time.count()) + " " + c.text + "\n";
+    for (const auto& st : states) all += st + "\n";
+    char pose[64];
+    std::snprintf(pose, sizeof pose, "%.9f %.9f", session.world().ball_position().x(),
+                  session.world().ball_position().y());
+    return all + pose;
+  };
+  const std::string first = run();
+  EXPECT_EQ(run(), first) << "one seed, one match";
 }
 
 TEST_F(TwoTeams, MistakesInTeamsAreNamedWithTheirLine) {

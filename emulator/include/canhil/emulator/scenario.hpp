@@ -26,6 +26,11 @@
 //   replicate = true                 # the wireless: shared items copied between agents
 //   replicate_period_s = 0.1
 //
+//   [referee]                        # goals, kick-offs, throw-ins, corners, dropped balls
+//   enabled = true                   #   (default: with two teams); each rule can be off:
+//   kickoff_after_goal = true        #   out_of_play, dropped_ball; stuck_s = 10,
+//   restart_pause_s = 2              #   stuck_radius_m = 0.5, touch_distance_m = 0.05
+//
 //   [[teams]]                        # two teams on one computer (docs/teams.md); instead
 //   name = "new"                     #   of [[robots]], run.interfaces/agents and the
 //   attacks = "+x"                   #   coach's per-robot lists
@@ -49,6 +54,7 @@
 
 #include "canhil/can_nodes/fault.hpp"
 #include "canhil/emulator/coach.hpp"
+#include "canhil/emulator/referee.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::emulator {
@@ -115,6 +121,7 @@ struct Scenario {
   ExternalSide external;
   std::string source_toml;  ///< the text it was parsed from (empty: built in code)
   std::vector<Team> teams;  ///< one or two after complete(), covering every robot in order
+  RefereeRules referee;     ///< [referee]; on by default with two teams
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
   /// The team robot r plays in (after complete()).

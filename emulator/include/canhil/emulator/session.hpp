@@ -225,6 +225,10 @@ class Session {
 
   // --- results (after the run, or from the stepping thread) -------------------
   const std::vector<Goal>& goals() const noexcept { return goals_.goals(); }
+  /// The referee, when the scenario's is on (its score and calls), else nullptr.
+  const Referee* referee() const noexcept { return referee_.get(); }
+  /// Called at each referee call, on the stepping thread (for the run's log).
+  void on_referee_call(std::function<void(const RefereeCall&)> hook) { referee_hook_ = std::move(hook); }
   /// What each fault rule did, summed over the robots.
   std::vector<can_nodes::FaultCount> fault_counts() const;
   /// The world log (CSV with a header line); empty when world_log_period is 0.
@@ -246,8 +250,14 @@ class Session {
   std::unique_ptr<vision_emu::VisionRunner> vision_;
   std::function<void(std::size_t, Nanos)> frame_hook_;
   GoalWatcher goals_;
+  std::unique_ptr<Referee> referee_;  // when the scenario's referee is on
+  RefereeView referee_view_;          // kept: filled every step
+  void referee_step(Nanos now, bool scored);
+  void carry_out(const RefereeCall& call);
+  void set_team_states(std::vector<std::string> states);
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
+  std::function<void(const RefereeCall&)> referee_hook_;
   std::function<void(WorldSnapshot&)> detail_hook_;
   // With vision, per team: its RTDB set, layout, PMan, coach, replicator.
   std::vector<std::unique_ptr<LaptopLink>> laptops_;
