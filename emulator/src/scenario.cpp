@@ -164,8 +164,8 @@ bool is_game_state(std::string_view name) noexcept {
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
-  s.world =
-      physics::parse_world_params(toml_text, file_name, {"run", "coach", "laptop", "external", "teams", "referee"});
+  s.world = physics::parse_world_params(toml_text, file_name,
+                                        {"run", "coach", "laptop", "external", "teams", "referee", "vision"});
   const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
   const bool teams = detail::read_teams(root, file_name, s);   // places the teams' robots
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
@@ -196,6 +196,14 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
     if (const auto v = r.number("stuck_radius_m", 0.0, 20.0)) rules.stuck_radius_m = *v;
     if (const auto v = r.number("restart_pause_s", 0.0, 60.0)) rules.restart_pause_s = *v;
     if (const auto v = r.number("touch_distance_m", 0.0, 2.0)) rules.touch_distance_m = *v;
+  }
+  if (const toml::table* vision = root["vision"].as_table()) {
+    const TableReader r(*vision, "vision", file_name,
+                        {"point_noise_m", "ball_noise_m", "detection_probability", "latency_s"});
+    s.vision.point_noise_m = r.number("point_noise_m", 0.0, 1.0);
+    s.vision.ball_noise_m = r.number("ball_noise_m", 0.0, 1.0);
+    s.vision.detection_probability = r.number("detection_probability", 0.0, 1.0);
+    s.vision.latency_s = r.number("latency_s", 0.0, 1.0);
   }
   if (const toml::table* external = root["external"].as_table()) {
     detail::read_external(TableReader(*external, "external", file_name, detail::kExternalFields), s.external);

@@ -1,5 +1,6 @@
 // [[teams]] in a scenario, and the checks every scenario's teams pass.
 #include <algorithm>
+#include <cctype>
 #include <set>
 #include <string>
 
@@ -81,6 +82,12 @@ bool read_teams(const toml::table& root, const std::string& file, Scenario& s) {
     const TableReader r(table, "teams", file, kTeamFields);
     Team team;
     team.name = r.text("name", "\"new\"").value_or("team " + std::to_string(s.teams.size() + 1));
+    const bool plain = std::all_of(team.name.begin(), team.name.end(), [](char c) {
+      return std::isprint(static_cast<unsigned char>(c)) != 0 && c != ',' && c != '"';
+    });
+    if (team.name.empty() || team.name.size() > 32 || !plain) {
+      r.fail(*r.get("name"), "name", "1 to 32 printable characters without commas or quotes (it goes into CSV logs)");
+    }
     if (const auto v = r.text("attacks", "\"+x\" or \"-x\"")) {
       if (*v != "+x" && *v != "-x") r.fail(*r.get("attacks"), "attacks", "the goal it attacks: \"+x\" or \"-x\"");
       team.attacks_positive_x = *v == "+x";

@@ -106,7 +106,18 @@ Session::Session(Scenario scenario, SessionOptions options)
       laptops_.push_back(std::make_unique<LaptopLink>(side, agents, team_coaches_.back(), static_cast<int>(t)));
     }
     std::vector<vision_emu::Vision> vision;
-    for (std::size_t r = 0; r < n; ++r) vision.emplace_back(options_.vision, world_->markings());
+    vision_emu::VisionParams params = options_.vision;
+    const VisionImperfections& imperfect = scenario_.vision;
+    params.point_noise_m = imperfect.point_noise_m.value_or(params.point_noise_m);
+    params.ball_noise_m = imperfect.ball_noise_m.value_or(params.ball_noise_m);
+    params.detection_probability = imperfect.detection_probability.value_or(params.detection_probability);
+    params.latency_s = imperfect.latency_s.value_or(params.latency_s);
+    for (std::size_t r = 0; r < n; ++r) {
+      // Robot r's camera draws from the run's seed: another seed, another match.
+      vision_emu::VisionParams mine = params;
+      mine.seed = static_cast<unsigned>(params.seed + 1000 * scenario_.seed + r);
+      vision.emplace_back(mine, world_->markings());
+    }
     vision_ = std::make_unique<vision_emu::VisionRunner>(
         std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
           laptops_[rigs_[r].team]->vision_frame(local_index(r), f);
@@ -243,20 +254,75 @@ void Session::carry_out(const RefereeCall& call) {
   if (call.restart == Restart::kKickoff) {
     for (std::size_t r = 0; r < rigs_.size(); ++r) world_->robot(r).place(scenario_.world.robots[r]);
   } else {
-    // Every robot keeps its distance from a restart (1 m): one nearer steps back towards its own goal.
-    constexpr double kDistance = 1.0;
-    for (std::size_t r = 0; r < rigs_.size(); ++r) {
-      const kinematics::Pose p = world_->robot(r).pose();
-      if (std::hypot(p.x_m - call.spot.x(), p.y_m - call.spot.y()) >= kDistance) continue;
-      const double own = scenario_.teams[rigs_[r].team].attacks_positive_x ? -1.0 : 1.0;
-      const double heading_deg = p.heading_rad * 180.0 / std::numbers::pi;
-      world_->robot(r).place({call.spot.x() + own * kDistance, p.y_m, heading_deg});
-    }
+    keep_away_from(call.spot);
   }
   std::vector<std::string> states;
   for (std::size_t t = 0; t < scenario_.teams.size(); ++t) states.push_back(referee_->state_for(call, t));
   set_team_states(std::move(states));
+  log_call(call);
   if (referee_hook_) referee_hook_(call);
+}
+
+// A call in the world log, among the rows and in time order:
+// "#referee,TIME,RESTART,TEAM,SPOT_X,SPOT_Y,SCORE_1,SCORE_2" (TEAM "-" for a
+// dropped ball). CSV readers take it as a comment; canhil view marks it.
+void Session::log_call(const RefereeCall& call) {
+  if (options_.world_log_period <= Nanos{0}) return;
+  char buf[200];
+  const std::string team = call.team ? scenario_.teams[*call.team].name : std::string("-");
+  std::snprintf(buf, sizeof buf, "#referee,%.3f,%s,%s,%.3f,%.3f", to_seconds(call.time),
+                std::string(restart_name(call.restart)).c_str(), team.c_str(), call.spot.x(), call.spot.y());
+  world_log_ += buf;
+  for (const int goals : referee_->score()) world_log_ += "," + std::to_string(goals);
+  world_log_ += '\n';
+}
+
+// Every robot keeps its distance from a restart (1 m): one nearer steps back
+// towards its own goal, to the first place on the field that no other robot
+// or obstacle takes (robots placed into each other would be thrown apart).
+void Session::keep_away_from(const Eigen::Vector2d& spot) {
+  constexpr double kDistance = 1.0;
+  const physics::WorldParams& w = scenario_.world;
+  const double radius = w.robot.body_radius_m;
+  std::vector<Eigen::Vector2d> at(rigs_.size());
+  for (std::size_t r = 0; r < rigs_.size(); ++r) {
+    const kinematics::Pose p = world_->robot(r).pose();
+    at[r] = {p.x_m, p.y_m};
+  }
+  const auto free = [&](const Eigen::Vector2d& c, std::size_t self) {
+    if (std::fabs(c.x()) > w.field.length_m / 2 - radius || std::fabs(c.y()) > w.field.width_m / 2 - radius) {
+      return false;
+    }
+    if ((c - spot).norm() < kDistance) return false;
+    for (std::size_t o = 0; o < at.size(); ++o) {
+      if (o != self && (at[o] - c).norm() < 2 * radius + 0.1) return false;
+    }
+    for (std::size_t o = 0; o < w.obstacles.size(); ++o) {
+      const Eigen::Vector3d ob = world_->obstacle_position(o);
+      if (Eigen::Vector2d(ob.x() - c.x(), ob.y() - c.y()).norm() < radius + w.obstacles[o].params.radius_m + 0.1) {
+        return false;
+      }
+    }
+    return true;
+  };
+  for (std::size_t r = 0; r < rigs_.size(); ++r) {
+    if ((at[r] - spot).norm() >= kDistance) continue;
+    const double own = scenario_.teams[rigs_[r].team].attacks_positive_x ? -1.0 : 1.0;
+    std::optional<Eigen::Vector2d> place;
+    for (double back = kDistance; back <= 4.0 && !place; back += 0.5) {
+      for (const double side : {0.0, 0.6, -0.6, 1.2, -1.2, 1.8, -1.8}) {
+        const Eigen::Vector2d c(spot.x() + own * back, at[r].y() + side);
+        if (free(c, r)) {
+          place = c;
+          break;
+        }
+      }
+    }
+    if (!place) continue;  // nowhere free near: it stays
+    at[r] = *place;
+    const double heading_deg = world_->robot(r).pose().heading_rad * 180.0 / std::numbers::pi;
+    world_->robot(r).place({place->x(), place->y(), heading_deg});
+  }
 }
 
 void Session::set_team_states(std::vector<std::string> states) {
@@ -280,6 +346,7 @@ void Session::after_step(Nanos now) {
   log_world(now);
   const bool scored = goals_.step(*world_, now);
   if (referee_) referee_step(now, scored);
+  if (step_hook_) step_hook_(now);
   publish(steps_);
 }
 

@@ -146,6 +146,43 @@ TEST_F(TwoTeams, ABallKickedOutComesBackOnTheLineForTheOtherTeamTheSameTwice) {
   EXPECT_EQ(run(), first) << "one seed, one match";
 }
 
+TEST_F(TwoTeams, ARestartSendsRobotsOffTheSpotNeverIntoEachOtherAndIntoTheWorldLog) {
+  Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  s.world.ball_start = {3.0, 5.5, 0.11};
+  s.world.robots[0] = {2.45, 5.5, -90};  // both within 1 m of where the ball goes out,
+  s.world.robots[1] = {3.55, 5.5, -90};  // both stepping back towards -x ...
+  s.world.robots[2] = {1.85, 5.5, -90};  // ... where this one stands
+  SessionOptions o = options();
+  o.world_log_period = std::chrono::milliseconds(50);
+  Session session(s, o);
+  session.apply(MoveBall{{3.0, 5.5, 0.11}, {0.0, 3.0, 0.0}});
+  std::vector<Eigen::Vector2d> at_call;
+  Eigen::Vector2d spot = Eigen::Vector2d::Zero();
+  session.on_referee_call([&](const RefereeCall& c) {
+    if (!at_call.empty()) return;
+    spot = c.spot;
+    for (std::size_t r = 0; r < s.robot_count(); ++r) {
+      const auto p = session.world().robot(r).pose();
+      at_call.emplace_back(p.x_m, p.y_m);
+    }
+  });
+  VirtualDriver driver(session, {});
+  driver.run_for(1s);
+  ASSERT_FALSE(at_call.empty()) << "the ball went out";
+  const double radius = s.world.robot.body_radius_m;
+  for (std::size_t r = 0; r < at_call.size(); ++r) {
+    EXPECT_GE((at_call[r] - spot).norm(), 1.0 - 1e-9) << "robot " << r << " keeps its distance";
+    for (std::size_t o2 = r + 1; o2 < at_call.size(); ++o2) {
+      EXPECT_GE((at_call[r] - at_call[o2]).norm(), 2 * radius) << "robots " << r << " and " << o2 << " overlap";
+    }
+  }
+  const std::string& log = session.world_log();
+  const auto line = log.find("\n#referee,");
+  ASSERT_NE(line, std::string::npos) << "the call is in the world log";
+  EXPECT_NE(log.find(",throwin,", line), std::string::npos) << log.substr(line, 80);
+  EXPECT_NE(log.find(",0,0\n", line), std::string::npos) << "with the score";
+}
+
 TEST_F(TwoTeams, MistakesInTeamsAreNamedWithTheirLine) {
   const auto error = [](const std::string& text) { return test::error_of([&] { parse_scenario(text, "t.toml"); }); };
   const std::string robot = "[[teams.robots]]\nx_m = -2.0\n";

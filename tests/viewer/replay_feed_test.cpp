@@ -31,6 +31,24 @@ const char* kHeader =
     "time_s,ball_x_m,ball_y_m,ball_z_m,robot0_x_m,robot0_y_m,robot0_heading_deg,robot0_reported_x_m,"
     "robot0_reported_y_m,robot0_reported_heading_deg\n";
 
+TEST_F(ReplayFeedTest, TheRefereesCallsAreMarksOtherCommentsAreSkipped) {
+  std::string log = kHeader;
+  log += "0.0,5,0,0.11,-3,0,-90,-3,0,-90\n";
+  log += "# a comment line\n";
+  log += "0.1,5,0,0.11,-3,0,-90,-3,0,-90\n";
+  log += "#referee,0.150,throwin,old,2.500,-6.000,1,0\n";
+  log += "#referee,0.180,drop_ball,-,0.000,0.000,1,0\n";
+  log += "#referee,not-a-time,throwin,old,0,0\n";  // not a call: skipped like any comment
+  log += "0.2,5,0,0.11,-3,0,-90,-3,0,-90\n";
+  const auto f = feed(write("r.csv", log));
+  EXPECT_EQ(f.rows(), 3u);
+  ASSERT_EQ(f.events().size(), 2u);
+  EXPECT_EQ(f.events()[0].kind, "referee");
+  EXPECT_NEAR(f.events()[0].time_s, 0.15, 1e-9);
+  EXPECT_EQ(f.events()[0].text, "throwin for old, score 1:0");
+  EXPECT_EQ(f.events()[1].text, "drop_ball, score 1:0");
+}
+
 TEST_F(ReplayFeedTest, RowsGoalsAndKicksFromTheBallAlone) {
   std::string log = kHeader;
   // The ball lies still, is kicked at 0.2 s and rolls into the +x goal (x > 9.11).

@@ -66,6 +66,10 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
   while (std::getline(in, line)) {
     ++number;
     if (line.empty()) continue;
+    if (line[0] == '#') {
+      referee_line(line);  // a referee's call; other comments are skipped
+      continue;
+    }
     const auto cells = split(line);
     if (cells.size() != columns_.size()) {
       throw SetupError(where(world_log, number) + std::to_string(cells.size()) + " values where the header has " +
@@ -116,6 +120,22 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
     events.push_back(std::move(event));
   }
   replay_json_ = json{{"columns", columns_}, {"robots", robots_}, {"rows", rows_}, {"events", events}}.dump();
+}
+
+// "#referee,TIME,RESTART,TEAM,X,Y,SCORE..." (Session::log_call): a mark on
+// the scrubber. A line that does not read so is a comment like any other.
+void ReplayFeed::referee_line(const std::string& line) {
+  const auto cells = split(line);
+  if (cells.size() < 6 || cells[0] != "#referee") return;
+  char* end = nullptr;
+  const double t = std::strtod(cells[1].c_str(), &end);
+  if (end != cells[1].c_str() + cells[1].size() || !std::isfinite(t)) return;
+  std::string text = cells[2] + (cells[3] == "-" ? std::string() : " for " + cells[3]);
+  if (cells.size() > 6) {
+    text += ", score";
+    for (std::size_t k = 6; k < cells.size(); ++k) text += (k == 6 ? " " : ":") + cells[k];
+  }
+  events_.push_back({t, "referee", std::move(text), std::nullopt});
 }
 
 // GoalWatcher's rule, on the logged ball.

@@ -76,6 +76,8 @@ class Referee {
   /// True once, at the first step after a call's pause is over: play on ("start").
   bool resume_due(Nanos now);
 
+  /// The ball is in play: no restart's pause is running.
+  bool in_play() const noexcept { return !resume_at_.has_value(); }
   /// Goals per team (a goal in a goal no team attacks counts for nobody).
   const std::vector<int>& score() const noexcept { return score_; }
   const std::vector<RefereeCall>& calls() const noexcept { return calls_; }

@@ -26,6 +26,11 @@
 //   replicate = true                 # the wireless: shared items copied between agents
 //   replicate_period_s = 0.1
 //
+//   [vision]                         # the camera's imperfections (default: exact)
+//   point_noise_m = 0.02             #   Gaussian sigma on line and obstacle points
+//   ball_noise_m = 0.05              #   on the ball
+//   detection_probability = 0.95     #   of each point and ball
+//   latency_s = 0.0                  #   what a frame shows is this old
 //   [referee]                        # goals, kick-offs, throw-ins, corners, dropped balls
 //   enabled = true                   #   (default: with two teams); each rule can be off:
 //   kickoff_after_goal = true        #   out_of_play, dropped_ball; stuck_s = 10,
@@ -105,6 +110,19 @@ struct Team {
   std::optional<ExternalSide> external;  ///< its own processes; none: the scenario's [external]
 };
 
+/// The emulated camera's imperfections ([vision]); each given one replaces
+/// SessionOptions::vision's (exact geometry by default). Each robot's camera
+/// draws from the run's seed.
+struct VisionImperfections {
+  std::optional<double> point_noise_m;          ///< Gaussian sigma on line and obstacle points
+  std::optional<double> ball_noise_m;           ///< Gaussian sigma on the ball
+  std::optional<double> detection_probability;  ///< of each ball, line and obstacle point
+  std::optional<double> latency_s;              ///< what a frame shows is this old
+  bool any_noise() const noexcept {
+    return point_noise_m.value_or(0) > 0 || ball_noise_m.value_or(0) > 0 || detection_probability.value_or(1) < 1;
+  }
+};
+
 /// At most two teams (CAMBADA's RTDB has two sets of databases).
 inline constexpr std::size_t kMostTeams = 2;
 
@@ -119,9 +137,10 @@ struct Scenario {
   CoachState coach;  ///< one player per robot after complete()
   LaptopSide laptop;
   ExternalSide external;
-  std::string source_toml;  ///< the text it was parsed from (empty: built in code)
-  std::vector<Team> teams;  ///< one or two after complete(), covering every robot in order
-  RefereeRules referee;     ///< [referee]; on by default with two teams
+  std::string source_toml;     ///< the text it was parsed from (empty: built in code)
+  std::vector<Team> teams;     ///< one or two after complete(), covering every robot in order
+  RefereeRules referee;        ///< [referee]; on by default with two teams
+  VisionImperfections vision;  ///< [vision]
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
   /// The team robot r plays in (after complete()).

@@ -196,6 +196,9 @@ class Session {
   /// The driver's part of a detailed snapshot (its bus measurements), called
   /// on the stepping thread when a watcher asked for details.
   void on_detail(std::function<void(WorldSnapshot&)> hook) { detail_hook_ = std::move(hook); }
+  /// Called on the stepping thread at the end of every step, after the
+  /// referee (a match's tally reads the world there).
+  void on_step(std::function<void(Nanos now)> hook) { step_hook_ = std::move(hook); }
   /// While the world is not stepping (paused): applies the queued changes,
   /// answers state requests and publishes the snapshot, as a step would.
   void settle();
@@ -231,7 +234,8 @@ class Session {
   void on_referee_call(std::function<void(const RefereeCall&)> hook) { referee_hook_ = std::move(hook); }
   /// What each fault rule did, summed over the robots.
   std::vector<can_nodes::FaultCount> fault_counts() const;
-  /// The world log (CSV with a header line); empty when world_log_period is 0.
+  /// The world log (CSV with a header line; with a referee, its calls as
+  /// "#referee,..." lines among the rows); empty when world_log_period is 0.
   const std::string& world_log() const noexcept { return world_log_; }
 
  private:
@@ -254,11 +258,14 @@ class Session {
   RefereeView referee_view_;          // kept: filled every step
   void referee_step(Nanos now, bool scored);
   void carry_out(const RefereeCall& call);
+  void keep_away_from(const Eigen::Vector2d& spot);
   void set_team_states(std::vector<std::string> states);
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
   std::function<void(const RefereeCall&)> referee_hook_;
   std::function<void(WorldSnapshot&)> detail_hook_;
+  std::function<void(Nanos)> step_hook_;
+  void log_call(const RefereeCall& call);
   // With vision, per team: its RTDB set, layout, PMan, coach, replicator.
   std::vector<std::unique_ptr<LaptopLink>> laptops_;
   std::vector<CoachState> team_coaches_;                       // team_coach(t), kept with coach_

@@ -1,6 +1,7 @@
 // canhil/viewer/replay_feed.hpp — a recorded run for the viewer (`canhil
 // view WORLD_LOG [--trace TRACE]`): the world log's rows and the events in
-// them (goals from the ball's path; kicks from the laptop's kick commands in
+// them (goals from the ball's path; the referee's calls from its "#referee"
+// lines; kicks from the laptop's kick commands in
 // the trace, or from the ball's jumps in speed without one), and the trace's
 // frames around any time, decoded. The page plays it; the feed only serves.
 #pragma once
@@ -45,6 +46,7 @@ class ReplayFeed final : public Feed {
   static constexpr std::size_t kMostFrames = 500;
 
  private:
+  void referee_line(const std::string& line);
   void find_goals();
   void find_kicks();
 
