@@ -1,6 +1,7 @@
 // app/args.hpp — a small, strict command-line parser for canhil's subcommands.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -83,6 +84,23 @@ inline std::optional<double> optional_number(Args& args, const std::string& name
 /// Removes `--name VALUE` and returns VALUE as a number, or `fallback` when absent.
 inline double number_option(Args& args, const std::string& name, double fallback) {
   return optional_number(args, name).value_or(fallback);
+}
+
+/// Removes `--seed S` and returns S (a whole number, 0 or more); nothing when absent.
+inline std::optional<std::uint64_t> seed_option(Args& args) {
+  const auto text = args.option("--seed");
+  if (!text) return std::nullopt;
+  std::size_t used = 0;
+  std::uint64_t seed = 0;
+  try {
+    seed = std::stoull(*text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text->size() || text->empty() || (*text)[0] == '-') {
+    throw UsageError("--seed takes a whole number, 0 or more, got '" + *text + "'");
+  }
+  return seed;
 }
 
 }  // namespace canhil::app

@@ -26,6 +26,8 @@ int run_rtdb(Args& args);
 int run_nodes(Args& args, const std::optional<std::string>& dbc);
 /// `canhil coach STATE|status|--robot N ...`: the base station's orders to a running run.
 int run_coach(Args& args, const std::optional<std::string>& dbc);
+/// `canhil match SCENARIO`: whole matches of two teams in virtual time.
+int run_match(Args& args, const std::optional<std::string>& dbc);
 int run_view(Args& args, const std::optional<std::string>& dbc);
 int run_play(Args& args, const std::optional<std::string>& dbc);
 /// `canhil pman list`: every robot's PMan table, its processes and their activations.

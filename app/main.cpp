@@ -78,6 +78,14 @@ const Command kCommands[] = {
                                               coach, faults, saves (docs/viewer.md)
 )",
      canhil::app::run_run},
+    {"match", "whole matches of two teams in virtual time, with a table of results",
+     R"(  canhil match SCENARIO.toml [--halves 2] [--half-minutes 10] [--repeat 1] [--seed N] [--json] [--quiet]
+                                              two teams ([[teams]]) play whole matches in virtual time,
+                                              ends changed at half time, the referee on; per match and in
+                                              total: score, possession, shots, kicks, faults and FTT
+                                              violations per team; seeds N, N+1, ... (docs/teams.md)
+)",
+     canhil::app::run_match},
     {"view", "a recorded run (world log and trace) in the web viewer, with a timeline",
      R"(  canhil view WORLD_LOG.csv [--trace FILE] [--config SCENARIO.toml] [--view-port 8765]
              [--view-listen 127.0.0.1] [--duration S]

@@ -214,7 +214,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const auto restore_world = args.option("--restore-world");
   std::vector<std::string> fault_texts;
   while (auto f = args.option("--fault")) fault_texts.push_back(*f);
-  const auto seed_text = args.option("--seed");
+  const std::optional<std::uint64_t> seed = seed_option(args);
   outputs.quiet = args.flag("--quiet");
   const auto control_path = args.option("--control");
   const ViewChoice view = view_options(args);
@@ -232,17 +232,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const double duration = duration_given.value_or(scenario.duration_s);
   outputs.log_period_s = number_option(args, "--world-log-period", 0.05);
   scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
-  if (seed_text) {
-    std::size_t used = 0;
-    try {
-      scenario.seed = std::stoull(*seed_text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != seed_text->size() || seed_text->empty() || (*seed_text)[0] == '-') {
-      throw UsageError("--seed takes a whole number, 0 or more, got '" + *seed_text + "'");
-    }
-  }
+  if (seed) scenario.seed = *seed;
   if (args.positionals().size() != 1) throw UsageError("run takes no other arguments");
   if (!external && (!processes.empty() || answer_limit || wait_for)) {
     throw UsageError("--process, --answer-limit and --wait-for are for runs with --external");

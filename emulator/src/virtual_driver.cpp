@@ -101,7 +101,14 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
       laptop->agent = std::make_unique<AgentParticipant>(space, agent_cfg);
     }
-    if (options_.count_frames || options_.record_trace) {
+    if (options_.check_timing) {
+      timing::TimingConfig config;
+      config.elementary_cycle = session_.options().ftt.elementary_cycle;
+      config.bit_rate = session_.options().ftt.bit_rate;
+      config.keep_intervals = false;
+      checkers_.emplace_back(session_.options().messages, config);
+    }
+    if (options_.count_frames || options_.record_trace || options_.check_timing) {
       recorders_.push_back(buses_[r]->attach("trace", 1 << 20));
       recorders_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
     }
@@ -143,9 +150,14 @@ void VirtualDriver::record() {
     while (auto f = recorders_[r]->receive()) {
       ++frame_counts_[r];
       if (!bus_stats_.empty()) bus_stats_[r].add(*f);
+      if (!checkers_.empty()) checkers_[r].add(*f);
       if (options_.record_trace) recorded_[r].push_back(*f);
     }
   }
+}
+
+std::uint64_t VirtualDriver::ftt_violations(std::size_t robot) const {
+  return robot < checkers_.size() ? checkers_[robot].violation_count() : 0;
 }
 
 void VirtualDriver::fill_detail(WorldSnapshot& s) {

@@ -154,7 +154,7 @@ TEST(Canhil, AWrongOptionShowsTheErrorAndThatCommandsUsageOnly) {
 TEST(Canhil, EveryCommandHasItsOwnHelp) {
   const CliRun all = canhil("help");
   EXPECT_EQ(all.status, 0);
-  for (const char* c : {"frames", "dump", "nodes", "run", "bench", "timing", "rtdb", "experiment"}) {
+  for (const char* c : {"frames", "dump", "nodes", "run", "match", "bench", "timing", "rtdb", "experiment"}) {
     const CliRun one = canhil(std::string(c) + " --help");
     EXPECT_EQ(one.status, 0) << c;
     EXPECT_TRUE(has(one, std::string("canhil ") + c + " ")) << c << "\n" << one.out;
@@ -398,6 +398,35 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
   EXPECT_TRUE(has(bad_cpu, "--cpu takes a core number, or -1 for none")) << bad_cpu.out;
+}
+
+TEST(CanhilMatch, PrintsATablePerMatchAndTheTotalsAndJsonForScripts) {
+  const CliRun r = canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --repeat 2 --seed 5");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r, "2 match(es) of 2 x 0.05 min, seeds 5..6, new against old")) << r.out;
+  EXPECT_TRUE(has(r, "match 1 (seed 5): new ")) << r.out;
+  EXPECT_TRUE(has(r, "match 2 (seed 6): new ")) << r.out;
+  EXPECT_TRUE(has(r, "goals  possession  shots  kicks  faults  FTT violations")) << r.out;
+  EXPECT_TRUE(has(r, "over 2 matches: new won ")) << r.out;
+  const CliRun j = canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --halves 1 --json --seed 5");
+  ASSERT_EQ(j.status, 0) << j.out;
+  EXPECT_EQ(j.out.front(), '{') << "JSON alone on stdout\n" << j.out;
+  EXPECT_TRUE(has(j, "\"possession_pct\"")) << j.out;
+  EXPECT_TRUE(has(j, "\"ftt_violations\": 0")) << j.out;
+  EXPECT_TRUE(has(j, "\"seed\": 5")) << j.out;
+  EXPECT_TRUE(has(j, "\"virtual_s\": 3.0")) << j.out;
+}
+
+TEST(CanhilMatch, RefusesWhatIsNoMatch) {
+  const CliRun one = canhil("match emulator/scenarios/one_robot.toml --half-minutes 0.01");
+  EXPECT_EQ(one.status, 2);
+  EXPECT_TRUE(has(one, "needs two teams")) << one.out;
+  const CliRun none = canhil("match");
+  EXPECT_EQ(none.status, 2);
+  EXPECT_TRUE(has(none, "match needs a scenario with two teams")) << none.out;
+  const CliRun halves = canhil("match emulator/scenarios/two_teams.toml --halves 1.5");
+  EXPECT_EQ(halves.status, 2);
+  EXPECT_TRUE(has(halves, "--halves takes a whole number 1..4")) << halves.out;
 }
 
 }  // namespace

@@ -71,7 +71,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
   // Intervals: missing and late frames against the period (or the minimum gap).
   if (m.count > 0) {
     const Nanos interval = t - m.last;
-    m.intervals.push_back(interval);
+    if (config_.keep_intervals) m.intervals.push_back(interval);
     if (m.ftt.kind == frames::FttKind::kAsync) {
       if (interval + config_.window_slack < m.ftt.min_gap) {
         std::snprintf(detail, sizeof detail, "%.3f ms after the previous, minimum gap %.0f ms", ms(interval),

@@ -18,6 +18,7 @@
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/laptop/hwcomm.hpp"
+#include "canhil/timing/analysis.hpp"
 #include "canhil/timing/live.hpp"
 
 namespace canhil::emulator {
@@ -28,6 +29,9 @@ struct VirtualOptions {
   bool reference_laptop = true;
   bool count_frames = true;  ///< a listener on every bus counts its frames (RobotOutcome::frames)
   bool record_trace = true;  ///< and keeps them for trace(); false: trace() is empty
+  /// Every bus checked as `canhil timing` would (FTT windows, periods), in
+  /// constant memory: ftt_violations().
+  bool check_timing = false;
 };
 
 struct RobotOutcome {
@@ -62,6 +66,8 @@ class VirtualDriver {
   std::vector<RobotOutcome> outcomes() const;
   /// Robot r's in-process reference handler, or nullptr without the reference laptop.
   const laptop::HwComm* handler(std::size_t robot) const;
+  /// The FTT and timing violations on robot r's bus so far (check_timing; else 0).
+  std::uint64_t ftt_violations(std::size_t robot) const;
   /// Every bus as a candump log, one interface name per robot, in time order (record_trace).
   std::string trace() const;
 
@@ -80,6 +86,7 @@ class VirtualDriver {
   std::vector<std::uint64_t> frame_counts_;
   // Measured once someone watches the run in detail (the viewer's plots); until then no cost.
   std::vector<timing::LiveBusStats> bus_stats_;
+  std::vector<timing::TimingAnalyzer> checkers_;  // check_timing
   std::vector<std::unique_ptr<Laptop>> laptops_;
   can_nodes::Lockstep lockstep_;
 };

@@ -24,6 +24,9 @@ struct TimingConfig {
   double late_fraction = 0.10;  ///< late: an interval longer than the period by this fraction ...
   Nanos late_minimum = std::chrono::microseconds(1500);  ///< ... or by this, whichever is larger
   Nanos window_slack{0};                                 ///< tolerance on the windows' edges (real buses: a few us)
+  /// Keep every interval for the report's mean, extremes and percentiles;
+  /// false: counts and violations only, in constant memory (a whole match).
+  bool keep_intervals = true;
 };
 
 enum class ViolationKind : std::uint8_t {
@@ -88,6 +91,8 @@ class TimingAnalyzer {
   /// Frames must come in time order (the interface's or log's own time).
   void add(const frames::TimedFrame& frame);
   TimingReport finish() const;
+  /// Violations so far (what finish() reports as violation_count).
+  std::uint64_t violation_count() const noexcept { return report_.violation_count; }
 
  private:
   struct PerMessage {

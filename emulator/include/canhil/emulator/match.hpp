@@ -1,0 +1,81 @@
+// canhil/emulator/match.hpp — whole matches in virtual time (`canhil
+// match`): halves of a set length, each a fresh session of the scenario with
+// the teams changing ends at half time, the referee on, and a tally per team
+// taken from the world as it steps: goals, possession, shots, kicks, the
+// frames the scenario's fault rules changed and the FTT violations on the
+// team's buses. One seed gives one match; each half has a seed of its own
+// drawn from it.
+//
+// Thread-compatible: one thread plays a match.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/emulator/session.hpp"
+
+namespace canhil::emulator {
+
+struct MatchOptions {
+  int halves = 2;
+  double half_s = 600;  ///< virtual seconds per half
+  /// A team has the ball while, in play, one of its robots is the nearest to
+  /// the ball and within this distance of its centre.
+  double possession_reach_m = 1.0;
+  /// A shot: a kick after which the ball, this long later, is moving towards
+  /// the goal the kicker's team attacks on a line between the posts.
+  double shot_check_s = 0.05;
+};
+
+/// A team's figures over a match (or a half).
+struct TeamTally {
+  int goals = 0;
+  double possession_s = 0;
+  int shots = 0;
+  int kicks = 0;                     ///< kicks its robots fired (the world's count, whoever asked)
+  std::uint64_t faults = 0;          ///< frames the scenario's fault rules changed on its buses
+  std::uint64_t ftt_violations = 0;  ///< on its buses, by `canhil timing`'s rules
+  TeamTally& operator+=(const TeamTally& other);
+};
+
+struct MatchGoal {
+  int half = 0;
+  double time_s = 0;  ///< into the half
+  std::size_t team = 0;
+};
+
+struct MatchResult {
+  std::uint64_t seed = 0;
+  std::vector<TeamTally> teams;  ///< in the scenario's order
+  std::vector<MatchGoal> goals;
+  std::size_t referee_calls = 0;
+  double virtual_s = 0;
+  double wall_s = 0;
+  bool stopped = false;  ///< cut short (the stop flag): the figures so far
+  /// The winner's index; none for a draw.
+  std::optional<std::size_t> winner() const;
+};
+
+/// The scenario of half `half` (0-based): in odd halves the teams change ends
+/// (every robot's place turned about the centre spot, each team attacking the
+/// other goal) and swap their starting game states (the other team kicks off).
+Scenario half_scenario(const Scenario& scenario, int half);
+
+/// The seed of one half of the match with seed `seed`.
+std::uint64_t half_seed(std::uint64_t seed, int half) noexcept;
+
+/// Plays a match of `scenario` (two teams; its seed is the match's) with the
+/// in-process reference handler and agent on every robot. `progress` is
+/// called after each virtual second with the virtual seconds played so far;
+/// `stop`, when set, ends the match after the current second. SetupError for
+/// a scenario without two teams, or with its referee switched off.
+MatchResult play_match(const Scenario& scenario, const SessionOptions& options, const MatchOptions& match,
+                       const std::function<void(double played_s)>& progress = {},
+                       const std::atomic<bool>* stop = nullptr);
+
+}  // namespace canhil::emulator

@@ -1,0 +1,154 @@
+// Whole matches in virtual time: halves with ends changed, a tally per team
+// that adds up, one seed one match, faults and FTT violations counted for the
+// team whose buses had them, and what a match refuses.
+#include "canhil/emulator/match.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/emulator/session.hpp"
+#include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/frames/messages.hpp"
+#include "support/error_of.hpp"
+#include "support/rtdb_ipc.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+using namespace std::chrono_literals;
+
+class MatchTest : public ::testing::Test {
+ protected:
+  SessionOptions options() const {
+    SessionOptions o;
+    o.messages = frames::MessageSet::load(test::shipped_dbc());
+    return o;
+  }
+  MatchOptions short_match(double half_s) const {
+    MatchOptions m;
+    m.half_s = half_s;
+    return m;
+  }
+  test::RtdbKeys keys_;
+};
+
+TEST_F(MatchTest, InTheSecondHalfTheTeamsChangeEndsAndTheOtherKicksOff) {
+  Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  s.coach.team_game_states = {"our_kickoff", "their_kickoff"};
+  const Scenario first = half_scenario(s, 0);
+  EXPECT_EQ(first.world.robots, s.world.robots) << "the first half as the file says";
+  const Scenario second = half_scenario(s, 1);
+  ASSERT_EQ(second.world.robots.size(), s.world.robots.size());
+  for (std::size_t r = 0; r < s.world.robots.size(); ++r) {
+    EXPECT_DOUBLE_EQ(second.world.robots[r].x_m, -s.world.robots[r].x_m) << r;
+    EXPECT_DOUBLE_EQ(second.world.robots[r].y_m, -s.world.robots[r].y_m) << r;
+    EXPECT_NEAR(std::fabs(std::remainder(second.world.robots[r].heading_deg - s.world.robots[r].heading_deg, 360.0)),
+                180.0, 1e-9)
+        << "turned about: " << r;
+  }
+  EXPECT_FALSE(second.teams[0].attacks_positive_x);
+  EXPECT_TRUE(second.teams[1].attacks_positive_x);
+  EXPECT_EQ(second.coach.team_game_states, (std::vector<std::string>{"their_kickoff", "our_kickoff"}));
+  EXPECT_EQ(half_scenario(s, 2).world.robots, s.world.robots) << "a third half as the first";
+  EXPECT_NE(half_seed(7, 0), half_seed(7, 1));
+  EXPECT_EQ(half_seed(7, 0), 7u);
+}
+
+TEST_F(MatchTest, AGoalInTheSecondHalfCountsForTheTeamNowAttackingThatGoal) {
+  Scenario s = half_scenario(load_scenario(shipped_scenario("two_teams.toml")), 1);
+  Session session(s, options());
+  VirtualDriver driver(session, {});
+  const double goal_x = s.world.field.length_m / 2 + 0.3;
+  session.apply(MoveBall{{goal_x, 0.0, s.world.ball.radius_m}, Eigen::Vector3d::Zero()});
+  driver.run_for(100ms);
+  ASSERT_NE(session.referee(), nullptr);
+  EXPECT_EQ(session.referee()->score(), (std::vector<int>{0, 1})) << "old attacks +x after half time";
+}
+
+TEST_F(MatchTest, AMatchPlaysEveryHalfAndItsTallyAddsUp) {
+  const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  std::vector<double> seen;
+  const MatchResult r = play_match(s, options(), short_match(8), [&](double played) { seen.push_back(played); });
+  EXPECT_FALSE(r.stopped);
+  EXPECT_DOUBLE_EQ(r.virtual_s, 16.0);
+  ASSERT_EQ(seen.size(), 16u) << "progress after every virtual second";
+  EXPECT_DOUBLE_EQ(seen.back(), 16.0);
+  ASSERT_EQ(r.teams.size(), 2u);
+  int goals = 0;
+  double possession = 0;
+  for (const TeamTally& t : r.teams) {
+    goals += t.goals;
+    possession += t.possession_s;
+    EXPECT_GT(t.kicks, 0) << "both teams' agents kick";
+    EXPECT_LE(t.shots, t.kicks);
+    EXPECT_EQ(t.faults, 0u) << "no fault rules";
+    EXPECT_EQ(t.ftt_violations, 0u) << "the emulated buses keep FTT";
+  }
+  EXPECT_EQ(static_cast<std::size_t>(goals), r.goals.size());
+  EXPECT_GT(possession, 1.0);
+  EXPECT_LE(possession, 16.0 + 1e-9);
+  EXPECT_EQ(r.seed, s.seed);
+}
+
+TEST_F(MatchTest, OneSeedPlaysOneMatchAnotherSeedAnother) {
+  Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  ASSERT_TRUE(s.vision.any_noise()) << "the shipped scenario's camera is noisy, so seeds matter";
+  const MatchResult a = play_match(s, options(), short_match(5));
+  const MatchResult again = play_match(s, options(), short_match(5));
+  s.seed += 1;
+  const MatchResult other = play_match(s, options(), short_match(5));
+  for (std::size_t t = 0; t < 2; ++t) {
+    EXPECT_EQ(a.teams[t].possession_s, again.teams[t].possession_s) << t;
+    EXPECT_EQ(a.teams[t].kicks, again.teams[t].kicks) << t;
+    EXPECT_EQ(a.teams[t].shots, again.teams[t].shots) << t;
+  }
+  EXPECT_NE(a.teams[0].possession_s, other.teams[0].possession_s) << "another seed, another match";
+}
+
+TEST_F(MatchTest, FaultsAndFttViolationsCountOnTheBusesThatHadThem) {
+  Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  s.faults.push_back(can_nodes::parse_fault("drop:M4_1:0.2"));
+  MatchOptions m = short_match(3);
+  m.halves = 1;
+  const MatchResult r = play_match(s, options(), m);
+  for (const TeamTally& t : r.teams) {
+    EXPECT_GT(t.faults, 0u) << "odometry frames dropped on every robot's bus";
+    EXPECT_GT(t.ftt_violations, 0u) << "a dropped periodic frame is a missing one";
+  }
+}
+
+TEST_F(MatchTest, AStopFlagEndsTheMatchWithTheFiguresSoFar) {
+  const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  std::atomic<bool> stop{false};
+  const MatchResult r = play_match(
+      s, options(), short_match(30),
+      [&](double played) {
+        if (played >= 2) stop = true;
+      },
+      &stop);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_DOUBLE_EQ(r.virtual_s, 2.0);
+}
+
+TEST_F(MatchTest, AMatchNeedsTwoTeamsAndItsReferee) {
+  const Scenario one = load_scenario(shipped_scenario("one_robot.toml"));
+  EXPECT_NE(test::error_of([&] { play_match(one, options(), short_match(1)); }).find("needs two teams"),
+            std::string::npos);
+  Scenario no_referee = load_scenario(shipped_scenario("two_teams.toml"));
+  no_referee.referee.enabled = false;
+  EXPECT_NE(test::error_of([&] { play_match(no_referee, options(), short_match(1)); }).find("needs the referee"),
+            std::string::npos);
+  MatchOptions none = short_match(1);
+  none.halves = 0;
+  EXPECT_NE(test::error_of([&] {
+              play_match(load_scenario(shipped_scenario("two_teams.toml")), options(), none);
+            }).find("at least one half"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace canhil::emulator
