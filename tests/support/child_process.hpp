@@ -1,8 +1,9 @@
 // tests/support/child_process.hpp — a program run in the background for the
 // vcan tests (the emulator, the handler), its output captured to a file;
 // stop() sends SIGINT (its Ctrl-C) and waits; a child that has not ended 60 s
-// later is killed (SIGKILL) and fails the test, so a hang is reported rather
-// than holding the suite until its time limit. A sanitizer's report in the
+// later is killed (SIGKILL), with every process it started, and fails the
+// test, so a hang is reported rather than holding the suite until its time
+// limit or leaving a process behind on the bus of the next test. A sanitizer's report in the
 // child's output (ASan, UBSan, TSan builds) fails the test that ran it, so a
 // finding in a child process is never lost behind an unchecked exit status.
 #pragma once
@@ -24,10 +25,12 @@ class ChildProcess {
     std::remove(log_.c_str());  // a previous run's output must never be read as this one's
     pid_ = fork();
     if (pid_ == 0) {
+      setpgid(0, 0);  // its own group: a kill reaches what it started too
       const std::string full = "exec " + command + " > " + log_ + " 2>&1";  // exec: the signal reaches it
       execl("/bin/sh", "sh", "-c", full.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
+    if (pid_ > 0) setpgid(pid_, pid_);  // as the child does: whichever comes first
   }
   ~ChildProcess() { stop(); }
   ChildProcess(const ChildProcess&) = delete;
@@ -47,7 +50,7 @@ class ChildProcess {
         ADD_FAILURE() << log_ << ": the process did not end within 60 s of signal " << sig
                       << "; killed (SIGKILL). Its output:\n"
                       << output();
-        ::kill(pid_, SIGKILL);
+        ::kill(-pid_, SIGKILL);  // and whatever it started: nothing of it may go on into the next test
         waitpid(pid_, &status, 0);
         break;
       }
