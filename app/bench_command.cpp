@@ -13,6 +13,8 @@
 //            target at least 20x (bench_external.cpp)
 //   view     the five-robot virtual-time factor with a page connected to the
 //            viewer against without; target at least 0.9 of it (bench_view.cpp)
+//   match    five robots and a ten-robot match half on one core, against the
+//            physics alone; targets 0.75 and 1/3 of it (bench_match.cpp)
 // The last three need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
 #include <sched.h>
 #include <time.h>
@@ -27,6 +29,7 @@
 #include <thread>
 
 #include "bench_external.hpp"
+#include "bench_match.hpp"
 #include "bench_realtime.hpp"
 #include "bench_view.hpp"
 #include "canhil/base/setup_error.hpp"
@@ -144,7 +147,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const double rt_seconds = number_option(args, "--rt-seconds", 10);
   const double rate_frames = number_option(args, "--frames", 200'000);
   const std::string iface = args.option("--iface").value_or("vcan0");
-  const std::string parts = args.option("--part").value_or("virtual,view,jitter,vcan,external");
+  const std::string parts = args.option("--part").value_or("virtual,view,match,jitter,vcan,external");
   const double priority_option = number_option(args, "--priority", 40);
   const auto config = args.option("--config");
   const double cpu_option = number_option(args, "--cpu", 0);
@@ -155,7 +158,8 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (!(priority_option >= 0 && priority_option <= 99)) throw UsageError("--priority takes 0..99");
   if (!(cpu_option >= -1 && cpu_option < CPU_SETSIZE)) throw UsageError("--cpu takes a core number, or -1 for none");
   const int priority = static_cast<int>(priority_option);
-  bool want_virtual = false, want_view = false, want_jitter = false, want_vcan = false, want_external = false;
+  bool want_virtual = false, want_view = false, want_jitter = false, want_vcan = false, want_external = false,
+       want_match = false;
   {
     std::istringstream in(parts);
     for (std::string part; std::getline(in, part, ',');) {
@@ -167,10 +171,13 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
         want_vcan = true;
       } else if (part == "view") {
         want_view = true;
+      } else if (part == "match") {
+        want_match = true;
       } else if (part == "external") {
         want_external = true;
       } else {
-        throw UsageError("--part takes virtual, view, jitter, vcan and external, comma-separated; got '" + part + "'");
+        throw UsageError("--part takes virtual, view, match, jitter, vcan and external, comma-separated; got '" + part +
+                         "'");
       }
     }
   }
@@ -187,6 +194,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   bool all_met = true;
   if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;
   if (want_view) all_met = bench_view(config, seconds, messages) && all_met;
+  if (want_match) all_met = bench_match(config, seconds, messages) && all_met;
   if (!want_jitter && !want_vcan && !want_external) return all_met ? 0 : 1;
   if (!can_nodes::kernel_has_can()) {
     std::printf(

@@ -105,7 +105,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       timing::TimingConfig config;
       config.elementary_cycle = session_.options().ftt.elementary_cycle;
       config.bit_rate = session_.options().ftt.bit_rate;
-      config.keep_intervals = false;
+      config.violations_only = true;
       checkers_.emplace_back(session_.options().messages, config);
     }
     if (options_.count_frames || options_.record_trace || options_.check_timing) {

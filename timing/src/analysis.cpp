@@ -57,7 +57,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
   if (report_.frames == 0) report_.start = t;
   report_.end = t;
   ++report_.frames;
-  report_.bits += frames::frame_bits(f);
+  if (!config_.violations_only) report_.bits += frames::frame_bits(f);
   if (f.kind == frames::FrameKind::kError) ++report_.error_frames;
   if (f.kind != frames::FrameKind::kData) return;
   const frames::MessageCodec* codec = set_->codec().find(f.id, f.extended);
@@ -71,7 +71,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
   // Intervals: missing and late frames against the period (or the minimum gap).
   if (m.count > 0) {
     const Nanos interval = t - m.last;
-    if (config_.keep_intervals) m.intervals.push_back(interval);
+    if (!config_.violations_only) m.intervals.push_back(interval);
     if (m.ftt.kind == frames::FttKind::kAsync) {
       if (interval + config_.window_slack < m.ftt.min_gap) {
         std::snprintf(detail, sizeof detail, "%.3f ms after the previous, minimum gap %.0f ms", ms(interval),

@@ -24,9 +24,10 @@ struct TimingConfig {
   double late_fraction = 0.10;  ///< late: an interval longer than the period by this fraction ...
   Nanos late_minimum = std::chrono::microseconds(1500);  ///< ... or by this, whichever is larger
   Nanos window_slack{0};                                 ///< tolerance on the windows' edges (real buses: a few us)
-  /// Keep every interval for the report's mean, extremes and percentiles;
-  /// false: counts and violations only, in constant memory (a whole match).
-  bool keep_intervals = true;
+  /// Counts and violations only, in constant memory and time per frame (a
+  /// whole match): no intervals kept (no mean, extremes or percentiles) and
+  /// no bits counted (no bus load).
+  bool violations_only = false;
 };
 
 enum class ViolationKind : std::uint8_t {

@@ -1,0 +1,100 @@
+// `canhil bench --part match` (bench_match.hpp).
+#include "bench_match.hpp"
+
+#include <sched.h>
+#include <time.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "canhil/emulator/match.hpp"
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/physics/world.hpp"
+
+namespace canhil::app {
+namespace {
+
+double cpu_now() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+// The world of a scenario stepped alone: virtual seconds per CPU second.
+double physics_alone(const emulator::Scenario& s, double seconds) {
+  physics::World world(s.world);
+  const auto steps = static_cast<long>(seconds / s.world.simulation.step_s + 0.5);
+  const double cpu0 = cpu_now();
+  for (long k = 0; k < steps; ++k) world.step();
+  return seconds / (cpu_now() - cpu0);
+}
+
+// One robot set in virtual time, everything on, as `canhil run` without --trace.
+double everything_on(const emulator::Scenario& s, double seconds,
+                     const std::shared_ptr<const frames::MessageSet>& messages) {
+  emulator::SessionOptions options;
+  options.messages = messages;
+  const double cpu0 = cpu_now();
+  emulator::Session session(s, options);
+  emulator::VirtualOptions driving;
+  driving.record_trace = false;
+  emulator::VirtualDriver driver(session, driving);
+  driver.run_for(from_seconds(seconds));
+  return seconds / (cpu_now() - cpu0);
+}
+
+// A match half of two teams: the referee, the tally and the FTT check on.
+double match_half(const emulator::Scenario& s, double seconds,
+                  const std::shared_ptr<const frames::MessageSet>& messages) {
+  emulator::SessionOptions options;
+  options.messages = messages;
+  emulator::MatchOptions m;
+  m.halves = 1;
+  m.half_s = seconds;
+  const double cpu0 = cpu_now();
+  emulator::play_match(s, options, m);
+  return seconds / (cpu_now() - cpu0);
+}
+
+// The rest of the bench on the core it runs on now: one core, as the targets say.
+int stay_on_this_core() {
+  const int cpu = sched_getcpu();
+  if (cpu < 0) return -1;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(static_cast<std::size_t>(cpu), &set);
+  return sched_setaffinity(0, sizeof set, &set) == 0 ? cpu : -1;
+}
+
+}  // namespace
+
+bool bench_match(const std::optional<std::string>& config, double seconds,
+                 const std::shared_ptr<const frames::MessageSet>& messages) {
+  const emulator::Scenario five = emulator::load_scenario(emulator::shipped_scenario("five_robots.toml"));
+  const std::filesystem::path path =
+      config ? std::filesystem::path(*config) : emulator::shipped_scenario("two_teams.toml");
+  const emulator::Scenario ten = emulator::load_scenario(path);
+  const int core = stay_on_this_core();
+  std::printf("canhil bench: matches on one core (%s), %g s of virtual time each, CPU time of this thread\n",
+              core >= 0 ? ("core " + std::to_string(core)).c_str() : "any core", seconds);
+  const double reference = physics_alone(five, seconds);
+  const double reference_ten = physics_alone(ten, seconds);
+  const double five_on = everything_on(five, seconds, messages);
+  const double ten_on = match_half(ten, seconds, messages);
+  const double five_target = 0.75 * reference;
+  const double ten_target = reference / 3;
+  std::printf("  physics alone, five_robots.toml:           %6.0fx  (the reference)\n", reference);
+  std::printf("  physics alone, %-26s %6.0fx\n", (path.filename().string() + ":").c_str(), reference_ten);
+  std::printf(
+      "  five robots, everything on:                %6.0fx  = %.2f of physics alone  target >= 0.75 "
+      "(180x where physics alone is 240x): %s\n",
+      five_on, five_on / reference, five_on >= five_target ? "met" : "MISSED");
+  std::printf(
+      "  %2zu robots, a match half, everything on:    %6.0fx  = %.2f of physics alone  target >= 0.33 "
+      "(80x where physics alone is 240x): %s\n",
+      ten.robot_count(), ten_on, ten_on / reference, ten_on >= ten_target ? "met" : "MISSED");
+  return five_on >= five_target && ten_on >= ten_target;
+}
+
+}  // namespace canhil::app
