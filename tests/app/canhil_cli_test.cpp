@@ -393,11 +393,22 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   EXPECT_EQ(canhil("bench --seconds -1").status, 2);
   const CliRun bad = canhil("bench --part speed");
   EXPECT_EQ(bad.status, 2);
-  EXPECT_TRUE(has(bad, "--part takes virtual, view, jitter, vcan and external, comma-separated; got 'speed'"))
+  EXPECT_TRUE(has(bad, "--part takes virtual, view, match, jitter, vcan and external, comma-separated; got 'speed'"))
       << bad.out;
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
   EXPECT_TRUE(has(bad_cpu, "--cpu takes a core number, or -1 for none")) << bad_cpu.out;
+}
+
+TEST(CanhilBench, MatchPartPrintsEachFigureAgainstThePhysicsAloneOfTheSameRun) {
+  // Printed, never judged here: the exit status says met (0) or missed (1).
+  const CliRun r = canhil("bench --part match --seconds 1");
+  EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
+  EXPECT_TRUE(has(r, "physics alone, five_robots.toml:")) << r.out;
+  EXPECT_TRUE(has(r, "five robots, everything on:")) << r.out;
+  EXPECT_TRUE(has(r, "10 robots, a match half, everything on:")) << r.out;
+  EXPECT_TRUE(has(r, "of physics alone  target >= 0.33")) << r.out;
+  EXPECT_FALSE(has(r, "real-time factor, everything on:")) << "only the part asked for\n" << r.out;
 }
 
 TEST(CanhilMatch, PrintsATablePerMatchAndTheTotalsAndJsonForScripts) {
