@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <time.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -24,7 +25,7 @@ double cpu_now() {
 // The world of a scenario stepped alone: virtual seconds per CPU second.
 double physics_alone(const emulator::Scenario& s, double seconds) {
   physics::World world(s.world);
-  const auto steps = static_cast<long>(seconds / s.world.simulation.step_s + 0.5);
+  const auto steps = std::lround(seconds / s.world.simulation.step_s);
   const double cpu0 = cpu_now();
   for (long k = 0; k < steps; ++k) world.step();
   return seconds / (cpu_now() - cpu0);

@@ -40,7 +40,7 @@ class ProgressBar {
   void show(double fraction, const std::string& what) {
     if (!on_) return;
     const int width = 30;
-    const int filled = static_cast<int>(fraction * width + 0.5);
+    const int filled = static_cast<int>(std::lround(fraction * width));
     std::fprintf(stderr, "\r[%s%s] %3.0f %%  %s ", std::string(static_cast<std::size_t>(filled), '#').c_str(),
                  std::string(static_cast<std::size_t>(width - filled), '.').c_str(), 100 * fraction, what.c_str());
     std::fflush(stderr);

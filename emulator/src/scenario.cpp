@@ -151,10 +151,16 @@ void read_external(const TableReader& r, ExternalSide& e) {
   if (const auto v = r.number("attach_limit_s", 0.1, 3600.0)) e.attach_limit_s = *v;
 }
 
-const std::vector<std::string> kLaptopFields = {"rtdb_lib",       "rtdb_items", "rtdb_ini",
-                                                "layout",         "pman",       "pman_processes",
-                                                "coach_period_s", "replicate",  "replicate_period_s"};
-const std::vector<std::string> kExternalFields = {"processes", "answer_limit_s", "attach_limit_s"};
+const std::vector<std::string>& laptop_fields() {
+  static const std::vector<std::string> fields = {"rtdb_lib",       "rtdb_items", "rtdb_ini",
+                                                  "layout",         "pman",       "pman_processes",
+                                                  "coach_period_s", "replicate",  "replicate_period_s"};
+  return fields;
+}
+const std::vector<std::string>& external_fields() {
+  static const std::vector<std::string> fields = {"processes", "answer_limit_s", "attach_limit_s"};
+  return fields;
+}
 
 }  // namespace detail
 
@@ -181,7 +187,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
     read_coach(TableReader(*coach, "coach", file_name, fields), s, robots);
   }
   if (const toml::table* laptop = root["laptop"].as_table()) {
-    detail::read_laptop(TableReader(*laptop, "laptop", file_name, detail::kLaptopFields), s.laptop);
+    detail::read_laptop(TableReader(*laptop, "laptop", file_name, detail::laptop_fields()), s.laptop);
   }
   if (const toml::table* referee = root["referee"].as_table()) {
     const TableReader r(*referee, "referee", file_name,
@@ -206,7 +212,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
     s.vision.latency_s = r.number("latency_s", 0.0, 1.0);
   }
   if (const toml::table* external = root["external"].as_table()) {
-    detail::read_external(TableReader(*external, "external", file_name, detail::kExternalFields), s.external);
+    detail::read_external(TableReader(*external, "external", file_name, detail::external_fields()), s.external);
   }
   complete(s);
   s.source_toml = std::string(toml_text);

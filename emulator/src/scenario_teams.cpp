@@ -28,9 +28,15 @@ const ExternalSide& Scenario::external_of(std::size_t team) const noexcept {
 namespace detail {
 namespace {
 
-const std::vector<std::string> kTeamFields = {"name", "attacks", "game_state", "laptop", "external", "robots"};
-const std::vector<std::string> kRobotFields = {"x_m",   "y_m",     "heading_deg", "interface",
-                                               "agent", "running", "role",        "role_auto"};
+const std::vector<std::string>& team_fields() {
+  static const std::vector<std::string> fields = {"name", "attacks", "game_state", "laptop", "external", "robots"};
+  return fields;
+}
+const std::vector<std::string>& robot_fields() {
+  static const std::vector<std::string> fields = {"x_m",   "y_m",     "heading_deg", "interface",
+                                                  "agent", "running", "role",        "role_auto"};
+  return fields;
+}
 
 void read_robot(const TableReader& r, Scenario& s) {
   physics::Placement at;
@@ -79,7 +85,7 @@ bool read_teams(const toml::table& root, const std::string& file, Scenario& s) {
   std::vector<std::string> game_states;
   for (const toml::node& t : *teams) {
     const toml::table& table = *t.as_table();
-    const TableReader r(table, "teams", file, kTeamFields);
+    const TableReader r(table, "teams", file, team_fields());
     Team team;
     team.name = r.text("name", "\"new\"").value_or("team " + std::to_string(s.teams.size() + 1));
     const bool plain = std::all_of(team.name.begin(), team.name.end(), [](char c) {
@@ -101,12 +107,12 @@ bool read_teams(const toml::table& root, const std::string& file, Scenario& s) {
     if (const toml::node* l = r.get("laptop")) {
       if (!l->is_table()) r.fail(*l, "laptop", "give it as a [teams.laptop] table");
       team.laptop.emplace();
-      read_laptop(TableReader(*l->as_table(), "teams.laptop", file, kLaptopFields), *team.laptop);
+      read_laptop(TableReader(*l->as_table(), "teams.laptop", file, laptop_fields()), *team.laptop);
     }
     if (const toml::node* e = r.get("external")) {
       if (!e->is_table()) r.fail(*e, "external", "give it as a [teams.external] table");
       team.external.emplace();
-      read_external(TableReader(*e->as_table(), "teams.external", file, kExternalFields), *team.external);
+      read_external(TableReader(*e->as_table(), "teams.external", file, external_fields()), *team.external);
     }
     const toml::node* robots = r.get("robots");
     if (robots == nullptr || !robots->is_array_of_tables() || robots->as_array()->empty()) {
@@ -114,7 +120,7 @@ bool read_teams(const toml::table& root, const std::string& file, Scenario& s) {
     }
     team.first_robot = s.world.robots.size();
     for (const toml::node& rb : *robots->as_array()) {
-      read_robot(TableReader(*rb.as_table(), "teams.robots", file, kRobotFields), s);
+      read_robot(TableReader(*rb.as_table(), "teams.robots", file, robot_fields()), s);
     }
     team.robots = s.world.robots.size() - team.first_robot;
     s.teams.push_back(std::move(team));

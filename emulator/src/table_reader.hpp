@@ -89,8 +89,8 @@ class TableReader {
 // The scenario's tables a team may give again (scenario.cpp).
 void read_laptop(const TableReader& r, LaptopSide& l);
 void read_external(const TableReader& r, ExternalSide& e);
-extern const std::vector<std::string> kLaptopFields;
-extern const std::vector<std::string> kExternalFields;
+const std::vector<std::string>& laptop_fields();
+const std::vector<std::string>& external_fields();
 
 /// [[teams]] (scenario_teams.cpp): the teams, their robots placed into
 /// s.world.robots (refused next to [[robots]]), their interfaces, agents and
