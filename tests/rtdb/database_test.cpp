@@ -189,12 +189,13 @@ TEST_F(TeamDatabase, SetUpMistakesAreNamed) {
 TEST_F(TeamDatabase, TheOtherTeamsSetOfOneLibraryMustReadTheSameTable) {
   auto first = open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini, 0);
   write_file(files_.dir / "other.ini", team_rtdb_ini());
-  const std::string why = error_of(
-      [&] { open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.dir / "other.ini", 1); });
+  const std::string why =
+      error_of([&] { open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.dir / "other.ini", 1); });
   EXPECT_NE(why.find("already serves the other team with " + files_.ini.string()), std::string::npos) << why;
   EXPECT_NE(why.find("this team a copy of the library under another path"), std::string::npos) << why;
-  EXPECT_NE(error_of([&] { open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini, 2); })
-                .find("two teams at most"),
+  EXPECT_NE(error_of([&] {
+              open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini, 2);
+            }).find("two teams at most"),
             std::string::npos);
   // The first team's Database still works after both refusals.
   const std::array<unsigned char, 16> vel{9};
