@@ -43,8 +43,11 @@ const Command kCommands[] = {
 )",
      canhil::app::run_dump},
     {"nodes", "one robot's emulated nodes with physics on an interface, real time",
-     R"(  canhil nodes --iface IFACE [--config WORLD.toml] [--duration S] [--ec-ms 10] [--bit-rate 1000000] [--quiet]
-                                              one robot's emulated nodes with physics, real time
+     R"(  canhil nodes --iface IFACE [--config WORLD.toml] [--emulate NODE,...] [--duration S] [--ec-ms 10]
+               [--bit-rate 1000000] [--quiet]
+                                              one robot's emulated nodes with physics, real time;
+                                              --emulate names the nodes canhil plays (default all),
+                                              the others being real boards on the bus
 )",
      canhil::app::run_nodes},
     {"run", "a scenario: the whole loop in virtual time, or real time on SocketCAN",

@@ -1,6 +1,7 @@
 // `canhil nodes --iface IFACE`: one robot's emulated node set with its physics,
 // in real time on a SocketCAN interface, so any laptop-side program can talk
 // to it: a session of one robot without vision or RTDB, on the real-time driver.
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -16,6 +17,23 @@ namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void stop_on_signal(int) { g_stop = true; }
 
+// --emulate Motor1,Motor2,Motor3: the nodes canhil plays; the others are real boards on the bus.
+can_nodes::NodeSet parse_emulate(const std::string& text) {
+  can_nodes::NodeSet set;
+  std::size_t from = 0;
+  while (from <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', from), text.size());
+    const std::string name = text.substr(from, comma - from);
+    const auto id = can_nodes::node_by_name(name);
+    if (!id)
+      throw UsageError("--emulate: \"" + name + "\" is not a node; the nodes are " + can_nodes::node_name_list());
+    if (set.contains(*id)) throw UsageError("--emulate: " + name + " appears twice");
+    set.insert(*id);
+    from = comma + 1;
+  }
+  return set;
+}
+
 }  // namespace
 
 int run_nodes(Args& args, const std::optional<std::string>& dbc) {
@@ -25,6 +43,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   const double ec_ms = number_option(args, "--ec-ms", 10);
   const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
   const bool quiet = args.flag("--quiet");
+  const auto emulate = args.option("--emulate");
   if (args.positionals().size() != 1) throw UsageError("nodes takes no other arguments");
   if (!iface) throw UsageError("nodes needs --iface IFACE (e.g. --iface vcan0)");
   if (!(ec_ms > 0)) throw UsageError("--ec-ms takes milliseconds above 0");
@@ -34,6 +53,8 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   scenario.world.robots.resize(1, emulator::kDefaultPlacement);
   scenario.interfaces = {*iface};
   scenario.agents = {emulator::kFirstAgent};
+  scenario.emulate.resize(1, can_nodes::NodeSet::all());
+  if (emulate) scenario.emulate = {parse_emulate(*emulate)};
   emulator::SessionOptions options;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   options.ftt.elementary_cycle = from_ms(ec_ms);
@@ -47,10 +68,10 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
 
   std::signal(SIGINT, stop_on_signal);
   std::signal(SIGTERM, stop_on_signal);
-  std::printf(
-      "canhil nodes: robot on %s: FTT master (EC %.1f ms, %u bit/s), Pic_base, Motor1-3, Pic_odom, Compass, "
-      "SysMon; physics every %.0f ms. Ctrl-C stops.\n",
-      iface->c_str(), ec_ms, options.ftt.bit_rate, to_ms(session.step_period()));
+  const can_nodes::NodeSet emulated = session.scenario().emulate.at(0);
+  std::printf("canhil nodes: robot on %s: %s (EC %.1f ms, %u bit/s)%s; physics every %.0f ms. Ctrl-C stops.\n",
+              iface->c_str(), can_nodes::describe(emulated).c_str(), ec_ms, options.ftt.bit_rate,
+              emulated.is_all() ? "" : ", the others are real boards on the bus", to_ms(session.step_period()));
   std::fflush(stdout);
 
   const Nanos end = duration_s > 0 ? start + from_seconds(duration_s) : kNever;
@@ -64,10 +85,14 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
     }
     if (!quiet && driver.clock().now() >= next_report) {
       const kinematics::Pose pose = session.snapshot().robots.at(0);
+      const can_nodes::Node& timed = nodes.emulates(can_nodes::NodeId::kMaster)
+                                         ? nodes.node(can_nodes::NodeId::kMaster)
+                                         : *session.rig(0).nodes->nodes().front();
+      const std::uint64_t tms =
+          nodes.emulates(can_nodes::NodeId::kMaster) ? timed.counters().sent : timed.counters().triggers;
       std::printf("canhil nodes: %.0f s, %llu TMs, robot at (%.2f, %.2f) m, %llu bad frames, %llu late steps\n",
-                  to_seconds(driver.clock().now() - start),
-                  static_cast<unsigned long long>(nodes.node(can_nodes::NodeId::kMaster).counters().sent), pose.x_m,
-                  pose.y_m, static_cast<unsigned long long>(nodes.bad_frames()),
+                  to_seconds(driver.clock().now() - start), static_cast<unsigned long long>(tms), pose.x_m, pose.y_m,
+                  static_cast<unsigned long long>(nodes.bad_frames()),
                   static_cast<unsigned long long>(driver.physics_stats().late_steps));
       std::fflush(stdout);
       next_report += std::chrono::seconds(5);
@@ -79,6 +104,10 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   std::printf("\ncanhil nodes: summary after %.1f s on %s\n", to_seconds(driver.clock().now() - start), iface->c_str());
   std::printf("  %-12s %10s %10s %10s %12s %10s\n", "node", "sent", "received", "bad", "send failed", "dropped");
   for (std::size_t i = 0; i < can_nodes::kNodeCount; ++i) {
+    if (!nodes.emulates(static_cast<can_nodes::NodeId>(i))) {
+      std::printf("  %-12s %10s\n", can_nodes::kNodeNames[i], "(a real board)");
+      continue;
+    }
     const auto& c = nodes.node(static_cast<can_nodes::NodeId>(i)).counters();
     std::printf("  %-12s %10llu %10llu %10llu %12llu %10llu\n", can_nodes::kNodeNames[i],
                 static_cast<unsigned long long>(c.sent), static_cast<unsigned long long>(c.received),

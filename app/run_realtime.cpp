@@ -24,11 +24,15 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
     const kinematics::Pose p = world.robot(r).pose();
-    const auto& tm = rig.nodes->node(can_nodes::NodeId::kMaster).counters();
-    std::fprintf(out, "  %s agent %d: at (%.2f, %.2f), %llu TMs sent, %llu bad frames, 24 V pack %.1f V (%.0f %%)\n",
-                 rig.interface.c_str(), rig.agent, p.x_m, p.y_m, static_cast<unsigned long long>(tm.sent),
-                 static_cast<unsigned long long>(rig.nodes->bad_frames()), world.robot(r).battery().power24_v,
-                 100 * world.robot(r).charge()[2]);
+    // TMs canhil's master sent, or, with a real master, those canhil's first node answered.
+    const bool master = rig.nodes->emulates(can_nodes::NodeId::kMaster);
+    const can_nodes::NodeCounters& tm =
+        master ? rig.nodes->node(can_nodes::NodeId::kMaster).counters() : rig.nodes->nodes().front()->counters();
+    std::fprintf(
+        out, "  %s agent %d: at (%.2f, %.2f), %llu TMs %s, %llu bad frames, 24 V pack %.1f V (%.0f %%)\n",
+        rig.interface.c_str(), rig.agent, p.x_m, p.y_m, static_cast<unsigned long long>(master ? tm.sent : tm.triggers),
+        master ? "sent" : "heard from the real master", static_cast<unsigned long long>(rig.nodes->bad_frames()),
+        world.robot(r).battery().power24_v, 100 * world.robot(r).charge()[2]);
     std::fprintf(out, "    bus: %s\n", can_nodes::describe(rig.nodes->bus_report()).c_str());
     for (const auto& c : rig.faults->counts()) {
       std::fprintf(out, "    fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
@@ -54,6 +58,10 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
     const emulator::Rig& rig = session.rig(r);
     std::fprintf(out, "  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,
                  rig.interface.c_str(), rig.agent, rig.agent);
+    if (const can_nodes::NodeSet e = sc.emulate.at(r); !e.is_all()) {
+      std::fprintf(out, "    canhil emulates %s; the other nodes are real boards on %s\n",
+                   can_nodes::describe(e).c_str(), rig.interface.c_str());
+    }
   }
   std::fflush(out);
   const Nanos end = output.duration_s > 0 ? start + from_seconds(output.duration_s) : kNever;

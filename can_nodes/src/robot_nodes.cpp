@@ -2,61 +2,87 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 namespace canhil::can_nodes {
 
 RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params, RobotIo& robot,
-                       const EndpointFactory& endpoints, Nanos start)
-    : schedule_(*set, params.ftt), start_(start) {
-  for (std::size_t i = 0; i < kNodeCount; ++i) buses_.push_back(endpoints(node_name(static_cast<NodeId>(i))));
-  watch_bus_ = endpoints("SysMon watch");
-  auto bus = [&](NodeId id) -> Bus& { return *buses_[static_cast<std::size_t>(id)]; };
-  nodes_.push_back(std::make_unique<FttMaster>(bus(NodeId::kMaster), set, schedule_, start));
-  nodes_.push_back(std::make_unique<PicBase>(bus(NodeId::kPicBase), set, params, robot));
-  for (int w = 0; w < 3; ++w) {
-    nodes_.push_back(std::make_unique<MotorNode>(bus(motor_node(w)), set, params, robot, w, start));
+                       const EndpointFactory& endpoints, Nanos start, NodeSet emulate)
+    : schedule_(*set, params.ftt), start_(start), emulated_(emulate) {
+  for (std::size_t i = 0; i < kNodeCount; ++i) {
+    const auto id = static_cast<NodeId>(i);
+    if (emulates(id)) buses_[i] = endpoints(node_name(id));
   }
-  nodes_.push_back(std::make_unique<PicOdom>(bus(NodeId::kPicOdom), set, params));
-  nodes_.push_back(std::make_unique<CompassNode>(bus(NodeId::kCompass), set, params, robot));
-  auto* base = static_cast<PicBase*>(nodes_[1].get());
-  nodes_.push_back(std::make_unique<SystemMonitor>(
+  auto bus = [&](NodeId id) -> Bus& { return *buses_[static_cast<std::size_t>(id)]; };
+  auto make = [&](NodeId id, auto build) {
+    if (emulates(id)) nodes_[static_cast<std::size_t>(id)] = build(bus(id));
+  };
+  make(NodeId::kMaster, [&](Bus& b) { return std::make_unique<FttMaster>(b, set, schedule_, start); });
+  make(NodeId::kPicBase, [&](Bus& b) { return std::make_unique<PicBase>(b, set, params, robot); });
+  for (int w = 0; w < 3; ++w) {
+    make(motor_node(w), [&](Bus& b) { return std::make_unique<MotorNode>(b, set, params, robot, w, start); });
+  }
+  make(NodeId::kPicOdom, [&](Bus& b) { return std::make_unique<PicOdom>(b, set, params); });
+  make(NodeId::kCompass, [&](Bus& b) { return std::make_unique<CompassNode>(b, set, params, robot); });
+  if (!emulates(NodeId::kSysMon)) return;
+  watch_bus_ = endpoints("SysMon watch");
+  auto* base = static_cast<PicBase*>(nodes_[static_cast<std::size_t>(NodeId::kPicBase)].get());
+  nodes_[static_cast<std::size_t>(NodeId::kSysMon)] = std::make_unique<SystemMonitor>(
       bus(NodeId::kSysMon), set, params,
-      [this] {  // the others' bad frames; it adds its own
+      [this] {  // the other emulated nodes' bad frames; it adds its own
         std::uint64_t n = 0;
-        for (std::size_t i = 0; i + 1 < nodes_.size(); ++i) n += nodes_[i]->counters().bad_frames();
+        for (std::size_t i = 0; i < kNodeCount; ++i) {
+          if (nodes_[i] && static_cast<NodeId>(i) != NodeId::kSysMon) n += nodes_[i]->counters().bad_frames();
+        }
         return n;
       },
       [this, base](Nanos now) {
-        // bit0: Pic_base braking (no M6); bit1: some node switched off.
-        std::uint8_t state = base->watchdog_tripped(now) ? 1 : 0;
+        // bit0: Pic_base braking (no M6); bit1: some node switched off. (A real
+        // Pic_base's brake is its own to report.)
+        std::uint8_t state = base != nullptr && base->watchdog_tripped(now) ? 1 : 0;
         for (const auto& n : nodes_) {
-          if (!n->enabled()) state |= 2;
+          if (n && !n->enabled()) state |= 2;
         }
         return state;
       },
-      watch_bus_.get()));
+      watch_bus_.get());
+}
+
+Node& RobotNodes::node(NodeId id) { return const_cast<Node&>(static_cast<const RobotNodes&>(*this).node(id)); }
+
+const Node& RobotNodes::node(NodeId id) const {
+  const auto& n = nodes_[static_cast<std::size_t>(id)];
+  if (!n) throw std::logic_error(std::string(node_name(id)) + " is a real board here: canhil does not emulate it");
+  return *n;
 }
 
 std::vector<Node*> RobotNodes::nodes() {
   std::vector<Node*> out;
-  for (auto& n : nodes_) out.push_back(n.get());
+  for (auto& n : nodes_) {
+    if (n) out.push_back(n.get());
+  }
   return out;
 }
 
 std::uint64_t RobotNodes::bad_frames() const {
   std::uint64_t n = 0;
-  for (const auto& node : nodes_) n += node->counters().bad_frames();
+  for (const auto& node : nodes_) {
+    if (node) n += node->counters().bad_frames();
+  }
   return n;
 }
 
 BusReport RobotNodes::bus_report() const {
   BusReport r;
   r.fewest_triggers = ~0ULL;
-  const BusStats watch = watch_bus_->stats();
-  r.monitor_heard = watch.received;
-  r.monitor_overflow = watch.rx_overflow;
+  if (watch_bus_) {
+    const BusStats watch = watch_bus_->stats();
+    r.monitor_heard = watch.received;
+    r.monitor_overflow = watch.rx_overflow;
+  }
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    if (!nodes_[i]) continue;
     const Node& n = *nodes_[i];
     const NodeCounters& c = n.counters();
     const BusStats s = n.bus().stats();
@@ -79,6 +105,7 @@ BusReport RobotNodes::bus_report() const {
       r.fewest_node = node_name(id);
     }
   }
+  if (r.fewest_triggers == ~0ULL) r.fewest_triggers = 0;  // no synchronous node emulated
   return r;
 }
 
@@ -100,7 +127,9 @@ std::string describe(const BusReport& r) {
 }
 
 void RobotNodes::set_fault_hook(FaultHook* hook) {
-  for (auto& n : nodes_) n->set_fault_hook(hook);
+  for (auto& n : nodes_) {
+    if (n) n->set_fault_hook(hook);
+  }
 }
 
 }  // namespace canhil::can_nodes

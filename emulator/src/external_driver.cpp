@@ -35,6 +35,11 @@ class ExternalDriver::Processes final : public can_nodes::Participant {
 
 ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor, ExternalOptions options)
     : session_(session), conductor_(conductor), options_(options), lockstep_(clock_) {
+  if (session_.scenario().mixes_real_boards()) {
+    throw SetupError(
+        "emulate = [...] leaves nodes to real boards, and a board keeps the wall clock's time, not "
+        "canhil's virtual time: run that scenario in real time (without --virtual-time)");
+  }
   const std::size_t n = session_.robot_count();
   can_nodes::SocketCanOptions socket_options;
   socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;

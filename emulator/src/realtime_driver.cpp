@@ -38,24 +38,35 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
   }
   const Nanos ec = session_.options().ftt.elementary_cycle;
   start_ = (clock_.now() / ec + 10) * ec;  // on a whole EC, a little ahead
-  sockets_.resize(n);
+  // Per robot: a socket per emulated node in NodeId order, the system monitor's watching one last (null: a real
+  // board's, or no monitor).
+  sockets_.assign(n, std::vector<can_nodes::SocketCanBus*>(can_nodes::kNodeCount + 1, nullptr));
   session_.build_nodes(
-      [this](std::size_t r, const std::string&) {
+      [this](std::size_t r, const std::string& node) {
         can_nodes::SocketCanOptions socket_options;
         socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
         auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options);
-        sockets_[r].push_back(bus.get());
+        const auto id = can_nodes::node_by_name(node);
+        sockets_[r][id ? static_cast<std::size_t>(*id) : can_nodes::kNodeCount] = bus.get();
         return std::unique_ptr<can_nodes::Bus>(std::move(bus));
       },
       Session::IoMode::kShared, start_);
   std::vector<int> fds;
   for (std::size_t r = 0; r < n; ++r) {
-    if (sockets_[r].front()->state() != can_nodes::BusState::kUp) {
+    const auto open = [](const can_nodes::SocketCanBus* s) { return s != nullptr; };
+    const auto first = std::find_if(sockets_[r].begin(), sockets_[r].end(), open);
+    if (first == sockets_[r].end() || (*first)->state() != can_nodes::BusState::kUp) {
       const std::string& iface = session_.rig(r).interface;
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
     }
     states_.push_back(can_nodes::BusState::kUp);
-    for (std::size_t k = 1; k < sockets_[r].size(); ++k) fds.push_back(sockets_[r][k]->fd());  // not the master's
+    // The loop's sockets (not the master's): the watching one, else any; its state is read on the loop's thread.
+    watched_.push_back(sockets_[r].back());
+    for (std::size_t k = 1; k < sockets_[r].size(); ++k) {
+      if (sockets_[r][k] == nullptr) continue;
+      fds.push_back(sockets_[r][k]->fd());
+      if (watched_.back() == nullptr) watched_.back() = sockets_[r][k];
+    }
   }
   waiter_ = std::make_unique<WallWaiter>(fds);
   loop_ = std::make_unique<can_nodes::Realtime>(clock_, [this](Nanos d) { waiter_->wait(d); });
@@ -63,7 +74,7 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
   for (std::size_t r = 0; r < n; ++r) {
     const can_nodes::RobotNodes& nodes = *session_.rig(r).nodes;
     for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) {
-      if (node == &nodes.node(can_nodes::NodeId::kMaster)) {
+      if (nodes.emulates(can_nodes::NodeId::kMaster) && node == &nodes.node(can_nodes::NodeId::kMaster)) {
         masters_->add(*node);
       } else {
         loop_->add(*node);
@@ -104,8 +115,9 @@ void RealtimeDriver::run_until(Nanos end, const std::atomic<bool>& stop) {
 
 std::vector<std::pair<std::size_t, can_nodes::BusState>> RealtimeDriver::bus_state_changes() {
   std::vector<std::pair<std::size_t, can_nodes::BusState>> changes;
-  for (std::size_t r = 0; r < sockets_.size(); ++r) {
-    const can_nodes::BusState state = sockets_[r].back()->refresh_state();  // SysMon's watch socket: this thread's
+  for (std::size_t r = 0; r < watched_.size(); ++r) {
+    if (watched_[r] == nullptr) continue;  // only the master is emulated: its thread's socket
+    const can_nodes::BusState state = watched_[r]->refresh_state();
     if (state != states_[r]) {
       changes.emplace_back(r, state);
       states_[r] = state;

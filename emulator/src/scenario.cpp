@@ -71,6 +71,26 @@ void read_run(const TableReader& r, Scenario& s, std::size_t robots) {
   }
 }
 
+// [run] emulate: one list of node names for every robot (those that do not
+// give their own in [[teams.robots]]), or, without teams, one list per robot.
+void read_emulate(const TableReader& r, Scenario& s, std::size_t robots, bool teams) {
+  s.emulate.resize(robots);  // an empty set: not given yet
+  const toml::array* a = r.array("emulate");
+  if (a != nullptr && !a->empty() && a->front().is_array()) {
+    if (teams) r.fail(*a, "emulate", "with [[teams]], give a robot's own list in its [[teams.robots]]");
+    if (a->size() != robots) {
+      r.fail(*a, "emulate",
+             "give one list per robot (the file places " + std::to_string(robots) + "), or one list for all of them");
+    }
+    for (std::size_t k = 0; k < robots; ++k) s.emulate[k] = r.node_set((*a)[k], "emulate");
+    return;
+  }
+  const can_nodes::NodeSet all = a != nullptr ? r.node_set(*a, "emulate") : can_nodes::NodeSet::all();
+  for (can_nodes::NodeSet& e : s.emulate) {
+    if (e.empty()) e = all;
+  }
+}
+
 void read_coach(const TableReader& r, Scenario& s, std::size_t robots) {
   if (const auto state = r.text("game_state", "\"start\"")) {
     if (!is_game_state(*state)) {
@@ -177,9 +197,14 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
   if (const toml::table* run = root["run"].as_table()) {
-    std::vector<std::string> fields = {"duration_s", "seed", "kick_power", "faults"};
+    std::vector<std::string> fields = {"duration_s", "seed", "kick_power", "faults", "emulate"};
     if (!teams) fields.insert(fields.end(), {"interfaces", "agents"});  // a team gives its robots'
-    read_run(TableReader(*run, "run", file_name, fields), s, robots);
+    const TableReader r(*run, "run", file_name, fields);
+    read_run(r, s, robots);
+    read_emulate(r, s, robots, teams);
+  }
+  for (can_nodes::NodeSet& e : s.emulate) {
+    if (e.empty()) e = can_nodes::NodeSet::all();  // neither the robot nor [run] says
   }
   if (const toml::table* coach = root["coach"].as_table()) {
     std::vector<std::string> fields = {"game_state"};
@@ -256,7 +281,17 @@ void complete(Scenario& s) {
       }
     }
   }
+  if (s.emulate.empty()) s.emulate.resize(robots, can_nodes::NodeSet::all());
+  if (s.emulate.size() != robots) {
+    throw SetupError("give one set of emulated nodes per robot (" + std::to_string(robots) + " robots, " +
+                     std::to_string(s.emulate.size()) + " sets), or none for all eight");
+  }
   for (std::size_t k = 0; k < robots; ++k) {
+    if (s.emulate[k].empty()) {
+      throw SetupError("robot " + std::to_string(k + 1) +
+                       " emulates no node; leave at least one to canhil (a robot of real boards only needs no "
+                       "emulator)");
+    }
     if (std::count(s.interfaces.begin(), s.interfaces.end(), s.interfaces[k]) > 1) {
       throw SetupError("interface " + s.interfaces[k] + " is given to two robots; each robot has its own bus");
     }

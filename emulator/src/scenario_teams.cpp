@@ -17,6 +17,10 @@ std::size_t Scenario::team_of(std::size_t robot) const noexcept {
   return 0;
 }
 
+bool Scenario::mixes_real_boards() const noexcept {
+  return std::any_of(emulate.begin(), emulate.end(), [](can_nodes::NodeSet e) { return !e.is_all(); });
+}
+
 const LaptopSide& Scenario::laptop_of(std::size_t team) const noexcept {
   return team < teams.size() && teams[team].laptop ? *teams[team].laptop : laptop;
 }
@@ -33,8 +37,8 @@ const std::vector<std::string>& team_fields() {
   return fields;
 }
 const std::vector<std::string>& robot_fields() {
-  static const std::vector<std::string> fields = {"x_m",   "y_m",     "heading_deg", "interface",
-                                                  "agent", "running", "role",        "role_auto"};
+  static const std::vector<std::string> fields = {"x_m",     "y_m",  "heading_deg", "interface", "agent",
+                                                  "running", "role", "role_auto",   "emulate"};
   return fields;
 }
 
@@ -59,6 +63,8 @@ void read_robot(const TableReader& r, Scenario& s) {
   } else {
     s.agents.push_back(0);  // complete() numbers it
   }
+  // Not given: [run].emulate's, else all (parse_scenario fills it in).
+  s.emulate.push_back(r.get("emulate") != nullptr ? r.node_set(*r.get("emulate"), "emulate") : can_nodes::NodeSet());
   CoachPlayer p;
   if (const auto v = r.boolean("running")) p.running = *v;
   if (const auto v = r.text("role", "\"striker\"")) p.role = *v;

@@ -36,6 +36,18 @@ std::string scenario_toml(const Scenario& sc, const WorldSnapshot& now) {
   run.insert("interfaces", std::move(interfaces));
   run.insert("agents", std::move(agents));
   if (!faults.empty()) run.insert("faults", std::move(faults));
+  if (sc.mixes_real_boards() && !root.contains("teams")) {  // (teams keep theirs in [[teams.robots]])
+    toml::array emulate;
+    for (const can_nodes::NodeSet set : sc.emulate) {
+      toml::array names;
+      for (std::size_t i = 0; i < can_nodes::kNodeCount; ++i) {
+        const auto id = static_cast<can_nodes::NodeId>(i);
+        if (set.contains(id)) names.push_back(can_nodes::node_name(id));
+      }
+      emulate.push_back(std::move(names));
+    }
+    run.insert("emulate", std::move(emulate));
+  }
   root.insert("run", std::move(run));
 
   toml::table coach{{"game_state", now.coach.game_state}};

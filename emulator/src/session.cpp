@@ -162,7 +162,8 @@ void Session::build_nodes(const Endpoints& endpoints, IoMode mode, Nanos start) 
     }
     const std::size_t r = rig.index;
     rig.nodes = std::make_unique<can_nodes::RobotNodes>(
-        options_.messages, node_params_, *rig.io, [&](const std::string& node) { return endpoints(r, node); }, start);
+        options_.messages, node_params_, *rig.io, [&](const std::string& node) { return endpoints(r, node); }, start,
+        scenario_.emulate.at(r));
     rig.faults->start_at(start);  // rule times count from the run's start, not the clock's epoch
     rig.nodes->set_fault_hook(rig.faults.get());
   }
@@ -486,7 +487,9 @@ void Session::publish(std::uint64_t step) {
       d.achieved = world_->robot(rig.index).twist();
       d.odometry = !laptops_.empty() ? laptops_[rig.team]->reported_pose(local_index(rig.index)) : std::nullopt;
       // The base node's state belongs to the nodes' thread: read only when that is this one.
-      d.commanded = rig.shared == nullptr && rig.nodes ? rig.nodes->pic_base().commanded() : std::nullopt;
+      d.commanded = rig.shared == nullptr && rig.nodes && rig.nodes->emulates(can_nodes::NodeId::kPicBase)
+                        ? rig.nodes->pic_base().commanded()
+                        : std::nullopt;
     }
     if (vision_watched_.load(std::memory_order_relaxed) == kNoRobot) {
       s.vision.reset();

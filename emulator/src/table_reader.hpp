@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/physics/config.hpp"
 
@@ -77,6 +78,25 @@ class TableReader {
       fail(*get(key), key, "give one per robot: the file places " + std::to_string(robots) + " robot(s)");
     }
     return out;
+  }
+  /// A list of node names (can_nodes::node_by_name) as a set, from `list`
+  /// (the field `key`'s value or an entry of it): no name twice, at least one.
+  can_nodes::NodeSet node_set(const toml::node& list, const std::string& key) const {
+    const toml::array* a = list.as_array();
+    if (a == nullptr || a->empty()) {
+      fail(list, key,
+           "must list the nodes canhil emulates, e.g. [\"Motor1\", \"Motor2\", \"Motor3\"]; the nodes are " +
+               can_nodes::node_name_list());
+    }
+    can_nodes::NodeSet set;
+    for (const toml::node& e : *a) {
+      const auto name = e.value<std::string>();
+      const auto id = name ? can_nodes::node_by_name(*name) : std::nullopt;
+      if (!id) fail(e, key, "not a node's name; the nodes are " + can_nodes::node_name_list());
+      if (set.contains(*id)) fail(e, key, *name + " appears twice");
+      set.insert(*id);
+    }
+    return set;
   }
   const std::string& file() const { return file_; }
 

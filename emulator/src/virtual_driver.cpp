@@ -72,6 +72,11 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
           "; run the team's own software against a real-time run (canhil run without --virtual-time)");
     }
   }
+  if (session_.scenario().mixes_real_boards() && !options_.caller_plays_real_boards) {
+    throw SetupError(
+        "emulate = [...] leaves nodes to real boards, and a virtual-time run has no real bus: run that "
+        "scenario in real time (without --virtual-time)");
+  }
   const std::size_t n = session_.robot_count();
   for (std::size_t r = 0; r < n; ++r) {
     buses_.push_back(std::make_unique<can_nodes::MemoryBus>(clock_, session_.rig(r).interface));

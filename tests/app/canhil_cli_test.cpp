@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -346,6 +347,18 @@ TEST(CanhilRun, MistakesExitTwoWithAReason) {
   r = canhil("run --virtual-time --config /nonexistent.toml");
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(has(r, "/nonexistent.toml")) << r.out;
+}
+
+TEST(CanhilRun, RealBoardsOnTheBusMeanRealTime) {
+  const std::string bench = ::testing::TempDir() + "bench_" + std::to_string(::getpid()) + ".toml";
+  std::ofstream(bench) << "[run]\nemulate = [\"Motor1\", \"Motor2\", \"Motor3\"]\n";
+  CliRun r = canhil("run --virtual-time --config " + bench);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "leaves nodes to real boards, and a virtual-time run has no real bus")) << r.out;
+  std::remove(bench.c_str());
+  r = canhil("nodes --iface vcan0 --emulate Motor1,Motor4");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(has(r, "--emulate: \"Motor4\" is not a node; the nodes are FTT_master, Pic_base")) << r.out;
 }
 
 TEST(CanhilTiming, ABrokenCaptureIsAnErrorNotAPass) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <set>
 
 #include "canhil/can_nodes/fault.hpp"
@@ -76,6 +77,55 @@ TEST_F(RobotNodesTest, AFaultHookReachesEveryNode) {
     EXPECT_GT(n->counters().fault_dropped, 0u) << n->name();
     counters.allow(std::string(n->name()) + ".fault_dropped");
   }
+}
+
+// A bench: canhil emulates the motors, Pic_odom, the compass and the monitor;
+// the FTT master and Pic_base are real boards (here a second set playing them).
+TEST(RobotNodesSubset, NodesLeftToRealBoardsGetNoEndpointAndTheOthersFollowTheRealMastersTriggers) {
+  NodeSet boards;
+  for (const NodeId id : {NodeId::kMaster, NodeId::kPicBase}) boards.insert(id);
+  NodeSet canhil;
+  for (std::size_t i = 0; i < kNodeCount; ++i) {
+    if (!boards.contains(static_cast<NodeId>(i))) canhil.insert(static_cast<NodeId>(i));
+  }
+  ASSERT_FALSE(canhil.is_all());
+  test::NodeRig rig(canhil);
+  EXPECT_EQ(rig.endpoints_asked,
+            (std::vector<std::string>{"Motor1", "Motor2", "Motor3", "Pic_odom", "Compass", "SysMon", "SysMon watch"}));
+  EXPECT_EQ(rig.nodes.nodes().size(), 6u);
+  EXPECT_FALSE(rig.nodes.emulates(NodeId::kMaster));
+  EXPECT_THROW(rig.nodes.node(NodeId::kPicBase), std::logic_error);
+  EXPECT_EQ(describe(rig.nodes.emulated()), "Motor1, Motor2, Motor3, Pic_odom, Compass, SysMon");
+
+  test::FakeRobot board_robot;  // what the real Pic_base drives (its kicker, grabber)
+  RobotNodes real(
+      rig.set, rig.params, board_robot,
+      [&](const std::string& name) { return std::unique_ptr<Bus>(rig.bus.attach(name)); }, Nanos{0}, boards);
+  for (Node* n : real.nodes()) rig.run.add(*n);
+  rig.laptop.m6_1 = frames::M6_1{0, 0.5};  // forward
+  rig.run.run_until(1s - 1ns);             // ECs 0..99 of the real master
+  EXPECT_EQ(real.node(NodeId::kMaster).counters().sent, 100u);
+  const BusReport r = rig.nodes.bus_report();
+  EXPECT_EQ(r.tms_sent, 0u) << "canhil sent no TM";
+  EXPECT_EQ(r.fewest_triggers, 100u) << "each of canhil's synchronous nodes answered every TM it heard";
+  EXPECT_EQ(r.monitor_triggers, 100u);
+  EXPECT_EQ(r.unknown_id + r.wrong_length + r.out_of_range, 0u);
+  // The real Pic_base's set-points (M1) reached canhil's motor nodes, which drive the wheels.
+  const auto& sp = real.pic_base().setpoints();
+  EXPECT_NE(std::abs(sp[0]) + std::abs(sp[1]) + std::abs(sp[2]), 0);
+  EXPECT_GT(std::abs(rig.robot.speed[0]) + std::abs(rig.robot.speed[1]) + std::abs(rig.robot.speed[2]), 1.0);
+}
+
+TEST(NodeNames, AConfigurationMayWriteANameInAnyCaseWithUnderscores) {
+  EXPECT_EQ(node_by_name("FTT_master"), NodeId::kMaster);
+  EXPECT_EQ(node_by_name("ftt master"), NodeId::kMaster);
+  EXPECT_EQ(node_by_name("PIC_BASE"), NodeId::kPicBase);
+  EXPECT_EQ(node_by_name("Motor3"), NodeId::kMotor3);
+  EXPECT_EQ(node_by_name("Motor4"), std::nullopt);
+  EXPECT_EQ(node_by_name(""), std::nullopt);
+  EXPECT_EQ(node_name_list(), "FTT_master, Pic_base, Motor1, Motor2, Motor3, Pic_odom, Compass, SysMon");
+  EXPECT_EQ(describe(NodeSet::all()), "all eight nodes");
+  EXPECT_EQ(describe(NodeSet()), "no node");
 }
 
 }  // namespace

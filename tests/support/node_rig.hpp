@@ -17,7 +17,8 @@
 namespace canhil::test {
 
 struct NodeRig {
-  NodeRig()
+  /// `emulate`: the nodes of the set (the others are for the test to play).
+  explicit NodeRig(can_nodes::NodeSet emulate = can_nodes::NodeSet::all())
       : set(frames::MessageSet::load(shipped_dbc())),
         bus(clock),
         nodes(
@@ -26,7 +27,7 @@ struct NodeRig {
               endpoints_asked.push_back(name);
               return std::unique_ptr<can_nodes::Bus>(bus.attach(name));
             },
-            Nanos{0}),
+            Nanos{0}, emulate),
         laptop(bus, set, params.ftt.elementary_cycle),
         run(clock) {
     for (can_nodes::Node* n : nodes.nodes()) run.add(*n);

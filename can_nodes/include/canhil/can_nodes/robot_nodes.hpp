@@ -4,8 +4,13 @@
 // Pic_odom, compass, system monitor — each on its own bus endpoint (a memory
 // endpoint or a SocketCAN socket), so they hear each other as separate
 // microcontrollers would, all reaching the robot through one RobotIo.
+//
+// On a bench some of those boards are real: a set may leave any node out
+// (`emulate = [...]` in a scenario), the FTT master too; then the others
+// answer the trigger messages of the master they hear on the bus.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -43,19 +48,25 @@ class RobotNodes {
   /// which the system monitor watches the whole bus.
   using EndpointFactory = std::function<std::unique_ptr<Bus>(const std::string& node_name)>;
 
-  /// Builds the set. `params` and `robot` must outlive it. Throws
-  /// SetupError when the schedule does not fit the EC.
+  /// Builds the nodes of `emulate` (endpoints only for those; the watching
+  /// one with the system monitor). `params` and `robot` must outlive it.
+  /// Throws SetupError when the schedule does not fit the EC.
   RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, const NodeParams& params, RobotIo& robot,
-             const EndpointFactory& endpoints, Nanos start);
+             const EndpointFactory& endpoints, Nanos start, NodeSet emulate = NodeSet::all());
 
-  Node& node(NodeId id) { return *nodes_[static_cast<std::size_t>(id)]; }
-  const Node& node(NodeId id) const { return *nodes_[static_cast<std::size_t>(id)]; }
+  NodeSet emulated() const noexcept { return emulated_; }
+  bool emulates(NodeId id) const noexcept { return emulated_.contains(id); }
+  /// A node of the set; std::logic_error for one it leaves to a real board.
+  Node& node(NodeId id);
+  const Node& node(NodeId id) const;
+  /// The emulated nodes, in NodeId order.
   std::vector<Node*> nodes();
   const FttSchedule& schedule() const noexcept { return schedule_; }
   /// The time the set started at (its first EC).
   Nanos start() const noexcept { return start_; }
   PicBase& pic_base() { return static_cast<PicBase&>(node(NodeId::kPicBase)); }
-  /// Bad frames counted by all nodes.
+  const PicBase& pic_base() const { return static_cast<const PicBase&>(node(NodeId::kPicBase)); }
+  /// Bad frames counted by all emulated nodes.
   std::uint64_t bad_frames() const;
   BusReport bus_report() const;
   /// Sets the fault hook of every node (nullptr removes it).
@@ -64,9 +75,10 @@ class RobotNodes {
  private:
   FttSchedule schedule_;
   Nanos start_;
-  std::vector<std::unique_ptr<Bus>> buses_;
-  std::unique_ptr<Bus> watch_bus_;  // the system monitor's second endpoint: the whole bus
-  std::vector<std::unique_ptr<Node>> nodes_;
+  NodeSet emulated_;
+  std::array<std::unique_ptr<Bus>, kNodeCount> buses_;
+  std::unique_ptr<Bus> watch_bus_;                       // the system monitor's second endpoint: the whole bus
+  std::array<std::unique_ptr<Node>, kNodeCount> nodes_;  // NodeId order; null: a real board's
 };
 
 }  // namespace canhil::can_nodes

@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <utility>
@@ -67,9 +68,12 @@ class RealtimeDriver {
   RealtimeStats physics_stats() const { return physics_.stats(); }
   /// Why the node loop could not get its SCHED_FIFO priority (empty: it did).
   const std::string& priority_problem() const noexcept { return priority_problem_; }
-  /// Robot r's socket for node i (in can_nodes::NodeId order).
+  /// Robot r's socket for node i (in can_nodes::NodeId order; kNodeCount: the
+  /// system monitor's watching one); std::out_of_range for a real board's.
   const can_nodes::SocketCanBus& socket(std::size_t robot, std::size_t node) const {
-    return *sockets_.at(robot).at(node);
+    const can_nodes::SocketCanBus* s = sockets_.at(robot).at(node);
+    if (s == nullptr) throw std::out_of_range("no socket: that node is a real board's");
+    return *s;
   }
 
  private:
@@ -77,7 +81,8 @@ class RealtimeDriver {
   RealtimeOptions options_;
   can_nodes::WallClock clock_;
   Nanos start_{0};
-  std::vector<std::vector<can_nodes::SocketCanBus*>> sockets_;
+  std::vector<std::vector<can_nodes::SocketCanBus*>> sockets_;  // [robot][NodeId, watch]; null: not emulated
+  std::vector<can_nodes::SocketCanBus*> watched_;               // per robot, the socket whose state is read
   std::vector<can_nodes::BusState> states_;
   std::unique_ptr<WallWaiter> waiter_;
   std::unique_ptr<can_nodes::Realtime> loop_;     // every node but the masters

@@ -9,6 +9,9 @@
 //   interfaces = ["vcan0"]           # one per robot; default vcan0, vcan1, ...
 //   agents = [1]                     # one per robot, 1..6; default 1, 2, ...
 //   faults = ["drop:M4_1:0.1"]       # see can_nodes/fault.hpp
+//   emulate = ["Motor1", "Motor2"]   # nodes canhil emulates (default all); the others
+//                                    #   are real boards on the bus (real time only);
+//                                    #   or one list per robot; [[teams.robots]] emulate
 //
 //   [coach]                          # the base station's orders (emulator/coach.hpp)
 //   game_state = "start"             # stop, start, our_kickoff, ...
@@ -58,6 +61,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/fault.hpp"
+#include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/emulator/coach.hpp"
 #include "canhil/emulator/referee.hpp"
 #include "canhil/physics/params.hpp"
@@ -134,6 +138,9 @@ struct Scenario {
   std::vector<std::string> interfaces;  ///< one per robot after complete()
   std::vector<int> agents;              ///< one per robot after complete()
   std::vector<can_nodes::FaultRule> faults;
+  /// Per robot, the nodes canhil emulates (the rest are real boards on its
+  /// bus); after complete() one per robot, all eight where not given.
+  std::vector<can_nodes::NodeSet> emulate;
   CoachState coach;  ///< one player per robot after complete()
   LaptopSide laptop;
   ExternalSide external;
@@ -143,6 +150,8 @@ struct Scenario {
   VisionImperfections vision;  ///< [vision]
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
+  /// True when some robot leaves a node to a real board (after complete()).
+  bool mixes_real_boards() const noexcept;
   /// The team robot r plays in (after complete()).
   std::size_t team_of(std::size_t robot) const noexcept;
   /// A team's laptop side and processes: its own, else the scenario's.

@@ -32,6 +32,10 @@ struct VirtualOptions {
   /// Every bus checked as `canhil timing` would (FTT windows, periods), in
   /// constant memory: ftt_violations().
   bool check_timing = false;
+  /// The nodes a scenario leaves to real boards (Scenario::emulate) are
+  /// played by the caller, who adds them on the robots' buses (add()). False:
+  /// such a scenario is refused, as nothing would play those boards.
+  bool caller_plays_real_boards = false;
 };
 
 struct RobotOutcome {
@@ -58,8 +62,10 @@ class VirtualDriver {
 
   /// Robot r's bus, for what a test attaches (a laptop endpoint, a listener).
   can_nodes::MemoryBus& bus(std::size_t robot) { return *buses_.at(robot); }
-  /// Another participant (ticked after the nodes and the reference laptop); must outlive the driver.
+  /// Another participant (ticked after the nodes and the reference laptop),
+  /// such as a node playing a real board; must outlive the driver.
   void add(can_nodes::Participant& p) { lockstep_.add(p); }
+  void add(can_nodes::Node& node) { lockstep_.add(node); }
   const can_nodes::SimulatedClock& clock() const noexcept { return clock_; }
   std::uint64_t physics_steps() const noexcept { return lockstep_.steps(); }
 
