@@ -12,13 +12,19 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
 flavours=("$@")
 [[ ${#flavours[@]} -gt 0 ]] || flavours=(plain sanitize tsan lint)
+# Each stage's wall time, so CI's log shows where its minutes go.
+stage() { printf '== canhil %s: %d min %d s\n' "$1" $((SECONDS / 60)) $((SECONDS % 60)); SECONDS=0; }
+SECONDS=0
 for flavour in "${flavours[@]}"; do
   if [[ "$flavour" == lint ]]; then
     echo "== canhil lint: clang-format, clang-tidy"
     bash scripts/lint.sh
+    stage "lint took"
     continue
   fi
   echo "== canhil tests: $flavour build"
   bash scripts/build.sh "$flavour"
+  stage "$flavour build took"
   ctest --test-dir "build/$flavour" --output-on-failure -j2
+  stage "$flavour tests took"
 done
