@@ -17,12 +17,14 @@ struct Circle {
   double dist;        // centre distance
   double bearing;     // atan2(y, x) of the centre
   double half_width;  // angular half-width as seen from the camera
+  double c2_r2;       // |c|^2 - r^2, the same for every ray
 };
 
 // Nearest t >= 0 where origin + t * dir hits the circle, or inf.
 double ray_circle(const Eigen::Vector2d& dir, const Circle& c) {
   const double b = dir.dot(c.c);
-  const double disc = b * b - (c.c.squaredNorm() - c.r * c.r);
+  if (b < 0) return kInf;  // behind the camera: t = b - sqrt(disc) < 0
+  const double disc = b * b - c.c2_r2;
   if (disc < 0) return kInf;
   const double t = b - std::sqrt(disc);
   return t >= 0 ? t : kInf;
@@ -110,7 +112,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
     const Eigen::Vector2d c = to_robot(me, world);
     const double d = c.norm();
     if (d <= r + 1e-9 || d - r > params_.obstacle_range_m + params_.line_range_m) return;
-    circles.push_back({c, r, d, std::atan2(c.y(), c.x()), std::asin(std::min(1.0, r / d))});
+    circles.push_back({c, r, d, std::atan2(c.y(), c.x()), std::asin(std::min(1.0, r / d)), c.squaredNorm() - r * r});
   };
   for (std::size_t i = 0; i < scene.robots.size(); ++i) {
     if (i != robot) add_circle({scene.robots[i].x_m, scene.robots[i].y_m}, scene.robot_radius_m);
@@ -141,24 +143,45 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
     out.obstacles.push_back(p);
   }
 
-  // --- line points: marking geometry in the robot frame.
+  // --- line points: marking geometry in the robot frame, only what lies
+  // within reach: no sensor sees a point farther than line_range_m (a ray
+  // stops there, a ring's radius is at most that), so a marking wholly beyond
+  // it gives no point and is left out of the per-ray work.
+  const double reach = params_.line_range_m + 1e-9;
   struct Seg {
     Eigen::Vector2d a, b;
+    Eigen::Vector2d e;  // b - a
+    double a_cross_e;   // a x e: the numerator of every ray's t
   };
   thread_local std::vector<Seg> segs;
   segs.clear();
-  for (const auto& s : markings_.segments)
-    segs.push_back({to_robot(me, {s.x0_m, s.y0_m}), to_robot(me, {s.x1_m, s.y1_m})});
+  for (const auto& s : markings_.segments) {
+    const Eigen::Vector2d a = to_robot(me, {s.x0_m, s.y0_m});
+    const Eigen::Vector2d b = to_robot(me, {s.x1_m, s.y1_m});
+    const Eigen::Vector2d e = b - a;
+    const double len2 = e.squaredNorm();
+    const double u = len2 > 0 ? std::clamp(-a.dot(e) / len2, 0.0, 1.0) : 0.0;
+    if ((a + u * e).norm() > reach) continue;  // its nearest point is out of reach
+    segs.push_back({a, b, e, a.x() * e.y() - a.y() * e.x()});
+  }
   struct Arc {
     Eigen::Vector2d c;
     double r, start, end;
+    bool whole;  // a full circle: every crossing is on it (on_arc needs no angle)
   };
   thread_local std::vector<Arc> arcs;
   arcs.clear();
   for (const auto& a : markings_.arcs) {
-    arcs.push_back({to_robot(me, {a.cx_m, a.cy_m}), a.radius_m, wrap_angle(a.start_rad - me.heading_rad),
-                    wrap_angle(a.start_rad - me.heading_rad) + (a.end_rad - a.start_rad)});
+    const Eigen::Vector2d c = to_robot(me, {a.cx_m, a.cy_m});
+    if (c.norm() - a.radius_m > reach) continue;  // the whole circle is out of reach
+    const double start = wrap_angle(a.start_rad - me.heading_rad);
+    const double end = start + (a.end_rad - a.start_rad);
+    // on_arc takes rel in [0, 2 pi] and accepts rel <= end - start + 1e-12.
+    arcs.push_back({c, a.radius_m, start, end, 2 * kPi <= (end - start) + 1e-12});
   }
+  auto on = [](const Arc& a, const Eigen::Vector2d& q) {
+    return a.whole || on_arc(physics::LineArc{0, 0, a.r, a.start, a.end}, std::atan2(q.y(), q.x()));
+  };
   auto keep = [&](Eigen::Vector2d p) {
     if (static_cast<int>(out.lines.size()) >= params_.max_line_points) return false;
     if (detection < 1 && chance(rng) > detection) return true;
@@ -190,10 +213,10 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
       };
       for (const Seg& sg : segs) {
         // Ray origin + t dir against segment a + u (b - a).
-        const Eigen::Vector2d e = sg.b - sg.a;
+        const Eigen::Vector2d& e = sg.e;
         const double den = dir.x() * e.y() - dir.y() * e.x();
         if (std::fabs(den) < 1e-12) continue;
-        const double t = (sg.a.x() * e.y() - sg.a.y() * e.x()) / den;
+        const double t = sg.a_cross_e / den;
         const double u = (sg.a.x() * dir.y() - sg.a.y() * dir.x()) / den;
         if (t > 0 && t <= blocked && u >= 0 && u <= 1) add(t);
       }
@@ -203,8 +226,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
         if (disc < 0) continue;
         for (const double t : {b - std::sqrt(disc), b + std::sqrt(disc)}) {
           if (t <= 0 || t > blocked) continue;
-          const Eigen::Vector2d q = dir * t - a.c;
-          if (on_arc(physics::LineArc{0, 0, a.r, a.start, a.end}, std::atan2(q.y(), q.x()))) add(t);
+          if (on(a, dir * t - a.c)) add(t);
         }
       }
       std::sort(t_out, t_out + n);
@@ -225,7 +247,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   for (const double r : params_.circle_radii_m) {
     if (r > params_.line_range_m) continue;
     for (const Seg& s : segs) {
-      const Eigen::Vector2d e = s.b - s.a;
+      const Eigen::Vector2d& e = s.e;
       const double A = e.squaredNorm();
       const double B = 2 * s.a.dot(e);
       const double C = s.a.squaredNorm() - r * r;
@@ -247,8 +269,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
       const Eigen::Vector2d perp(-a.c.y() / d, a.c.x() / d);
       for (const double sign : {-1.0, 1.0}) {
         const Eigen::Vector2d p = mid + sign * h * perp;
-        const Eigen::Vector2d q = p - a.c;
-        if (!on_arc(physics::LineArc{0, 0, a.r, a.start, a.end}, std::atan2(q.y(), q.x()))) continue;
+        if (!on(a, p - a.c)) continue;
         if (!occluded(p, circles) && !keep(p)) break;
       }
     }
