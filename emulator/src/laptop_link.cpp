@@ -197,7 +197,13 @@ void LaptopLink::step(Nanos now, const CoachState& coach) {
     if (now > Nanos{0}) write_coach(coach);  // at 0 the constructor just did
     next_coach_ = now + coach_period_;
   }
-  if (replicator_) replicator_->cycle(now);
+  if (!replicator_) return;
+  if (now >= next_replicate_) {
+    replicator_->cycle(now);
+    next_replicate_ = now + replicator_->config().period;
+  } else if (replicator_->in_flight() > 0) {
+    replicator_->deliver(now);
+  }
 }
 
 std::optional<kinematics::Pose> LaptopLink::reported_pose(std::size_t robot) {

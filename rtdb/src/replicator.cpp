@@ -18,10 +18,11 @@ void Replicator::cycle(std::chrono::nanoseconds now) {
   ++stats_.cycles;
   std::uniform_real_distribution<double> chance(0.0, 1.0);
   const ItemTable& items = db_.items();
+  const bool at_once = config_.delay <= std::chrono::nanoseconds{0};
   for (const int from : db_.spaces()) {
     for (const int item : items.items_of(from, ItemKind::kShared)) {
-      std::vector<std::byte> value(*items.size(item));
-      const std::optional<int> age = db_.get(from, from, item, value);
+      value_.resize(*items.size(item));
+      const std::optional<int> age = db_.get(from, from, item, value_);
       if (!age) continue;
       if (*age == Database::kNeverWritten) {
         ++stats_.never_written;
@@ -33,13 +34,20 @@ void Replicator::cycle(std::chrono::nanoseconds now) {
           ++stats_.lost;
           continue;
         }
-        in_flight_.push_back(InFlight{now + config_.delay, to, from, item, *age, now, value});
+        if (at_once) {
+          db_.put(to, from, item, value_, *age);
+          ++stats_.copied;
+        } else {
+          in_flight_.push_back(InFlight{now + config_.delay, to, from, item, *age, now, value_});
+        }
       }
     }
   }
-  // Deliver what is due, aged by its time in flight.
-  std::stable_sort(in_flight_.begin(), in_flight_.end(),
-                   [](const InFlight& a, const InFlight& b) { return a.due < b.due; });
+  deliver(now);
+}
+
+void Replicator::deliver(std::chrono::nanoseconds now) {
+  // Aged by the time in flight.
   while (!in_flight_.empty() && in_flight_.front().due <= now) {
     InFlight& f = in_flight_.front();
     const auto flight_ms = std::chrono::duration_cast<std::chrono::milliseconds>(now - f.read_at).count();

@@ -133,6 +133,16 @@ TEST_F(LaptopLinkTest, CanhilsOwnRtdbInCanhilsLayoutAndThePoseReadBack) {
   EXPECT_NE(link.replicator_stats(), nullptr) << "two robots: the replicator runs";
 }
 
+TEST_F(LaptopLinkTest, TheReplicatorCopiesOnceAReplicationPeriodWhateverTheStep) {
+  setenv("RTDB_KEY", std::to_string(0x5E000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  LaptopSide side;
+  side.replicate_period_s = 0.1;
+  LaptopLink link(resolve_laptop(side, 2, false), {1, 2}, coach(2));
+  ASSERT_NE(link.replicator_stats(), nullptr);
+  for (int ms = 0; ms <= 1000; ms += 10) link.step(std::chrono::milliseconds(ms), coach(2));
+  EXPECT_EQ(link.replicator_stats()->cycles, 11u) << "at 0, 100, ..., 1000 ms; not at each 10 ms step";
+}
+
 TEST_F(LaptopLinkTest, EachRobotsPmanTableIsTickedAfterItsVisionInfo) {
   LaptopLink link(team(true), {1}, coach(1));
   ASSERT_NE(link.masters(), nullptr);

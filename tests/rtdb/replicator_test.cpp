@@ -36,13 +36,16 @@ TEST_F(ReplicatorTest, DelayAndLossThroughTheBuiltin) {
   RobotWS seen{};
   DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
   EXPECT_EQ(seen.frame, 0u) << "still in flight";
-  rep.cycle(200ms);
+  EXPECT_GT(rep.in_flight(), 0u);
+  rep.deliver(299ms);
   DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
   EXPECT_EQ(seen.frame, 0u);
-  rep.cycle(300ms);
+  rep.deliver(300ms);
   const int age = DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
-  EXPECT_EQ(seen.frame, 42u) << "arrived after the delay";
+  EXPECT_EQ(seen.frame, 42u) << "arrived after the delay, between two cycles";
   EXPECT_GE(age, 300) << "aged by its time in flight";
+  EXPECT_EQ(rep.in_flight(), 0u);
+  EXPECT_EQ(rep.stats().cycles, 1u) << "deliver() copies nothing new";
 
   ReplicatorConfig lossy;
   lossy.loss = 0.5;

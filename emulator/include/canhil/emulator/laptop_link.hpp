@@ -63,7 +63,8 @@ class LaptopLink {
   /// The coach's orders into every robot's database (COACH_INFO as the base
   /// station's copy and the robot's own, where the team's table has them).
   void write_coach(const CoachState& coach);
-  /// Periodic work at `now`: the coach again every coach period, a replicator cycle.
+  /// Periodic work at `now`: the coach again every coach period, the replicator
+  /// every replication period (its delayed copies at any step).
   void step(Nanos now, const CoachState& coach);
   /// Robot r's pose as its handler reported it (CMD_POS), when the layout carries it.
   std::optional<kinematics::Pose> reported_pose(std::size_t robot);
@@ -96,6 +97,7 @@ class LaptopLink {
   std::vector<std::array<double, 2>> points_;  // scratch for a frame's points
   Nanos coach_period_;
   Nanos next_coach_{0};
+  Nanos next_replicate_{0};
   std::uint64_t vision_writes_ = 0;
   std::uint64_t coach_writes_ = 0;
 };

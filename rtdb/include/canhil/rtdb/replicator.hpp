@@ -2,12 +2,14 @@
 // each agent's shared items into every other agent's database, through a
 // Database (canhil's RTDB or the team's own library).
 //
-// Call cycle(now) every `period` (canhil rtdb replicate does). For each agent
-// a and each of a's shared items: read it in a's database, then write it, as
-// a's item, into every other agent's database. Each copy is lost with
-// probability `loss` (seeded, so runs repeat) and otherwise arrives `delay`
-// later, aged by its age when read plus its time in flight. An item never
-// written is not copied. Not thread-safe; the clock is the caller's.
+// Call cycle(now) every `period` (canhil rtdb replicate and the emulator's
+// laptop link do), and deliver(now) in between when copies are delayed. For
+// each agent a and each of a's shared items: read it in a's database, then
+// write it, as a's item, into every other agent's database. Each copy is lost
+// with probability `loss` (seeded, so runs repeat) and otherwise arrives
+// `delay` later, aged by its age when read plus its time in flight. An item
+// never written is not copied. Not thread-safe; the clock is the caller's and
+// never goes back.
 #pragma once
 
 #include <chrono>
@@ -43,6 +45,10 @@ class Replicator {
   /// One replication cycle at time `now` (any monotonic time base), and
   /// delivery of every delayed copy that is due.
   void cycle(std::chrono::nanoseconds now);
+  /// Delivery of every delayed copy due at `now`, copying nothing new.
+  void deliver(std::chrono::nanoseconds now);
+  /// Copies read but not delivered yet.
+  std::size_t in_flight() const noexcept { return in_flight_.size(); }
   const ReplicatorStats& stats() const noexcept { return stats_; }
   const ReplicatorConfig& config() const noexcept { return config_; }
 
@@ -59,7 +65,8 @@ class Replicator {
   Database& db_;
   ReplicatorConfig config_;
   std::mt19937_64 rng_;
-  std::deque<InFlight> in_flight_;
+  std::deque<InFlight> in_flight_;  // in order of `due`: the delay is fixed
+  std::vector<std::byte> value_;     // the item being copied
   ReplicatorStats stats_;
 };
 
