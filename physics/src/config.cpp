@@ -211,6 +211,7 @@ void read_all(Reader& root, WorldParams& w) {
     r.number("cfm", s.cfm, between(0, 1));
     r.number("erp", s.erp, between(0, 1));
     r.boolean("exact_solver", s.exact_solver);
+    r.integer("exact_solver_max_rows", s.exact_solver_max_rows, 0, 100000);
     r.integer("solver_iterations", s.solver_iterations, 1, 1000);
     r.integer("sleep_after_steps", s.sleep_after_steps, 0, 1'000'000);
     r.unsigned_long("seed", s.seed);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
@@ -13,6 +14,7 @@
 #include "canhil/base/demand.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "convex.hpp"
+#include "islands.hpp"
 
 namespace canhil::physics {
 namespace {
@@ -145,9 +147,18 @@ struct World::Impl {
     for (Canon& c : canon) {
       if (c.body == b) return c;
     }
+    body_index.push_back(static_cast<int>(canon.size()));
+    dBodySetData(b, &body_index.back());
     canon.push_back(Canon{b, {1, 0, 0, 0}});
     return canon.back();
   }
+  /// A body's place in `canon` (its data pointer); -1 for the static world.
+  static int index_of(dBodyID b) { return b == nullptr ? -1 : *static_cast<const int*>(dBodyGetData(b)); }
+  std::deque<int> body_index;     // each body's data points at its entry (a deque: entries never move)
+  Islands islands;                // this substep's, as ODE will form them
+  std::vector<char> big;          // per body: in an island stepped by QuickStep
+  std::vector<char> was_enabled;  // per body, across the two passes of a split step
+  std::uint64_t split_substeps = 0;
   FieldMarkings markings;
   dWorldID world = nullptr;
   dSpaceID statics = nullptr;   // ground, goals, boundary, static obstacles
@@ -182,6 +193,7 @@ struct World::Impl {
   void build_robot(int index, const Placement& at);
   void build_obstacle(int index, const ObstaclePlacement& o);
   void substep(double h);
+  void step_split(double h);
   void collide(dGeomID a, dGeomID b);
   void apply_robot_inputs(RobotImpl& r);
   void update_robot_after(RobotImpl& r, double h);
@@ -515,6 +527,8 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
     }
     dJointID j = dJointCreateContact(world, contacts, &c[i]);
     dJointAttach(j, ba, bb);
+    // Rows: the normal, two of friction, three of rolling resistance.
+    islands.link(index_of(ba), index_of(bb), (s.mode & dContactRolling) != 0 ? 6 : 3);
   }
 }
 
@@ -535,6 +549,11 @@ int tag_id(dGeomID g) { return static_cast<const Tag*>(dGeomGetData(g))->id; }
 void World::Impl::substep(double h) {
   for (std::size_t i = 0; i < robots.size(); ++i) apply_robot_inputs(robot(i));
   ball_on_ground = false;
+  islands.reset(canon.size());
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    // A motorised hinge: five rows and the motor's.
+    for (dBodyID w : robot(i).wheel) islands.link(index_of(robot(i).chassis), index_of(w), 6);
+  }
   pairs.clear();
   dSpaceCollide(dynamics, this, &near_callback);
   dSpaceCollide2(reinterpret_cast<dGeomID>(dynamics), reinterpret_cast<dGeomID>(statics), this, &near_callback);
@@ -549,15 +568,47 @@ void World::Impl::substep(double h) {
   for (const auto& [a, b] : pairs) collide(a, b);
   // ODE shuffles constraint order with a global seed: keep this world's own.
   dRandSetSeed(seed);
-  if (params.simulation.exact_solver) {
+  const SimulationParams& sp = params.simulation;
+  if (!sp.exact_solver) {
+    dWorldQuickStep(world, h);
+  } else if (sp.exact_solver_max_rows <= 0 || islands.largest() <= sp.exact_solver_max_rows) {
     dWorldStep(world, h);
   } else {
-    dWorldQuickStep(world, h);
+    step_split(h);
   }
   seed = dRandGetSeed();
   dJointGroupEmpty(contacts);
   for (std::size_t i = 0; i < robots.size(); ++i) update_robot_after(robot(i), h);
   time += h;
+}
+
+// Islands of more than exact_solver_max_rows rows by QuickStep, the rest
+// exactly: ODE steps only enabled bodies, and an island is stepped whole, so
+// each pass disables the other pass's bodies and the enabled flags are put
+// back as ODE would have left them (a large island's bodies all awake).
+void World::Impl::step_split(double h) {
+  ++split_substeps;
+  const std::size_t n = canon.size();
+  big.assign(n, 0);
+  was_enabled.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    big[i] = islands.rows_of(static_cast<int>(i)) > params.simulation.exact_solver_max_rows ? 1 : 0;
+    if (big[i] != 0) dBodyDisable(canon[i].body);
+  }
+  dWorldStep(world, h);
+  for (std::size_t i = 0; i < n; ++i) {
+    dBodyID b = canon[i].body;
+    if (big[i] != 0) {
+      dBodyEnable(b);
+    } else if (dBodyIsEnabled(b) != 0) {
+      was_enabled[i] = 1;
+      dBodyDisable(b);
+    }
+  }
+  dWorldQuickStep(world, h);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (was_enabled[i] != 0) dBodyEnable(canon[i].body);
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -613,6 +664,7 @@ World::~World() = default;
 const WorldParams& World::params() const noexcept { return impl_->params; }
 const FieldMarkings& World::markings() const noexcept { return impl_->markings; }
 double World::time_s() const noexcept { return impl_->time; }
+std::uint64_t World::large_island_substeps() const noexcept { return impl_->split_substeps; }
 std::size_t World::robot_count() const noexcept { return impl_->robots.size(); }
 Robot& World::robot(std::size_t i) { return *impl_->robots.at(i); }
 const Robot& World::robot(std::size_t i) const { return *impl_->robots.at(i); }

@@ -15,6 +15,8 @@ TEST(Config, ShippedFileListsExactlyTheDefaults) {
 TEST(Config, EmptyFileGivesDefaultsAndPartialFilesOverride) {
   EXPECT_TRUE(parse_world_params("", "empty.toml") == WorldParams{});
   const WorldParams p = parse_world_params(R"(
+[simulation]
+exact_solver_max_rows = 100
 [ball]
 mass_kg = 0.45
 [robot.kicker]
@@ -29,6 +31,7 @@ x_m = 3
 movable = true
 )",
                                            "partial.toml");
+  EXPECT_EQ(p.simulation.exact_solver_max_rows, 100);
   EXPECT_EQ(p.ball.mass_kg, 0.45);
   EXPECT_EQ(p.ball.radius_m, 0.11) << "untouched fields keep their defaults";
   EXPECT_EQ(p.robot.kicker.max_lob_range_m, 12.0);

@@ -386,5 +386,96 @@ TEST(Robot, PlaceTeleportsAndStops) {
   EXPECT_NEAR(w.robot(0).twist().vy_mps, 0.0, 1e-3);
 }
 
+// Three robots driving into the ball at the centre from three sides (a scrum:
+// one island of well over 64 rows), and a fourth robot alone at (5, 3)
+// turning on the spot.
+WorldParams scrum_scene(int exact_solver_max_rows) {
+  WorldParams p;
+  for (int i = 0; i < 3; ++i) {
+    const double a = 2 * kPi * i / 3;
+    // Heading so that the robot's front (+y) points at the centre.
+    p.robots.push_back(Placement{0.6 * std::cos(a), 0.6 * std::sin(a), a * 180 / kPi + 90});
+  }
+  p.robots.push_back(Placement{5, 3, 0});
+  p.ball_start = {0, 0, p.ball.radius_m};
+  p.simulation.exact_solver_max_rows = exact_solver_max_rows;
+  return p;
+}
+
+void push_in(World& w) {
+  const kinematics::OmniKinematics k(w.params().robot.geometry);
+  const auto ahead = k.inverse({0, 1.0, 0});
+  for (std::size_t r = 0; r < 3; ++r) {
+    for (int n = 0; n < 3; ++n) w.robot(r).set_wheel_speed(n, ahead[static_cast<std::size_t>(n)]);
+  }
+  const auto turn = k.inverse({0, 0, 2.0});
+  for (int n = 0; n < 3; ++n) w.robot(3).set_wheel_speed(n, turn[static_cast<std::size_t>(n)]);
+}
+
+TEST(Scrum, ALargeIslandGoesToQuickStepAndStaysTogether) {
+  World w(scrum_scene(64));
+  for (int i = 0; i < 300; ++i) {
+    push_in(w);
+    w.step();
+  }
+  EXPECT_GT(w.large_island_substeps(), 200u) << "the three robots pushing together are one large island";
+  const double r = w.params().robot.body_radius_m;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const kinematics::Pose pa = w.robot(a).pose();
+    EXPECT_LT(std::hypot(pa.x_m, pa.y_m), 1.0) << "robot " << a << " stays in the scrum, not thrown out";
+    const kinematics::Twist v = w.robot(a).twist();
+    EXPECT_LT(std::hypot(v.vx_mps, v.vy_mps), 0.5) << "robot " << a << " pushes, it does not fly";
+    EXPECT_NEAR(w.save().robots[a].chassis.position[2], w.save().robots[3].chassis.position[2], 0.02)
+        << "robot " << a << " on its wheels";
+    for (std::size_t b = a + 1; b < 3; ++b) {
+      const kinematics::Pose pb = w.robot(b).pose();
+      EXPECT_GT(std::hypot(pa.x_m - pb.x_m, pa.y_m - pb.y_m), 2 * r - 0.12) << "robots " << a << " and " << b;
+    }
+  }
+  World exact(scrum_scene(0));
+  for (int i = 0; i < 10; ++i) {
+    push_in(exact);
+    exact.step();
+  }
+  EXPECT_EQ(exact.large_island_substeps(), 0u) << "0: every island exactly";
+}
+
+TEST(Scrum, SmallIslandsKeepTheExactSolverBitForBit) {
+  World split(scrum_scene(64));
+  World exact(scrum_scene(0));
+  for (int i = 0; i < 300; ++i) {
+    push_in(split);
+    push_in(exact);
+    split.step();
+    exact.step();
+  }
+  ASSERT_GT(split.large_island_substeps(), 0u);
+  const WorldState a = split.save();
+  const WorldState b = exact.save();
+  EXPECT_TRUE(a.robots[3] == b.robots[3]) << "the lone robot's island is stepped exactly either way";
+  EXPECT_FALSE(a.robots[0] == b.robots[0]) << "the scrum is stepped differently";
+}
+
+TEST(Scrum, SplitStepsRepeatAndRestoreBitForBit) {
+  World w(scrum_scene(64));
+  for (int i = 0; i < 100; ++i) {
+    push_in(w);
+    w.step();
+  }
+  const WorldState saved = w.save();
+  for (int i = 0; i < 100; ++i) {
+    push_in(w);
+    w.step();
+  }
+  const WorldState first = w.save();
+  World other(scrum_scene(64));
+  other.restore(saved);
+  for (int i = 0; i < 100; ++i) {
+    push_in(other);
+    other.step();
+  }
+  EXPECT_TRUE(other.save() == first) << "QuickStep's shuffling seed is part of the state";
+}
+
 }  // namespace
 }  // namespace canhil::physics

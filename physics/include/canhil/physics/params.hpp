@@ -24,7 +24,12 @@ struct SimulationParams {
   /// ODE's exact (Dantzig LCP) solver instead of the iterative QuickStep; the
   /// islands here are small (one robot is about 27 constraint rows).
   bool exact_solver = true;
-  int solver_iterations = 10;  ///< QuickStep only
+  /// With the exact solver, an island of more constraint rows than this (a
+  /// scrum of three robots or more: one robot is about 27, the ball on the
+  /// carpet 6, a contact 3) is stepped by QuickStep instead, whose cost grows
+  /// with the rows rather than their cube; 0: every island exactly.
+  int exact_solver_max_rows = 64;
+  int solver_iterations = 10;  ///< QuickStep only (exact_solver false, or a large island)
   /// A movable obstacle still for this many steps sleeps (leaves the solver)
   /// until something touches it; 0 never sleeps.
   int sleep_after_steps = 20;

@@ -159,6 +159,9 @@ class World {
   /// Advances the world by params().simulation.step_s.
   void step();
   double time_s() const noexcept;
+  /// Substeps so far in which an island larger than
+  /// simulation.exact_solver_max_rows went to QuickStep (a scrum).
+  std::uint64_t large_island_substeps() const noexcept;
 
   std::size_t robot_count() const noexcept;
   Robot& robot(std::size_t index);
