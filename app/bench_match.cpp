@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -77,12 +78,23 @@ bool bench_match(const std::optional<std::string>& config, double seconds,
       config ? std::filesystem::path(*config) : emulator::shipped_scenario("two_teams.toml");
   const emulator::Scenario ten = emulator::load_scenario(path);
   const int core = stay_on_this_core();
-  std::printf("canhil bench: matches on one core (%s), %g s of virtual time each, CPU time of this thread\n",
-              core >= 0 ? ("core " + std::to_string(core)).c_str() : "any core", seconds);
-  const double reference = physics_alone(five, seconds);
-  const double reference_ten = physics_alone(ten, seconds);
-  const double five_on = everything_on(five, seconds, messages);
-  const double ten_on = match_half(ten, seconds, messages);
+  constexpr int kRounds = 3;
+  std::printf(
+      "canhil bench: matches on one core (%s), %g s of virtual time each, CPU time of this thread, "
+      "the best of %d interleaved rounds\n",
+      core >= 0 ? ("core " + std::to_string(core)).c_str() : "any core", seconds, kRounds);
+  // Noise only ever adds CPU time: each figure is its fastest round, and the
+  // rounds interleave so that a slow spell of the machine hits every figure.
+  double reference = 0;
+  double reference_ten = 0;
+  double five_on = 0;
+  double ten_on = 0;
+  for (int round = 0; round < kRounds; ++round) {
+    reference = std::max(reference, physics_alone(five, seconds));
+    reference_ten = std::max(reference_ten, physics_alone(ten, seconds));
+    five_on = std::max(five_on, everything_on(five, seconds, messages));
+    ten_on = std::max(ten_on, match_half(ten, seconds, messages));
+  }
   const double five_target = 0.75 * reference;
   const double ten_target = reference / 3;
   std::printf("  physics alone, five_robots.toml:           %6.0fx  (the reference)\n", reference);

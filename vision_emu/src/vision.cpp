@@ -1,5 +1,7 @@
 #include "canhil/vision_emu/vision.hpp"
 
+#include "canhil/vision_emu/gaussian.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -98,9 +100,8 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   out.balls.clear();
   out.line_rays = 0;
   const kinematics::Pose& me = scene.robots.at(robot);
-  // Single-precision draws (one engine call each): ample for centimetre noise.
-  std::normal_distribution<float> point_noise(
-      0.0f, params_.point_noise_m > 0 ? static_cast<float>(params_.point_noise_m) : 1.0f);
+  // Single-precision draws (about one engine call each): ample for centimetre noise.
+  const Gaussian point_noise(static_cast<float>(params_.point_noise_m));
   std::uniform_real_distribution<float> chance(0.0f, 1.0f);
   const bool noisy = params_.point_noise_m > 0;
   const auto detection = static_cast<float>(params_.detection_probability);
@@ -287,7 +288,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
     if (seen) {
       Eigen::Vector2d p = ball_local * (d / d_prime);
       if (params_.ball_noise_m > 0) {
-        std::normal_distribution<float> bn(0.0f, static_cast<float>(params_.ball_noise_m));
+        const Gaussian bn(static_cast<float>(params_.ball_noise_m));
         p += Eigen::Vector2d(bn(rng), bn(rng));
       }
       out.balls.push_back(p);
