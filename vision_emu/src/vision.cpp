@@ -47,6 +47,20 @@ bool occluded(const Eigen::Vector2d& p, const std::vector<Circle>& circles) {
 
 double wrap_angle(double a) { return std::remainder(a, 2 * kPi); }
 
+// atan2 within 2e-5 rad, for choosing which sensors to test (never for a point).
+double rough_atan2(double y, double x) {
+  const double ax = std::fabs(x);
+  const double ay = std::fabs(y);
+  const double hi = std::max(ax, ay);
+  if (hi == 0) return 0;
+  const double a = std::min(ax, ay) / hi;
+  const double s = a * a;
+  double r = ((-0.0464964749 * s + 0.15931422) * s - 0.327622764) * s * a + a;
+  if (ay > ax) r = kPi / 2 - r;
+  if (x < 0) r = kPi - r;
+  return y < 0 ? -r : r;
+}
+
 bool on_arc(const physics::LineArc& a, double angle) {
   double rel = std::fmod(angle - a.start_rad, 2 * kPi);
   if (rel < 0) rel += 2 * kPi;
@@ -70,6 +84,12 @@ Vision::Vision(const VisionParams& params, physics::FieldMarkings markings)
       // Pass p fills the gaps the earlier passes left: offset by p/passes of the spacing.
       const double angle = 2 * kPi * (k + static_cast<double>(pass) / passes) / sensors;
       line_dir_.emplace_back(std::cos(angle), std::sin(angle));
+    }
+  }
+  line_by_angle_.resize(line_dir_.size());
+  for (int pass = 0; pass < passes; ++pass) {
+    for (int k = 0; k < sensors; ++k) {
+      line_by_angle_[static_cast<std::size_t>(k * passes + pass)] = static_cast<std::size_t>(pass * sensors + k);
     }
   }
 }
@@ -201,37 +221,82 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   if (hit_t.size() < rays * kMaxHits) hit_t.resize(rays * kMaxHits);  // no need to clear: hit_n says what is valid
   hit_n.assign(rays, 0);
   const std::vector<Eigen::Vector2d>& ray_dir = line_dir_;
-  for (std::size_t ray = 0; ray < rays; ++ray) {
-    {
-      const Eigen::Vector2d& dir = ray_dir[ray];
-      ++out.line_rays;
-      double blocked = params_.line_range_m;  // occlusion: nothing beyond the nearest obstacle on this ray
-      for (const Circle& c : circles) blocked = std::min(blocked, ray_circle(dir, c));
-      double* t_out = &hit_t[ray * kMaxHits];
-      std::size_t& n = hit_n[ray];
-      auto add = [&](double t) {
-        if (n < kMaxHits) t_out[n++] = t;
-      };
-      for (const Seg& sg : segs) {
-        // Ray origin + t dir against segment a + u (b - a).
-        const Eigen::Vector2d& e = sg.e;
-        const double den = dir.x() * e.y() - dir.y() * e.x();
-        if (std::fabs(den) < 1e-12) continue;
-        const double t = sg.a_cross_e / den;
-        const double u = (sg.a.x() * dir.y() - sg.a.y() * dir.x()) / den;
-        if (t > 0 && t <= blocked && u >= 0 && u <= 1) add(t);
-      }
-      for (const Arc& a : arcs) {
-        const double b = dir.dot(a.c);
-        const double disc = b * b - (a.c.squaredNorm() - a.r * a.r);
-        if (disc < 0) continue;
-        for (const double t : {b - std::sqrt(disc), b + std::sqrt(disc)}) {
-          if (t <= 0 || t > blocked) continue;
-          if (on(a, dir * t - a.c)) add(t);
-        }
-      }
-      std::sort(t_out, t_out + n);
+  // Each circle, segment and arc is tested only by the sensors whose
+  // direction lies within the angle it covers as seen from the camera (with
+  // a sensor to spare on each side), in the same order per sensor as testing
+  // every sensor against everything: the same points.
+  const double angle_step = 2 * kPi / static_cast<double>(rays);
+  auto each_ray = [&](double lo, double hi, auto&& test) {
+    const auto j0 = static_cast<long>(std::floor(lo / angle_step)) - 1;
+    const auto j1 = static_cast<long>(std::ceil(hi / angle_step)) + 1;
+    const auto n_rays = static_cast<long>(rays);
+    if (j1 - j0 + 1 >= n_rays) {
+      for (std::size_t ray = 0; ray < rays; ++ray) test(ray);
+      return;
     }
+    for (long j = j0; j <= j1; ++j) test(line_by_angle_[static_cast<std::size_t>(((j % n_rays) + n_rays) % n_rays)]);
+  };
+  constexpr double kAllAround = 4 * kPi;
+  thread_local std::vector<double> blocked;  // occlusion: nothing beyond the nearest obstacle on a ray
+  blocked.assign(rays, params_.line_range_m);
+  for (const Circle& c : circles) {
+    each_ray(c.bearing - c.half_width, c.bearing + c.half_width,
+             [&](std::size_t ray) { blocked[ray] = std::min(blocked[ray], ray_circle(ray_dir[ray], c)); });
+  }
+  auto add = [&](std::size_t ray, double t) {
+    std::size_t& n = hit_n[ray];
+    if (n < kMaxHits) hit_t[ray * kMaxHits + n++] = t;
+  };
+  for (const Seg& sg : segs) {
+    // The angle from a to b the short way round; all around when the segment
+    // passes (nearly) through the camera.
+    double lo = 0;
+    double hi = kAllAround;
+    if (sg.a.squaredNorm() > 1e-18 && sg.b.squaredNorm() > 1e-18) {
+      const double from = rough_atan2(sg.a.y(), sg.a.x());
+      double turn = rough_atan2(sg.b.y(), sg.b.x()) - from;
+      if (turn > kPi) turn -= 2 * kPi;
+      if (turn < -kPi) turn += 2 * kPi;
+      if (std::fabs(turn) < kPi - 0.01) {
+        lo = from + std::min(0.0, turn);
+        hi = from + std::max(0.0, turn);
+      }
+    }
+    each_ray(lo, hi, [&](std::size_t ray) {
+      // Ray origin + t dir against segment a + u (b - a).
+      const Eigen::Vector2d& dir = ray_dir[ray];
+      const Eigen::Vector2d& e = sg.e;
+      const double den = dir.x() * e.y() - dir.y() * e.x();
+      if (std::fabs(den) < 1e-12) return;
+      const double t = sg.a_cross_e / den;
+      const double u = (sg.a.x() * dir.y() - sg.a.y() * dir.x()) / den;
+      if (t > 0 && t <= blocked[ray] && u >= 0 && u <= 1) add(ray, t);
+    });
+  }
+  for (const Arc& a : arcs) {
+    double lo = 0;
+    double hi = kAllAround;
+    const double d = a.c.norm();
+    if (d > a.r * (1 + 1e-9) + 1e-9) {
+      const double bearing = rough_atan2(a.c.y(), a.c.x());
+      const double half = std::asin(a.r / d);
+      lo = bearing - half;
+      hi = bearing + half;
+    }
+    each_ray(lo, hi, [&](std::size_t ray) {
+      const Eigen::Vector2d& dir = ray_dir[ray];
+      const double b = dir.dot(a.c);
+      const double disc = b * b - (a.c.squaredNorm() - a.r * a.r);
+      if (disc < 0) return;
+      for (const double t : {b - std::sqrt(disc), b + std::sqrt(disc)}) {
+        if (t <= 0 || t > blocked[ray]) continue;
+        if (on(a, dir * t - a.c)) add(ray, t);
+      }
+    });
+  }
+  for (std::size_t ray = 0; ray < rays; ++ray) {
+    ++out.line_rays;
+    std::sort(&hit_t[ray * kMaxHits], &hit_t[ray * kMaxHits] + hit_n[ray]);
   }
   bool room = true;
   for (std::size_t round = 0; round < kMaxHits && room; ++round) {

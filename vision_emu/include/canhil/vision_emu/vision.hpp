@@ -86,6 +86,7 @@ class Vision {
   std::vector<double> ray_cos_;  // obstacle sensors
   std::vector<double> ray_sin_;
   std::vector<Eigen::Vector2d> line_dir_;  // line sensors, pass after pass
+  std::vector<std::size_t> line_by_angle_;  // line sensors by angle: [j] points at 2 pi j / count
 };
 
 }  // namespace canhil::vision_emu
