@@ -12,7 +12,9 @@ void Participants::add(Node& node) {
 void Participants::deliver() {
   for (int round = 0; round < 10'000; ++round) {
     std::size_t handled = 0;
-    for (Participant* p : list_) handled += p->poll();
+    for (Participant* p : list_) {
+      if (p->may_have_frames()) handled += p->poll();
+    }
     if (handled == 0) return;
   }
 }

@@ -27,14 +27,25 @@ std::optional<TimedFrame> MemoryEndpoint::receive() {
   return f;
 }
 
-void MemoryEndpoint::set_filters(std::span<const Filter> filters) { filters_.assign(filters.begin(), filters.end()); }
+void MemoryEndpoint::set_filters(std::span<const Filter> filters) {
+  filters_.assign(filters.begin(), filters.end());
+  CanFrame probe;
+  for (std::uint32_t id = 0; id < standard_data_.size(); ++id) {
+    probe.id = id;
+    standard_data_[id] =
+        std::any_of(filters_.begin(), filters_.end(), [&](const Filter& f) { return f.matches(probe); });
+  }
+}
 
 BusState MemoryEndpoint::state() const { return bus_->up() ? BusState::kUp : BusState::kDown; }
 
 void MemoryEndpoint::deliver(const TimedFrame& frame) {
-  if (frame.frame.kind == frames::FrameKind::kError) {
-    if ((frame.frame.id & error_mask_) == 0) return;
-  } else if (std::none_of(filters_.begin(), filters_.end(), [&](const Filter& f) { return f.matches(frame.frame); })) {
+  const CanFrame& f = frame.frame;
+  if (f.kind == frames::FrameKind::kError) {
+    if ((f.id & error_mask_) == 0) return;
+  } else if (f.kind == frames::FrameKind::kData && !f.extended && f.id < standard_data_.size()) {
+    if (!standard_data_[f.id]) return;
+  } else if (std::none_of(filters_.begin(), filters_.end(), [&](const Filter& filter) { return filter.matches(f); })) {
     return;
   }
   if (queue_.size() >= capacity_) {

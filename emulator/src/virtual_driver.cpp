@@ -21,6 +21,7 @@ class AgentParticipant final : public can_nodes::Participant {
   AgentParticipant(int space, const laptop::AgentConfig& config) : io_(space), logic_(config) {}
   void frame_ready(Nanos now) { wake_ = now; }
   std::size_t poll() override { return 0; }
+  bool may_have_frames() const override { return false; }
   Nanos next_wakeup() const override { return wake_; }
   void tick(Nanos now) override {
     wake_ = kNever;

@@ -90,5 +90,40 @@ TEST(Lockstep, AParticipantMayAskToBeWokenAgainAtOnce) {
   EXPECT_EQ(log, (std::vector<std::string>{"a tick 7", "a tick 7", "a tick 7"}));
 }
 
+// Counts its polls; says it has frames only when its endpoint has some.
+class Counted final : public Participant {
+ public:
+  explicit Counted(MemoryBus& bus) : ep_(bus.attach("counted")) {}
+  std::size_t poll() override {
+    ++polls;
+    std::size_t n = 0;
+    while (ep_->receive()) ++n;
+    got += n;
+    return n;
+  }
+  bool may_have_frames() const override { return ep_->may_have_frames(); }
+  void tick(Nanos) override {}
+  Nanos next_wakeup() const override { return kNever; }
+  std::size_t polls = 0;
+  std::size_t got = 0;
+
+ private:
+  std::unique_ptr<MemoryEndpoint> ep_;
+};
+
+TEST(Lockstep, ADeliveryRoundPassesByWhoeverHasNothingToRead) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  std::vector<std::string> log;
+  Scripted a("a", bus, {Nanos{5}, Nanos{9}}, log, clock);
+  Counted quiet(bus);
+  Lockstep run(clock);
+  run.add(a);
+  run.add(quiet);
+  run.run_until(Nanos{100});
+  EXPECT_EQ(quiet.got, 2u) << "both of a's frames";
+  EXPECT_EQ(quiet.polls, 2u) << "polled only when a frame waited";
+}
+
 }  // namespace
 }  // namespace canhil::can_nodes

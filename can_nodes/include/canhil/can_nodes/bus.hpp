@@ -71,6 +71,9 @@ class Bus {
   virtual SendStatus send(const CanFrame& frame) = 0;
   /// The next received frame with its receive time, or nullopt when none waits.
   virtual std::optional<TimedFrame> receive() = 0;
+  /// False only when receive() would certainly return nothing (a memory
+  /// endpoint's empty queue); a socket may always have frames.
+  virtual bool may_have_frames() const { return true; }
   /// Replaces the receive filters; an empty list receives no data frames.
   virtual void set_filters(std::span<const Filter> filters) = 0;
   /// Which error-frame classes to receive (kErr*); 0, the default, receives none.

@@ -35,6 +35,9 @@ class Participant {
   }
   virtual void tick(Nanos now) = 0;
   virtual Nanos next_wakeup() const = 0;
+  /// False only when poll() would certainly handle nothing: a delivery round
+  /// then passes this participant by.
+  virtual bool may_have_frames() const { return true; }
 };
 
 /// A node as a participant.
@@ -45,6 +48,7 @@ class NodeParticipant final : public Participant {
   std::size_t poll_some(std::size_t budget) override { return node_.poll(budget); }
   void tick(Nanos now) override { node_.tick(now); }
   Nanos next_wakeup() const override { return node_.next_wakeup(); }
+  bool may_have_frames() const override { return node_.may_have_frames(); }
 
  private:
   Node& node_;

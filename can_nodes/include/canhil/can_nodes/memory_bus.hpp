@@ -8,6 +8,7 @@
 // Deterministic; not thread-safe (virtual time runs on one thread).
 #pragma once
 
+#include <bitset>
 #include <deque>
 #include <memory>
 #include <string>
@@ -26,6 +27,7 @@ class MemoryEndpoint final : public Bus {
 
   SendStatus send(const CanFrame& frame) override;
   std::optional<TimedFrame> receive() override;
+  bool may_have_frames() const override { return !queue_.empty(); }
   void set_filters(std::span<const Filter> filters) override;
   void set_error_mask(std::uint32_t mask) override { error_mask_ = mask; }
   BusState state() const override;
@@ -46,6 +48,7 @@ class MemoryEndpoint final : public Bus {
   std::size_t capacity_;
   std::deque<TimedFrame> queue_;
   std::vector<Filter> filters_{Filter::all()};
+  std::bitset<2048> standard_data_{std::bitset<2048>().set()};  // the filters' verdict on each 11-bit data frame
   std::uint32_t error_mask_ = 0;
   bool receive_own_ = false;
   BusStats stats_;

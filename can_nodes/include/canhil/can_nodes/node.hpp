@@ -65,6 +65,8 @@ class Node {
   const std::string& name() const noexcept { return name_; }
   /// Handles every frame waiting on the bus; returns how many.
   std::size_t poll();
+  /// False only when poll() would certainly find nothing to read.
+  bool may_have_frames() const { return bus_.may_have_frames() || more_may_have_frames(); }
   /// Handles at most `max_frames` waiting frames; the rest stay queued.
   std::size_t poll(std::size_t max_frames);
   /// Acts at `now` (call when now >= next_wakeup()).
@@ -88,6 +90,8 @@ class Node {
     (void)max_frames;
     return 0;
   }
+  /// As Bus::may_have_frames, for what poll_more reads.
+  virtual bool more_may_have_frames() const { return false; }
 
   /// Asks for a tick at `t`. Every request is kept until served (a node may
   /// want its motor tick and its synchronous window); one tick serves all due.

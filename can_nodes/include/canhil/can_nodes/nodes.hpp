@@ -169,6 +169,7 @@ class SystemMonitor final : public Node {
   void on_frame(const frames::TimedFrame& frame) override;
   void step(Nanos now) override;
   std::size_t poll_more(std::size_t max_frames) override;
+  bool more_may_have_frames() const override { return watch_ != nullptr && watch_->may_have_frames(); }
 
  private:
   void observe(const frames::TimedFrame& frame);  // bad frames and who is alive

@@ -34,6 +34,7 @@ class HandlerParticipant final : public can_nodes::Participant {
     }
     return n;
   }
+  bool may_have_frames() const override { return ep_->may_have_frames(); }
   void tick(Nanos now) override { hw_.on_time(now); }
   Nanos next_wakeup() const override { return hw_.next_deadline(); }
 
