@@ -24,12 +24,14 @@ int run_pman(Args& args) {
   if (words.size() != 2 || words[1] != "list") throw UsageError("pman takes one word: list");
   const std::vector<pman::TableView> tables = pman::read_tables();
   if (tables.empty()) {
-    std::printf("no PMan table (keys 0x9011 + 2 x agent, agents 1..6): no canhil run with PMan, and no other master\n");
+    std::printf(
+        "no PMan table (keys 0x9011 + 2 x agent, the second team's 0x9111 + 2 x agent, agents 1..6): no canhil run "
+        "with PMan, and no other master\n");
     return 0;
   }
   for (const pman::TableView& t : tables) {
-    std::printf("agent %d: table at key 0x%x, %llu ticks\n", t.agent, static_cast<unsigned>(t.key),
-                static_cast<unsigned long long>(t.ticks));
+    std::printf("%sagent %d: table at key 0x%x, %llu ticks\n", t.set == 0 ? "" : "second team, ", t.agent,
+                static_cast<unsigned>(t.key), static_cast<unsigned long long>(t.ticks));
     for (const pman::Process& p : t.processes) {
       std::printf("  %-16s pid %-7d %-32s %llu activations\n", p.name.c_str(), p.pid, state_name(p),
                   static_cast<unsigned long long>(p.activations));

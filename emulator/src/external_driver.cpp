@@ -141,7 +141,11 @@ std::size_t ExternalDriver::settle() {
     return 0;
   }
   bool agents_due = false;  // set once a woken agent has been told to look
-  pman::Masters* masters = session_.laptop() != nullptr ? session_.laptop()->masters() : nullptr;
+  // Each robot's PMan table is its team's.
+  auto masters_of = [this](std::size_t r) -> pman::Masters* {
+    LaptopLink* laptop = session_.laptop(session_.rig(r).team);
+    return laptop != nullptr ? laptop->masters() : nullptr;
+  };
   // Until nothing new happens: wait for the processes to be quiet and for every
   // frame sent to have reached every socket; then, if frames are new to the
   // processes or an agent was activated, nudge them to look again.
@@ -151,10 +155,12 @@ std::size_t ExternalDriver::settle() {
         [&]() -> std::string {
           sent = ours + conductor_.frames_sent();
           std::string missing = in_flight(sent);
-          if (!missing.empty() || !agents_due || masters == nullptr) return missing;
+          if (!missing.empty() || !agents_due) return missing;
           for (std::size_t r = 0; r < woken_.size(); ++r) {
-            if (woken_[r] && !masters->all_idle(session_.rig(r).agent)) {
-              return "agent " + std::to_string(session_.rig(r).agent) + "'s PMAN_epilogue";
+            pman::Masters* masters = masters_of(r);
+            if (woken_[r] && masters != nullptr && !masters->all_idle(session_.rig(r).agent)) {
+              return (session_.rig(r).team == 0 ? "" : "the second team's ") + std::string("agent ") +
+                     std::to_string(session_.rig(r).agent) + "'s PMAN_epilogue";
             }
           }
           return {};

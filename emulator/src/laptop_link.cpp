@@ -41,9 +41,9 @@ std::unique_ptr<rtdb::Database> open_database(const LaptopSide& side, int set) {
                             rtdb::Scope::kAllAgents, std::filesystem::path(side.rtdb_ini), set);
 }
 
-std::unique_ptr<pman::Masters> open_masters(const std::string& pman) {
+std::unique_ptr<pman::Masters> open_masters(const std::string& pman, int rtdb_set) {
   if (pman == "none") return nullptr;
-  if (pman == "builtin") return pman::builtin_masters();
+  if (pman == "builtin") return pman::builtin_masters(rtdb_set);
   return pman::library_masters(pman);
 }
 
@@ -125,12 +125,14 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
     }
     coach_items_.push_back(std::move(c));
   }
-  if (rtdb_set != 0 && side.pman != "none") {
+  if (rtdb_set != 0 && side.pman != "none" && side.pman != "builtin") {
     throw SetupError(
-        "PMan's tables have fixed keys (0x9011 + 2 x agent), so only the first team can use PMan on "
-        "one computer; give the second team pman = \"none\" in its [teams.laptop]");
+        "the second team's PMan: a team's PMan library (" + side.pman +
+        ") puts robot N's table at key 0x9011 + 2 x N for both teams; canhil's own PMan moves the second team's to "
+        "0x9111 + 2 x N (its processes started with SECOND_RTDB=1, built against canhil's libpman): give the second "
+        "team pman = \"builtin\" or \"none\" in its [teams.laptop]");
   }
-  masters_ = open_masters(side.pman);
+  masters_ = open_masters(side.pman, rtdb_set);
   if (masters_) {
     for (const int agent : agents) {
       std::vector<std::string> names;

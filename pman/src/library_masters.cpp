@@ -56,7 +56,7 @@ class LibraryMasters final : public CountingMasters {
     // -15: SCHED_FIFO refused (not root), after the table was made: usable.
     if (r != 0 && r != -15) {
       throw SetupError("the PMan library " + path_ + " could not create robot " + std::to_string(agent) +
-                       "'s table (key 0x" + hex(agent) + ", PMAN_init2 returned " + std::to_string(r) +
+                       "'s table (key 0x" + hex(key) + ", PMAN_init2 returned " + std::to_string(r) +
                        "): is another master running for this agent? `canhil pman list` shows the tables");
     }
     Ids& ids = tables_[agent];

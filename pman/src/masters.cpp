@@ -5,6 +5,7 @@
 #include <sys/ipc.h>
 #include <sys/shm.h>
 
+#include <climits>
 #include <map>
 
 #include "canhil/base/setup_error.hpp"
@@ -82,14 +83,18 @@ namespace {
 
 class BuiltinMasters final : public CountingMasters {
  public:
+  explicit BuiltinMasters(int set) : set_(set) {}
   ~BuiltinMasters() override { BuiltinMasters::close_all(); }
 
   void open(int agent, const std::vector<std::string>& processes) override {
-    int error = 0;
-    canhil_pman* h = canhil_pman_open_master(agent, &error);
+    int error = PMAN_E_AGENT;
+    const long long key = CANHIL_PMAN_SET_KEY(static_cast<long long>(set_), static_cast<long long>(agent));
+    canhil_pman* h = agent < 0 || key > INT_MAX
+                         ? nullptr
+                         : canhil_pman_open_master_keys(static_cast<key_t>(key), static_cast<key_t>(key), &error);
     if (h == nullptr) {
-      throw SetupError("cannot create robot " + std::to_string(agent) + "'s PMan table (key 0x" + hex(agent) +
-                       ", error " + std::to_string(error) +
+      throw SetupError("cannot create robot " + std::to_string(agent) + "'s PMan table (key 0x" +
+                       hex(static_cast<int>(key)) + ", error " + std::to_string(error) +
                        "): is another PMan master (an omni vision, another canhil) running for this agent? "
                        "`canhil pman list` shows the tables");
     }
@@ -121,7 +126,9 @@ class BuiltinMasters final : public CountingMasters {
     tables_.clear();
   }
 
-  std::string description() const override { return "canhil's own PMan"; }
+  std::string description() const override {
+    return set_ == 0 ? "canhil's own PMan" : "canhil's own PMan, the second team's keys";
+  }
 
  private:
   void do_tick(int agent) override {
@@ -133,38 +140,45 @@ class BuiltinMasters final : public CountingMasters {
     std::vector<std::string> names;
   };
   std::map<int, Table> tables_;
+  int set_;
 };
 
 }  // namespace
 
-std::string hex(int agent) {
+std::string hex(int key) {
   char buf[16];
-  std::snprintf(buf, sizeof buf, "%X", CANHIL_PMAN_AGENT_KEY(agent));
+  std::snprintf(buf, sizeof buf, "%X", static_cast<unsigned>(key));
   return buf;
 }
 
-std::unique_ptr<Masters> builtin_masters() { return std::make_unique<BuiltinMasters>(); }
+std::unique_ptr<Masters> builtin_masters(int set) {
+  if (set != 0 && set != 1) throw SetupError("a PMan key set is 0 (the first team) or 1 (the second)");
+  return std::make_unique<BuiltinMasters>(set);
+}
 
 std::vector<TableView> read_tables(int first_agent, int last_agent) {
   std::vector<TableView> out;
-  for (int agent = first_agent; agent <= last_agent; ++agent) {
-    const int key = CANHIL_PMAN_AGENT_KEY(agent);
-    const int id = shmget(key, 0, 0);
-    if (id < 0) continue;
-    shmid_ds ds{};
-    if (shmctl(id, IPC_STAT, &ds) != 0 || ds.shm_segsz < sizeof(PROC_TABLE_TYPE)) continue;  // not a table
-    void* at = shmat(id, nullptr, SHM_RDONLY);
-    if (at == reinterpret_cast<void*>(-1)) continue;  // NOLINT(performance-no-int-to-ptr): shmat's error value
-    const auto* table = static_cast<const PROC_TABLE_TYPE*>(at);
-    TableView view;
-    view.agent = agent;
-    view.key = key;
-    view.ticks = table->ticks < 0 ? 0 : static_cast<std::uint64_t>(table->ticks);
-    for (const PROC_TYPE& p : table->proc) {  // read as untrusted: only what fits
-      if (p.PROC_name[0] != '\0') view.processes.push_back(process_of(p));
+  for (int set = 0; set < 2; ++set) {
+    for (int agent = first_agent; agent <= last_agent; ++agent) {
+      const int key = CANHIL_PMAN_SET_KEY(set, agent);
+      const int id = shmget(key, 0, 0);
+      if (id < 0) continue;
+      shmid_ds ds{};
+      if (shmctl(id, IPC_STAT, &ds) != 0 || ds.shm_segsz < sizeof(PROC_TABLE_TYPE)) continue;  // not a table
+      void* at = shmat(id, nullptr, SHM_RDONLY);
+      if (at == reinterpret_cast<void*>(-1)) continue;  // NOLINT(performance-no-int-to-ptr): shmat's error value
+      const auto* table = static_cast<const PROC_TABLE_TYPE*>(at);
+      TableView view;
+      view.agent = agent;
+      view.set = set;
+      view.key = key;
+      view.ticks = table->ticks < 0 ? 0 : static_cast<std::uint64_t>(table->ticks);
+      for (const PROC_TYPE& p : table->proc) {  // read as untrusted: only what fits
+        if (p.PROC_name[0] != '\0') view.processes.push_back(process_of(p));
+      }
+      shmdt(at);
+      out.push_back(std::move(view));
     }
-    shmdt(at);
-    out.push_back(std::move(view));
   }
   return out;
 }

@@ -15,8 +15,8 @@ namespace canhil::pman {
 
 /// A slot as canhil reports it (names are read up to their terminator or the field's end).
 Process process_of(const PROC_TYPE& p);
-/// The table key of robot `agent`, in hex.
-std::string hex(int agent);
+/// A table key in hex.
+std::string hex(int key);
 
 class CountingMasters : public Masters {
  public:

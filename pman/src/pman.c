@@ -13,6 +13,7 @@
 #include <string.h>
 #include <sys/ipc.h>
 
+#include "canhil/pman/pman_master.h"
 #include "pman_core.h"
 
 PMAN_EXPORT int pman_sem_id = -1;
@@ -95,8 +96,12 @@ PMAN_EXPORT int PMAN_init(key_t shmem_pman_key, key_t sem_pman_key, void* QoSfun
   char* end = NULL;
   errno = 0;
   const long agent = strtol(text, &end, 10);
-  const long long shm_key = (long long)shmem_pman_key + 2LL * agent;
-  const long long sem_key = (long long)sem_pman_key + 2LL * agent;
+  /* A process of a second team (SECOND_RTDB set, and not "0", as for its RTDB set). */
+  const char* second = getenv("SECOND_RTDB");
+  const long long set_offset =
+      second != NULL && second[0] != '\0' && strcmp(second, "0") != 0 ? CANHIL_PMAN_SECOND_SET_OFFSET : 0;
+  const long long shm_key = (long long)shmem_pman_key + 2LL * agent + set_offset;
+  const long long sem_key = (long long)sem_pman_key + 2LL * agent + set_offset;
   if (errno != 0 || *end != '\0' || agent < 0 || shm_key > INT_MAX || sem_key > INT_MAX) {
     fprintf(stderr, "PMan: AGENT=%s is not a robot number (0, 1, 2, ...)\n", text);
     return PMAN_E_AGENT;

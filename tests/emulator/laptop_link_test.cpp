@@ -143,6 +143,25 @@ TEST_F(LaptopLinkTest, TheReplicatorCopiesOnceAReplicationPeriodWhateverTheStep)
   EXPECT_EQ(link.replicator_stats()->cycles, 11u) << "at 0, 100, ..., 1000 ms; not at each 10 ms step";
 }
 
+TEST_F(LaptopLinkTest, TheSecondTeamsPmanIsCanhilsOwnAtItsOwnKeys) {
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  LaptopSide side;
+  side.pman = "builtin";
+  LaptopLink first(resolve_laptop(side, 1, true), {1}, coach(1), 0);
+  LaptopLink second(resolve_laptop(side, 1, true), {1}, coach(1), 1);
+  ASSERT_NE(second.masters(), nullptr) << "agent 1 of each team: two tables";
+  EXPECT_EQ(second.masters()->query(1).at(0).name, "agent1");
+  EXPECT_NE(second.masters()->description().find("second team"), std::string::npos);
+  LaptopSide library;
+  library.pman = "/opt/team/lib/libpman.so";  // refused before it is loaded
+  try {
+    LaptopLink refused(resolve_laptop(library, 1, true), {2}, coach(1), 1);
+    FAIL() << "a team's PMan library for the second team";
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("pman = \"builtin\" or \"none\""), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(LaptopLinkTest, EachRobotsPmanTableIsTickedAfterItsVisionInfo) {
   LaptopLink link(team(true), {1}, coach(1));
   ASSERT_NE(link.masters(), nullptr);

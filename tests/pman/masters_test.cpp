@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/pman/pman_master.h"
 #include "pman.h"
 
 namespace canhil::pman {
@@ -31,7 +32,7 @@ int test_agent(int k) { return 700 + static_cast<int>(getpid() % 97) * 3 + k; }
 // pipe) and, unless `late`, PMAN_epilogue; SIGINT ends it.
 class Client {
  public:
-  Client(int agent, const std::string& name, bool late = false) {
+  Client(int agent, const std::string& name, bool late = false, bool second_team = false) {
     int fds[2];
     EXPECT_EQ(pipe(fds), 0);
     pid_ = fork();
@@ -43,6 +44,11 @@ class Client {
       sigaddset(&set, SIGINT);
       sigprocmask(SIG_BLOCK, &set, nullptr);
       setenv("AGENT", std::to_string(agent).c_str(), 1);
+      if (second_team) {
+        setenv("SECOND_RTDB", "1", 1);
+      } else {
+        unsetenv("SECOND_RTDB");
+      }
       for (int i = 0; PMAN_init(SHMEM_OCAM_PMAN_KEY, SEM_OCAM_PMAN_KEY, nullptr, 0, PMAN_ATTACH) != 0; ++i) {
         PMAN_close(PMAN_CLLEAVE);
         if (i > 500) _exit(3);
@@ -166,6 +172,33 @@ TEST(Masters, AClientThatDiesIsCountedGoneAndNotActivatedAgain) {
   ASSERT_EQ(counts.size(), 1u);
   EXPECT_EQ(counts[0].activations, 1u);
   EXPECT_EQ(counts[0].gone, 1u) << "its death seen once";
+}
+
+TEST(Masters, TheSecondTeamsTablesSitBesideTheFirstsAndItsClientsFindThemWithSecondRtdb) {
+  auto first = builtin_masters(0);
+  auto second = builtin_masters(1);
+  const int agent = test_agent(3);
+  const std::string name = "agent" + std::to_string(agent);
+  first->open(agent, {name});
+  second->open(agent, {name});  // the same agent number: another key
+  Client ours(agent, name);
+  Client theirs(agent, name, false, true);
+  ASSERT_TRUE(attached(*first, agent));
+  ASSERT_TRUE(attached(*second, agent));
+  EXPECT_EQ(first->query(agent).at(0).pid, ours.pid());
+  EXPECT_EQ(second->query(agent).at(0).pid, theirs.pid()) << "SECOND_RTDB=1: the second team's table";
+  EXPECT_EQ(second->tick(agent), 1);
+  ASSERT_TRUE(theirs.cycle());
+  EXPECT_EQ(first->counts(agent).at(0).activations, 0u) << "a tick of one team's table wakes nobody of the other";
+  EXPECT_EQ(second->counts(agent).at(0).activations, 1u);
+  bool listed_first = false;
+  bool listed_second = false;
+  for (const TableView& t : read_tables(agent, agent)) {
+    listed_first = listed_first || (t.set == 0 && t.key == CANHIL_PMAN_AGENT_KEY(agent));
+    listed_second = listed_second || (t.set == 1 && t.key == CANHIL_PMAN_AGENT_KEY(agent) + 0x100);
+  }
+  EXPECT_TRUE(listed_first && listed_second) << "canhil pman list shows both";
+  EXPECT_THROW(builtin_masters(2), SetupError);
 }
 
 TEST(Masters, ALibraryWithoutThePmanApiIsNamed) {

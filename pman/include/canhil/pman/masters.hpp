@@ -77,19 +77,22 @@ class Masters {
   Masters() = default;
 };
 
-/// canhil's own PMan (the canhil::pman library's handle API).
-std::unique_ptr<Masters> builtin_masters();
+/// canhil's own PMan (the canhil::pman library's handle API), its tables at
+/// the first team's keys (set 0: 0x9011 + 2 x agent) or the second team's
+/// (set 1: 0x100 higher, where canhil's PMAN_init looks with SECOND_RTDB=1).
+std::unique_ptr<Masters> builtin_masters(int set = 0);
 
 /// A team's PMan library (a shared object with CAMBADA's API), loaded with
 /// dlopen. SetupError: no such file, not loadable, a symbol missing (named).
 std::unique_ptr<Masters> library_masters(const std::filesystem::path& shared_object);
 
-/// The processes of every table at keys 0x9011 + 2 x agent, agent 1..6, read
-/// without attaching (for `canhil pman list`; any master's, canhil's or a
-/// team's, as long as the table is CAMBADA's layout). Agents without a table
-/// are left out.
+/// The processes of every table at keys 0x9011 + 2 x agent and the second
+/// team's 0x9111 + 2 x agent, agent 1..6, read without attaching (for
+/// `canhil pman list`; any master's, canhil's or a team's, as long as the
+/// table is CAMBADA's layout). Agents without a table are left out.
 struct TableView {
   int agent = 0;
+  int set = 0;  ///< 0 the first team's keys, 1 the second's
   int key = 0;
   std::uint64_t ticks = 0;
   std::vector<Process> processes;

@@ -45,6 +45,14 @@ extern "C" {
 /* The table and semaphore key of robot `agent`'s omni-vision master. */
 #define CANHIL_PMAN_AGENT_KEY(agent) (SHMEM_OCAM_PMAN_KEY + 2 * (agent))
 
+/* A second team on the same computer (its processes started with
+ * SECOND_RTDB=1, as for its RTDB set) meets its masters this far above the
+ * first team's keys: 0x9111 + 2 x agent. canhil's PMAN_init adds it; a
+ * library that does not know SECOND_RTDB (CAMBADA's) cannot. */
+#define CANHIL_PMAN_SECOND_SET_OFFSET 0x100
+/* The key of robot `agent` of team `set` (0 or 1). */
+#define CANHIL_PMAN_SET_KEY(set, agent) (CANHIL_PMAN_AGENT_KEY(agent) + (set)*CANHIL_PMAN_SECOND_SET_OFFSET)
+
 typedef struct canhil_pman canhil_pman;
 
 /* What a master has seen. Every field only grows. */
