@@ -404,6 +404,17 @@ void ItemBuffer::set_points(Quantity list, std::span<const std::array<double, 2>
   const auto fields = item_->fields();
   for (std::size_t i : list.binding_->fields) {
     const FieldLayout& f = fields[i];
+    if (f.type == ScalarType::kF32 && f.stored_per_si == 1.0 && f.add == 0 && f.turn <= 0) {
+      // Metres as floats (canhil's and CAMBADA's vision): what store(to_stored()) does, without its cases.
+      constexpr double kMax = std::numeric_limits<float>::max();
+      for (std::size_t p = 0; p < n; ++p) {
+        for (std::size_t c = 0; c < 2; ++c) {
+          const double v = points[p][c];
+          put(&bytes_[at_byte(f, p, c)], static_cast<float>(std::isfinite(v) ? std::clamp(v, -kMax, kMax) : v));
+        }
+      }
+      continue;
+    }
     for (std::size_t p = 0; p < n; ++p) {
       store(&bytes_[at_byte(f, p, 0)], f.type, to_stored(f, points[p][0]));
       store(&bytes_[at_byte(f, p, 1)], f.type, to_stored(f, points[p][1]));

@@ -120,6 +120,14 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   out.balls.clear();
   out.line_rays = 0;
   const kinematics::Pose& me = scene.robots.at(robot);
+  // to_robot with the heading's cosine and sine taken once a frame (the same numbers).
+  const double cos_h = std::cos(me.heading_rad);
+  const double sin_h = std::sin(me.heading_rad);
+  const auto local = [&](const Eigen::Vector2d& w) -> Eigen::Vector2d {
+    const double dx = w.x() - me.x_m;
+    const double dy = w.y() - me.y_m;
+    return {cos_h * dx + sin_h * dy, -sin_h * dx + cos_h * dy};
+  };
   // Single-precision draws (about one engine call each): ample for centimetre noise.
   const Gaussian point_noise(static_cast<float>(params_.point_noise_m));
   std::uniform_real_distribution<float> chance(0.0f, 1.0f);
@@ -130,7 +138,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   thread_local std::vector<Circle> circles;
   circles.clear();
   auto add_circle = [&](const Eigen::Vector2d& world, double r) {
-    const Eigen::Vector2d c = to_robot(me, world);
+    const Eigen::Vector2d c = local(world);
     const double d = c.norm();
     if (d <= r + 1e-9 || d - r > params_.obstacle_range_m + params_.line_range_m) return;
     circles.push_back({c, r, d, std::atan2(c.y(), c.x()), std::asin(std::min(1.0, r / d)), c.squaredNorm() - r * r});
@@ -177,8 +185,8 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   thread_local std::vector<Seg> segs;
   segs.clear();
   for (const auto& s : markings_.segments) {
-    const Eigen::Vector2d a = to_robot(me, {s.x0_m, s.y0_m});
-    const Eigen::Vector2d b = to_robot(me, {s.x1_m, s.y1_m});
+    const Eigen::Vector2d a = local({s.x0_m, s.y0_m});
+    const Eigen::Vector2d b = local({s.x1_m, s.y1_m});
     const Eigen::Vector2d e = b - a;
     const double len2 = e.squaredNorm();
     const double u = len2 > 0 ? std::clamp(-a.dot(e) / len2, 0.0, 1.0) : 0.0;
@@ -193,7 +201,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   thread_local std::vector<Arc> arcs;
   arcs.clear();
   for (const auto& a : markings_.arcs) {
-    const Eigen::Vector2d c = to_robot(me, {a.cx_m, a.cy_m});
+    const Eigen::Vector2d c = local({a.cx_m, a.cy_m});
     if (c.norm() - a.radius_m > reach) continue;  // the whole circle is out of reach
     const double start = wrap_angle(a.start_rad - me.heading_rad);
     const double end = start + (a.end_rad - a.start_rad);
@@ -342,7 +350,7 @@ void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, Visio
   }
 
   // --- the ball: projected to the ground, within the see limit, not occluded.
-  const Eigen::Vector2d ball_local = to_robot(me, scene.ball.head<2>());
+  const Eigen::Vector2d ball_local = local(scene.ball.head<2>());
   const double d_prime = ball_local.norm();
   const double h = params_.camera_height_m;
   const double h_prime = scene.ball.z() - scene.ball_radius_m;  // height above its resting height
