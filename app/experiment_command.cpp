@@ -92,7 +92,7 @@ int vision_experiment(const physics::WorldParams& base, int robot, const std::op
   if (r >= scene.robots.size())
     throw UsageError("--robot " + std::to_string(r) + ": the scene has " + std::to_string(scene.robots.size()) +
                      " robots");
-  std::mt19937 rng(vp.seed);
+  vision_emu::NoiseEngine rng(vp.seed);
   const vision_emu::VisionFrame f = vision.see(scene, r, rng);
   if (json) {
     std::printf(

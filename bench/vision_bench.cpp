@@ -25,7 +25,7 @@ void BM_VisionRobotFrame(benchmark::State& state) {
   vp.detection_probability = 0.95;
   const vision_emu::Vision vision(vp, world.markings());
   const vision_emu::Scene scene = vision_emu::snapshot(world);
-  std::mt19937 rng(1);
+  vision_emu::NoiseEngine rng(1);
   std::size_t robot = 0;
   std::size_t points = 0;
   vision_emu::VisionFrame f;

@@ -3,6 +3,8 @@
 // 0.25 sigma, and the same draws from the same seed.
 #include "canhil/vision_emu/gaussian.hpp"
 
+#include "canhil/vision_emu/noise_engine.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +16,7 @@ namespace canhil::vision_emu {
 namespace {
 
 std::vector<float> draws(std::size_t n, unsigned seed, float sigma = 1.0f) {
-  std::mt19937 engine(seed);
+  NoiseEngine engine(seed);
   const Gaussian g(sigma);
   std::vector<float> out(n);
   for (float& x : out) x = g(engine);

@@ -32,7 +32,7 @@ class VisionTest : public ::testing::Test {
     return s;
   }
   VisionFrame see(const Scene& s, std::size_t robot = 0) {
-    std::mt19937 rng(1);
+    NoiseEngine rng(1);
     return vision_.see(s, robot, rng);
   }
   Vision vision_;
@@ -134,7 +134,7 @@ TEST_F(VisionTest, WithTheCapReachedThePassesStillCoverTheWholeCircle) {
   p.circle_radii_m = {};
   const Vision small(p, vision_.markings());
   Scene s = scene_with({0.5, 0.3, 0});  // centre of the field: lines all around
-  std::mt19937 rng(1);
+  NoiseEngine rng(1);
   const VisionFrame f = small.see(s, 0, rng);
   ASSERT_EQ(f.lines.size(), 30u);
   // The points' bearings leave no gap wider than a quarter turn.
@@ -158,7 +158,7 @@ TEST_F(VisionTest, CircularSensorsSeeTheCentreCircleFromOnIt) {
   VisionParams radial_only;
   radial_only.circle_radii_m = {};
   const Vision r(radial_only, vision_.markings());
-  std::mt19937 rng(1);
+  NoiseEngine rng(1);
   const VisionFrame g = r.see(s, 0, rng);
   int radial_on_circle = 0;
   for (const auto& p : g.lines) {
@@ -174,7 +174,7 @@ TEST_F(VisionTest, NoiseAndDetectionProbabilityChangeTheOutput) {
   p.detection_probability = 0.5;
   const Vision noisy(p, vision_.markings());
   Scene s = scene_with({-3, 0, 0.3});
-  std::mt19937 rng(3);
+  NoiseEngine rng(3);
   const VisionFrame f = noisy.see(s, 0, rng);
   const VisionFrame exact = see(s);
   EXPECT_LT(f.lines.size(), exact.lines.size() * 3 / 4);

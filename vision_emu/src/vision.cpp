@@ -108,13 +108,13 @@ Eigen::Vector2d Vision::to_world(const kinematics::Pose& pose, const Eigen::Vect
   return {pose.x_m + c * l.x() - s * l.y(), pose.y_m + s * l.x() + c * l.y()};
 }
 
-VisionFrame Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng) const {
+VisionFrame Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng) const {
   VisionFrame out;
   see(scene, robot, rng, out);
   return out;
 }
 
-void Vision::see(const Scene& scene, std::size_t robot, std::mt19937& rng, VisionFrame& out) const {
+void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, VisionFrame& out) const {
   out.obstacles.clear();
   out.lines.clear();
   out.balls.clear();

@@ -18,7 +18,7 @@ class Gaussian {
   /// Draws with mean 0 and standard deviation `sigma`.
   explicit Gaussian(float sigma) noexcept : sigma_(sigma) {}
 
-  /// One draw; `Engine` gives 32 uniform bits (std::mt19937).
+  /// One draw; `Engine` gives 32 uniform bits (NoiseEngine, std::mt19937).
   template <class Engine>
   float operator()(Engine& engine) const {
     return sigma_ * standard(engine);

@@ -30,7 +30,7 @@ class VisionRunner {
   Sink sink_;
   std::deque<Scene> history_;
   std::vector<double> next_frame_s_;
-  std::vector<std::mt19937> rng_;
+  std::vector<NoiseEngine> rng_;
   std::vector<VisionFrame> frame_;  // reused per robot
   std::uint64_t frames_ = 0;
 };

@@ -16,6 +16,7 @@
 
 #include "canhil/kinematics/omni.hpp"
 #include "canhil/physics/field.hpp"
+#include "canhil/vision_emu/noise_engine.hpp"
 
 namespace canhil::vision_emu {
 
@@ -71,10 +72,10 @@ class Vision {
 
   /// What robot `robot` sees in `scene`. `rng` drives noise and detection.
   /// Thread-safe (scratch space is per thread).
-  VisionFrame see(const Scene& scene, std::size_t robot, std::mt19937& rng) const;
+  VisionFrame see(const Scene& scene, std::size_t robot, NoiseEngine& rng) const;
   /// The same into `out` (cleared first), reusing its storage: no allocation
   /// once the vectors have grown.
-  void see(const Scene& scene, std::size_t robot, std::mt19937& rng, VisionFrame& out) const;
+  void see(const Scene& scene, std::size_t robot, NoiseEngine& rng, VisionFrame& out) const;
 
   /// World point to robot frame, and back.
   static Eigen::Vector2d to_robot(const kinematics::Pose& pose, const Eigen::Vector2d& world);
@@ -85,7 +86,7 @@ class Vision {
   physics::FieldMarkings markings_;
   std::vector<double> ray_cos_;  // obstacle sensors
   std::vector<double> ray_sin_;
-  std::vector<Eigen::Vector2d> line_dir_;  // line sensors, pass after pass
+  std::vector<Eigen::Vector2d> line_dir_;   // line sensors, pass after pass
   std::vector<std::size_t> line_by_angle_;  // line sensors by angle: [j] points at 2 pi j / count
 };
 
