@@ -7,10 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <thread>
-
-#include "canhil/can_nodes/socketcan_bus.hpp"
+#include "support/driving_laptop.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
@@ -33,34 +30,10 @@ TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
   const frames::MessageSet& set = *options.messages;
 
   // The laptop: M6 (forward, 0.5 m/s) in every slot that schedules it; counts M8.
-  auto laptop = can_nodes::SocketCanBus::open("vcan0");
-  std::atomic<bool> stop{false};
-  std::atomic<int> tms{0}, m8{0};
-  std::thread laptop_thread([&] {
-    while (!stop) {
-      if (!laptop->wait_readable(20ms)) continue;
-      while (auto f = laptop->receive()) {
-        frames::Tm tm;
-        if (f->frame.id == set.tm.message().id() && set.tm.decode(f->frame, tm).ok()) {
-          ++tms;
-          if ((tm.sync_bitmap & (1u << set.ftt(set.m6_1.message()).index)) != 0) {
-            laptop->send(set.m6_1.encode(frames::M6_1{0, 0.5}));
-            laptop->send(set.m6_2.encode(frames::M6_2{}));
-          }
-        } else if (f->frame.id == set.m8.message().id()) {
-          ++m8;
-        }
-      }
-    }
-  });
-  std::atomic<bool> never{false};
-  auto run_until = [&](auto done, Nanos limit) {
-    const Nanos end = driver.clock().now() + limit;
-    while (!done() && driver.clock().now() < end) driver.run_until(driver.clock().now() + 100ms, never);
-    return done();
-  };
+  test::DrivingLaptop laptop("vcan0", set, set.m8.message().id());
+  auto run_until = [&](auto done, Nanos limit) { return test::run_until(driver, done, limit); };
   driver.start();
-  EXPECT_TRUE(run_until([&] { return tms >= 50; }, 60s)) << "trigger messages flow";
+  EXPECT_TRUE(run_until([&] { return laptop.tms() >= 50; }, 60s)) << "trigger messages flow";
   const double x0 = session.snapshot().robots[0].x_m;
   EXPECT_TRUE(run_until([&] { return session.snapshot().robots[0].x_m > x0 + 0.3; }, 60s))
       << "the laptop's M6 drove the robot forward (+x)";
@@ -71,12 +44,11 @@ TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
 
   session.apply(InjectFault{can_nodes::parse_fault("drop:M8")});
   run_until([&] { return session.fault_counts().size() == 1 && session.fault_counts()[0].applied >= 10; }, 30s);
-  const int m8_then = m8;
+  const int m8_then = laptop.watched();
   run_until([] { return false; }, 1s);
-  stop = true;
-  laptop_thread.join();
+  laptop.stop();
   driver.stop();
-  EXPECT_LE(m8 - m8_then, 1) << "no M8 after the fault took effect (one may have been on its way)";
+  EXPECT_LE(laptop.watched() - m8_then, 1) << "no M8 after the fault took effect (one may have been on its way)";
   const auto counts = session.fault_counts();
   ASSERT_EQ(counts.size(), 1u);
   EXPECT_EQ(counts[0].applied, counts[0].matched) << "every M8 since then dropped";

@@ -14,6 +14,7 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/realtime_driver.hpp"
 #include "canhil/emulator/wall_waiter.hpp"
+#include "support/driving_laptop.hpp"
 #include "support/fake_robot.hpp"
 #include "support/test_paths.hpp"
 
@@ -67,38 +68,16 @@ TEST(VcanEmulate, CanhilsNodesFollowARealMasterAndARealPicBaseDrivesThem) {
   std::thread board_thread([&] { board_loop.run_until(kNever, stop); });
 
   // The laptop: M6 (forward, 0.5 m/s) in every slot that schedules it; counts the odometry (M4_1).
-  auto laptop = can_nodes::SocketCanBus::open("vcan0");
-  std::atomic<int> tms{0}, m4{0};
-  std::thread laptop_thread([&] {
-    while (!stop) {
-      if (!laptop->wait_readable(20ms)) continue;
-      while (auto f = laptop->receive()) {
-        frames::Tm tm;
-        if (f->frame.id == set.tm.message().id() && set.tm.decode(f->frame, tm).ok()) {
-          ++tms;
-          if ((tm.sync_bitmap & (1u << set.ftt(set.m6_1.message()).index)) != 0) {
-            laptop->send(set.m6_1.encode(frames::M6_1{0, 0.5}));
-            laptop->send(set.m6_2.encode(frames::M6_2{}));
-          }
-        } else if (f->frame.id == set.m4_1.message().id()) {
-          ++m4;
-        }
-      }
-    }
-  });
-  std::atomic<bool> never{false};
-  auto run_until = [&](auto done, Nanos limit) {
-    const Nanos end = driver.clock().now() + limit;
-    while (!done() && driver.clock().now() < end) driver.run_until(driver.clock().now() + 100ms, never);
-    return done();
-  };
+  test::DrivingLaptop laptop("vcan0", set, set.m4_1.message().id());
+  auto run_until = [&](auto done, Nanos limit) { return test::run_until(driver, done, limit); };
   driver.start();
   const double x0 = session.snapshot().robots[0].x_m;
-  EXPECT_TRUE(run_until([&] { return tms >= 50 && m4 >= 20; }, 60s)) << tms << " TMs, " << m4 << " M4_1";
+  EXPECT_TRUE(run_until([&] { return laptop.tms() >= 50 && laptop.watched() >= 20; }, 60s))
+      << laptop.tms() << " TMs, " << laptop.watched() << " M4_1";
   EXPECT_TRUE(run_until([&] { return session.snapshot().robots[0].x_m > x0 + 0.2; }, 60s))
       << "the laptop's M6 went through the real Pic_base to canhil's motor nodes: the robot drove forward (+x)";
   stop = true;
-  laptop_thread.join();
+  laptop.stop();
   board_thread.join();
   driver.stop();
 

@@ -87,10 +87,10 @@ Vision::Vision(const VisionParams& params, physics::FieldMarkings markings)
     }
   }
   line_by_angle_.resize(line_dir_.size());
-  for (int pass = 0; pass < passes; ++pass) {
-    for (int k = 0; k < sensors; ++k) {
-      line_by_angle_[static_cast<std::size_t>(k * passes + pass)] = static_cast<std::size_t>(pass * sensors + k);
-    }
+  const auto n_sensors = static_cast<std::size_t>(sensors);
+  const auto n_passes = static_cast<std::size_t>(passes);
+  for (std::size_t pass = 0; pass < n_passes; ++pass) {
+    for (std::size_t k = 0; k < n_sensors; ++k) line_by_angle_[k * n_passes + pass] = pass * n_sensors + k;
   }
 }
 
