@@ -13,6 +13,7 @@ import {
 } from './support.mjs';
 
 const FIVE = join(SOURCE, 'emulator/scenarios/five_robots.toml');
+const TWO_TEAMS = join(SOURCE, 'emulator/scenarios/two_teams.toml');
 const shared = sharedBrowser();
 
 // A paused, long virtual-time run with its viewer on a free port, the page
@@ -217,6 +218,44 @@ test('an error reply shows in the log', async () => {
   await page.waitForSelector('#log li.error', { timeout: 10000 });
   const text = await page.$eval('#log li.error', (e) => e.textContent);
   assert.match(text, /fault refused/);
+  assert.deepEqual(page.errors, []);
+});
+
+test('two teams: the second team\'s robots in magenta, the score in the bar', async () => {
+  const { page, control } = await live(['--paused'], { config: TWO_TEAMS });
+  const hello = await page.evaluate(() => window.canhilView.hello());
+  assert.equal(hello.teams.length, 2);
+  const teamOf = hello.robots.map((r) => r.team);
+  assert.ok(teamOf.includes(0) && teamOf.includes(1), `teams of the robots: ${teamOf}`);
+  const s0 = await control.snapshot();
+  await pageAt(page, s0.time_s);
+  // The body's colour beside the centre (robot frame +x, clear of the front
+  // wedge and the number), read back from the canvas.
+  const bodyColour = (pose) => page.evaluate((x, y) => {
+    const c = document.getElementById('field');
+    const p = window.canhilView.toScreen(x, y);
+    const box = c.getBoundingClientRect();
+    const k = c.width / box.width;
+    const d = c.getContext('2d').getImageData(Math.round((p.x - box.left) * k), Math.round((p.y - box.top) * k), 1, 1).data;
+    return [d[0], d[1], d[2]];
+  }, pose.x + 0.7 * hello.robot_radius_m * Math.cos(pose.heading_deg * Math.PI / 180),
+  pose.y + 0.7 * hello.robot_radius_m * Math.sin(pose.heading_deg * Math.PI / 180));
+  const magenta = ([r, g, b]) => r > 90 && r > g + 50 && b > g + 30;
+  for (let i = 0; i < s0.robots.length; ++i) {
+    const colour = await bodyColour(s0.robots[i]);
+    assert.equal(magenta(colour), teamOf[i] === 1, `robot ${i} (team ${teamOf[i]}) drawn ${colour}`);
+  }
+  const bar = () => page.$eval('#st-goals', (e) => e.textContent);
+  const [a, b] = hello.teams;
+  assert.equal(await bar(), `${a.name} 0 : 0 ${b.name}`);
+  // A ball rolled into the goal the first team attacks: 1 : 0.
+  const x = (a.attacks_positive_x ? 1 : -1) * (hello.field.length_m / 2 - 0.3);
+  await control.must('move_ball', { x, y: 0, z: hello.ball_radius_m, vx: a.attacks_positive_x ? 3 : -3, vy: 0, vz: 0 });
+  await control.must('step', { count: 50 });
+  await control.until((w) => w.goals.length === 1, 'the goal counted');
+  await page.waitForFunction((want) => document.getElementById('st-goals').textContent === want, { timeout: 10000 },
+    `${a.name} 1 : 0 ${b.name}`);
+  await shot(page, 'two-teams');
   assert.deepEqual(page.errors, []);
 });
 

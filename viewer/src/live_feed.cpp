@@ -42,9 +42,12 @@ json LiveFeed::hello() {
   json robots = json::array();
   for (std::size_t r = 0; r < session_.robot_count(); ++r) {
     const emulator::Rig& rig = session_.rig(r);
-    robots.push_back({{"index", r}, {"agent", rig.agent}, {"interface", rig.interface}});
+    robots.push_back({{"index", r}, {"agent", rig.agent}, {"interface", rig.interface}, {"team", rig.team}});
   }
   h["robots"] = robots;
+  json teams = json::array();
+  for (const emulator::Team& t : sc.teams) teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
+  h["teams"] = teams;
   json obstacles = json::array();
   for (std::size_t o = 0; o < sc.world.obstacles.size(); ++o) {
     const physics::ObstacleParams& p = sc.world.obstacles[o].params;

@@ -183,9 +183,10 @@ json ReplayFeed::hello() {
   h["mode"] = "replay";
   json robots = json::array();
   for (std::size_t r = 0; r < robots_; ++r) {
-    robots.push_back({{"index", r}, {"agent", r + 1}, {"interface", "robot " + std::to_string(r)}});
+    robots.push_back({{"index", r}, {"agent", r + 1}, {"interface", "robot " + std::to_string(r)}, {"team", 0}});
   }
   h["robots"] = robots;
+  h["teams"] = json::array();  // a world log does not say
   h["obstacles"] = json::array();
   h["virtual_time"] = false;
   h["duration_s"] = rows_.back()[0];

@@ -13,6 +13,7 @@ export const COLOURS = {
   goalPositive: '#4f8fe8',  // +x: the opponent's goal
   goalNegative: '#e9c046',  // -x: your own
   robotBody: '#11161b',
+  secondTeamBody: '#7a1f5c',  // the second team's robots (magenta, as the league's markers)
   robotRim: '#dfe6ec',
   robotFront: '#ff9f43',
   selected: '#5ee1ff',
@@ -166,13 +167,13 @@ function label(ctx, text, x, y, size, colour = '#fff') {
   ctx.fillText(text, x, y);
 }
 
-/** A robot: its body, a wedge at its front, its agent number, its interface under it. */
+/** A robot: its body (the second team's magenta), a wedge at its front, its agent number, its interface under it. */
 export function drawRobot(ctx, view, pose, radius, info, { selected = false, active = false } = {}) {
   const c = view.toCanvas(pose.x, pose.y);
   const r = Math.max(6, radius * view.scale);
   ctx.beginPath();
   ctx.arc(c.x, c.y, r, 0, 2 * Math.PI);
-  ctx.fillStyle = COLOURS.robotBody;
+  ctx.fillStyle = info.team === 1 ? COLOURS.secondTeamBody : COLOURS.robotBody;
   ctx.fill();
   ctx.lineWidth = selected || active ? 3 : 1.5;
   ctx.strokeStyle = selected || active ? COLOURS.selected : COLOURS.robotRim;

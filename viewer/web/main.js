@@ -135,7 +135,13 @@ function onState(s) {
 
 // --- the status line ----------------------------------------------------------------
 
+// With two teams, the score: each team's goals are those in the goal it attacks.
 function goalsText(goals) {
+  const teams = (hello && hello.teams) || [];
+  if (teams.length === 2) {
+    const of = (t) => (goals || []).filter((g) => g.positive_x === t.attacks_positive_x).length;
+    return `${teams[0].name} ${of(teams[0])} : ${of(teams[1])} ${teams[1].name}`;
+  }
   if (!goals || !goals.length) return 'goals 0';
   const plus = goals.filter((g) => g.positive_x === true).length;
   const minus = goals.filter((g) => g.positive_x === false).length;
