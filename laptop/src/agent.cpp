@@ -23,6 +23,12 @@ const char* state_name(AgentState s) noexcept {
 AgentOutput Agent::decide(const AgentInput& in) {
   constexpr double kPi = std::numbers::pi;
   AgentOutput out;
+  if (!in.play) {
+    // Waits for "start": still, grabber off, no aim carried over into the game.
+    aimed_ = 0;
+    if (state_ == AgentState::kAim || state_ == AgentState::kApproach) state_ = AgentState::kSearch;
+    return out;
+  }
   if (state_ == AgentState::kCooldown) {
     cooldown_left_ -= in.dt_s;
     if (cooldown_left_ > 0) return out;  // stand still while the ball leaves

@@ -22,6 +22,13 @@ AgentInput AgentIo::read(double dt_s) {
   CMD_Grabber_Info gi;
   DB_get_from(space_, SELF, CMD_GRABBER_INFO, &gi);
   in.ball_engaged = gi.ballEngaged != 0;
+  // The base station's orders, as the coach writes them into this robot's
+  // database (canhil's layout: stop 1, halt 2, start 3, ...; 0 none yet).
+  CoachInfo coach{};
+  DB_get_from(space_, BASE_STATION, COACH_INFO, &coach);
+  constexpr int kNoCoachYet = 0;
+  constexpr int kStart = 3;
+  in.play = coach.gameState == kNoCoachYet || coach.gameState == kStart;
   return in;
 }
 

@@ -64,6 +64,7 @@ class Loop {
   const std::vector<Goal>& goals() const { return session_.goals(); }
   const std::string& world_log() const { return session_.world_log(); }
   std::vector<can_nodes::FaultCount> fault_counts() const { return session_.fault_counts(); }
+  Session& session() { return session_; }
 
  private:
   Session session_;
@@ -144,6 +145,25 @@ TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
   ASSERT_EQ(run.goals().size(), 1u) << "the reference agent scores from this start";
   EXPECT_TRUE(run.goals()[0].positive_x);
   EXPECT_LT(std::fabs(ball.y()), 3.0);
+}
+
+TEST_F(VirtualRunTest, TheReferenceAgentWaitsForTheCoachsStart) {
+  Config c = one_robot();
+  c.scenario.coach.game_state = "stop";
+  Loop run(c, &counters);
+  const kinematics::Pose before = run.outcomes()[0].pose;
+  run.run_for(3s);
+  const kinematics::Pose stopped = run.outcomes()[0].pose;
+  EXPECT_NEAR(stopped.x_m, before.x_m, 0.01) << "stop: the robot stands";
+  EXPECT_NEAR(stopped.y_m, before.y_m, 0.01);
+  EXPECT_EQ(run.outcomes()[0].kicks, 0);
+  run.session().apply(SetCoach{"start", std::nullopt, std::nullopt, std::nullopt, std::nullopt});
+  bool kicked = false;
+  for (int second = 0; second < 30 && !kicked; ++second) {
+    run.run_for(1s);
+    kicked = run.outcomes()[0].kicks > 0;
+  }
+  EXPECT_TRUE(kicked) << "start: it plays";
 }
 
 timing::TimingReport analyse(const std::string& trace, const std::shared_ptr<const frames::MessageSet>& set,

@@ -67,5 +67,26 @@ TEST(Agent, AimsAtTheGoalAndKicksOnceThenCoolsDown) {
   EXPECT_EQ(a.state(), AgentState::kSearch);
 }
 
+TEST(Agent, StandsStillWhileTheCoachDoesNotSayStart) {
+  Agent a;
+  AgentInput in;
+  in.ball_engaged = true;
+  in.heading_rad = -std::numbers::pi / 2;  // aimed at the goal: it would kick
+  in.play = false;
+  for (int i = 0; i < 10; ++i) {
+    const AgentOutput out = a.decide(in);
+    EXPECT_EQ(out.vx_mps, 0);
+    EXPECT_EQ(out.vy_mps, 0);
+    EXPECT_EQ(out.va_radps, 0);
+    EXPECT_EQ(out.grabber, 0);
+    EXPECT_EQ(out.kick, 0) << "no kick before the restart";
+  }
+  EXPECT_EQ(a.kicks(), 0);
+  in.play = true;
+  int kicks = 0;
+  for (int i = 0; i < 10; ++i) kicks += a.decide(in).kick != 0 ? 1 : 0;
+  EXPECT_EQ(kicks, 1) << "on start it aims afresh, then kicks";
+}
+
 }  // namespace
 }  // namespace canhil::laptop

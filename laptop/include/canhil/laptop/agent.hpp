@@ -6,6 +6,10 @@
 //   approach  drive to the ball, facing it; grabber on when near
 //   aim       ball held (the barrier says so): turn towards the opponent goal
 //   kick      aimed for a few frames: one kick, then cool down and search again
+//
+// It plays only while the coach lets it (the game state "start", or no coach
+// yet); in every other game state (stop, halt, a restart's pause, parking)
+// it stands still, grabber off, and kicks nothing.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +34,7 @@ struct AgentInput {
   double x_m = 0, y_m = 0;            ///< own pose (odometry), world frame
   double heading_rad = 0;             ///< yaw of the robot's +x axis; its front points at heading + pi/2
   bool ball_engaged = false;
+  bool play = true;        ///< the coach's game state lets it play ("start", or none written yet)
   double dt_s = 1.0 / 30;  ///< since the last decision
 };
 

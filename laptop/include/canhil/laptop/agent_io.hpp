@@ -1,5 +1,6 @@
 // canhil/laptop/agent_io.hpp — the reference agent's RTDB side: what it reads
-// before deciding (VISION_INFO, CMD_POS, CMD_GRABBER_INFO) and what it writes
+// before deciding (VISION_INFO, CMD_POS, CMD_GRABBER_INFO, and the base
+// station's COACH_INFO in its own database) and what it writes
 // after (CMD_VEL, CMD_GRABBER, and CMD_KICKER once per kick), for one agent.
 // Used by canhil-agent (its own agent) and by the virtual-time run (each
 // robot's agent in one process). DB_init or DB_init_all first. It works in one
