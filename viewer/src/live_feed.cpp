@@ -46,7 +46,8 @@ json LiveFeed::hello() {
   }
   h["robots"] = robots;
   json teams = json::array();
-  for (const emulator::Team& t : sc.teams) teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
+  for (const emulator::Team& t : sc.teams)
+    teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
   h["teams"] = teams;
   json obstacles = json::array();
   for (std::size_t o = 0; o < sc.world.obstacles.size(); ++o) {

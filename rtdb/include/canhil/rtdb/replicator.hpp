@@ -66,7 +66,7 @@ class Replicator {
   ReplicatorConfig config_;
   std::mt19937_64 rng_;
   std::deque<InFlight> in_flight_;  // in order of `due`: the delay is fixed
-  std::vector<std::byte> value_;     // the item being copied
+  std::vector<std::byte> value_;    // the item being copied
   ReplicatorStats stats_;
 };
 
