@@ -203,8 +203,8 @@ void LaptopLink::step(Nanos now, const CoachState& coach) {
   if (now >= next_replicate_) {
     replicator_->cycle(now);
     next_replicate_ = now + replicator_->config().period;
-  } else if (replicator_->in_flight() > 0) {
-    replicator_->deliver(now);
+  } else {
+    replicator_->deliver(now);  // delayed copies due by now
   }
 }
 

@@ -16,14 +16,8 @@ namespace {
 using namespace std::chrono_literals;
 
 TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
-  Scenario scenario;
-  scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};
-  scenario.world.ball_start = {3.0, 3.0, scenario.world.ball.radius_m};
-  scenario.interfaces = {"vcan0"};
-  SessionOptions options;
-  options.messages = frames::MessageSet::load(test::shipped_dbc());
-  options.vision_on = false;
-  Session session(scenario, options);
+  const SessionOptions options = test::without_vision();
+  Session session(test::one_robot_on_vcan0(), options);
   RealtimeOptions rt;
   rt.priority = 0;
   RealtimeDriver driver(session, rt);

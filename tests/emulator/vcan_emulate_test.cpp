@@ -32,14 +32,9 @@ TEST(VcanEmulate, CanhilsNodesFollowARealMasterAndARealPicBaseDrivesThem) {
   for (std::size_t i = 0; i < can_nodes::kNodeCount; ++i) {
     if (!boards.contains(static_cast<NodeId>(i))) canhil.insert(static_cast<NodeId>(i));
   }
-  Scenario scenario;
-  scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};
-  scenario.world.ball_start = {3.0, 3.0, scenario.world.ball.radius_m};
-  scenario.interfaces = {"vcan0"};
+  Scenario scenario = test::one_robot_on_vcan0();
   scenario.emulate = {canhil};
-  SessionOptions options;
-  options.messages = frames::MessageSet::load(test::shipped_dbc());
-  options.vision_on = false;
+  const SessionOptions options = test::without_vision();
   Session session(scenario, options);
   RealtimeOptions rt;
   rt.priority = 0;

@@ -2,7 +2,8 @@
 // a real-time run: on its own socket and thread it sends M6 (0.5 m/s
 // forward) in every synchronous slot a trigger message gives it, and counts
 // the trigger messages and the frames of one id it watches. Plus the loop
-// that runs a RealtimeDriver until something is true.
+// that runs a RealtimeDriver until something is true, and the one-robot
+// session they drive.
 #pragma once
 
 #include <atomic>
@@ -14,6 +15,7 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/realtime_driver.hpp"
 #include "canhil/frames/messages.hpp"
+#include "support/test_paths.hpp"
 
 namespace canhil::test {
 
@@ -64,6 +66,24 @@ class DrivingLaptop {
   std::atomic<int> watched_{0};
   std::thread thread_;  // last: it starts once everything it uses is ready
 };
+
+/// One robot at (-3, 0) facing +x on vcan0, the ball out of its way, no
+/// vision: the scenario the vcan tests' laptop drives.
+inline emulator::Scenario one_robot_on_vcan0() {
+  emulator::Scenario s;
+  s.world.robots = {physics::Placement{-3.0, 0.0, -90}};
+  s.world.ball_start = {3.0, 3.0, s.world.ball.radius_m};
+  s.interfaces = {"vcan0"};
+  return s;
+}
+
+/// The shipped DBC, no vision.
+inline emulator::SessionOptions without_vision() {
+  emulator::SessionOptions o;
+  o.messages = frames::MessageSet::load(shipped_dbc());
+  o.vision_on = false;
+  return o;
+}
 
 /// Runs `driver` in 100 ms slices until `done()` or `limit` of its clock has passed; done()'s last word.
 template <class Done>

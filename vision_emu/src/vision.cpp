@@ -47,6 +47,23 @@ bool occluded(const Eigen::Vector2d& p, const std::vector<Circle>& circles) {
 
 double wrap_angle(double a) { return std::remainder(a, 2 * kPi); }
 
+// World points into a robot's frame (Vision::to_robot), the heading's cosine and sine taken once.
+class RobotFrame {
+ public:
+  explicit RobotFrame(const kinematics::Pose& pose)
+      : pose_(pose), c_(std::cos(pose.heading_rad)), s_(std::sin(pose.heading_rad)) {}
+  Eigen::Vector2d local(const Eigen::Vector2d& w) const {
+    const double dx = w.x() - pose_.x_m;
+    const double dy = w.y() - pose_.y_m;
+    return {c_ * dx + s_ * dy, -s_ * dx + c_ * dy};
+  }
+
+ private:
+  kinematics::Pose pose_;
+  double c_;
+  double s_;
+};
+
 // atan2 within 2e-5 rad, for choosing which sensors to test (never for a point).
 double rough_atan2(double y, double x) {
   const double ax = std::fabs(x);
@@ -95,11 +112,7 @@ Vision::Vision(const VisionParams& params, physics::FieldMarkings markings)
 }
 
 Eigen::Vector2d Vision::to_robot(const kinematics::Pose& pose, const Eigen::Vector2d& w) {
-  const double dx = w.x() - pose.x_m;
-  const double dy = w.y() - pose.y_m;
-  const double c = std::cos(pose.heading_rad);
-  const double s = std::sin(pose.heading_rad);
-  return {c * dx + s * dy, -s * dx + c * dy};
+  return RobotFrame(pose).local(w);
 }
 
 Eigen::Vector2d Vision::to_world(const kinematics::Pose& pose, const Eigen::Vector2d& l) {
@@ -120,14 +133,8 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
   out.balls.clear();
   out.line_rays = 0;
   const kinematics::Pose& me = scene.robots.at(robot);
-  // to_robot with the heading's cosine and sine taken once a frame (the same numbers).
-  const double cos_h = std::cos(me.heading_rad);
-  const double sin_h = std::sin(me.heading_rad);
-  const auto local = [&](const Eigen::Vector2d& w) -> Eigen::Vector2d {
-    const double dx = w.x() - me.x_m;
-    const double dy = w.y() - me.y_m;
-    return {cos_h * dx + sin_h * dy, -sin_h * dx + cos_h * dy};
-  };
+  const RobotFrame frame(me);  // the heading's cosine and sine once a frame
+  const auto local = [&frame](const Eigen::Vector2d& w) { return frame.local(w); };
   // Single-precision draws (about one engine call each): ample for centimetre noise.
   const Gaussian point_noise(static_cast<float>(params_.point_noise_m));
   std::uniform_real_distribution<float> chance(0.0f, 1.0f);
