@@ -4,32 +4,59 @@
 
 namespace canhil::can_nodes {
 
+void Participants::add(Participant& p) {
+  const std::size_t i = list_.size();
+  list_.push_back(&p);
+  bell_->resize(list_.size());
+  rings_.push_back(p.set_doorbell(bell_, i) ? 1 : 0);
+  if (rings_[i] == 0 || p.may_have_frames()) bell_->ring(i);  // those that cannot ring stay rung
+  kept_.push_back(p.wakeup_is_own() ? 1 : 0);
+  wake_.push_back(kNever);
+  keep(i);
+  if (kept_[i] == 0) asked_.push_back(i);
+}
+
 void Participants::add(Node& node) {
   owned_.push_back(std::make_unique<NodeParticipant>(node));
-  list_.push_back(owned_.back().get());
+  add(*owned_.back());
+}
+
+std::size_t Participants::poll(std::size_t i) {
+  Participant* p = list_[i];
+  if (rings_[i] != 0) {
+    bell_->clear(i);  // frames arriving while it polls ring it again
+  } else if (!p->may_have_frames()) {
+    return 0;
+  }
+  const std::size_t n = p->poll();
+  keep(i);
+  return n;
 }
 
 void Participants::deliver() {
   for (int round = 0; round < 10'000; ++round) {
     std::size_t handled = 0;
-    for (Participant* p : list_) {
-      if (p->may_have_frames()) handled += p->poll();
-    }
+    for (std::size_t i = bell_->next(0); i != Doorbell::kNone; i = bell_->next(i + 1)) handled += poll(i);
     if (handled == 0) return;
   }
 }
 
 void Participants::deliver_some(std::size_t budget) {
-  for (Participant* p : list_) p->poll_some(budget);
+  for (std::size_t i = 0; i < list_.size(); ++i) {
+    list_[i]->poll_some(budget);
+    if (rings_[i] != 0 && !list_[i]->may_have_frames()) bell_->clear(i);
+    keep(i);
+  }
 }
 
 void Participants::tick_due(const Clock& clock, std::size_t budget) {
   for (int round = 0; round < 64; ++round) {
     const Nanos now = clock.now();
     bool any = false;
-    for (Participant* p : list_) {
-      if (p->next_wakeup() <= now) {
-        p->tick(now);
+    for (std::size_t i = 0; i < list_.size(); ++i) {
+      if (wakeup(i) <= now) {
+        list_[i]->tick(now);
+        keep(i);
         any = true;
       }
     }
@@ -44,8 +71,13 @@ void Participants::tick_due(const Clock& clock, std::size_t budget) {
 
 Nanos Participants::next_wakeup() const {
   Nanos t = kNever;
-  for (const Participant* p : list_) t = std::min(t, p->next_wakeup());
+  for (const Nanos w : wake_) t = std::min(t, w);
+  for (const std::size_t i : asked_) t = std::min(t, list_[i]->next_wakeup());
   return t;
+}
+
+void Participants::refresh() {
+  for (std::size_t i = 0; i < list_.size(); ++i) keep(i);
 }
 
 void Lockstep::set_step(Nanos period, std::function<void(Nanos now)> step) {
@@ -55,6 +87,7 @@ void Lockstep::set_step(Nanos period, std::function<void(Nanos now)> step) {
 }
 
 void Lockstep::run_until(Nanos end) {
+  participants_.refresh();  // the caller may have moved wake-ups between runs
   while (true) {
     const Nanos next = std::min(next_step_, participants_.next_wakeup());
     if (next > end) break;
@@ -64,6 +97,7 @@ void Lockstep::run_until(Nanos end) {
       next_step_ += period_;
       ++steps_;
       step_(now);
+      participants_.refresh();  // the step may move wake-ups (a vision frame wakes an agent)
     }
     participants_.deliver();
     participants_.tick_due(clock_);

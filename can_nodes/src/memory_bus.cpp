@@ -58,6 +58,7 @@ void MemoryEndpoint::deliver(const TimedFrame& frame) {
     ++stats_.received;
   }
   queue_.push_back(frame);
+  if (bell_ != nullptr) bell_->ring(bell_index_);
 }
 
 MemoryBus::MemoryBus(const Clock& clock, std::string name) : clock_(clock), name_(std::move(name)) {}

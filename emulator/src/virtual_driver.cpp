@@ -22,6 +22,11 @@ class AgentParticipant final : public can_nodes::Participant {
   void frame_ready(Nanos now) { wake_ = now; }
   std::size_t poll() override { return 0; }
   bool may_have_frames() const override { return false; }
+  bool set_doorbell(const std::shared_ptr<can_nodes::Doorbell>& /*bell*/, std::size_t /*index*/) override {
+    return true;
+  }  // reads no bus
+  /// Woken by the vision frames of the physics step (the runner's periodic step).
+  bool wakeup_is_own() const override { return true; }
   Nanos next_wakeup() const override { return wake_; }
   void tick(Nanos now) override {
     wake_ = kNever;

@@ -125,5 +125,115 @@ TEST(Lockstep, ADeliveryRoundPassesByWhoeverHasNothingToRead) {
   EXPECT_EQ(quiet.polls, 2u) << "polled only when a frame waited";
 }
 
+// Answers each frame it hears with its id + 1 (up to `last`), in the
+// instant; rings its doorbell when `rings`, else is asked every round.
+// Counts the questions a runner puts to it.
+class Echo final : public Participant {
+ public:
+  Echo(std::string name, MemoryBus& bus, std::uint32_t last, bool rings, std::vector<std::string>& log)
+      : name_(std::move(name)), ep_(bus.attach(name_)), last_(last), rings_(rings), log_(log) {}
+  std::size_t poll() override {
+    std::size_t n = 0;
+    while (auto f = ep_->receive()) {
+      ++n;
+      log_.push_back(name_ + " got " + std::to_string(f->frame.id) + " at " + std::to_string(f->time.count()));
+      if (f->frame.id < last_) ep_->send(frames::make_data_frame(f->frame.id + 1, {}));
+    }
+    if (n == 0) ++empty_polls;
+    return n;
+  }
+  bool may_have_frames() const override {
+    ++asked_frames;
+    return ep_->may_have_frames();
+  }
+  bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) override {
+    return rings_ && ep_->set_doorbell(bell, index);
+  }
+  void tick(Nanos) override {}
+  Nanos next_wakeup() const override { return kNever; }
+  mutable std::size_t asked_frames = 0;
+  std::size_t empty_polls = 0;
+
+ private:
+  std::string name_;
+  std::unique_ptr<MemoryEndpoint> ep_;
+  std::uint32_t last_;
+  bool rings_;
+  std::vector<std::string>& log_;
+};
+
+std::vector<std::string> echo_run(bool rings, std::size_t* asked, std::size_t* empty_polls) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  std::vector<std::string> log;
+  Echo first("first", bus, 40, rings, log);
+  Scripted talker("talker", bus, {Nanos{5}, Nanos{9}, Nanos{30}}, log, clock);
+  Echo last("last", bus, 40, rings, log);
+  Lockstep run(clock);
+  run.add(first);
+  run.add(talker);
+  run.add(last);
+  run.run_until(Nanos{100});
+  *asked = first.asked_frames + last.asked_frames;
+  *empty_polls = first.empty_polls + last.empty_polls;
+  return log;
+}
+
+TEST(Lockstep, RingingParticipantsGetTheSameFramesInTheSameOrderWithoutBeingAsked) {
+  std::size_t asked_when_ringing = 0;
+  std::size_t asked_when_asking = 0;
+  std::size_t empty = 0;
+  const auto ringing = echo_run(true, &asked_when_ringing, &empty);
+  EXPECT_EQ(empty, 0u) << "polled only when a frame waited";
+  const auto asking = echo_run(false, &asked_when_asking, &empty);
+  EXPECT_GT(ringing.size(), 20u) << "answers bounce over several rounds of each instant";
+  EXPECT_EQ(ringing, asking) << "the doorbell changes who is asked, not what happens";
+  EXPECT_EQ(asked_when_ringing, 2u) << "once each, when added";
+  EXPECT_GT(asked_when_asking, 20u);
+}
+
+// Keeps its wake-up (wakeup_is_own) and counts how often it is read; the
+// test moves it from outside as a step or a caller would.
+class Kept final : public Participant {
+ public:
+  std::size_t poll() override { return 0; }
+  bool may_have_frames() const override { return false; }
+  void tick(Nanos now) override {
+    ticks.push_back(now);
+    wake = now + period;
+  }
+  Nanos next_wakeup() const override {
+    ++reads;
+    return wake;
+  }
+  bool wakeup_is_own() const override { return true; }
+  Nanos wake = kNever;
+  Nanos period = kNever;
+  std::vector<Nanos> ticks;
+  mutable std::size_t reads = 0;
+};
+
+TEST(Lockstep, AKeptWakeUpIsReadAfterItsOwnTicksTheStepAndEachRunNotAtEveryInstant) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  std::vector<std::string> log;
+  std::vector<Nanos> busy(200);
+  for (std::size_t i = 0; i < busy.size(); ++i) busy[i] = Nanos{static_cast<std::int64_t>(i + 1)};
+  Scripted other("other", bus, busy, log, clock);  // an instant every nanosecond
+  Kept kept;
+  kept.wake = Nanos{50};
+  kept.period = Nanos{100};
+  Lockstep run(clock);
+  run.set_step(Nanos{120}, [&](Nanos now) { kept.wake = now + Nanos{3}; });  // as a vision frame wakes an agent
+  run.add(other);
+  run.add(kept);
+  run.run_until(Nanos{200});
+  EXPECT_EQ(kept.ticks, (std::vector<Nanos>{Nanos{50}, Nanos{123}})) << "the step's move was seen";
+  EXPECT_LT(kept.reads, 10u) << "not read at each of the 200 instants";
+  kept.wake = Nanos{210};  // moved by the caller between runs
+  run.run_until(Nanos{220});
+  EXPECT_EQ(kept.ticks.back(), Nanos{210});
+}
+
 }  // namespace
 }  // namespace canhil::can_nodes

@@ -6,7 +6,9 @@
 // there. A Bus is used from one thread at a time.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -14,6 +16,8 @@
 #include "canhil/frames/frame.hpp"
 
 namespace canhil::can_nodes {
+
+class Doorbell;
 
 using frames::CanFrame;
 using frames::TimedFrame;
@@ -74,6 +78,14 @@ class Bus {
   /// False only when receive() would certainly return nothing (a memory
   /// endpoint's empty queue); a socket may always have frames.
   virtual bool may_have_frames() const { return true; }
+  /// Rings `bell` with `index` whenever a frame is queued for receive();
+  /// nullptr stops it. The bus keeps its share of the bell. False when the backend cannot tell (a socket): then its
+  /// reader must be asked (may_have_frames) instead.
+  virtual bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) {
+    (void)bell;
+    (void)index;
+    return false;
+  }
   /// Replaces the receive filters; an empty list receives no data frames.
   virtual void set_filters(std::span<const Filter> filters) = 0;
   /// Which error-frame classes to receive (kErr*); 0, the default, receives none.

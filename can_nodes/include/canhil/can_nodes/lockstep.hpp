@@ -9,6 +9,11 @@
 // (frames sent at an instant are received at that instant). Time then jumps
 // to the next wake-up or step.
 //
+// What it costs does not grow with the participants that have nothing to do:
+// a participant whose frames arrive in memory rings a Doorbell, and a round
+// polls only those rung; one whose wake-up changes only in its own calls has
+// it kept, not asked for at every instant.
+//
 // Not thread-safe: one thread runs it.
 #pragma once
 
@@ -17,6 +22,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/clock.hpp"
+#include "canhil/can_nodes/doorbell.hpp"
 #include "canhil/can_nodes/node.hpp"
 
 namespace canhil::can_nodes {
@@ -38,6 +44,20 @@ class Participant {
   /// False only when poll() would certainly handle nothing: a delivery round
   /// then passes this participant by.
   virtual bool may_have_frames() const { return true; }
+  /// Asks to have `bell` rung with `index` whenever a frame arrives for this
+  /// participant, on everything poll() reads; nullptr stops it. True when it
+  /// will (a delivery round then polls it only once rung); false, the
+  /// default, when it cannot (then may_have_frames() is asked every round).
+  virtual bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) {
+    (void)bell;
+    (void)index;
+    return false;
+  }
+  /// True when next_wakeup() changes only inside this participant's own
+  /// poll(), poll_some() and tick(), or in a runner's periodic step: a runner
+  /// then reads it after those instead of at every instant. False, the
+  /// default, for one moved from outside (by another thread, a process).
+  virtual bool wakeup_is_own() const { return false; }
 };
 
 /// A node as a participant.
@@ -49,6 +69,11 @@ class NodeParticipant final : public Participant {
   void tick(Nanos now) override { node_.tick(now); }
   Nanos next_wakeup() const override { return node_.next_wakeup(); }
   bool may_have_frames() const override { return node_.may_have_frames(); }
+  bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) override {
+    return node_.set_doorbell(bell, index);
+  }
+  /// A node moves its wake-ups only in its own tick() and frame handling.
+  bool wakeup_is_own() const override { return true; }
 
  private:
   Node& node_;
@@ -57,7 +82,11 @@ class NodeParticipant final : public Participant {
 /// A runner's participants, in the order added (the order they are ticked).
 class Participants {
  public:
-  void add(Participant& p) { list_.push_back(&p); }
+  Participants() = default;
+  Participants(const Participants&) = delete;
+  Participants& operator=(const Participants&) = delete;
+
+  void add(Participant& p);
   void add(Node& node);
   /// Delivers frames round after round until nobody has any left (frames sent
   /// while handling frames arrive in the same instant).
@@ -70,10 +99,25 @@ class Participants {
   void tick_due(const Clock& clock, std::size_t budget = kUnlimited);
   static constexpr std::size_t kUnlimited = ~std::size_t{0};
   Nanos next_wakeup() const;
+  /// Reads every kept wake-up again (after a change from outside the
+  /// participants' own calls: a periodic step, a pass's queued changes).
+  void refresh();
 
  private:
+  Nanos wakeup(std::size_t i) const { return kept_[i] ? wake_[i] : list_[i]->next_wakeup(); }
+  void keep(std::size_t i) {
+    if (kept_[i]) wake_[i] = list_[i]->next_wakeup();
+  }
+  std::size_t poll(std::size_t i);
+
   std::vector<Participant*> list_;
   std::vector<std::unique_ptr<NodeParticipant>> owned_;
+  std::vector<Nanos> wake_;          // kept wake-ups (kNever for those asked)
+  std::vector<std::uint8_t> kept_;   // wakeup_is_own()
+  std::vector<std::uint8_t> rings_;  // set_doorbell() accepted
+  std::vector<std::size_t> asked_;   // indices whose wake-up is asked for each time
+  std::shared_ptr<Doorbell> bell_ =
+      std::make_shared<Doorbell>();  // rung: may have frames (those that cannot ring stay rung)
 };
 
 class Lockstep {

@@ -16,6 +16,7 @@
 
 #include "canhil/can_nodes/bus.hpp"
 #include "canhil/can_nodes/clock.hpp"
+#include "canhil/can_nodes/doorbell.hpp"
 
 namespace canhil::can_nodes {
 
@@ -28,6 +29,11 @@ class MemoryEndpoint final : public Bus {
   SendStatus send(const CanFrame& frame) override;
   std::optional<TimedFrame> receive() override;
   bool may_have_frames() const override { return !queue_.empty(); }
+  bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) override {
+    bell_ = bell;
+    bell_index_ = index;
+    return true;
+  }
   void set_filters(std::span<const Filter> filters) override;
   void set_error_mask(std::uint32_t mask) override { error_mask_ = mask; }
   BusState state() const override;
@@ -52,6 +58,8 @@ class MemoryEndpoint final : public Bus {
   std::uint32_t error_mask_ = 0;
   bool receive_own_ = false;
   BusStats stats_;
+  std::shared_ptr<Doorbell> bell_;  // shared: an endpoint may outlive its runner
+  std::size_t bell_index_ = 0;
 };
 
 class MemoryBus {

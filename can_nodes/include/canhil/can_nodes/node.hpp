@@ -67,6 +67,12 @@ class Node {
   std::size_t poll();
   /// False only when poll() would certainly find nothing to read.
   bool may_have_frames() const { return bus_.may_have_frames() || more_may_have_frames(); }
+  /// Rings `bell` with `index` when a frame arrives on anything poll() reads
+  /// (Bus::set_doorbell); false when some of it cannot ring.
+  bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) {
+    const bool mine = bus_.set_doorbell(bell, index);
+    return more_set_doorbell(bell, index) && mine;
+  }
   /// Handles at most `max_frames` waiting frames; the rest stay queued.
   std::size_t poll(std::size_t max_frames);
   /// Acts at `now` (call when now >= next_wakeup()).
@@ -92,6 +98,12 @@ class Node {
   }
   /// As Bus::may_have_frames, for what poll_more reads.
   virtual bool more_may_have_frames() const { return false; }
+  /// As Bus::set_doorbell, for what poll_more reads (nothing: true).
+  virtual bool more_set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) {
+    (void)bell;
+    (void)index;
+    return true;
+  }
 
   /// Asks for a tick at `t`. Every request is kept until served (a node may
   /// want its motor tick and its synchronous window); one tick serves all due.

@@ -170,6 +170,9 @@ class SystemMonitor final : public Node {
   void step(Nanos now) override;
   std::size_t poll_more(std::size_t max_frames) override;
   bool more_may_have_frames() const override { return watch_ != nullptr && watch_->may_have_frames(); }
+  bool more_set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) override {
+    return watch_ == nullptr || watch_->set_doorbell(bell, index);
+  }
 
  private:
   void observe(const frames::TimedFrame& frame);  // bad frames and who is alive

@@ -35,6 +35,11 @@ class HandlerParticipant final : public can_nodes::Participant {
     return n;
   }
   bool may_have_frames() const override { return ep_->may_have_frames(); }
+  bool set_doorbell(const std::shared_ptr<can_nodes::Doorbell>& bell, std::size_t index) override {
+    return ep_->set_doorbell(bell, index);
+  }
+  /// The handler's deadlines move only as it handles frames and time.
+  bool wakeup_is_own() const override { return true; }
   void tick(Nanos now) override { hw_.on_time(now); }
   Nanos next_wakeup() const override { return hw_.next_deadline(); }
 
