@@ -9,11 +9,11 @@
 #pragma once
 
 #include <bitset>
-#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "canhil/base/ring.hpp"
 #include "canhil/can_nodes/bus.hpp"
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/doorbell.hpp"
@@ -52,7 +52,7 @@ class MemoryEndpoint final : public Bus {
   MemoryBus* bus_;
   std::string name_;
   std::size_t capacity_;
-  std::deque<TimedFrame> queue_;
+  base::Ring<TimedFrame> queue_;
   std::vector<Filter> filters_{Filter::all()};
   std::bitset<2048> standard_data_{std::bitset<2048>().set()};  // the filters' verdict on each 11-bit data frame
   std::uint32_t error_mask_ = 0;

@@ -1,0 +1,43 @@
+// canhil/base/ring.hpp — a first-in first-out queue in one growing array: no
+// allocation once it has been as long as it gets (a std::deque allocates and
+// frees a block every few hundred bytes that pass through it).
+//
+// Not thread-safe.
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+namespace canhil::base {
+
+template <class T>
+class Ring {
+ public:
+  bool empty() const noexcept { return size_ == 0; }
+  std::size_t size() const noexcept { return size_; }
+  const T& front() const noexcept { return slots_[head_]; }
+  void push_back(const T& value) {
+    if (size_ == slots_.size()) grow();
+    slots_[(head_ + size_) & (slots_.size() - 1)] = value;
+    ++size_;
+  }
+  void pop_front() noexcept {
+    head_ = (head_ + 1) & (slots_.size() - 1);
+    --size_;
+  }
+
+ private:
+  void grow() {
+    std::vector<T> bigger(slots_.empty() ? 16 : slots_.size() * 2);
+    for (std::size_t i = 0; i < size_; ++i) bigger[i] = std::move(slots_[(head_ + i) & (slots_.size() - 1)]);
+    slots_ = std::move(bigger);
+    head_ = 0;
+  }
+
+  std::vector<T> slots_;  // a power of two long
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+};
+
+}  // namespace canhil::base
