@@ -28,6 +28,7 @@ std::optional<TimedFrame> MemoryEndpoint::receive() {
 }
 
 void MemoryEndpoint::set_filters(std::span<const Filter> filters) {
+  if (bus_ != nullptr) bus_->routes_stale_ = true;
   filters_.assign(filters.begin(), filters.end());
   CanFrame probe;
   for (std::uint32_t id = 0; id < standard_data_.size(); ++id) {
@@ -48,6 +49,10 @@ void MemoryEndpoint::deliver(const TimedFrame& frame) {
   } else if (std::none_of(filters_.begin(), filters_.end(), [&](const Filter& filter) { return filter.matches(f); })) {
     return;
   }
+  accept(frame);
+}
+
+void MemoryEndpoint::accept(const TimedFrame& frame) {
   if (queue_.size() >= capacity_) {
     ++stats_.rx_overflow;
     return;
@@ -70,16 +75,36 @@ MemoryBus::~MemoryBus() {
 std::unique_ptr<MemoryEndpoint> MemoryBus::attach(std::string endpoint_name, std::size_t queue_capacity) {
   auto endpoint = std::unique_ptr<MemoryEndpoint>(new MemoryEndpoint(this, std::move(endpoint_name), queue_capacity));
   endpoints_.push_back(endpoint.get());
+  routes_stale_ = true;
   return endpoint;
 }
 
 void MemoryBus::detach(MemoryEndpoint* endpoint) {
   endpoints_.erase(std::remove(endpoints_.begin(), endpoints_.end(), endpoint), endpoints_.end());
+  routes_stale_ = true;
+}
+
+void MemoryBus::route() {
+  if (!routes_stale_) return;
+  routes_.assign(2048, {});
+  for (std::size_t id = 0; id < routes_.size(); ++id) {
+    for (MemoryEndpoint* e : endpoints_) {
+      if (e->standard_data_[id]) routes_[id].push_back(e);
+    }
+  }
+  routes_stale_ = false;
 }
 
 void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
   ++carried_;
   const TimedFrame timed{frame, clock_.now()};
+  if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < 2048) {
+    route();
+    for (MemoryEndpoint* e : routes_[frame.id]) {
+      if (e != from || e->receive_own_) e->accept(timed);
+    }
+    return;
+  }
   for (MemoryEndpoint* e : endpoints_) {
     if (e != from || e->receive_own_) e->deliver(timed);
   }

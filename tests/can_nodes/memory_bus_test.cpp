@@ -171,6 +171,32 @@ TEST(MemoryBus, DetachedEndpointGetsNothingAndBusOutlivingIsSafe) {
   EXPECT_EQ(bus.frames_carried(), 1u);
 }
 
+TEST(MemoryBus, WhoReceivesFollowsAttachDetachAndNewFiltersBetweenFrames) {
+  // A frame visits only the endpoints whose filters take its id, a table the
+  // bus keeps: it must follow every change made while traffic flows.
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto tx = bus.attach("tx");
+  auto a = bus.attach("a");
+  tx->send(make_data_frame(0x100, {}));
+  auto late = bus.attach("late");
+  tx->send(make_data_frame(0x100, {}));
+  EXPECT_EQ(a->pending(), 2u);
+  EXPECT_EQ(late->pending(), 1u) << "attached after the first frame";
+  const Filter only_0x200[] = {Filter::exact(0x200)};
+  a->set_filters(only_0x200);
+  tx->send(make_data_frame(0x100, {}));
+  tx->send(make_data_frame(0x200, {}));
+  EXPECT_EQ(a->pending(), 3u) << "0x100 refused, 0x200 taken";
+  EXPECT_EQ(late->pending(), 3u);
+  late.reset();
+  tx->set_receive_own(true);
+  tx->send(make_data_frame(0x200, {}));
+  EXPECT_EQ(a->pending(), 4u);
+  EXPECT_EQ(tx->pending(), 1u) << "its own frame, once asked for";
+  EXPECT_EQ(bus.frames_carried(), 5u);
+}
+
 TEST(Filter, MatchesExtendedAndRemoteFlagsWhenAsked) {
   frames::CanFrame ext = make_data_frame(0x131, {});
   ext.extended = true;

@@ -48,6 +48,7 @@ class MemoryEndpoint final : public Bus {
   friend class MemoryBus;
   MemoryEndpoint(MemoryBus* bus, std::string name, std::size_t capacity);
   void deliver(const TimedFrame& frame);
+  void accept(const TimedFrame& frame);  // deliver() once the filters passed it
 
   MemoryBus* bus_;
   std::string name_;
@@ -87,9 +88,15 @@ class MemoryBus {
   void transmit(MemoryEndpoint* from, const CanFrame& frame);
   void detach(MemoryEndpoint* endpoint);
 
+  void route();  // rebuilds routes_ when stale
+
   const Clock& clock_;
   std::string name_;
   std::vector<MemoryEndpoint*> endpoints_;
+  // Per 11-bit data frame id, the endpoints whose filters take it, in attach
+  // order: a frame visits only those. Rebuilt after attach, detach or new filters.
+  std::vector<std::vector<MemoryEndpoint*>> routes_;
+  bool routes_stale_ = true;
   bool up_ = true;
   std::uint64_t carried_ = 0;
 };
