@@ -309,19 +309,22 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
       }
     });
   }
+  thread_local std::vector<std::size_t> live;  // the rays with a crossing left for this round, in order
+  live.clear();
   for (std::size_t ray = 0; ray < rays; ++ray) {
     ++out.line_rays;
-    std::sort(&hit_t[ray * kMaxHits], &hit_t[ray * kMaxHits] + hit_n[ray]);
+    if (hit_n[ray] > 1) std::sort(&hit_t[ray * kMaxHits], &hit_t[ray * kMaxHits] + hit_n[ray]);
+    if (hit_n[ray] > 0) live.push_back(ray);
   }
   bool room = true;
-  for (std::size_t round = 0; round < kMaxHits && room; ++round) {
-    bool any = false;
-    for (std::size_t ray = 0; ray < rays && room; ++ray) {
-      if (round >= hit_n[ray]) continue;
-      any = true;
+  for (std::size_t round = 0; !live.empty() && room; ++round) {
+    std::size_t still = 0;
+    for (const std::size_t ray : live) {
       room = keep(ray_dir[ray] * hit_t[ray * kMaxHits + round]);
+      if (!room) break;
+      if (hit_n[ray] > round + 1) live[still++] = ray;
     }
-    if (!any) break;
+    live.resize(still);
   }
   // Circular sensors: crossings of rings around the robot with the markings
   // (they see the lines a radial sensor meets only at a grazing angle).
