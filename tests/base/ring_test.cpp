@@ -6,6 +6,7 @@
 
 #include <deque>
 #include <random>
+#include <vector>
 
 namespace canhil::base {
 namespace {
@@ -17,11 +18,23 @@ TEST(Ring, GivesBackInOrderAcrossGrowthWhileWrapped) {
   for (int i = 0; i < 8; ++i) ring.pop_front();      // the head is now well inside the array
   for (int i = 10; i < 100; ++i) ring.push_back(i);  // wraps, then grows twice
   ASSERT_EQ(ring.size(), 92u);
+  for (std::size_t i = 0; i < ring.size(); ++i) ASSERT_EQ(ring[i], static_cast<int>(i) + 8);
   for (int i = 8; i < 100; ++i) {
     ASSERT_EQ(ring.front(), i);
     ring.pop_front();
   }
   EXPECT_TRUE(ring.empty());
+}
+
+TEST(Ring, MovesInAndOut) {
+  Ring<std::vector<int>> ring;
+  std::vector<int> v{1, 2, 3};
+  ring.push_back(std::move(v));
+  ring.push_back(std::vector<int>{4});
+  std::vector<int> out = std::move(ring.front());
+  ring.pop_front();
+  EXPECT_EQ(out, (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(ring.front(), (std::vector<int>{4}));
 }
 
 TEST(Ring, AgreesWithADequeOnRandomPushesAndPops) {

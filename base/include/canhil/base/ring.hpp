@@ -17,11 +17,20 @@ class Ring {
   bool empty() const noexcept { return size_ == 0; }
   std::size_t size() const noexcept { return size_; }
   const T& front() const noexcept { return slots_[head_]; }
+  T& front() noexcept { return slots_[head_]; }
+  /// The i-th from the front (i < size()).
+  const T& operator[](std::size_t i) const noexcept { return slots_[(head_ + i) & (slots_.size() - 1)]; }
   void push_back(const T& value) {
     if (size_ == slots_.size()) grow();
     slots_[(head_ + size_) & (slots_.size() - 1)] = value;
     ++size_;
   }
+  void push_back(T&& value) {
+    if (size_ == slots_.size()) grow();
+    slots_[(head_ + size_) & (slots_.size() - 1)] = std::move(value);
+    ++size_;
+  }
+  /// Drops the front; its slot keeps what it held (move it out first to reuse it).
   void pop_front() noexcept {
     head_ = (head_ + 1) & (slots_.size() - 1);
     --size_;

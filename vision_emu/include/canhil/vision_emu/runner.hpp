@@ -3,10 +3,10 @@
 // robot's frame and hands it to a sink (the RTDB writer, a test, an SVG).
 #pragma once
 
-#include <deque>
 #include <functional>
 #include <random>
 
+#include "canhil/base/ring.hpp"
 #include "canhil/physics/world.hpp"
 #include "canhil/vision_emu/vision.hpp"
 
@@ -14,6 +14,8 @@ namespace canhil::vision_emu {
 
 /// A snapshot of the physics world as vision sees it.
 Scene snapshot(const physics::World& world);
+/// The same into `into`, reusing its storage.
+void snapshot(const physics::World& world, Scene& into);
 
 class VisionRunner {
  public:
@@ -28,7 +30,8 @@ class VisionRunner {
  private:
   std::vector<Vision> vision_;
   Sink sink_;
-  std::deque<Scene> history_;
+  base::Ring<Scene> history_;
+  std::vector<Scene> spare_;  // scenes dropped from the history, their storage reused
   std::vector<double> next_frame_s_;
   std::vector<NoiseEngine> rng_;
   std::vector<VisionFrame> frame_;  // reused per robot
