@@ -10,7 +10,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <random>
+#include <vector>
 
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
@@ -74,6 +77,53 @@ TEST_F(VisionTest, ObstaclePointsLieOnTheNearestObstacleAlongTheirRay) {
       }
     }
   }
+}
+
+TEST_F(VisionTest, EverySensorThatCrossesAnObstacleReportsItsNearestCrossing) {
+  // Vision tests a circle only with the sensors within the angle it covers
+  // (found with a rough arctangent and a margin); here every sensor is tested
+  // against every circle, in random scenes, and the two must agree.
+  std::mt19937 pick(11);
+  std::uniform_real_distribution<double> coord(-5.0, 5.0);
+  const int n = vision_.params().obstacle_sensors;
+  int points = 0;
+  for (int scene = 0; scene < 400; ++scene) {
+    Scene s = scene_with({coord(pick), coord(pick), coord(pick)});
+    std::vector<Scene::Obstacle> all;
+    while (all.size() < 8) {
+      const Eigen::Vector2d c(coord(pick), coord(pick));
+      const double r = all.size() % 2 == 0 ? s.robot_radius_m : 0.1 + 0.3 * (coord(pick) + 5) / 10;
+      if ((c - Eigen::Vector2d(s.robots[0].x_m, s.robots[0].y_m)).norm() < r + 0.05) continue;
+      all.push_back({c, r});
+      if (all.size() % 2 == 1) {
+        s.robots.push_back({c.x(), c.y(), 0});
+      } else {
+        s.obstacles.push_back(all.back());
+      }
+    }
+    const VisionFrame f = see(s);
+    std::vector<Eigen::Vector2d> expected;
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * kPi * i / n;
+      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Scene::Obstacle& o : all) {
+        const Eigen::Vector2d c = Vision::to_robot(s.robots[0], o.centre);
+        const double b = dir.dot(c);
+        const double disc = b * b - (c.squaredNorm() - o.radius_m * o.radius_m);
+        if (b < 0 || disc < 0) continue;
+        const double t = b - std::sqrt(disc);
+        if (t >= 0) nearest = std::min(nearest, t);
+      }
+      if (nearest <= vision_.params().obstacle_range_m) expected.push_back(dir * nearest);
+    }
+    ASSERT_EQ(f.obstacles.size(), expected.size()) << "scene " << scene;
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+      EXPECT_LT((f.obstacles[k] - expected[k]).norm(), 1e-9) << "scene " << scene << ", point " << k;
+    }
+    points += static_cast<int>(expected.size());
+  }
+  EXPECT_GT(points, 400 * 10) << "the scenes put obstacles in sight";
 }
 
 TEST_F(VisionTest, AnObstacleFullyBehindAnotherIsNotReported) {
