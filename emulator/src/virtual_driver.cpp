@@ -43,6 +43,9 @@ class AgentParticipant final : public can_nodes::Participant {
   Nanos last_ = kNever;
 };
 
+// The RTDB's clock during a run: the run's virtual time.
+std::int64_t virtual_now(void* clock) { return static_cast<const can_nodes::SimulatedClock*>(clock)->now().count(); }
+
 // A fresh database for the run: every item of the agent zeroed, and the
 // handler asked to put the odometry where the robot stands.
 // `space` is the agent's memory space (its team's set).
@@ -82,6 +85,11 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     throw SetupError(
         "emulate = [...] leaves nodes to real boards, and a virtual-time run has no real bus: run that "
         "scenario in real time (without --virtual-time)");
+  }
+  if (options_.reference_laptop) {
+    // Items stamped and aged in the run's time: an age is what the robot would see, at any speed.
+    DB_set_clock(&virtual_now, &clock_);
+    rtdb_clock_set_ = true;
   }
   const std::size_t n = session_.robot_count();
   for (std::size_t r = 0; r < n; ++r) {
@@ -147,6 +155,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
 VirtualDriver::~VirtualDriver() {
   session_.on_vision_frame(nullptr);
   session_.on_detail(nullptr);
+  if (rtdb_clock_set_) DB_set_clock(nullptr, nullptr);
 }
 
 void VirtualDriver::run_until(Nanos end) {

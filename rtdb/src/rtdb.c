@@ -66,10 +66,24 @@ static int verbose(void) {
   return v != NULL && v[0] == '1';
 }
 
-static int64_t now_ns(void) {
+static int64_t monotonic_ns(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+/* DB_set_clock's: stamps are g_clock(g_clock_context) + g_clock_offset. */
+static int64_t (*g_clock)(void*) = NULL;
+static void* g_clock_context = NULL;
+static int64_t g_clock_offset = 0;
+
+static int64_t now_ns(void) { return g_clock != NULL ? g_clock(g_clock_context) + g_clock_offset : monotonic_ns(); }
+
+RTDB_EXPORT void DB_set_clock(int64_t (*now)(void* context), void* context) {
+  g_clock = NULL;
+  if (now != NULL) g_clock_offset = monotonic_ns() - now(context);
+  g_clock_context = context;
+  g_clock = now;
 }
 
 static int attached(void) { return g_me >= 0 || g_all[0] > 0 || g_all[1] > 0; }

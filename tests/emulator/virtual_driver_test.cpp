@@ -17,7 +17,9 @@
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/frames/candump.hpp"
 #include "canhil/physics/config.hpp"
+#include "canhil/rtdb/rtdb.h"
 #include "canhil/timing/analysis.hpp"
+#include "rtdb_user.h"
 #include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
 
@@ -98,6 +100,20 @@ TEST_F(VirtualRunTest, SameScenarioSameTraceByteForByte) {
   again.run_for(3s);
   EXPECT_EQ(again.trace(), first);
   EXPECT_GT(first.size(), 50'000u);
+}
+
+TEST_F(VirtualRunTest, ItemAgesAreInTheRunsVirtualTime) {
+  // Two seconds of virtual time take milliseconds of real time: ages read by
+  // the wall clock would all be about 0.
+  Loop run(one_robot(), &counters);
+  run.run_for(2s);
+  std::vector<char> item(static_cast<std::size_t>(DB_item_size(VISION_INFO)));
+  const int vision_age = DB_get_from(CAMBADA_1, CAMBADA_1, VISION_INFO, item.data());
+  EXPECT_GE(vision_age, 0);
+  EXPECT_LE(vision_age, 34) << "written at 30 Hz";
+  item.resize(static_cast<std::size_t>(DB_item_size(CMD_SETPOSE)));
+  EXPECT_NEAR(DB_get_from(CAMBADA_1, CAMBADA_1, CMD_SETPOSE, item.data()), 2000, 15)
+      << "written at the start only (the handler takes the pose at its first TM)";
 }
 
 TEST_F(VirtualRunTest, WithoutATraceFramesAreCountedNotKept) {

@@ -79,6 +79,23 @@ TEST_F(Rtdb, PutGetRoundTripWithAge) {
   EXPECT_EQ(std::memcmp(&v, &back, sizeof v), 0);
 }
 
+TEST_F(Rtdb, AgesFollowTheClockTheProcessSetsAndTheMonotonicOneAgain) {
+  ASSERT_EQ(DB_init(), 0);
+  CMD_Vel v{0.5f, -0.25f, 1.5f, true};
+  ASSERT_GT(DB_put(CMD_VEL, &v), 0);        // stamped by the monotonic clock
+  std::int64_t virtual_ns = 5'000'000'000;  // any start: it is taken to be now
+  DB_set_clock([](void* t) { return *static_cast<std::int64_t*>(t); }, &virtual_ns);
+  CMD_Vel back{};
+  EXPECT_LT(DB_get(CAMBADA_1, CMD_VEL, &back), 1000) << "a stamp from before compares with the new clock";
+  virtual_ns += 7'300'000'000;  // 7.3 s later in virtual time, at once in real time
+  EXPECT_EQ(DB_get(CAMBADA_1, CMD_VEL, &back), 7300);
+  ASSERT_GT(DB_put(CMD_VEL, &v), 0);
+  virtual_ns += 250'000'000;
+  EXPECT_EQ(DB_get(CAMBADA_1, CMD_VEL, &back), 250);
+  DB_set_clock(nullptr, nullptr);
+  EXPECT_EQ(DB_get(CAMBADA_1, CMD_VEL, &back), 0) << "stamped ahead of the monotonic clock: fresh";
+}
+
 TEST_F(Rtdb, BadIdsAndAgentsAreErrors) {
   CMD_Vel v{};
   EXPECT_EQ(DB_put(CMD_VEL, &v), -1) << "before DB_init";

@@ -2,7 +2,9 @@
 // process, deterministically: per robot its emulated nodes on its own
 // in-memory bus and, optionally, the reference handler (laptop::HwComm) on
 // that bus and the reference agent on its RTDB, woken after each vision frame;
-// everything advanced in lockstep with the physics. Every bus can be recorded
+// everything advanced in lockstep with the physics. With the reference laptop
+// the process's RTDB stamps and ages items in the run's virtual time while the
+// driver lives (DB_set_clock). Every bus can be recorded
 // as a candump log (one interface name per robot). `canhil run --virtual-time`,
 // `canhil bench`, RobotRig and the tests are built on this.
 //
@@ -95,6 +97,7 @@ class VirtualDriver {
   std::vector<timing::TimingAnalyzer> checkers_;  // check_timing
   std::vector<std::unique_ptr<Laptop>> laptops_;
   can_nodes::Lockstep lockstep_;
+  bool rtdb_clock_set_ = false;  // the RTDB stamps and ages items in this run's virtual time
 };
 
 }  // namespace canhil::emulator

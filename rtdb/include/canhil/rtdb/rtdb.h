@@ -51,6 +51,8 @@
 #include "../../rtdb_comm.h"
 #include "../../rtdb_sim.h"
 
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -83,6 +85,18 @@ int DB_signal_frame(int space);
  * the second set (SECOND_RTDB); -1 before. What DB_put_in / DB_get_from take. */
 int DB_space(void);
 int DB_wait_frame(int timeout_ms);
+
+/* The clock items are stamped and aged by in this process: CLOCK_MONOTONIC
+ * unless set. A process that runs the robots in virtual time (canhil run
+ * --virtual-time, with its handler and agent in process) sets its virtual
+ * clock, so that ages are virtual-time ages. `now(context)` gives nanoseconds
+ * from any start; the value it gives at this call is taken to be the
+ * monotonic clock's at this call, so stamps from before and after compare.
+ * NULL restores the monotonic clock. Other processes keep theirs: a run
+ * faster than real time stamps ahead of it, and they read its items as 0 ms
+ * old. Set-up: not while other threads use the database; `now` is then
+ * called from whichever thread reads or writes an item, under no lock. */
+void DB_set_clock(int64_t (*now)(void* context), void* context);
 
 #ifdef __cplusplus
 }
