@@ -4,6 +4,7 @@
 #include "canhil/rtdb/layout.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdlib>
@@ -406,12 +407,15 @@ void ItemBuffer::set_points(Quantity list, std::span<const std::array<double, 2>
     const FieldLayout& f = fields[i];
     if (f.type == ScalarType::kF32 && f.stored_per_si == 1.0 && f.add == 0 && f.turn <= 0) {
       // Metres as floats (canhil's and CAMBADA's vision): what store(to_stored()) does, without its cases.
-      constexpr double kMax = std::numeric_limits<float>::max();
-      for (std::size_t p = 0; p < n; ++p) {
-        for (std::size_t c = 0; c < 2; ++c) {
-          const double v = points[p][c];
-          put(&bytes_[at_byte(f, p, c)], static_cast<float>(std::isfinite(v) ? std::clamp(v, -kMax, kMax) : v));
-        }
+      static constexpr double kMax = std::numeric_limits<float>::max();
+      const auto to_float = [](double v) {
+        return static_cast<float>(std::isfinite(v) ? std::clamp(v, -kMax, kMax) : v);
+      };
+      // x then y, side by side (at_byte(f, p, 1) = at_byte(f, p, 0) + 4): one 8-byte copy a point.
+      std::byte* at = bytes_.data() + at_byte(f, 0, 0);
+      for (std::size_t p = 0; p < n; ++p, at += f.stride_bytes) {
+        const std::array<float, 2> xy{to_float(points[p][0]), to_float(points[p][1])};
+        std::memcpy(at, xy.data(), sizeof xy);
       }
       continue;
     }
