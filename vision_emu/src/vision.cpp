@@ -262,9 +262,13 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
     each_ray(c.bearing - c.half_width, c.bearing + c.half_width,
              [&](std::size_t ray) { blocked[ray] = std::min(blocked[ray], ray_circle(ray_dir[ray], c)); });
   }
-  auto add = [&](std::size_t ray, double t) {
+  auto add = [&](std::size_t ray, double t) {  // kept nearest first (the first kMaxHits found)
     std::size_t& n = hit_n[ray];
-    if (n < kMaxHits) hit_t[ray * kMaxHits + n++] = t;
+    if (n == kMaxHits) return;
+    double* hits = &hit_t[ray * kMaxHits];
+    std::size_t at = n++;
+    for (; at > 0 && hits[at - 1] > t; --at) hits[at] = hits[at - 1];
+    hits[at] = t;
   };
   for (const Seg& sg : segs) {
     // The angle from a to b the short way round; all around when the segment
@@ -317,7 +321,6 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
   live.clear();
   for (std::size_t ray = 0; ray < rays; ++ray) {
     ++out.line_rays;
-    if (hit_n[ray] > 1) std::sort(&hit_t[ray * kMaxHits], &hit_t[ray * kMaxHits] + hit_n[ray]);
     if (hit_n[ray] > 0) live.push_back(ray);
   }
   bool room = true;
