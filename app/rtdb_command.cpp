@@ -175,10 +175,7 @@ int run_rtdb(Args& args) {
                 static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.delay).count()),
                 cfg.loss);
     std::fflush(stdout);
-    while (!g_stop) {
-      rep.cycle(clock.now());
-      std::this_thread::sleep_for(cfg.period);
-    }
+    rep.run([&clock] { return clock.now(); }, [](Nanos t) { can_nodes::WallClock::sleep_until(t); }, g_stop);
     std::printf("canhil rtdb replicate: %llu cycles, %llu copies, %llu lost\n",
                 static_cast<unsigned long long>(rep.stats().cycles),
                 static_cast<unsigned long long>(rep.stats().copied), static_cast<unsigned long long>(rep.stats().lost));

@@ -12,6 +12,13 @@ Replicator::Replicator(Database& db, const ReplicatorConfig& config) : db_(db), 
     throw SetupError("the replicator copies between every agent's database: open " + db.library() +
                      " for every agent (Scope::kAllAgents)");
   }
+  if (config.period <= std::chrono::nanoseconds{0}) {
+    throw SetupError("the replicator's period must be above 0 (a cycle every period)");
+  }
+  if (config.delay < std::chrono::nanoseconds{0}) throw SetupError("the replicator's delay cannot be negative");
+  if (!(config.loss >= 0.0 && config.loss <= 1.0)) {
+    throw SetupError("the replicator's loss is a probability: 0 to 1");
+  }
 }
 
 void Replicator::cycle(std::chrono::nanoseconds now) {
@@ -55,6 +62,22 @@ void Replicator::deliver(std::chrono::nanoseconds now) {
     db_.put(f.to_agent, f.from_agent, f.item, f.value, static_cast<int>(life));
     ++stats_.copied;
     in_flight_.pop_front();
+  }
+}
+
+void Replicator::run(const std::function<std::chrono::nanoseconds()>& now,
+                     const std::function<void(std::chrono::nanoseconds)>& sleep_until, const std::atomic<bool>& stop) {
+  std::chrono::nanoseconds next_cycle = now();
+  while (!stop.load(std::memory_order_relaxed)) {
+    const std::chrono::nanoseconds t = now();
+    if (t >= next_cycle) {
+      cycle(t);
+      while (next_cycle <= t) next_cycle += config_.period;
+    } else {
+      deliver(t);
+    }
+    const auto due = next_due();
+    sleep_until(due && *due < next_cycle ? *due : next_cycle);
   }
 }
 

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
+#include <vector>
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/rtdb/cambada_types.h"
@@ -57,6 +59,65 @@ TEST_F(ReplicatorTest, DelayAndLossThroughTheBuiltin) {
   Replicator r3(*db, lossy);
   for (int i = 0; i < 200; ++i) r3.cycle(std::chrono::milliseconds(100 * i));
   EXPECT_EQ(r3.stats().lost, r2.stats().lost) << "seeded: the same losses";
+}
+
+TEST_F(ReplicatorTest, RunCyclesOnItsPeriodAndDeliversEachDelayedCopyWhenDue) {
+  // A fake clock that sleeping moves: what run() asks to sleep until is when
+  // it next acts. Cycles every 100 ms; copies 30 ms in flight arrive at 30 ms
+  // past each cycle, not at the next cycle.
+  const auto db = open_builtin(Scope::kAllAgents);
+  ReplicatorConfig cfg;
+  cfg.delay = 30ms;
+  Replicator rep(*db, cfg);
+  RobotWS w{0, 0, 0, 1, 7};
+  DB_put_in(CAMBADA_3, CAMBADA_3, ROBOT_WS, &w, 0);
+  std::chrono::nanoseconds t = 1000ms;
+  std::vector<std::chrono::nanoseconds> woken;
+  std::vector<unsigned> seen_at_wake;
+  std::atomic<bool> stop{false};
+  rep.run([&] { return t; },
+          [&](std::chrono::nanoseconds until) {
+            RobotWS seen{};
+            DB_get_from(CAMBADA_4, CAMBADA_3, ROBOT_WS, &seen);
+            seen_at_wake.push_back(seen.frame);
+            woken.push_back(until);
+            t = until;
+            if (woken.size() == 5) stop = true;
+          },
+          stop);
+  EXPECT_EQ(woken, (std::vector<std::chrono::nanoseconds>{1030ms, 1100ms, 1130ms, 1200ms, 1230ms}));
+  EXPECT_EQ(seen_at_wake.front(), 0u) << "in flight after the first cycle";
+  EXPECT_EQ(seen_at_wake[1], 7u) << "delivered at 1030 ms";
+  EXPECT_EQ(rep.stats().cycles, 3u);
+
+  // A stall of 350 ms skips the cycles it missed.
+  ReplicatorConfig plain;
+  Replicator steady(*db, plain);
+  t = 0ms;
+  woken.clear();
+  std::atomic<bool> stop2{false};
+  steady.run([&] { return t; },
+             [&](std::chrono::nanoseconds until) {
+               woken.push_back(until);
+               t = woken.size() == 1 ? until + 350ms : until;
+               if (woken.size() == 3) stop2 = true;
+             },
+             stop2);
+  EXPECT_EQ(woken, (std::vector<std::chrono::nanoseconds>{100ms, 500ms, 600ms}));
+  EXPECT_EQ(steady.stats().cycles, 3u) << "at 0, 450 and 500 ms";
+}
+
+TEST_F(ReplicatorTest, APeriodDelayOrLossOutOfRangeIsRefused) {
+  const auto db = open_builtin(Scope::kAllAgents);
+  ReplicatorConfig bad;
+  bad.period = 0ms;
+  EXPECT_THROW(Replicator(*db, bad), SetupError);
+  bad = {};
+  bad.delay = -1ms;
+  EXPECT_THROW(Replicator(*db, bad), SetupError);
+  bad = {};
+  bad.loss = 1.5;
+  EXPECT_THROW(Replicator(*db, bad), SetupError);
 }
 
 TEST_F(ReplicatorTest, ThroughTheTeamsLibrary) {

@@ -2,8 +2,9 @@
 // each agent's shared items into every other agent's database, through a
 // Database (canhil's RTDB or the team's own library).
 //
-// Call cycle(now) every `period` (canhil rtdb replicate and the emulator's
-// laptop link do), and deliver(now) in between when copies are delayed. For
+// Call cycle(now) every `period` (the emulator's laptop link does; run() does
+// it on a clock of its own, as canhil rtdb replicate), and deliver(now) in
+// between when copies are delayed. For
 // each agent a and each of a's shared items: read it in a's database, then
 // write it, as a's item, into every other agent's database. Each copy is lost
 // with probability `loss` (seeded, so runs repeat) and otherwise arrives
@@ -12,10 +13,13 @@
 // never goes back.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -47,8 +51,20 @@ class Replicator {
   void cycle(std::chrono::nanoseconds now);
   /// Delivery of every delayed copy due at `now`, copying nothing new.
   void deliver(std::chrono::nanoseconds now);
+  /// Runs until `stop`: a cycle every period from now() on (a stall skips the
+  /// cycles it missed rather than bursting), and each delayed copy delivered
+  /// when it is due, not at the next cycle. `sleep_until(t)` returns at `t` or
+  /// earlier (then the loop looks at `stop` and sleeps again). `canhil rtdb
+  /// replicate` runs this on the wall clock.
+  void run(const std::function<std::chrono::nanoseconds()>& now,
+           const std::function<void(std::chrono::nanoseconds)>& sleep_until, const std::atomic<bool>& stop);
   /// Copies read but not delivered yet.
   std::size_t in_flight() const noexcept { return in_flight_.size(); }
+  /// When the first copy in flight is due (nothing in flight: nullopt).
+  std::optional<std::chrono::nanoseconds> next_due() const {
+    if (in_flight_.empty()) return std::nullopt;
+    return in_flight_.front().due;
+  }
   const ReplicatorStats& stats() const noexcept { return stats_; }
   const ReplicatorConfig& config() const noexcept { return config_; }
 
