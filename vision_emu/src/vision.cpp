@@ -168,8 +168,8 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
     constexpr double kBearingError = 5e-4;  // rough_atan2 errs by at most 2.1e-4
     const int first = static_cast<int>(std::ceil((c.bearing - c.half_width - kBearingError) / step));
     const int last = static_cast<int>(std::floor((c.bearing + c.half_width + kBearingError) / step));
-    for (int k = first; k <= last; ++k) {
-      const auto i = static_cast<std::size_t>(((k % n_obs) + n_obs) % n_obs);
+    auto i = static_cast<std::size_t>(((first % n_obs) + n_obs) % n_obs);  // one division, then wrap by hand
+    for (int k = first; k <= last; ++k, i = i + 1 == nearest.size() ? 0 : i + 1) {
       const double t = ray_circle({ray_cos_[i], ray_sin_[i]}, c);
       if (t < nearest[i]) nearest[i] = t;
     }
@@ -253,7 +253,8 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
       for (std::size_t ray = 0; ray < rays; ++ray) test(ray);
       return;
     }
-    for (long j = j0; j <= j1; ++j) test(line_by_angle_[static_cast<std::size_t>(((j % n_rays) + n_rays) % n_rays)]);
+    auto at = static_cast<std::size_t>(((j0 % n_rays) + n_rays) % n_rays);  // one division, then wrap by hand
+    for (long j = j0; j <= j1; ++j, at = at + 1 == rays ? 0 : at + 1) test(line_by_angle_[at]);
   };
   constexpr double kAllAround = 4 * kPi;
   thread_local std::vector<double> blocked;  // occlusion: nothing beyond the nearest obstacle on a ray
