@@ -44,8 +44,6 @@ void MemoryEndpoint::deliver(const TimedFrame& frame) {
   const CanFrame& f = frame.frame;
   if (f.kind == frames::FrameKind::kError) {
     if ((f.id & error_mask_) == 0) return;
-  } else if (f.kind == frames::FrameKind::kData && !f.extended && f.id < standard_data_.size()) {
-    if (!standard_data_[f.id]) return;
   } else if (std::none_of(filters_.begin(), filters_.end(), [&](const Filter& filter) { return filter.matches(f); })) {
     return;
   }
@@ -86,7 +84,7 @@ void MemoryBus::detach(MemoryEndpoint* endpoint) {
 
 void MemoryBus::route() {
   if (!routes_stale_) return;
-  routes_.assign(2048, {});
+  routes_.assign(kStandardIds, {});
   for (std::size_t id = 0; id < routes_.size(); ++id) {
     for (MemoryEndpoint* e : endpoints_) {
       if (e->standard_data_[id]) routes_[id].push_back(e);
@@ -98,7 +96,7 @@ void MemoryBus::route() {
 void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
   ++carried_;
   const TimedFrame timed{frame, clock_.now()};
-  if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < 2048) {
+  if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < kStandardIds) {
     route();
     for (MemoryEndpoint* e : routes_[frame.id]) {
       if (e != from || e->receive_own_) e->accept(timed);

@@ -22,6 +22,9 @@ namespace canhil::can_nodes {
 
 class MemoryBus;
 
+/// 11-bit identifiers: the data frames a bus routes by table.
+inline constexpr std::size_t kStandardIds = std::size_t{1} << 11;
+
 class MemoryEndpoint final : public Bus {
  public:
   ~MemoryEndpoint() override;
@@ -47,15 +50,18 @@ class MemoryEndpoint final : public Bus {
  private:
   friend class MemoryBus;
   MemoryEndpoint(MemoryBus* bus, std::string name, std::size_t capacity);
+  // A frame the bus's per-id table does not route (error, extended, remote)
+  // through the filters; accept() queues one they passed.
   void deliver(const TimedFrame& frame);
-  void accept(const TimedFrame& frame);  // deliver() once the filters passed it
+  void accept(const TimedFrame& frame);
 
   MemoryBus* bus_;
   std::string name_;
   std::size_t capacity_;
   base::Ring<TimedFrame> queue_;
   std::vector<Filter> filters_{Filter::all()};
-  std::bitset<2048> standard_data_{std::bitset<2048>().set()};  // the filters' verdict on each 11-bit data frame
+  std::bitset<kStandardIds> standard_data_{
+      std::bitset<kStandardIds>().set()};  // the filters' verdict on each 11-bit data frame
   std::uint32_t error_mask_ = 0;
   bool receive_own_ = false;
   BusStats stats_;
