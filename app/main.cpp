@@ -87,6 +87,11 @@ const Command kCommands[] = {
                                               ends changed at half time, the referee on; per match and in
                                               total: score, possession, shots, kicks, faults and FTT
                                               violations per team; seeds N, N+1, ... (docs/teams.md)
+  canhil match SCENARIO.toml --external [--process "COMMAND"]... [--logs DIR] [--answer-limit S] ...
+                                              the teams' own processes play each half, in lockstep, started
+                                              afresh per half from [teams.external] (else [external]) or
+                                              --process; their output to DIR or stderr (needs the robots'
+                                              interfaces, e.g. vcan0..vcan9)
 )",
      canhil::app::run_match},
     {"view", "a recorded run (world log and trace) in the web viewer, with a timeline",

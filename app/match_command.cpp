@@ -1,8 +1,10 @@
 // `canhil match SCENARIO [--halves 2] [--half-minutes 10] [--repeat N]
-// [--seed S] [--json] [--quiet]`: whole matches of a two-team scenario in
-// virtual time (emulator/match.hpp), one seed per match (S, S+1, ...), and a
-// table per match and over all of them: score, possession, shots, kicks,
-// faults and FTT violations per team. A progress bar on a terminal's stderr.
+// [--seed S] [--json] [--quiet] [--external [--process CMD]... [--logs DIR]
+// [--answer-limit S]]`: whole matches of a two-team scenario in virtual time
+// (emulator/match.hpp), one seed per match (S, S+1, ...), and a table per
+// match and over all of them: score, possession, shots, kicks, faults and FTT
+// violations per team. A progress bar on a terminal's stderr. With
+// --external the teams' own processes play (match_external.hpp).
 #include <unistd.h>
 
 #include <atomic>
@@ -12,10 +14,13 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "canhil/emulator/external_driver.hpp"
 #include "canhil/emulator/match.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "match_external.hpp"
+#include "run_external.hpp"
 
 namespace canhil::app {
 namespace {
@@ -86,6 +91,11 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   const bool json = args.flag("--json");
   const bool quiet = args.flag("--quiet");
   const std::optional<std::uint64_t> seed = seed_option(args);
+  const bool external = args.flag("--external");
+  std::vector<std::string> processes;
+  while (auto p = args.option("--process")) processes.push_back(*p);
+  const auto logs = args.option("--logs");
+  const std::optional<double> answer_limit = optional_number(args, "--answer-limit");
   const auto positional = args.positionals();
   if (positional.size() > 2 || (positional.size() == 2 && config)) {
     throw UsageError("match takes one scenario (SCENARIO or --config SCENARIO)");
@@ -102,6 +112,24 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
       throw UsageError(path + ": " + e.what());
     }
   }();
+  if (!external && (!processes.empty() || logs || answer_limit)) {
+    throw UsageError("--process, --logs and --answer-limit are for matches with --external");
+  }
+  if (!processes.empty()) scenario.external.processes = processes;
+  if (answer_limit) {
+    if (!(*answer_limit >= 0.01 && *answer_limit <= 3600)) throw UsageError("--answer-limit takes 0.01..3600 s");
+    scenario.external.answer_limit_s = *answer_limit;
+  }
+  if (external) {
+    bool any = false;
+    for (std::size_t t = 0; t < scenario.teams.size(); ++t) any |= !scenario.external_of(t).processes.empty();
+    if (!any) {
+      throw UsageError(path +
+                       ": --external starts each robot's processes from its team's [teams.external] (else "
+                       "[external]) processes = [...] lines, and this scenario gives none; add them, or give "
+                       "--process \"COMMAND\" for both teams (docs/teams.md)");
+    }
+  }
   emulator::MatchOptions match;
   match.halves = static_cast<int>(halves);
   match.half_s = 60 * half_minutes.value_or(10);
@@ -109,6 +137,17 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   if (std::getenv("RTDB_KEY") == nullptr) {  // keys of this process, never a live robot's database
     setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
+  }
+  int match_number = 0;
+  if (external) {
+    // Before anything is printed: canhil may start itself again, with the shim preloaded.
+    ExternalMatch how;
+    how.shim = find_timeshim();
+    how.team_preload = preload_shim_into_self(how.shim);
+    how.logs = logs;
+    how.match = &match_number;
+    options.external = true;
+    match.driver = external_halves(how);
   }
   std::signal(SIGINT, stop_match);
   std::signal(SIGTERM, stop_match);
@@ -128,14 +167,17 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     }
     std::fflush(stdout);
   }
-  ProgressBar bar(!quiet && isatty(STDERR_FILENO) != 0);
+  // Not between the lines of the teams' processes (their output is on stderr unless --logs).
+  ProgressBar bar(!quiet && isatty(STDERR_FILENO) != 0 && !(external && !logs));
   std::vector<emulator::TeamTally> total(2);
   std::vector<int> wins(3, 0);  // team 0, team 1, draws
   nlohmann::json matches = nlohmann::json::array();
   double wall = 0, simulated = 0;
   long played = 0;
+  bool stuck = false;  // a process stopped answering: the match in progress is dropped
   for (long k = 0; k < repeat && !g_stop; ++k) {
     scenario.seed = first_seed + static_cast<std::uint64_t>(k);
+    match_number = static_cast<int>(k + 1);
     const std::string what = "match " + std::to_string(k + 1) + "/" + std::to_string(repeat);
     emulator::MatchResult r;
     try {
@@ -148,6 +190,12 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     } catch (const SetupError& e) {
       bar.done();
       throw UsageError(path + ": " + e.what());
+    } catch (const emulator::ProcessStuck& e) {
+      // The matches played so far are still reported; this one is not.
+      bar.done();
+      std::fprintf(stderr, "canhil match: stopped: %s\n", e.what());
+      stuck = true;
+      break;
     }
     bar.done();
     ++played;
@@ -193,7 +241,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
           {"draws", wins[2]}}},
         {"virtual_s", simulated},
         {"wall_s", wall},
-        {"stopped", g_stop.load()}};
+        {"stopped", g_stop.load() || stuck}};
     std::printf("%s\n", out.dump(2).c_str());
   } else if (played > 1) {
     std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s); %.0f s of play in %.1f s (%.0fx)\n", played,
@@ -201,6 +249,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
                 wall > 0 ? simulated / wall : 0.0);
     print_table(names, total);
   }
+  if (stuck) return kProcessStuckStatus;
   return g_stop ? 130 : 0;
 }
 

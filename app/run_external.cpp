@@ -2,8 +2,6 @@
 #include "run_external.hpp"
 
 #include <dlfcn.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -20,6 +18,7 @@
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/external_driver.hpp"
 #include "canhil/lockstep/conductor.hpp"
+#include "team_processes.hpp"
 
 namespace canhil::app {
 namespace {
@@ -38,101 +37,6 @@ fs::path own_folder() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   return ec ? fs::path() : exe.parent_path();
-}
-
-// "{agent}" and "{iface}" in a command line, replaced by the robot's.
-std::string expand(std::string command, int agent, const std::string& iface) {
-  const auto replace = [&command](const std::string& key, const std::string& value) {
-    for (std::size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size())) {
-      command.replace(at, key.size(), value);
-    }
-  };
-  replace("{agent}", std::to_string(agent));
-  replace("{iface}", iface);
-  return command;
-}
-
-// One process canhil started for a robot.
-struct Started {
-  std::string command;
-  int agent = 0;
-  pid_t pid = -1;
-  int status = 0;
-  bool ended = false;
-};
-
-// canhil's own laptop programs (canhil-hwcomm, canhil-agent) are found
-// without a path: installed beside canhil, or in the build tree's laptop/.
-std::string search_path() {
-  const fs::path here = own_folder();
-  std::string path;
-  for (const fs::path& p : {here, here.parent_path() / "laptop"}) {
-    std::error_code ec;
-    if (!p.empty() && fs::exists(p / "canhil-hwcomm", ec)) path += p.string() + ":";
-  }
-  const char* old = std::getenv("PATH");
-  return path + (old != nullptr ? old : "/usr/bin:/bin");
-}
-
-// `second_set`: a process of the second team (its RTDB set: SECOND_RTDB=1).
-pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent, bool second_set,
-            const std::string& path) {
-  const pid_t pid = fork();
-  if (pid != 0) return pid;
-  for (const std::string& e : environment) {
-    const auto eq = e.find('=');
-    setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
-  }
-  setenv("AGENT", std::to_string(agent).c_str(), 1);
-  if (second_set) {
-    setenv("SECOND_RTDB", "1", 1);
-  } else {
-    unsetenv("SECOND_RTDB");
-  }
-  setenv("PATH", path.c_str(), 1);
-  signal(SIGINT, SIG_DFL);
-  signal(SIGTERM, SIG_DFL);
-  // exec: the process is the command's program itself (its signals reach it,
-  // and no shell stays behind in the lockstep).
-  const std::string line = "exec " + command;
-  execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
-  _exit(127);
-}
-
-// Reaps what ended; says so once per process, with the virtual time.
-void reap(std::vector<Started>& started, Nanos now, FILE* out) {
-  for (Started& s : started) {
-    if (s.ended || s.pid <= 0) continue;
-    if (waitpid(s.pid, &s.status, WNOHANG) != s.pid) continue;
-    s.ended = true;
-    std::fprintf(out, "canhil run: `%s` (agent %d, pid %d) ended at t = %.3f s: %s %d\n", s.command.c_str(), s.agent,
-                 s.pid, seconds(now), WIFSIGNALED(s.status) ? "signal" : "exit status",
-                 WIFSIGNALED(s.status) ? WTERMSIG(s.status) : WEXITSTATUS(s.status));
-  }
-}
-
-// SIGINT (their Ctrl-C), then SIGKILL for any still there after five seconds.
-void stop_all(std::vector<Started>& started) {
-  for (const Started& s : started) {
-    if (!s.ended && s.pid > 0) kill(s.pid, SIGINT);
-  }
-  const Nanos until = lockstep::wall_clock() + std::chrono::seconds(5);
-  for (Started& s : started) {
-    while (!s.ended && s.pid > 0) {
-      if (waitpid(s.pid, &s.status, WNOHANG) == s.pid) {
-        s.ended = true;
-      } else if (lockstep::wall_clock() > until) {
-        std::fprintf(stderr, "canhil run: `%s` (pid %d) did not end within 5 s of SIGINT; killed\n", s.command.c_str(),
-                     s.pid);
-        kill(s.pid, SIGKILL);
-        waitpid(s.pid, &s.status, 0);
-        s.ended = true;
-      } else {
-        const timespec a_while{0, 20'000'000};
-        nanosleep(&a_while, nullptr);  // real: canhil's own waits never follow the board
-      }
-    }
-  }
 }
 
 void write_text(const std::string& path, const std::string& text, const char* what) {
@@ -246,28 +150,15 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s, seed %llu\n", robots,
               run.duration_s, static_cast<unsigned long long>(session.scenario().seed));
-  std::vector<Started> started;
   std::size_t expected = 0;
   const std::vector<std::string> environment =
       conductor.environment(shim, team_preload.empty() ? nullptr : team_preload.c_str());
   const emulator::Scenario& scenario = session.scenario();
   bool any_processes = false;
   for (std::size_t t = 0; t < scenario.teams.size(); ++t) any_processes |= !scenario.external_of(t).processes.empty();
+  TeamProcesses started(environment, stdout);
   if (any_processes) {
-    const std::string path = search_path();
-    for (std::size_t r = 0; r < robots; ++r) {
-      const std::size_t team = session.rig(r).team;
-      for (const std::string& c : scenario.external_of(team).processes) {
-        Started s;
-        s.agent = session.rig(r).agent;
-        s.command = expand(c, s.agent, session.rig(r).interface);
-        s.pid = start(s.command, environment, s.agent, team > 0, path);
-        std::printf("  started `%s` for agent %d%s (pid %d)\n", s.command.c_str(), s.agent,
-                    scenario.teams.size() > 1 ? (" of team " + scenario.teams[team].name).c_str() : "", s.pid);
-        started.push_back(s);
-      }
-    }
-    expected = started.size();
+    expected = started.start_all(session);
   } else {
     expected = run.wait_for > 0 ? run.wait_for : 2 * robots;
     std::printf("  start your handler and agent (AGENT=N) with:\n   ");
@@ -291,7 +182,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     try {
       while (driver.now() < total && !g_stop) {
         driver.run_until(std::min<Nanos>(driver.now() + std::chrono::seconds(1), total));
-        reap(started, driver.now(), stdout);
+        started.reap(driver.now());
         if (run.quiet) continue;
         const emulator::WorldSnapshot s = session.snapshot();
         std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", to_seconds(driver.now()), s.ball.x(), s.ball.y());
@@ -313,7 +204,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   }
   const Nanos wall = lockstep::wall_clock() - wall_start;
   conductor.release();  // the run is over: their waits end, they take their SIGINT
-  stop_all(started);
+  started.stop_all();
   print_summary(session, driver, conductor, wall, how);
   if (figures != nullptr)
     *figures = ExternalFigures{driver.now(), wall, conductor.waited_wall(), conductor.processes()};

@@ -52,6 +52,13 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
     observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
     observers_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
+    if (options_.check_timing) {
+      timing::TimingConfig config;
+      config.elementary_cycle = session_.options().ftt.elementary_cycle;
+      config.bit_rate = session_.options().ftt.bit_rate;
+      config.violations_only = true;
+      checkers_.emplace_back(session_.options().messages, config);
+    }
     if (observers_.back()->state() != can_nodes::BusState::kUp) {
       const std::string& iface = session_.rig(r).interface;
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
@@ -73,10 +80,10 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   }
   lockstep_.add(*processes_);
   // A team's agent was activated through its PMan table; canhil's own waits on canhil's RTDB's frame signal.
-  const bool builtin_rtdb = session_.scenario().laptop.rtdb_lib == "builtin";
-  session_.on_vision_frame([this, builtin_rtdb](std::size_t r, Nanos) {
-    if (builtin_rtdb)
-      DB_signal_frame(static_cast<int>(session_.rig(r).team) * DB_agent_count() + session_.rig(r).agent);
+  session_.on_vision_frame([this](std::size_t r, Nanos) {
+    const std::size_t team = session_.rig(r).team;
+    if (session_.scenario().laptop_of(team).rtdb_lib == "builtin")
+      DB_signal_frame(static_cast<int>(team) * DB_agent_count() + session_.rig(r).agent);
     woken_[r] = true;
   });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) {
@@ -114,6 +121,7 @@ void ExternalDriver::observe() {
       if (can_nodes::DeliveryFence::counts(f->frame)) ++fenced_[r];
       for (can_nodes::SocketCanBus* s : sockets_[r]) s->note_frame_on_bus(f->frame);
       if (options_.record_trace) recorded_[r].push_back({f->frame, clock_.now()});
+      if (!checkers_.empty()) checkers_[r].add({f->frame, clock_.now()});
     }
   }
 }
@@ -192,6 +200,10 @@ std::string ExternalDriver::trace() const {
   std::vector<std::string> names;
   for (std::size_t r = 0; r < session_.robot_count(); ++r) names.push_back(session_.rig(r).interface);
   return merged_trace(recorded_, names);
+}
+
+std::uint64_t ExternalDriver::ftt_violations(std::size_t robot) const {
+  return robot < checkers_.size() ? checkers_[robot].violation_count() : 0;
 }
 
 }  // namespace canhil::emulator

@@ -83,6 +83,24 @@ class HalfTally {
   std::vector<ShotDue> shots_due_;
 };
 
+// canhil's in-process reference handler and agent, the FTT check on.
+class ReferenceHalf final : public HalfDriver {
+ public:
+  explicit ReferenceHalf(Session& session) : driver_(session, options()) {}
+  void run_until(Nanos end) override { driver_.run_until(end); }
+  Nanos now() const override { return driver_.now(); }
+  std::uint64_t ftt_violations(std::size_t robot) const override { return driver_.ftt_violations(robot); }
+
+ private:
+  static VirtualOptions options() {
+    VirtualOptions o;
+    o.record_trace = false;
+    o.check_timing = true;
+    return o;
+  }
+  VirtualDriver driver_;
+};
+
 }  // namespace
 
 TeamTally& TeamTally::operator+=(const TeamTally& o) {
@@ -140,10 +158,9 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
     s.seed = half_seed(scenario.seed, half);
     s.duration_s = match.half_s;
     Session session(s, options);
-    VirtualOptions driving;
-    driving.record_trace = false;
-    driving.check_timing = true;
-    VirtualDriver driver(session, driving);
+    const std::unique_ptr<HalfDriver> driving =
+        match.driver ? match.driver(session, scenario.seed, half) : std::make_unique<ReferenceHalf>(session);
+    HalfDriver& driver = *driving;
     HalfTally tally(session, match);
     session.on_step([&](Nanos now) { tally.step(now, session.step_period()); });
     const Nanos end = from_seconds(match.half_s);

@@ -161,8 +161,8 @@ void read_external(const TableReader& r, ExternalSide& e) {
       const auto v = n.value<std::string>();
       if (!v || v->find_first_not_of(" \t") == std::string::npos) {
         r.fail(n, "processes",
-               "must be command lines such as \"canhil-hwcomm --iface {iface}\" ({agent} and {iface} are the "
-               "robot's)");
+               "must be command lines such as \"canhil-hwcomm --iface {iface}\" ({agent}, {iface}, {x}, {y}, "
+               "{heading} and {goal_x} are the robot's)");
       }
       e.processes.push_back(*v);
     }

@@ -453,4 +453,16 @@ TEST(CanhilMatch, RefusesWhatIsNoMatch) {
   EXPECT_TRUE(has(halves, "--halves takes a whole number 1..4")) << halves.out;
 }
 
+TEST(CanhilMatch, ExternalOptionsNeedExternalAndExternalNeedsProcesses) {
+  const CliRun logs = canhil("match emulator/scenarios/two_teams.toml --logs /tmp/nowhere");
+  EXPECT_EQ(logs.status, 2);
+  EXPECT_TRUE(has(logs, "--process, --logs and --answer-limit are for matches with --external")) << logs.out;
+  const CliRun bare = canhil("match emulator/scenarios/two_teams.toml --external");
+  EXPECT_EQ(bare.status, 2);
+  EXPECT_TRUE(has(bare, "this scenario gives none; add them, or give --process")) << bare.out;
+  const CliRun limit = canhil("match emulator/scenarios/two_teams.toml --external --process agent --answer-limit 0");
+  EXPECT_EQ(limit.status, 2);
+  EXPECT_TRUE(has(limit, "--answer-limit takes 0.01..3600 s")) << limit.out;
+}
+
 }  // namespace

@@ -134,6 +134,57 @@ TEST_F(MatchTest, AStopFlagEndsTheMatchWithTheFiguresSoFar) {
   EXPECT_DOUBLE_EQ(r.virtual_s, 2.0);
 }
 
+// The reference drivers, seen from outside: which half, on which session,
+// and the FTT count a driver reports.
+class SeenHalf final : public HalfDriver {
+ public:
+  struct Log {
+    std::vector<std::pair<std::uint64_t, int>> made;  // (match seed, half)
+    std::vector<bool> attacks_positive_x;             // the first team's, per half
+    std::vector<double> ended_at_s;                   // the session's virtual time when each driver went
+  };
+  SeenHalf(Session& session, Log& log) : session_(session), log_(log), driver_(session, options()) {}
+  ~SeenHalf() override { log_.ended_at_s.push_back(session_.snapshot().time_s); }
+  SeenHalf(const SeenHalf&) = delete;
+  SeenHalf& operator=(const SeenHalf&) = delete;
+  void run_until(Nanos end) override { driver_.run_until(end); }
+  Nanos now() const override { return driver_.now(); }
+  std::uint64_t ftt_violations(std::size_t) const override { return 7; }
+
+ private:
+  static VirtualOptions options() {
+    VirtualOptions o;
+    o.record_trace = false;
+    return o;
+  }
+  Session& session_;
+  Log& log_;
+  VirtualDriver driver_;
+};
+
+TEST_F(MatchTest, AGivenDriverPlaysEachHalfOnThatHalfsSessionAndGoesBeforeIt) {
+  const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  SeenHalf::Log log;
+  MatchOptions m = short_match(3);
+  m.driver = [&log](Session& session, std::uint64_t seed, int half) {
+    log.made.emplace_back(seed, half);
+    log.attacks_positive_x.push_back(session.scenario().teams[0].attacks_positive_x);
+    return std::make_unique<SeenHalf>(session, log);
+  };
+  const MatchResult given = play_match(s, options(), m);
+  const MatchResult reference = play_match(s, options(), short_match(3));
+  EXPECT_EQ(log.made, (std::vector<std::pair<std::uint64_t, int>>{{s.seed, 0}, {s.seed, 1}}));
+  EXPECT_EQ(log.attacks_positive_x, (std::vector<bool>{true, false})) << "each driver gets its half's session";
+  ASSERT_EQ(log.ended_at_s.size(), 2u);
+  for (const double t : log.ended_at_s)
+    EXPECT_NEAR(t, 3.0, 1e-6) << "each goes at its half's end, its session still there";
+  for (std::size_t t = 0; t < 2; ++t) {
+    EXPECT_EQ(given.teams[t].ftt_violations, 7u * 5 * 2) << "the driver's count, per robot and half: " << t;
+    EXPECT_EQ(given.teams[t].kicks, reference.teams[t].kicks) << "the same play as canhil's own driver: " << t;
+    EXPECT_EQ(given.teams[t].possession_s, reference.teams[t].possession_s) << t;
+  }
+}
+
 TEST_F(MatchTest, AMatchNeedsTwoTeamsAndItsReferee) {
   const Scenario one = load_scenario(shipped_scenario("one_robot.toml"));
   EXPECT_NE(test::error_of([&] { play_match(one, options(), short_match(1)); }).find("needs two teams"),

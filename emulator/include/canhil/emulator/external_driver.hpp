@@ -22,12 +22,16 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/lockstep/conductor.hpp"
+#include "canhil/timing/analysis.hpp"
 
 namespace canhil::emulator {
 
 struct ExternalOptions {
   int receive_buffer_bytes = 1 << 20;  ///< per socket (SO_RCVBUFFORCE as root)
   bool record_trace = true;            ///< keep every bus's frames for trace()
+  /// Check every bus against `canhil timing`'s rules as frames are seen, in
+  /// constant memory: ftt_violations().
+  bool check_timing = false;
   /// Wall time the processes may take from their start until they first all
   /// wait (loading configuration, building tables); then each instant has the
   /// conductor's answer limit.
@@ -61,6 +65,8 @@ class ExternalDriver {
   std::uint64_t frames_from_processes() const noexcept { return from_processes_; }
   /// Every bus as a candump log in virtual time: by time, then robot, then arrival.
   std::string trace() const;
+  /// The FTT and timing violations on robot r's bus so far (check_timing; else 0).
+  std::uint64_t ftt_violations(std::size_t robot) const;
 
   class Processes;  // the external processes as one participant
 
@@ -83,6 +89,7 @@ class ExternalDriver {
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
   std::vector<std::vector<frames::TimedFrame>> recorded_;
+  std::vector<timing::TimingAnalyzer> checkers_;  // check_timing: per robot
   std::uint64_t observed_ = 0;
   std::uint64_t observed_at_settle_ = 0;
   std::uint64_t announced_ = 0;      // frames on the buses when the processes were last nudged

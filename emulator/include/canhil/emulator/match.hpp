@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,24 @@
 #include "canhil/emulator/session.hpp"
 
 namespace canhil::emulator {
+
+/// What drives one half's session in virtual time: canhil's in-process
+/// reference handler and agent (VirtualDriver) unless the match is given
+/// another, such as the team's own processes in lockstep (`canhil match
+/// --external`).
+class HalfDriver {
+ public:
+  virtual ~HalfDriver() = default;
+  /// Runs until the virtual clock reads `end`.
+  virtual void run_until(Nanos end) = 0;
+  virtual Nanos now() const = 0;
+  /// The FTT and timing violations on robot r's bus so far.
+  virtual std::uint64_t ftt_violations(std::size_t robot) const = 0;
+};
+
+/// Makes the driver of half `half` (0-based) of the match with seed `seed`,
+/// on its fresh session; the driver is destroyed before the session.
+using HalfDriverMaker = std::function<std::unique_ptr<HalfDriver>(Session&, std::uint64_t seed, int half)>;
 
 struct MatchOptions {
   int halves = 2;
@@ -30,6 +49,8 @@ struct MatchOptions {
   /// A shot: a kick after which the ball, this long later, is moving towards
   /// the goal the kicker's team attacks on a line between the posts.
   double shot_check_s = 0.05;
+  /// None: the in-process reference handler and agent on every robot.
+  HalfDriverMaker driver;
 };
 
 /// A team's figures over a match (or a half).
@@ -70,7 +91,8 @@ Scenario half_scenario(const Scenario& scenario, int half);
 std::uint64_t half_seed(std::uint64_t seed, int half) noexcept;
 
 /// Plays a match of `scenario` (two teams; its seed is the match's) with the
-/// in-process reference handler and agent on every robot. `progress` is
+/// in-process reference handler and agent on every robot, or what
+/// `match.driver` makes. `progress` is
 /// called after each virtual second with the virtual seconds played so far;
 /// `stop`, when set, ends the match after the current second. SetupError for
 /// a scenario without two teams, or with its referee switched off.

@@ -1,0 +1,29 @@
+// app/match_external.hpp — `canhil match --external`: each half of a match
+// played by the teams' own processes in lockstep (emulator::ExternalDriver,
+// docs/lockstep.md), started afresh for every half from the scenario's
+// [teams.external] (else [external]) lines, the second team's with
+// SECOND_RTDB=1, and stopped when the half ends.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "canhil/emulator/match.hpp"
+
+namespace canhil::app {
+
+struct ExternalMatch {
+  std::string shim;          ///< the time shim (find_timeshim)
+  std::string team_preload;  ///< what the team's processes keep preloaded after it
+  /// Each process's output in its own file here (match<k>-half<h>-TEAM-agent<N>-PROGRAM.log);
+  /// none: on canhil's stderr (its stdout is the table, or JSON).
+  std::optional<std::string> logs;
+  int* match = nullptr;  ///< the number of the match being played (1, 2, ...), for the logs' names
+};
+
+/// The halves' drivers. A process that does not attach within the scenario's
+/// attach_limit_s, or stops answering, ends the match with
+/// emulator::ProcessStuck naming the match, the half and the process.
+emulator::HalfDriverMaker external_halves(const ExternalMatch& how);
+
+}  // namespace canhil::app

@@ -1,0 +1,186 @@
+// The team's own processes for a session in virtual time (team_processes.hpp).
+#include "team_processes.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cctype>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/lockstep/conductor.hpp"
+
+namespace canhil::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path own_folder() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path() : exe.parent_path();
+}
+
+// canhil's own laptop programs (canhil-hwcomm, canhil-agent) are found
+// without a path: installed beside canhil, or in the build tree's laptop/.
+std::string search_path() {
+  const fs::path here = own_folder();
+  std::string path;
+  for (const fs::path& p : {here, here.parent_path() / "laptop"}) {
+    std::error_code ec;
+    if (!p.empty() && fs::exists(p / "canhil-hwcomm", ec)) path += p.string() + ":";
+  }
+  const char* old = std::getenv("PATH");
+  return path + (old != nullptr ? old : "/usr/bin:/bin");
+}
+
+// The program's name in a command line, for a log file's name: "canhil-agent".
+std::string program_of(const std::string& command) {
+  const std::size_t begin = command.find_first_not_of(' ');
+  const std::size_t end = command.find(' ', begin == std::string::npos ? 0 : begin);
+  std::string word = begin == std::string::npos ? std::string("process") : command.substr(begin, end - begin);
+  word = fs::path(word).filename().string();
+  for (char& c : word) {
+    if (c != '-' && c != '_' && c != '.' && std::isalnum(static_cast<unsigned char>(c)) == 0) c = '_';
+  }
+  return word.empty() ? std::string("process") : word;
+}
+
+// `second_set`: a process of the second team (its RTDB set: SECOND_RTDB=1).
+// `log`: its standard output and error (2: canhil's stderr for both), or -1 to keep canhil's.
+pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent, bool second_set,
+            const std::string& path, int log) {
+  const pid_t pid = fork();
+  if (pid != 0) return pid;
+  for (const std::string& e : environment) {
+    const auto eq = e.find('=');
+    setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
+  }
+  setenv("AGENT", std::to_string(agent).c_str(), 1);
+  if (second_set) {
+    setenv("SECOND_RTDB", "1", 1);
+  } else {
+    unsetenv("SECOND_RTDB");
+  }
+  setenv("PATH", path.c_str(), 1);
+  signal(SIGINT, SIG_DFL);
+  signal(SIGTERM, SIG_DFL);
+  if (log >= 0) {
+    dup2(log, STDOUT_FILENO);
+    if (log != STDERR_FILENO) dup2(log, STDERR_FILENO);
+  }
+  // exec: the process is the command's program itself (its signals reach it,
+  // and no shell stays behind in the lockstep).
+  const std::string line = "exec " + command;
+  execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+  _exit(127);
+}
+
+}  // namespace
+
+std::string expand_command(std::string command, const emulator::Session& session, std::size_t robot) {
+  const auto replace = [&command](const std::string& key, const std::string& value) {
+    for (std::size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size())) {
+      command.replace(at, key.size(), value);
+    }
+  };
+  const auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v + 0.0);  // + 0.0: -0 prints as 0
+    return std::string(text);
+  };
+  const emulator::Scenario& scenario = session.scenario();
+  const emulator::Rig& rig = session.rig(robot);
+  const physics::Placement& at = scenario.world.robots.at(robot);
+  const double goal_x = scenario.world.field.length_m / 2;
+  replace("{agent}", std::to_string(rig.agent));
+  replace("{iface}", rig.interface);
+  replace("{x}", number(at.x_m));
+  replace("{y}", number(at.y_m));
+  replace("{heading}", number(at.heading_deg));
+  replace("{goal_x}", number(scenario.teams.at(rig.team).attacks_positive_x ? goal_x : -goal_x));
+  return command;
+}
+
+TeamProcesses::TeamProcesses(std::vector<std::string> environment, FILE* say, ProcessOutput output)
+    : environment_(std::move(environment)), say_(say), output_(std::move(output)) {}
+
+TeamProcesses::~TeamProcesses() { stop_all(); }
+
+std::size_t TeamProcesses::start_all(const emulator::Session& session) {
+  const emulator::Scenario& scenario = session.scenario();
+  const std::string path = search_path();
+  if (output_.folder) {
+    std::error_code ec;
+    fs::create_directories(*output_.folder, ec);
+    if (ec) throw SetupError("cannot make the folder " + *output_.folder + " for the processes' logs: " + ec.message());
+  }
+  for (std::size_t r = 0; r < session.robot_count(); ++r) {
+    const emulator::Rig& rig = session.rig(r);
+    const std::size_t team = rig.team;
+    for (const std::string& c : scenario.external_of(team).processes) {
+      Started s;
+      s.agent = rig.agent;
+      s.command = expand_command(c, session, r);
+      int log = -1;
+      std::string log_path;
+      if (output_.folder) {
+        log_path = (fs::path(*output_.folder) / (output_.prefix + scenario.teams[team].name + "-agent" +
+                                                 std::to_string(s.agent) + "-" + program_of(s.command) + ".log"))
+                       .string();
+        log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        if (log < 0) throw SetupError("cannot write the process log " + log_path + ": " + std::strerror(errno));
+      }
+      s.pid = start(s.command, environment_, s.agent, team > 0, path, log >= 0 ? log : (output_.onto_stderr ? 2 : -1));
+      if (log >= 0) close(log);
+      std::fprintf(say_, "  started `%s` for agent %d%s (pid %d)%s%s\n", s.command.c_str(), s.agent,
+                   scenario.teams.size() > 1 ? (" of team " + scenario.teams[team].name).c_str() : "", s.pid,
+                   log_path.empty() ? "" : ", output in ", log_path.c_str());
+      started_.push_back(s);
+    }
+  }
+  std::fflush(say_);
+  return started_.size();
+}
+
+void TeamProcesses::reap(Nanos now) {
+  for (Started& s : started_) {
+    if (s.ended || s.pid <= 0) continue;
+    if (waitpid(s.pid, &s.status, WNOHANG) != s.pid) continue;
+    s.ended = true;
+    std::fprintf(say_, "canhil: `%s` (agent %d, pid %d) ended at t = %.3f s: %s %d\n", s.command.c_str(), s.agent,
+                 s.pid, to_seconds(now), WIFSIGNALED(s.status) ? "signal" : "exit status",
+                 WIFSIGNALED(s.status) ? WTERMSIG(s.status) : WEXITSTATUS(s.status));
+  }
+}
+
+void TeamProcesses::stop_all() {
+  for (const Started& s : started_) {
+    if (!s.ended && s.pid > 0) kill(s.pid, SIGINT);
+  }
+  const Nanos until = lockstep::wall_clock() + std::chrono::seconds(5);
+  for (Started& s : started_) {
+    while (!s.ended && s.pid > 0) {
+      if (waitpid(s.pid, &s.status, WNOHANG) == s.pid) {
+        s.ended = true;
+      } else if (lockstep::wall_clock() > until) {
+        std::fprintf(stderr, "canhil: `%s` (pid %d) did not end within 5 s of SIGINT; killed\n", s.command.c_str(),
+                     s.pid);
+        kill(s.pid, SIGKILL);
+        waitpid(s.pid, &s.status, 0);
+        s.ended = true;
+      } else {
+        const timespec a_while{0, 20'000'000};
+        nanosleep(&a_while, nullptr);  // real: canhil's own waits never follow the board
+      }
+    }
+  }
+}
+
+}  // namespace canhil::app

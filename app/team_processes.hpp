@@ -1,0 +1,71 @@
+// app/team_processes.hpp — the team's own processes for a session in virtual
+// time (`canhil run --external`, `canhil match --external`): per robot, each
+// command line of its team's [teams.external] (else [external]) started with
+// the lockstep's environment, AGENT, SECOND_RTDB for the second team and
+// canhil's laptop programs on the PATH; reaped as they end; stopped with
+// SIGINT, then SIGKILL, when the session is over.
+//
+// Not thread-safe: the thread that drives the session owns it.
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canhil/base/time.hpp"
+#include "canhil/emulator/session.hpp"
+
+namespace canhil::app {
+
+/// A command line with robot `robot`'s values in place of "{agent}",
+/// "{iface}", "{x}", "{y}", "{heading}" (its start placement in this run or
+/// half: metres, degrees) and "{goal_x}" (the x of the goal its team attacks
+/// in it, metres), numbers as "%g" prints them.
+std::string expand_command(std::string command, const emulator::Session& session, std::size_t robot);
+
+/// Where the processes' own output goes: one file per process under `folder`
+/// (PREFIX TEAM-agentN-PROGRAM.log), else canhil's stdout and stderr, or both
+/// into its stderr (`onto_stderr`: a match's stdout may be JSON).
+struct ProcessOutput {
+  std::optional<std::string> folder;
+  std::string prefix;
+  bool onto_stderr = false;
+};
+
+class TeamProcesses {
+ public:
+  /// `environment`: the lockstep's (Conductor::environment), NAME=VALUE each.
+  /// `say`: where starts and ends are reported (stdout for a run, stderr for
+  /// a match, whose stdout may be JSON).
+  TeamProcesses(std::vector<std::string> environment, FILE* say, ProcessOutput output = {});
+  ~TeamProcesses();  ///< stop_all()
+  TeamProcesses(const TeamProcesses&) = delete;
+  TeamProcesses& operator=(const TeamProcesses&) = delete;
+
+  /// Starts every robot's processes; returns how many. SetupError when a log
+  /// file cannot be opened.
+  std::size_t start_all(const emulator::Session& session);
+  /// Reaps what ended; says so once per process, with the virtual time `now`.
+  void reap(Nanos now);
+  /// SIGINT (their Ctrl-C), then SIGKILL for any still there after five seconds.
+  void stop_all();
+  std::size_t started() const noexcept { return started_.size(); }
+
+ private:
+  struct Started {
+    std::string command;
+    int agent = 0;
+    pid_t pid = -1;
+    int status = 0;
+    bool ended = false;
+  };
+  std::vector<std::string> environment_;
+  FILE* say_;
+  ProcessOutput output_;
+  std::vector<Started> started_;
+};
+
+}  // namespace canhil::app

@@ -1,0 +1,161 @@
+// `canhil match --external` on a real vcan (the vcan suite): two teams of one
+// robot, each robot's handler and agent as processes of their own under the
+// time shim, started afresh for every half; the second team's with
+// SECOND_RTDB=1. The same seed plays the same match twice; a robot attacks
+// the goal its team attacks in each half (ends changed at half time: {x},
+// {y}, {heading} and {goal_x} follow); both teams' processes drive their
+// robots; a process that never attaches is named. Wall time never decides a
+// result here: it only bounds how long a match may take.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "support/test_paths.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Finished {
+  int status = -1;
+  std::string output;  // stdout
+  std::string errors;  // stderr
+};
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string scratch(const std::string& name) { return "/tmp/canhil_vcan_match_" + std::to_string(getpid()) + name; }
+
+// Runs `canhil match` to its end (at most five minutes).
+Finished canhil_match(const std::string& arguments) {
+  const std::string out = scratch(".out");
+  const std::string err = scratch(".err");
+  const std::string command =
+      "timeout 300 " + canhil::test::canhil_binary() + " match " + arguments + " > " + out + " 2> " + err;
+  Finished f;
+  f.status = std::system(command.c_str());
+  f.output = read_file(out);
+  f.errors = read_file(err);
+  std::remove(out.c_str());
+  std::remove(err.c_str());
+  return f;
+}
+
+int exit_status(const Finished& f) { return WIFEXITED(f.status) ? WEXITSTATUS(f.status) : -1; }
+
+// One robot a team on vcan0 and vcan1; the teams' processes from [external].
+std::string write_scenario(const std::string& name, double old_x, double old_y, const std::string& agent,
+                           const std::string& more_external = "") {
+  const std::string path = scratch(name + ".toml");
+  std::ofstream out(path);
+  out << "[run]\nseed = 1\nkick_power = 40\n\n"
+      << "[ball_start]\nx_m = 0.0\ny_m = 0.0\nz_m = 0.11\n\n"
+      << "[external]\nprocesses = [\"canhil-hwcomm --iface {iface}\", \"" << agent << "\"]\n"
+      << more_external << "\n"
+      << "[[teams]]\nname = \"new\"\nattacks = \"+x\"\n\n"
+      << "[[teams.robots]]\nx_m = -1.0\ny_m = 0.0\nheading_deg = -90.0\ninterface = \"vcan0\"\n\n"
+      << "[[teams]]\nname = \"old\"\nattacks = \"-x\"\n\n"
+      << "[[teams.robots]]\nx_m = " << old_x << "\ny_m = " << old_y << "\nheading_deg = 90.0\ninterface = \"vcan1\"\n";
+  return path;
+}
+
+const std::string kAgent = "canhil-agent --pose {x},{y},{heading} --goal-x {goal_x}";
+
+// The match's JSON without what the wall clock decides.
+nlohmann::json without_wall_time(nlohmann::json j) {
+  j.erase("wall_s");
+  for (auto& m : j["matches"]) m.erase("wall_s");
+  return j;
+}
+
+TEST(VcanMatch, TheTeamsProcessesPlayTheSameMatchTwiceAndScoreOnTheGoalTheyAttackInEachHalf) {
+  // "new" nearer the ball: in-process it scores in each half, on +x and then on -x.
+  const std::string scenario = write_scenario("goals", 3.0, 2.0, kAgent);
+  const std::string run = scenario + " --external --halves 2 --half-minutes 0.15 --json --quiet";
+  const Finished a = canhil_match(run);
+  const Finished b = canhil_match(run);
+  ASSERT_EQ(exit_status(a), 0) << a.output << a.errors;
+  ASSERT_EQ(exit_status(b), 0) << b.output << b.errors;
+  const nlohmann::json ja = nlohmann::json::parse(a.output);  // stdout is the JSON alone
+  const nlohmann::json jb = nlohmann::json::parse(b.output);
+  EXPECT_EQ(without_wall_time(ja), without_wall_time(jb)) << "one seed, one match, however the machine runs";
+  const nlohmann::json& m = ja["matches"][0];
+  EXPECT_DOUBLE_EQ(m["virtual_s"].get<double>(), 18.0) << "both halves played";
+  ASSERT_EQ(m["goals"].size(), 2u) << ja.dump(2) << a.errors;
+  for (std::size_t goal = 0; goal < 2; ++goal) {
+    EXPECT_EQ(m["goals"][goal]["half"], goal + 1);
+    EXPECT_EQ(m["goals"][goal]["team"], "new") << "the goal it attacks in half " << goal + 1 << " (its --goal-x)";
+  }
+  EXPECT_GT(m["teams"][0]["kicks"].get<int>(), 0);
+  // Each half started its own processes, the second team's in its RTDB set.
+  for (const char* half : {"match 1, half 1", "match 1, half 2"}) {
+    EXPECT_NE(a.errors.find(half), std::string::npos) << a.errors;
+  }
+  EXPECT_NE(a.errors.find("canhil-agent --pose -1,0,-90 --goal-x 9` for agent 1 of team new"), std::string::npos)
+      << "half 1: the placement and goal of the scenario\n"
+      << a.errors;
+  EXPECT_NE(a.errors.find("canhil-agent --pose 1,0,90 --goal-x -9` for agent 1 of team new"), std::string::npos)
+      << "half 2: ends changed, the place turned about the centre spot and the other goal\n"
+      << a.errors;
+  std::remove(scenario.c_str());
+}
+
+TEST(VcanMatch, BothTeamsProcessesDriveTheirRobotsAndEachProcessWritesItsOwnLog) {
+  const std::string scenario = write_scenario("kicks", 2.0, 0.0, kAgent);
+  const std::string logs = scratch("_logs");
+  fs::remove_all(logs);
+  const Finished f = canhil_match(scenario + " --external --halves 2 --half-minutes 0.1 --json --quiet --logs " + logs);
+  ASSERT_EQ(exit_status(f), 0) << f.output << f.errors;
+  const nlohmann::json j = nlohmann::json::parse(f.output);
+  const nlohmann::json& m = j["matches"][0];
+  EXPECT_GT(m["teams"][0]["kicks"].get<int>(), 0) << j.dump(2);
+  EXPECT_GT(m["teams"][1]["kicks"].get<int>(), 0) << "the second team's agent, on its own RTDB set, plays too\n"
+                                                  << j.dump(2);
+  EXPECT_EQ(m["teams"][0]["ftt_violations"], 0) << "canhil's nodes keep the schedule with processes in lockstep";
+  EXPECT_EQ(m["teams"][1]["ftt_violations"], 0);
+  for (const char* half : {"half1", "half2"}) {
+    for (const char* team : {"new", "old"}) {
+      const std::string base = logs + "/match1-" + half + "-" + team + "-agent1-";
+      const std::string agent_log = read_file(base + "canhil-agent.log");
+      EXPECT_NE(agent_log.find("canhil-agent: agent 1"), std::string::npos) << base << "canhil-agent.log";
+      EXPECT_TRUE(fs::exists(base + "canhil-hwcomm.log")) << base;
+    }
+  }
+  EXPECT_NE(read_file(logs + "/match1-half1-old-agent1-canhil-agent.log").find("opponent goal at x = -9.00"),
+            std::string::npos)
+      << "the second team attacks -x in the first half";
+  EXPECT_NE(read_file(logs + "/match1-half2-old-agent1-canhil-agent.log").find("opponent goal at x = 9.00"),
+            std::string::npos)
+      << "and +x in the second";
+  fs::remove_all(logs);
+  std::remove(scenario.c_str());
+}
+
+TEST(VcanMatch, AProcessThatNeverAnswersStopsTheMatchNamingItsMatchAndHalf) {
+  // The agent's process drops the lockstep's board before its program starts:
+  // canhil never hears from it again, and says so after the attach limit.
+  const std::string scenario =
+      write_scenario("stuck", 3.0, 2.0, "env -u CANHIL_LOCKSTEP sleep 30", "attach_limit_s = 3");
+  const Finished f = canhil_match(scenario + " --external --half-minutes 0.1 --quiet --json");
+  EXPECT_EQ(exit_status(f), 3) << f.output << f.errors;
+  EXPECT_NE(f.errors.find("canhil match: stopped: match 1, half 1"), std::string::npos) << f.errors;
+  const nlohmann::json j = nlohmann::json::parse(f.output);  // what was played before: nothing, said so
+  EXPECT_TRUE(j["stopped"].get<bool>());
+  EXPECT_TRUE(j["matches"].empty());
+  std::remove(scenario.c_str());
+}
+
+}  // namespace
