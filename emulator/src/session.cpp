@@ -140,6 +140,18 @@ Session::Session(Scenario scenario, SessionOptions options)
                     "reported_heading_deg";
     }
     world_log_ += '\n';
+    if (scenario_.teams.size() > 1) {
+      // Who played for whom, for a replay (ReplayFeed); one team's logs stay as they always were.
+      for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
+        const Team& team = scenario_.teams[t];
+        world_log_ +=
+            "#team," + std::to_string(t) + "," + team.name + "," + (team.attacks_positive_x ? "+x" : "-x") + "\n";
+      }
+      for (std::size_t r = 0; r < n; ++r) {
+        world_log_ += "#robot," + std::to_string(r) + "," + std::to_string(rigs_[r].team) + "," +
+                      std::to_string(rigs_[r].agent) + "," + rigs_[r].interface + "\n";
+      }
+    }
   }
   publish(0);
 }

@@ -9,7 +9,7 @@ import assert from 'node:assert/strict';
 import { existsSync } from 'node:fs';
 import { join } from 'node:path';
 import {
-  SOURCE, sharedBrowser, startCanhil, openPage, shot, Control, dragWorld, dist, sleep, workDir,
+  SOURCE, sharedBrowser, startCanhil, openPage, shot, Control, dragWorld, dist, sleep, workDir, bodyColour, magenta,
 } from './support.mjs';
 
 const FIVE = join(SOURCE, 'emulator/scenarios/five_robots.toml');
@@ -229,20 +229,8 @@ test('two teams: the second team\'s robots in magenta, the score in the bar', as
   assert.ok(teamOf.includes(0) && teamOf.includes(1), `teams of the robots: ${teamOf}`);
   const s0 = await control.snapshot();
   await pageAt(page, s0.time_s);
-  // The body's colour beside the centre (robot frame +x, clear of the front
-  // wedge and the number), read back from the canvas.
-  const bodyColour = (pose) => page.evaluate((x, y) => {
-    const c = document.getElementById('field');
-    const p = window.canhilView.toScreen(x, y);
-    const box = c.getBoundingClientRect();
-    const k = c.width / box.width;
-    const d = c.getContext('2d').getImageData(Math.round((p.x - box.left) * k), Math.round((p.y - box.top) * k), 1, 1).data;
-    return [d[0], d[1], d[2]];
-  }, pose.x + 0.7 * hello.robot_radius_m * Math.cos(pose.heading_deg * Math.PI / 180),
-  pose.y + 0.7 * hello.robot_radius_m * Math.sin(pose.heading_deg * Math.PI / 180));
-  const magenta = ([r, g, b]) => r > 90 && r > g + 50 && b > g + 30;
   for (let i = 0; i < s0.robots.length; ++i) {
-    const colour = await bodyColour(s0.robots[i]);
+    const colour = await bodyColour(page, hello, s0.robots[i]);
     assert.equal(magenta(colour), teamOf[i] === 1, `robot ${i} (team ${teamOf[i]}) drawn ${colour}`);
   }
   const bar = () => page.$eval('#st-goals', (e) => e.textContent);

@@ -7,12 +7,14 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { CANHIL, sharedBrowser, startCanhil, openPage, shot, sleep, workDir, rtdbEnv, dist } from './support.mjs';
+import {
+  CANHIL, SOURCE, sharedBrowser, startCanhil, openPage, shot, sleep, workDir, rtdbEnv, dist, bodyColour, magenta,
+} from './support.mjs';
 
 const shared = sharedBrowser();
 
 function readLog(path) {
-  const lines = readFileSync(path, 'utf8').trim().split('\n');
+  const lines = readFileSync(path, 'utf8').trim().split('\n').filter((l) => !l.startsWith('#'));  // rows, not comments
   const columns = lines[0].split(',');
   return { columns, rows: lines.slice(1).map((l) => l.split(',').map(Number)) };
 }
@@ -161,5 +163,49 @@ test('7. ten robots play back at 30 frames per second or more', async () => {
   assert.equal(d.robots.length, 10);
   assert.ok(Math.abs((t1 - t0) - wall) < 0.5, `1x: ${t1 - t0} s of replay in ${wall} s`);
   assert.ok(fps >= 30, `${fps.toFixed(1)} frames per second`);
+  assert.deepEqual(page.errors, []);
+});
+
+test('8. two teams: a replay draws the second team in magenta and keeps the score', async () => {
+  const dir = workDir('two-teams');
+  const worldLog = join(dir, 'two.csv');
+  execFileSync(CANHIL, ['run', '--virtual-time', '--config', join(SOURCE, 'emulator/scenarios/two_teams.toml'),
+    '--duration', '2', '--world-log', worldLog, '--no-view', '--no-control'],
+  { cwd: dir, env: rtdbEnv(), stdio: ['ignore', 'ignore', 'pipe'] });
+  // Then the ball rolls into the +x goal, the one the first team attacks.
+  const log = readLog(worldLog);
+  const last = log.rows[log.rows.length - 1];
+  const extra = [];
+  for (let i = 1; i <= 20; i++) {
+    const row = last.slice();
+    row[0] = last[0] + 0.05 * i;
+    row[1] = 7.5 + 0.1 * i;  // ball_x_m: past the goal line (9 m) from i = 16
+    row[2] = 0;
+    row[3] = 0.11;
+    extra.push(row.map((v) => v.toFixed(4)).join(','));
+  }
+  writeFileSync(worldLog, `${readFileSync(worldLog, 'utf8')}${extra.join('\n')}\n`);
+  const { page } = await view([worldLog]);
+  const hello = await page.evaluate(() => window.canhilView.hello());
+  assert.deepEqual(hello.teams.map((t) => [t.name, t.attacks_positive_x]), [['new', true], ['old', false]]);
+  const teamOf = hello.robots.map((r) => r.team);
+  assert.deepEqual(teamOf, [0, 0, 0, 0, 0, 1, 1, 1, 1, 1]);
+  assert.deepEqual(hello.robots.map((r) => r.interface), [...Array(10).keys()].map((k) => `vcan${k}`));
+  const box = await (await page.$('#rp-scrub')).boundingBox();
+  const scrubTo = async (fraction) => {
+    await page.mouse.click(box.x + 8 + (box.width - 16) * fraction, box.y + box.height / 2);
+    await sleep(200);
+  };
+  await scrubTo(0.3);
+  const state = await page.evaluate(() => window.canhilView.state());
+  for (let i = 0; i < state.robots.length; ++i) {
+    const colour = await bodyColour(page, hello, state.robots[i]);
+    assert.equal(magenta(colour), teamOf[i] === 1, `robot ${i} (team ${teamOf[i]}) drawn ${colour}`);
+  }
+  const bar = () => page.$eval('#st-goals', (e) => e.textContent);
+  assert.equal(await bar(), 'new 0 : 0 old');
+  await scrubTo(1);
+  assert.equal(await bar(), 'new 1 : 0 old', "the goal in the +x goal is the first team's");
+  await shot(page, '8-two-teams-replay');
   assert.deepEqual(page.errors, []);
 });

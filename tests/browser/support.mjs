@@ -220,3 +220,20 @@ export async function dragWorld(page, from, to, { button = 'left', modifier = nu
 }
 
 export const dist = (a, b) => Math.hypot(a.x - b.x, a.y - b.y);
+
+/** A robot body's colour, [r, g, b], read back from the field's canvas beside
+ * its centre (robot frame +x, clear of the front wedge and the number). */
+export function bodyColour(page, hello, pose) {
+  const a = pose.heading_deg * Math.PI / 180;
+  return page.evaluate((x, y) => {
+    const c = document.getElementById('field');
+    const p = window.canhilView.toScreen(x, y);
+    const box = c.getBoundingClientRect();
+    const k = c.width / box.width;
+    const d = c.getContext('2d').getImageData(Math.round((p.x - box.left) * k), Math.round((p.y - box.top) * k), 1, 1).data;
+    return [d[0], d[1], d[2]];
+  }, pose.x + 0.7 * hello.robot_radius_m * Math.cos(a), pose.y + 0.7 * hello.robot_radius_m * Math.sin(a));
+}
+
+/** The second team's magenta body, as field.js draws it. */
+export const magenta = ([r, g, b]) => r > 90 && r > g + 50 && b > g + 30;

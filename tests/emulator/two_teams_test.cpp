@@ -183,6 +183,24 @@ TEST_F(TwoTeams, ARestartSendsRobotsOffTheSpotNeverIntoEachOtherAndIntoTheWorldL
   EXPECT_NE(log.find(",0,0\n", line), std::string::npos) << "with the score";
 }
 
+TEST_F(TwoTeams, TheWorldLogSaysWhoPlaysForWhomAndOneTeamsLogDoesNot) {
+  SessionOptions o = options();
+  o.world_log_period = std::chrono::milliseconds(50);
+  const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  const Session two(s, o);
+  const std::string& log = two.world_log();
+  const auto header_end = log.find('\n');
+  ASSERT_NE(header_end, std::string::npos);
+  std::string expected = "#team,0,new,+x\n#team,1,old,-x\n";
+  for (std::size_t r = 0; r < 10; ++r) {
+    expected += "#robot," + std::to_string(r) + "," + std::to_string(r / 5) + "," + std::to_string(r % 5 + 1) +
+                ",vcan" + std::to_string(r) + "\n";
+  }
+  EXPECT_EQ(log.substr(header_end + 1, expected.size()), expected) << "right after the header";
+  const Session one(load_scenario(shipped_scenario("five_robots.toml")), o);
+  EXPECT_EQ(one.world_log().find("\n#"), std::string::npos) << "one team's world log as it always was";
+}
+
 TEST_F(TwoTeams, MistakesInTeamsAreNamedWithTheirLine) {
   const auto error = [](const std::string& text) { return test::error_of([&] { parse_scenario(text, "t.toml"); }); };
   const std::string robot = "[[teams.robots]]\nx_m = -2.0\n";

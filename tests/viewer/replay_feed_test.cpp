@@ -49,6 +49,38 @@ TEST_F(ReplayFeedTest, TheRefereesCallsAreMarksOtherCommentsAreSkipped) {
   EXPECT_EQ(f.events()[1].text, "drop_ball, score 1:0");
 }
 
+TEST_F(ReplayFeedTest, TeamsAndRobotsFromTheirLinesAreInTheHello) {
+  const std::string two_robots =
+      "time_s,ball_x_m,ball_y_m,ball_z_m,robot0_x_m,robot0_y_m,robot0_heading_deg,robot0_reported_x_m,"
+      "robot0_reported_y_m,robot0_reported_heading_deg,robot1_x_m,robot1_y_m,robot1_heading_deg,robot1_reported_x_m,"
+      "robot1_reported_y_m,robot1_reported_heading_deg\n";
+  const std::string row = ",0,0,0.11,-3,0,-90,-3,0,-90,3,0,90,3,0,90\n";
+  std::string log = two_robots;
+  log += "#team,0,new,+x\n#team,1,old,-x\n#robot,0,0,3,vcan0\n#robot,1,1,3,vcan5\n";
+  log += "#team,2,third,sideways\n#robot,7,0,1,vcan7\n#robot,1,x,1,vcan1\n";  // not so: comments
+  log += "0.0" + row + "0.1" + row;
+  auto f = feed(write("teams.csv", log));
+  ASSERT_EQ(f.teams().size(), 2u);
+  EXPECT_EQ(f.teams()[1].name, "old");
+  EXPECT_FALSE(f.teams()[1].attacks_positive_x);
+  const nlohmann::json h = f.hello();
+  ASSERT_EQ(h["teams"].size(), 2u);
+  EXPECT_EQ(h["teams"][0]["name"], "new");
+  EXPECT_EQ(h["teams"][0]["attacks_positive_x"], true);
+  ASSERT_EQ(h["robots"].size(), 2u);
+  EXPECT_EQ(h["robots"][1]["team"], 1);
+  EXPECT_EQ(h["robots"][1]["agent"], 3) << "both teams use agent numbers from 1";
+  EXPECT_EQ(h["robots"][1]["interface"], "vcan5");
+  EXPECT_EQ(f.rows(), 2u);
+  // Without the lines (one team, or an older log): one team, robots numbered in order.
+  auto plain = feed(write("plain.csv", two_robots + "0.0" + row));
+  const nlohmann::json p = plain.hello();
+  EXPECT_TRUE(p["teams"].empty());
+  EXPECT_EQ(p["robots"][1]["team"], 0);
+  EXPECT_EQ(p["robots"][1]["agent"], 2);
+  EXPECT_EQ(p["robots"][1]["interface"], "robot 1");
+}
+
 TEST_F(ReplayFeedTest, RowsGoalsAndKicksFromTheBallAlone) {
   std::string log = kHeader;
   // The ball lies still, is kicked at 0.2 s and rolls into the +x goal (x > 9.11).

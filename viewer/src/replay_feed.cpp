@@ -62,12 +62,17 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
     throw SetupError(where(world_log, 1) + "expected 4 columns and 6 per robot, got " +
                      std::to_string(columns_.size()) + " for " + std::to_string(robots_) + " robot(s)");
   }
+  for (std::size_t r = 0; r < robots_; ++r)
+    robot_info_.push_back({0, static_cast<int>(r + 1), "robot " + std::to_string(r)});
   std::size_t number = 1;
   while (std::getline(in, line)) {
     ++number;
     if (line.empty()) continue;
     if (line[0] == '#') {
-      referee_line(line);  // a referee's call; other comments are skipped
+      // A referee's call, a team or a robot; other comments are skipped.
+      referee_line(line);
+      team_line(line);
+      robot_line(line);
       continue;
     }
     const auto cells = split(line);
@@ -90,6 +95,10 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
     rows_.push_back(std::move(row));
   }
   if (rows_.empty()) throw SetupError(world_log.string() + ": the world log has no rows");
+  // A robot of a team the log does not name is of no team it knows: the first.
+  for (ReplayRobot& r : robot_info_) {
+    if (r.team >= std::max<std::size_t>(1, teams_.size())) r.team = 0;
+  }
   if (trace) {
     std::ifstream t(*trace);
     if (!t) throw SetupError("cannot read the trace " + trace->string());
@@ -138,6 +147,34 @@ void ReplayFeed::referee_line(const std::string& line) {
   events_.push_back({t, "referee", std::move(text), std::nullopt});
 }
 
+namespace {
+// Whole numbers only: "3" reads, "3x", "-1" and "" do not.
+std::optional<std::size_t> whole_number(const std::string& text) {
+  if (text.empty() || text.size() > 6 || text.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
+  return static_cast<std::size_t>(std::stoul(text));
+}
+}  // namespace
+
+// "#team,INDEX,NAME,+x|-x" (Session's world log with two teams), in index
+// order from 0. A line that does not read so is a comment like any other.
+void ReplayFeed::team_line(const std::string& line) {
+  const auto cells = split(line);
+  if (cells.size() != 4 || cells[0] != "#team" || cells[2].empty() || (cells[3] != "+x" && cells[3] != "-x")) return;
+  if (whole_number(cells[1]) != teams_.size()) return;
+  teams_.push_back({cells[2], cells[3] == "+x"});
+}
+
+// "#robot,INDEX,TEAM,AGENT,INTERFACE".
+void ReplayFeed::robot_line(const std::string& line) {
+  const auto cells = split(line);
+  if (cells.size() != 5 || cells[0] != "#robot") return;
+  const auto index = whole_number(cells[1]);
+  const auto team = whole_number(cells[2]);
+  const auto agent = whole_number(cells[3]);
+  if (!index || !team || !agent || *index >= robot_info_.size() || cells[4].empty()) return;
+  robot_info_[*index] = {*team, static_cast<int>(*agent), cells[4]};
+}
+
 // GoalWatcher's rule, on the logged ball.
 void ReplayFeed::find_goals() {
   bool was_in = false;
@@ -183,10 +220,13 @@ json ReplayFeed::hello() {
   h["mode"] = "replay";
   json robots = json::array();
   for (std::size_t r = 0; r < robots_; ++r) {
-    robots.push_back({{"index", r}, {"agent", r + 1}, {"interface", "robot " + std::to_string(r)}, {"team", 0}});
+    const ReplayRobot& info = robot_info_[r];
+    robots.push_back({{"index", r}, {"agent", info.agent}, {"interface", info.interface}, {"team", info.team}});
   }
   h["robots"] = robots;
-  h["teams"] = json::array();  // a world log does not say
+  json teams = json::array();  // as live: none said, one team
+  for (const ReplayTeam& t : teams_) teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
+  h["teams"] = teams;
   h["obstacles"] = json::array();
   h["virtual_time"] = false;
   h["duration_s"] = rows_.back()[0];
