@@ -76,6 +76,7 @@ Session::Session(Scenario scenario, SessionOptions options)
   }
   const std::size_t n = scenario_.robot_count();
   rigs_.resize(n);
+  referee_placements_.assign(n, 0);
   for (std::size_t r = 0; r < n; ++r) {
     Rig& rig = rigs_[r];
     rig.index = r;
@@ -265,7 +266,10 @@ void Session::referee_step(Nanos now, bool scored) {
 void Session::carry_out(const RefereeCall& call) {
   world_->place_ball({call.spot.x(), call.spot.y(), scenario_.world.ball.radius_m}, Eigen::Vector3d::Zero());
   if (call.restart == Restart::kKickoff) {
-    for (std::size_t r = 0; r < rigs_.size(); ++r) world_->robot(r).place(scenario_.world.robots[r]);
+    for (std::size_t r = 0; r < rigs_.size(); ++r) {
+      world_->robot(r).place(scenario_.world.robots[r]);
+      ++referee_placements_[r];
+    }
   } else {
     keep_away_from(call.spot);
   }
@@ -335,6 +339,7 @@ void Session::keep_away_from(const Eigen::Vector2d& spot) {
     at[r] = *place;
     const double heading_deg = world_->robot(r).pose().heading_rad * 180.0 / std::numbers::pi;
     world_->robot(r).place({place->x(), place->y(), heading_deg});
+    ++referee_placements_[r];
   }
 }
 

@@ -64,6 +64,9 @@ void prepare_rtdb(int space, int agent, const kinematics::Pose& at) {
 struct VirtualDriver::Laptop {
   std::unique_ptr<HandlerParticipant> handler;
   std::unique_ptr<AgentParticipant> agent;
+  int space = 0;  // the agent's memory space (its team's set)
+  int agent_number = 0;
+  std::uint32_t placements = 0;  // the referee's, answered so far
 };
 
 VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
@@ -113,6 +116,8 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       // The team's set of canhil's databases: its agents' memory spaces follow the first set's.
       const int space = static_cast<int>(rig.team) * DB_agent_count() + rig.agent;
       prepare_rtdb(space, rig.agent, session_.world().robot(r).pose());
+      laptop->space = space;
+      laptop->agent_number = rig.agent;
       LaptopLink& link = *session_.laptop(rig.team);
       laptop->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
                                                              link.layout(), rig.agent);
@@ -148,8 +153,24 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     session_.before_step();
     session_.world().step();
     session_.after_step(now);
+    if (options_.reference_laptop) set_pose_of_carried_robots();
     record();
   });
+}
+
+// The reference agent knows where it is only from the odometry: a robot the
+// referee carried is told its new place, as at the start (a team's own agent
+// localises itself from what its camera sees).
+void VirtualDriver::set_pose_of_carried_robots() {
+  for (std::size_t r = 0; r < laptops_.size(); ++r) {
+    Laptop& l = *laptops_[r];
+    const std::uint32_t placed = session_.referee_placements(r);
+    if (placed == l.placements || !l.handler) continue;
+    l.placements = placed;
+    const kinematics::Pose at = session_.world().robot(r).pose();
+    CMD_SetPose pose{static_cast<float>(at.x_m), static_cast<float>(at.y_m), static_cast<float>(at.heading_rad), 0, 1};
+    DB_put_in(l.space, l.agent_number, CMD_SETPOSE, &pose, 0);
+  }
 }
 
 VirtualDriver::~VirtualDriver() {

@@ -183,6 +183,37 @@ TEST_F(TwoTeams, ARestartSendsRobotsOffTheSpotNeverIntoEachOtherAndIntoTheWorldL
   EXPECT_NE(log.find(",0,0\n", line), std::string::npos) << "with the score";
 }
 
+TEST_F(TwoTeams, AfterAKickOffEveryReferenceAgentsOdometryKnowsWhereTheRefereePutItsRobot) {
+  const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  Session session(s, options());
+  VirtualDriver driver(session, {});
+  driver.run_for(3s);  // the robots drive off their places
+  ASSERT_EQ(session.referee_placements(0), 0u);
+  // A goal for the first team: the ball rolled into the goal it attacks.
+  session.apply(MoveBall{{s.world.field.length_m / 2 - 0.3, 0.7, 0.11}, {3.0, 0.0, 0.0}});  // past the keeper
+  std::vector<kinematics::Pose> placed;
+  session.on_referee_call([&](const RefereeCall& c) {
+    if (c.restart != Restart::kKickoff || !placed.empty()) return;
+    for (std::size_t r = 0; r < s.robot_count(); ++r) placed.push_back(session.world().robot(r).pose());
+  });
+  driver.run_for(500ms);  // the call, then a few of the handlers' cycles (the pause holds the agents still)
+  ASSERT_EQ(placed.size(), s.robot_count()) << "a kick-off after the goal";
+  ASSERT_EQ(DB_init_all(0), 0);
+  ASSERT_EQ(DB_init_all(1), 0);
+  for (std::size_t r = 0; r < s.robot_count(); ++r) {
+    EXPECT_EQ(session.referee_placements(r), 1u) << r;
+    const int space = (r < 5 ? 0 : N_AGENTS) + s.agents[r];
+    CMD_Pos odometry{};
+    ASSERT_GE(DB_get_from(space, s.agents[r], CMD_POS, &odometry), 0) << r;
+    EXPECT_NEAR(odometry.px, s.world.robots[r].x_m, 0.05)
+        << "robot " << r << " back at its place, and its odometry too";
+    EXPECT_NEAR(odometry.py, s.world.robots[r].y_m, 0.05) << r;
+    EXPECT_NEAR(placed[r].x_m, s.world.robots[r].x_m, 1e-6) << r;
+  }
+  DB_free_all(1);
+  DB_free_all(0);
+}
+
 TEST_F(TwoTeams, TheWorldLogSaysWhoPlaysForWhomAndOneTeamsLogDoesNot) {
   SessionOptions o = options();
   o.world_log_period = std::chrono::milliseconds(50);

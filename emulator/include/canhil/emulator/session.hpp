@@ -232,6 +232,10 @@ class Session {
   const Referee* referee() const noexcept { return referee_.get(); }
   /// Called at each referee call, on the stepping thread (for the run's log).
   void on_referee_call(std::function<void(const RefereeCall&)> hook) { referee_hook_ = std::move(hook); }
+  /// How many times the referee has put robot r somewhere (a kick-off's
+  /// places, a step back from a restart's spot): a robot carried, not driven,
+  /// whose odometry no longer knows where it is. Read on the stepping thread.
+  std::uint32_t referee_placements(std::size_t r) const { return referee_placements_.at(r); }
   /// What each fault rule did, summed over the robots.
   std::vector<can_nodes::FaultCount> fault_counts() const;
   /// The world log (CSV with a header line; with a referee, its calls as
@@ -263,6 +267,7 @@ class Session {
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
   std::function<void(const RefereeCall&)> referee_hook_;
+  std::vector<std::uint32_t> referee_placements_;  // per robot
   std::function<void(WorldSnapshot&)> detail_hook_;
   std::function<void(Nanos)> step_hook_;
   void log_call(const RefereeCall& call);

@@ -27,7 +27,8 @@ namespace canhil::emulator {
 
 struct VirtualOptions {
   /// The reference handler and agent per robot, in process (with their RTDB
-  /// cleared at start and the handler's odometry set to the robot's pose).
+  /// cleared at start and the handler's odometry set to the robot's pose, and
+  /// set again wherever the referee carries the robot).
   bool reference_laptop = true;
   bool count_frames = true;  ///< a listener on every bus counts its frames (RobotOutcome::frames)
   bool record_trace = true;  ///< and keeps them for trace(); false: trace() is empty
@@ -83,6 +84,7 @@ class VirtualDriver {
 
  private:
   void record();
+  void set_pose_of_carried_robots();
   void fill_detail(WorldSnapshot& s);
 
   Session& session_;
