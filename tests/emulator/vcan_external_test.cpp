@@ -152,6 +152,15 @@ TEST(VcanExternal, TheTeamsAgentOnItsOwnLibrariesRunsOncePerVisionFrameAndGivesT
   EXPECT_LE(cycles, 91) << "and only then\n" << a.output;
   EXPECT_EQ(before_vision, 0) << a.output;
   EXPECT_EQ(agent_cycles(b.output), agent_cycles(a.output)) << b.output;
+  // canhil writes VISION_INFO through the team's own library in its own
+  // process, the agent reads it in another, both on the lockstep's clock:
+  // woken by the frame, the agent finds it fresh, never from the future.
+  const auto at = a.output.rfind("vision age ");
+  ASSERT_NE(at, std::string::npos) << a.output;
+  int youngest = -1000, oldest = -1000;
+  ASSERT_EQ(std::sscanf(a.output.c_str() + at, "vision age %d..%d ms", &youngest, &oldest), 2) << a.output;
+  EXPECT_GE(youngest, 0) << a.output;
+  EXPECT_LE(oldest, 5) << "read within the instant it was written\n" << a.output;
   EXPECT_NE(a.output.find("team_agent: coach says play"), std::string::npos) << a.output;
   const std::string trace_a = read_file(trace_path("team_a"));
   const std::string trace_b = read_file(trace_path("team_b"));

@@ -13,7 +13,7 @@
 // otherwise stands still; then PMAN_epilogue. SIGINT (the master's
 // PMAN_close) ends it. It prints what it did, one line per event, and its
 // counts (at each change of the coach's word and at the end) for the tests:
-//   team_agent: cycles N, before vision M, playing P, stopped S, kicks K
+//   team_agent: cycles N, before vision M, playing P, stopped S, kicks K, vision age A..B ms
 // Exit status: 0 after SIGINT, 3 if the RTDB cannot be opened, 4 if its
 // process name is not in the table.
 #include <signal.h>
@@ -39,11 +39,12 @@ constexpr int kStart = 3;  // CAMBADA's SIGstart
 
 struct Counts {
   long cycles = 0, before_vision = 0, playing = 0, stopped = 0, kicks = 0;
+  int youngest_vision_ms = INT_MAX, oldest_vision_ms = INT_MIN;  // VISION_INFO's age as DB_get answers it
 };
 
 void print_counts(const Counts& n) {
-  std::printf("team_agent: cycles %ld, before vision %ld, playing %ld, stopped %ld, kicks %ld\n", n.cycles,
-              n.before_vision, n.playing, n.stopped, n.kicks);
+  std::printf("team_agent: cycles %ld, before vision %ld, playing %ld, stopped %ld, kicks %ld, vision age %d..%d ms\n",
+              n.cycles, n.before_vision, n.playing, n.stopped, n.kicks, n.youngest_vision_ms, n.oldest_vision_ms);
   std::fflush(stdout);
 }
 
@@ -64,6 +65,8 @@ void cycle(int agent, Counts& n, bool& was_playing) {
     ++n.before_vision;
     return;
   }
+  n.youngest_vision_ms = std::min(n.youngest_vision_ms, vision_age);
+  n.oldest_vision_ms = std::max(n.oldest_vision_ms, vision_age);
   const facts::PlayerInfo& me = coach.playerInfo[agent - 1];
   const bool play = me.running && coach.gameState == kStart;
   if (play != was_playing) {
