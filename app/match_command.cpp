@@ -115,11 +115,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   if (!external && (!processes.empty() || logs || answer_limit)) {
     throw UsageError("--process, --logs and --answer-limit are for matches with --external");
   }
-  if (!processes.empty()) scenario.external.processes = processes;
-  if (answer_limit) {
-    if (!(*answer_limit >= 0.01 && *answer_limit <= 3600)) throw UsageError("--answer-limit takes 0.01..3600 s");
-    scenario.external.answer_limit_s = *answer_limit;
-  }
+  apply_external_options(scenario, processes, answer_limit);
   if (external) {
     bool any = false;
     for (std::size_t t = 0; t < scenario.teams.size(); ++t) any |= !scenario.external_of(t).processes.empty();

@@ -237,11 +237,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   if (!external && (!processes.empty() || answer_limit || wait_for)) {
     throw UsageError("--process, --answer-limit and --wait-for are for runs with --external");
   }
-  if (!processes.empty()) scenario.external.processes = processes;
-  if (answer_limit) {
-    if (!(*answer_limit >= 0.01 && *answer_limit <= 3600)) throw UsageError("--answer-limit takes 0.01..3600 s");
-    scenario.external.answer_limit_s = *answer_limit;
-  }
+  apply_external_options(scenario, processes, answer_limit);
   if (wait_for && !(*wait_for >= 1 && *wait_for <= 64 && *wait_for == static_cast<int>(*wait_for))) {
     throw UsageError("--wait-for takes a number of processes, 1..64");
   }

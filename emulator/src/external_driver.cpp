@@ -52,13 +52,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
     observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
     observers_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
-    if (options_.check_timing) {
-      timing::TimingConfig config;
-      config.elementary_cycle = session_.options().ftt.elementary_cycle;
-      config.bit_rate = session_.options().ftt.bit_rate;
-      config.violations_only = true;
-      checkers_.emplace_back(session_.options().messages, config);
-    }
+    if (options_.check_timing) checkers_.push_back(ftt_checker(session_.options()));
     if (observers_.back()->state() != can_nodes::BusState::kUp) {
       const std::string& iface = session_.rig(r).interface;
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");

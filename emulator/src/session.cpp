@@ -568,4 +568,12 @@ void Session::log_world(Nanos now) {
   world_log_ += '\n';
 }
 
+timing::TimingAnalyzer ftt_checker(const SessionOptions& options) {
+  timing::TimingConfig config;
+  config.elementary_cycle = options.ftt.elementary_cycle;
+  config.bit_rate = options.ftt.bit_rate;
+  config.violations_only = true;
+  return {options.messages, config};
+}
+
 }  // namespace canhil::emulator

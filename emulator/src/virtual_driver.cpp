@@ -125,13 +125,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
       laptop->agent = std::make_unique<AgentParticipant>(space, agent_cfg);
     }
-    if (options_.check_timing) {
-      timing::TimingConfig config;
-      config.elementary_cycle = session_.options().ftt.elementary_cycle;
-      config.bit_rate = session_.options().ftt.bit_rate;
-      config.violations_only = true;
-      checkers_.emplace_back(session_.options().messages, config);
-    }
+    if (options_.check_timing) checkers_.push_back(ftt_checker(session_.options()));
     if (options_.count_frames || options_.record_trace || options_.check_timing) {
       recorders_.push_back(buses_[r]->attach("trace", 1 << 20));
       recorders_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace

@@ -40,6 +40,7 @@
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/shared_robot_io.hpp"
 #include "canhil/physics/world.hpp"
+#include "canhil/timing/analysis.hpp"
 #include "canhil/vision_emu/runner.hpp"
 
 namespace canhil::emulator {
@@ -62,6 +63,10 @@ struct SessionOptions {
   /// A saved world (physics::load_state) to start from instead of the placements.
   std::optional<physics::WorldState> initial_state;
 };
+
+/// A checker of one robot's bus by `canhil timing`'s rules with the session's
+/// elementary cycle and bit rate, counting violations only (constant memory).
+timing::TimingAnalyzer ftt_checker(const SessionOptions& options);
 
 /// One robot's part of a run.
 struct Rig {
