@@ -58,6 +58,14 @@ class ProgressBar {
   bool on_;
 };
 
+// Virtual seconds per wall second: "34x", or "0.25x" below 10 (the teams' processes in a slow machine).
+std::string factor(double virtual_s, double wall_s) {
+  const double f = wall_s > 0 ? virtual_s / wall_s : 0.0;
+  char text[32];
+  std::snprintf(text, sizeof text, f >= 10 ? "%.0fx" : "%.2gx", f);
+  return text;
+}
+
 double share(double mine, double theirs) { return mine + theirs > 0 ? 100 * mine / (mine + theirs) : 0; }
 
 void print_table(const std::vector<std::string>& names, const std::vector<emulator::TeamTally>& t) {
@@ -215,10 +223,10 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
            {"stopped", r.stopped}});
       continue;
     }
-    std::printf("match %ld (seed %llu): %s %d : %d %s%s, %zu referee call(s), %.0f s in %.1f s of wall time (%.0fx)\n",
+    std::printf("match %ld (seed %llu): %s %d : %d %s%s, %zu referee call(s), %.0f s in %.1f s of wall time (%s)\n",
                 k + 1, static_cast<unsigned long long>(r.seed), names[0].c_str(), r.teams[0].goals, r.teams[1].goals,
                 names[1].c_str(), r.stopped ? " (stopped)" : "", r.referee_calls, r.virtual_s, r.wall_s,
-                r.wall_s > 0 ? r.virtual_s / r.wall_s : 0.0);
+                factor(r.virtual_s, r.wall_s).c_str());
     for (const auto& g : r.goals) {
       std::printf("  goal  half %d  %6.1f s  %s\n", g.half + 1, g.time_s, names[g.team].c_str());
     }
@@ -240,9 +248,9 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
         {"stopped", g_stop.load() || stuck}};
     std::printf("%s\n", out.dump(2).c_str());
   } else if (played > 1) {
-    std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s); %.0f s of play in %.1f s (%.0fx)\n", played,
+    std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s); %.0f s of play in %.1f s (%s)\n", played,
                 names[0].c_str(), wins[0], names[1].c_str(), wins[1], wins[2], simulated, wall,
-                wall > 0 ? simulated / wall : 0.0);
+                factor(simulated, wall).c_str());
     print_table(names, total);
   }
   if (stuck) return kProcessStuckStatus;

@@ -41,9 +41,12 @@ class ExternalHalf final : public emulator::HalfDriver {
     const double limit = session.scenario().external.attach_limit_s;
     const std::size_t attached = conductor_.wait_attached(expected, from_seconds(limit));
     if (attached < expected) {
-      throw emulator::ProcessStuck(name + ": " + std::to_string(attached) + " of " + std::to_string(expected) +
-                                   " process(es) attached within " + std::to_string(limit) +
-                                   " s (attach_limit_s in [external])");
+      conductor_.release();  // the destructor does not run for a half that never began
+      processes_.stop_all();
+      char text[160];
+      std::snprintf(text, sizeof text, ": %zu of %zu process(es) attached within %g s (attach_limit_s in [external])",
+                    attached, expected, limit);
+      throw emulator::ProcessStuck(name + text);
     }
   }
   ~ExternalHalf() override {
