@@ -59,7 +59,7 @@ int exit_status(const Finished& f) { return WIFEXITED(f.status) ? WEXITSTATUS(f.
 // One robot a team on vcan0 and vcan1; the teams' processes from [external].
 std::string write_scenario(const std::string& name, double old_x, double old_y, const std::string& agent,
                            const std::string& more_external = "") {
-  const std::string path = scratch(name + ".toml");
+  std::string path = scratch(name + ".toml");
   std::ofstream out(path);
   out << "[run]\nseed = 1\nkick_power = 40\n\n"
       << "[ball_start]\nx_m = 0.0\ny_m = 0.0\nz_m = 0.11\n\n"
@@ -72,7 +72,7 @@ std::string write_scenario(const std::string& name, double old_x, double old_y, 
   return path;
 }
 
-const std::string kAgent = "canhil-agent --pose {x},{y},{heading} --goal-x {goal_x}";
+constexpr const char* kAgent = "canhil-agent --pose {x},{y},{heading} --goal-x {goal_x}";
 
 // The match's JSON without what the wall clock decides.
 nlohmann::json without_wall_time(nlohmann::json j) {
