@@ -21,12 +21,18 @@ class RtdbKeys {
  public:
   static constexpr int kKeysEach = 128;  ///< keys a base spans: 64 agents a set, two sets (teams)
 
-  /// Sets RTDB_KEY and TEAM_RTDB_KEY in the environment to fresh bases.
+  /// Sets RTDB_KEY and TEAM_RTDB_KEY in the environment to fresh bases: ones
+  /// no earlier process left segments under (a process killed before it
+  /// cleaned up, whose pid matched this one's low bits, would otherwise fail
+  /// this test's check that nothing is left behind).
   RtdbKeys() {
     static int counter = 0;
-    const int slot = ((getpid() & 0xFFF) << 12) + ((++counter & 0x1F) << 7);
-    canhil_ = 0x5B000000 + slot;
-    team_ = 0x7E000000 + slot;
+    for (int tries = 0; tries < 32; ++tries) {
+      const int slot = ((getpid() & 0xFFF) << 12) + ((++counter & 0x1F) << 7);
+      canhil_ = 0x5B000000 + slot;
+      team_ = 0x7E000000 + slot;
+      if (leftovers().empty()) break;
+    }
     setenv("RTDB_KEY", std::to_string(canhil_).c_str(), 1);
     setenv("TEAM_RTDB_KEY", std::to_string(team_).c_str(), 1);
   }
