@@ -1,6 +1,8 @@
 #include "convex.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 
 #include "canhil/base/demand.hpp"
@@ -54,7 +56,133 @@ ConvexShape make_hull(std::vector<V3> bottom, std::vector<V3> top) {
   return s;
 }
 
+// ---------------------------------------------------------------------------
+// BoundedHull: ODE's user geom class (dCreateGeomClass) around a dConvex.
+
+struct HullBound {
+  dGeomID hull;
+  double radius, z_lo, z_hi;
+};
+
+const HullBound& bound_of(dGeomID g) { return *static_cast<const HullBound*>(dGeomGetClassData(g)); }
+
+// The bounding cylinder's box: the segment from z_lo to z_hi along the geom's
+// z axis `a`, widened by the disc of `radius` about it, which reaches
+// radius * sqrt(1 - a_i^2) along world axis i.
+void hull_box(dGeomID g, dReal aabb[6]) {
+  const HullBound& b = bound_of(g);
+  const dReal* p = dGeomGetPosition(g);
+  const dReal* r = dGeomGetRotation(g);  // 3x4, row-major: the z axis is column 2
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double a = r[4 * i + 2];
+    const double lo = p[i] + a * (a >= 0 ? b.z_lo : b.z_hi);
+    const double hi = p[i] + a * (a >= 0 ? b.z_hi : b.z_lo);
+    const double wide = b.radius * std::sqrt(std::max(0.0, 1.0 - a * a));
+    aabb[2 * i] = lo - wide;
+    aabb[2 * i + 1] = hi + wide;
+  }
+}
+
+// Do two boxes lie apart? An infinite one (a plane's) never does.
+bool apart(const dReal x[6], const dReal y[6]) {
+  return x[0] > y[1] || x[1] < y[0] || x[2] > y[3] || x[3] < y[2] || x[4] > y[5] || x[5] < y[4];
+}
+
+bool infinite(const dReal box[6]) {
+  return std::any_of(box, box + 6, [](dReal v) { return std::isinf(v); });
+}
+
+// ODE's own dispatch of a user class: dCollide(hull, hull) reaches it with the
+// geoms swapped (a class against itself is entered as reversed), and libccd's
+// contacts differ in the last bits with the order; World calls collide_hulls.
+int hull_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
+  return collide_hulls(o1, o2, flags, contact, skip);
+}
+
+dColliderFn* hull_collider(int /*other_class*/) { return &hull_collide; }
+
+void hull_destroy(dGeomID g) { dGeomDestroy(bound_of(g).hull); }
+
+int hull_class() {
+  static const int number = [] {
+    dGeomClass c{};
+    c.bytes = sizeof(HullBound);
+    c.collider = &hull_collider;
+    c.aabb = &hull_box;
+    c.aabb_test = nullptr;
+    c.dtor = &hull_destroy;
+    return dCreateGeomClass(&c);
+  }();
+  return number;
+}
+
 }  // namespace
+
+dGeomID bounded_hull(dSpaceID space, dGeomID hull, double radius, double z_lo, double z_hi) {
+  dGeomID g = dCreateGeom(hull_class());
+  *static_cast<HullBound*>(dGeomGetClassData(g)) = HullBound{hull, radius, z_lo, z_hi};
+  if (space != nullptr) dSpaceAdd(space, g);
+  return g;
+}
+
+dGeomID hull_of(dGeomID g) { return dGeomGetClass(g) == hull_class() ? bound_of(g).hull : nullptr; }
+
+int collide_hulls(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
+  dGeomID a = hull_of(o1);
+  dGeomID b = hull_of(o2);
+  if (a == nullptr && b == nullptr) return dCollide(o1, o2, flags, contact, skip);
+  if (a == nullptr) a = o1;
+  if (b == nullptr) b = o2;
+  // The pairs a plain dConvex's exact box lets through, and no others: a
+  // collider may find a contact a hair apart (libccd's tolerance). A hull's
+  // exact box is computed here only, for the few pairs that got this far, and
+  // never against a plane's infinite box (every robot's, every step).
+  dReal box_a[6];
+  dReal box_b[6];
+  if (a == o1) {  // o1 is not a hull: its box first
+    dGeomGetAABB(a, box_a);
+    if (!infinite(box_a)) dGeomGetAABB(b, box_b);
+    if (!infinite(box_a) && apart(box_a, box_b)) return 0;
+  } else {
+    dGeomGetAABB(b, box_b);
+    if (!infinite(box_b)) dGeomGetAABB(a, box_a);
+    if (!infinite(box_b) && apart(box_a, box_b)) return 0;
+  }
+  const int n = dCollide(a, b, flags, contact, skip);
+  for (int i = 0; i < n; ++i) {  // the contacts name the geoms the spaces know
+    auto* c = reinterpret_cast<dContactGeom*>(reinterpret_cast<char*>(contact) + static_cast<std::ptrdiff_t>(i) * skip);
+    for (dGeomID* g : {&c->g1, &c->g2}) {
+      if (*g == a)
+        *g = o1;
+      else if (*g == b)
+        *g = o2;
+    }
+  }
+  return n;
+}
+
+dGeomID ConvexShape::create(dSpaceID space, dBodyID body) {
+  if (body == nullptr) {
+    dGeomID g = dCreateConvex(space, planes.data(), plane_count, points.data(), point_count, polygons.data());
+    dGeomSetPosition(g, offset[0], offset[1], offset[2]);
+    return g;
+  }
+  dGeomID hull = dCreateConvex(nullptr, planes.data(), plane_count, points.data(), point_count, polygons.data());
+  double radius = 0;
+  double z_lo = points[2];
+  double z_hi = points[2];
+  for (std::size_t i = 0; i + 2 < points.size(); i += 3) {
+    radius = std::max(radius, std::hypot(points[i], points[i + 1]));
+    z_lo = std::min(z_lo, points[i + 2]);
+    z_hi = std::max(z_hi, points[i + 2]);
+  }
+  dGeomID g = bounded_hull(space, hull, radius, z_lo, z_hi);
+  for (dGeomID x : {hull, g}) {
+    dGeomSetBody(x, body);
+    dGeomSetOffsetPosition(x, offset[0], offset[1], offset[2]);
+  }
+  return g;
+}
 
 ConvexShape make_prism(const Outline& outline, double z0, double z1) {
   std::vector<V3> bottom;

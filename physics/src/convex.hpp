@@ -24,17 +24,27 @@ struct ConvexShape {
   std::array<double, 3> offset{};
 
   /// A geom in `space`; attached to `body` at the offset when given, else placed there.
-  dGeomID create(dSpaceID space, dBodyID body = nullptr) {
-    dGeomID g = dCreateConvex(space, planes.data(), plane_count, points.data(), point_count, polygons.data());
-    if (body != nullptr) {
-      dGeomSetBody(g, body);
-      dGeomSetOffsetPosition(g, offset[0], offset[1], offset[2]);
-    } else {
-      dGeomSetPosition(g, offset[0], offset[1], offset[2]);
-    }
-    return g;
-  }
+  /// A geom on a body moves every step, and ODE's own bounding box of a convex
+  /// transforms every vertex each time; such a geom is a BoundedHull instead,
+  /// which collides as this hull and bounds it by its cylinder (bounded_hull).
+  dGeomID create(dSpaceID space, dBodyID body = nullptr);
 };
+
+/// A geom in `space` that collides exactly as `hull` (a dConvex on `body`, in
+/// no space, which it owns) and whose bounding box for the spaces comes from
+/// the hull's bounding cylinder about its own z axis: a few operations instead
+/// of a transform per vertex. A pair the looser box lets through is tested
+/// against the hull's exact box before the collider, so the pairs that collide
+/// and their contacts are the same as a plain dConvex's.
+/// `radius`: the farthest vertex from the z axis; `z_lo`, `z_hi`: the vertices'
+/// extent along it (all in the hull's frame).
+dGeomID bounded_hull(dSpaceID space, dGeomID hull, double radius, double z_lo, double z_hi);
+/// The dConvex a bounded_hull collides as, or nullptr for any other geom.
+dGeomID hull_of(dGeomID g);
+/// dCollide, with each bounded_hull replaced by its hull and the pair's order
+/// kept (ODE's dispatch of a user class against itself swaps it, and libccd's
+/// contacts differ in the last bits with the order); the contacts name o1 and o2.
+int collide_hulls(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip);
 
 /// A prism between z0 and z1 over `outline`.
 ConvexShape make_prism(const Outline& outline, double z0, double z1);

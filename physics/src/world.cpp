@@ -479,7 +479,7 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
   dContact c[kMaxContacts];
   // Four points hold a body resting on the carpet; more only cost solver rows.
   const int cap = (ta->kind == Kind::kGround && tb->kind == Kind::kObstacle) ? 4 : kMaxContacts;
-  const int n = dCollide(a, b, cap, &c[0].geom, sizeof(dContact));
+  const int n = collide_hulls(a, b, cap, &c[0].geom, sizeof(dContact));
   if (n == 0) return;
   const BallParams& bp = params.ball;
   const RobotParams& rp = params.robot;
