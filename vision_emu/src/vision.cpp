@@ -33,12 +33,14 @@ double ray_circle(const Eigen::Vector2d& dir, const Circle& c) {
 }
 
 // Does the segment from the origin to p pass through the circle (p beyond it)?
+// `circles` are nearest edge first: the first whose near edge lies beyond p
+// ends the search.
 bool occluded(const Eigen::Vector2d& p, const std::vector<Circle>& circles) {
   const double len = p.norm();
   if (len < 1e-9) return false;
   const Eigen::Vector2d dir = p / len;
   for (const Circle& c : circles) {
-    if (c.dist - c.r > len) continue;  // the obstacle is farther than the point
+    if (c.dist - c.r > len) break;  // this obstacle, and every one after it, is farther than the point
     const double t = ray_circle(dir, c);
     if (t < len - 1e-9) return true;
   }
@@ -155,6 +157,9 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
     if (i != robot) add_circle({scene.robots[i].x_m, scene.robots[i].y_m}, scene.robot_radius_m);
   }
   for (const auto& o : scene.obstacles) add_circle(o.centre, o.radius_m);
+  // Nearest edge first, for occluded(); every other use takes a minimum over them.
+  std::sort(circles.begin(), circles.end(),
+            [](const Circle& x, const Circle& y) { return x.dist - x.r < y.dist - y.r; });
 
   // --- obstacle points: nearest hit per radial sensor, only where a circle lies.
   const int n_obs = static_cast<int>(ray_cos_.size());
