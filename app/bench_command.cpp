@@ -13,8 +13,8 @@
 //            target at least 20x (bench_external.cpp)
 //   view     the five-robot virtual-time factor with a page connected to the
 //            viewer against without; target at least 0.9 of it (bench_view.cpp)
-//   match    five robots and a ten-robot match half on one core, against the
-//            physics alone; targets 0.75 and 1/3 of it (bench_match.cpp)
+//   match    five robots and a ten-robot match half on one core, physics alone
+//            for scale; targets 180x and 80x (bench_match.hpp)
 // The last three need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
 #include <sched.h>
 #include <time.h>

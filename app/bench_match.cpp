@@ -95,18 +95,19 @@ bool bench_match(const std::optional<std::string>& config, double seconds,
     five_on = std::max(five_on, everything_on(five, seconds, messages));
     ten_on = std::max(ten_on, match_half(ten, seconds, messages));
   }
-  const double five_target = 0.75 * reference;
-  const double ten_target = reference / 3;
-  std::printf("  physics alone, five_robots.toml:           %6.0fx  (the reference)\n", reference);
+  // The issue's targets are factors on one core of these machines, set where
+  // the same five-robot run was 130x; bench/against_base.sh measures them
+  // against that code in the same run. Physics alone is shown for scale.
+  constexpr double five_target = 180;
+  constexpr double ten_target = 80;
+  std::printf("  physics alone, five_robots.toml:           %6.0fx  (for scale: the world with nothing around it)\n",
+              reference);
   std::printf("  physics alone, %-26s %6.0fx\n", (path.filename().string() + ":").c_str(), reference_ten);
-  std::printf(
-      "  five robots, everything on:                %6.0fx  = %.2f of physics alone  target >= 0.75 "
-      "(180x where physics alone is 240x): %s\n",
-      five_on, five_on / reference, five_on >= five_target ? "met" : "MISSED");
-  std::printf(
-      "  %2zu robots, a match half, everything on:    %6.0fx  = %.2f of physics alone  target >= 0.33 "
-      "(80x where physics alone is 240x): %s\n",
-      ten.robot_count(), ten_on, ten_on / reference, ten_on >= ten_target ? "met" : "MISSED");
+  std::printf("  five robots, everything on:                %6.0fx  = %.2f of physics alone  target >= %.0fx: %s\n",
+              five_on, five_on / reference, five_target, five_on >= five_target ? "met" : "MISSED");
+  std::printf("  %2zu robots, a match half, everything on:    %6.0fx  = %.2f of physics alone  target >= %.0fx: %s\n",
+              ten.robot_count(), ten_on, ten_on / reference, ten_target, ten_on >= ten_target ? "met" : "MISSED");
+  std::printf("  (the targets' machine: bench/against_base.sh measures them against the code the issue measured)\n");
   return five_on >= five_target && ten_on >= ten_target;
 }
 

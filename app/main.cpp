@@ -116,8 +116,8 @@ const Command kCommands[] = {
                                               the figures against their targets: the five-robot real-time
                                               factor in virtual time; the same with a page on the viewer
                                               (keeps >= 90 %); a ten-robot match half and five
-                                              robots on one core against the physics alone
-                                              (>= 1/3 and 0.75 of it); release jitter against a bare
+                                              robots on one core (>= 80x and 180x; physics
+                                              alone for scale); release jitter against a bare
                                               clock_nanosleep loop; lossless vcan rate against cangen -g 0;
                                               the one-robot factor with the reference handler and agent as
                                               processes in lockstep (on core --cpu, -1: any), next to

@@ -413,14 +413,16 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   EXPECT_TRUE(has(bad_cpu, "--cpu takes a core number, or -1 for none")) << bad_cpu.out;
 }
 
-TEST(CanhilBench, MatchPartPrintsEachFigureAgainstThePhysicsAloneOfTheSameRun) {
+TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOfTheSameRun) {
   // Printed, never judged here: the exit status says met (0) or missed (1).
   const CliRun r = canhil("bench --part match --seconds 1");
   EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
   EXPECT_TRUE(has(r, "physics alone, five_robots.toml:")) << r.out;
   EXPECT_TRUE(has(r, "five robots, everything on:")) << r.out;
   EXPECT_TRUE(has(r, "10 robots, a match half, everything on:")) << r.out;
-  EXPECT_TRUE(has(r, "of physics alone  target >= 0.33")) << r.out;
+  EXPECT_TRUE(has(r, "of physics alone  target >= 180x")) << r.out;
+  EXPECT_TRUE(has(r, "of physics alone  target >= 80x")) << r.out;
+  EXPECT_TRUE(has(r, "bench/against_base.sh")) << r.out;
   EXPECT_FALSE(has(r, "real-time factor, everything on:")) << "only the part asked for\n" << r.out;
 }
 
