@@ -5,7 +5,7 @@ namespace canhil::vision_emu {
 // Layer 0 is the base: a rectangle of the layers' common area up to
 // kTailStart and the tail beyond it. Layers 1..127 are stacked above it,
 // layer 127 lowest (outer edge at kTailStart), layer 1 at the top.
-const Gaussian::Tables& Gaussian::tables() {
+const Gaussian::Tables& Gaussian::tables() noexcept {
   static const Tables t = [] {
     constexpr double kScale = 0x1p24;              // positions run over +-2^24
     constexpr double kArea = 9.91256303526217e-3;  // each layer's, for exp(-x^2 / 2)
