@@ -182,7 +182,11 @@ struct World::Impl {
     return tags.back().get();
   }
   int next_tag_id = 0;
-  std::vector<std::pair<dGeomID, dGeomID>> pairs;  // candidate pairs of the current substep
+  struct Pair {
+    std::uint64_t order;  // the lower creation id, then the higher: the order contacts are made in
+    dGeomID a, b;         // a has the lower id
+  };
+  std::vector<Pair> pairs;  // candidate pairs of the current substep
   void add_static_box(double cx, double cy, double cz, double lx, double ly, double lz) {
     dGeomID g = dCreateBox(statics, lx, ly, lz);
     dGeomSetPosition(g, cx, cy, cz);
@@ -533,6 +537,8 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
 }
 
 namespace {
+int tag_id(dGeomID g) { return static_cast<const Tag*>(dGeomGetData(g))->id; }
+
 void near_callback(void* data, dGeomID a, dGeomID b) {
   auto* impl = static_cast<World::Impl*>(data);
   if (dGeomIsSpace(a) != 0 || dGeomIsSpace(b) != 0) {
@@ -540,10 +546,14 @@ void near_callback(void* data, dGeomID a, dGeomID b) {
     dSpaceCollide2(a, b, data, &near_callback);
     return;
   }
-  impl->pairs.emplace_back(a, b);
+  auto ia = static_cast<std::uint32_t>(tag_id(a));
+  auto ib = static_cast<std::uint32_t>(tag_id(b));
+  if (ib < ia) {
+    std::swap(a, b);
+    std::swap(ia, ib);
+  }
+  impl->pairs.push_back({(std::uint64_t{ia} << 32U) | ib, a, b});
 }
-
-int tag_id(dGeomID g) { return static_cast<const Tag*>(dGeomGetData(g))->id; }
 }  // namespace
 
 void World::Impl::substep(double h) {
@@ -559,13 +569,8 @@ void World::Impl::substep(double h) {
   dSpaceCollide2(reinterpret_cast<dGeomID>(dynamics), reinterpret_cast<dGeomID>(statics), this, &near_callback);
   // ODE's spaces reorder geoms as they move; contacts are made in creation-id
   // order so that the solver sees the same rows whatever the history.
-  for (auto& [a, b] : pairs) {
-    if (tag_id(b) < tag_id(a)) std::swap(a, b);
-  }
-  std::sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) {
-    return std::pair(tag_id(x.first), tag_id(x.second)) < std::pair(tag_id(y.first), tag_id(y.second));
-  });
-  for (const auto& [a, b] : pairs) collide(a, b);
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.order < y.order; });
+  for (const Pair& p : pairs) collide(p.a, p.b);
   // ODE shuffles constraint order with a global seed: keep this world's own.
   dRandSetSeed(seed);
   const SimulationParams& sp = params.simulation;
