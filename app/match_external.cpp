@@ -65,6 +65,11 @@ class ExternalHalf final : public emulator::HalfDriver {
       throw emulator::ProcessStuck(name_ + at + ": " + e.what());
     }
     processes_.reap(driver_.now());
+    if (const std::string why = processes_.not_started(); !why.empty()) {
+      char at[48];
+      std::snprintf(at, sizeof at, " at t = %.3f s: ", to_seconds(driver_.now()));
+      throw emulator::ProcessStuck(name_ + at + why);
+    }
   }
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t robot) const override { return driver_.ftt_violations(robot); }

@@ -191,6 +191,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
       while (driver.now() < total && !g_stop) {
         driver.run_until(std::min<Nanos>(driver.now() + std::chrono::seconds(1), total));
         started.reap(driver.now());
+        if (const std::string why = started.not_started(); !why.empty()) throw emulator::ProcessStuck(why);
         if (run.quiet) continue;
         const emulator::WorldSnapshot s = session.snapshot();
         std::printf("  t=%5.1f s  ball (%6.2f, %5.2f)", to_seconds(driver.now()), s.ball.x(), s.ball.y());
@@ -203,7 +204,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     } catch (const emulator::ProcessStuck& e) {
       std::fprintf(stderr, "canhil run: stopped at t = %.3f s: %s\n", seconds(driver.now()), e.what());
       status = kProcessStuckStatus;
-      how = "stopped (a process did not answer)";
+      how = "stopped (a process did not answer, or never ran)";
     }
     if (g_stop && status == 0) {
       status = 130;

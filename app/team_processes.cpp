@@ -160,6 +160,19 @@ void TeamProcesses::reap(Nanos now) {
   }
 }
 
+std::string TeamProcesses::not_started() const {
+  for (const Started& s : started_) {
+    if (!s.ended || !WIFEXITED(s.status)) continue;
+    const int code = WEXITSTATUS(s.status);
+    if (code != 126 && code != 127) continue;
+    return "`" + s.command + "` (agent " + std::to_string(s.agent) + ", pid " + std::to_string(s.pid) +
+           ") never ran: the shell found " +
+           (code == 127 ? "no such program (exit status 127); check the command line and PATH"
+                        : "the program not executable (exit status 126); check its permissions");
+  }
+  return {};
+}
+
 void TeamProcesses::stop_all() {
   for (const Started& s : started_) {
     if (!s.ended && s.pid > 0) kill(s.pid, SIGINT);

@@ -50,6 +50,11 @@ class TeamProcesses {
   std::size_t start_all(const emulator::Session& session);
   /// Reaps what ended; says so once per process, with the virtual time `now`.
   void reap(Nanos now);
+  /// Why a process that has ended never ran its program, for the first such:
+  /// the shell's exit status 127 (not found) or 126 (not executable). Empty
+  /// when none: a program that ran and ended is the team's to mind, as a
+  /// crash on the robot would be.
+  std::string not_started() const;
   /// SIGINT (their Ctrl-C), then SIGKILL for any still there after five seconds.
   void stop_all();
   std::size_t started() const noexcept { return started_.size(); }

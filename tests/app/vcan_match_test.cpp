@@ -158,4 +158,15 @@ TEST(VcanMatch, AProcessThatNeverAnswersStopsTheMatchNamingItsMatchAndHalf) {
   std::remove(scenario.c_str());
 }
 
+TEST(VcanMatch, AProgramThatIsNotFoundStopsTheMatchSayingSo) {
+  const std::string scenario = write_scenario("typo", 3.0, 2.0, "canhil-agnet --goal-x {goal_x}");
+  const Finished f = canhil_match(scenario + " --external --half-minutes 0.1 --quiet --json");
+  EXPECT_EQ(exit_status(f), 3) << f.output << f.errors;
+  EXPECT_NE(f.errors.find("canhil match: stopped: match 1, half 1 at t = "), std::string::npos) << f.errors;
+  EXPECT_NE(f.errors.find("never ran: the shell found no such program (exit status 127)"), std::string::npos)
+      << f.errors;
+  EXPECT_TRUE(nlohmann::json::parse(f.output)["stopped"].get<bool>());
+  std::remove(scenario.c_str());
+}
+
 }  // namespace

@@ -187,6 +187,19 @@ TEST(VcanExternal, AHandlerThatStopsAnsweringIsNamedAndTheTraceIsKept) {
   std::remove(trace_path("stuck").c_str());
 }
 
+TEST(VcanExternal, AProgramThatIsNotFoundStopsTheRunSayingSo) {
+  // A typing error in a command line: the shell starts, attaches and ends
+  // with 127. The run stops with exit 3 rather than play on without it.
+  const Finished f = canhil(kRun + " --external --duration 4 --process \"canhil-hwcomm --iface {iface}\"" +
+                                " --process \"canhil-agnet --pose -3,0,-90\"",
+                            "typo");
+  EXPECT_EQ(exit_status(f), 3) << f.output;
+  EXPECT_NE(f.output.find("`canhil-agnet --pose -3,0,-90` (agent 1, pid "), std::string::npos) << f.output;
+  EXPECT_NE(f.output.find("never ran: the shell found no such program (exit status 127); check the command line"),
+            std::string::npos)
+      << f.output;
+}
+
 TEST(VcanExternal, TheBenchPrintsBothFactorsAndWhereTheWallTimeWent) {
   // Wall-clock figures: printed, never judged here (the exit status says met or missed).
   const Finished f = canhil("bench --part external --seconds 2", "bench");

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -217,6 +218,31 @@ TEST(Conductor, ReleasingTheBoardEndsEveryVirtualWaitSoAProcessCanStop) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << client.output();
   EXPECT_NE(client.output().find("patient woke"), std::string::npos) << client.output();
   EXPECT_EQ(client.output().find("is gone"), std::string::npos) << "a release is no news\n" << client.output();
+}
+
+}  // namespace
+
+namespace {
+
+TEST(Conductor, AShellWhoseProgramIsMissingIsNoLongerWaitedFor) {
+  // As canhil starts a team's processes: its own child, `sh -c "exec ..."`,
+  // reaped only later, so that it stays a zombie while canhil waits.
+  ConductorOptions options;
+  options.answer_limit = 5s;
+  Conductor conductor(options);
+  const std::vector<std::string> environment = conductor.environment(CANHIL_TEST_TIMESHIM, nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    for (const std::string& e : environment) putenv(const_cast<char*>(e.c_str()));
+    execl("/bin/sh", "sh", "-c", "exec canhil-no-such-program --iface vcan0", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  conductor.wait_attached(1, 2s);
+  EXPECT_EQ(conductor.wait_quiet({}, "x"), "");
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_EQ(WEXITSTATUS(status), 127);
 }
 
 }  // namespace
