@@ -96,6 +96,7 @@ void MemoryBus::route() {
 void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
   ++carried_;
   const TimedFrame timed{frame, clock_.now()};
+  if (tap_) tap_(timed);
   if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < kStandardIds) {
     route();
     for (MemoryEndpoint* e : routes_[frame.id]) {
@@ -115,6 +116,7 @@ void MemoryBus::inject_error(std::uint32_t error_class) {
   f.id = error_class & frames::kErrorClassMask;
   f.len = frames::kMaxDataBytes;
   const TimedFrame timed{f, clock_.now()};
+  if (tap_) tap_(timed);
   for (MemoryEndpoint* e : endpoints_) e->deliver(timed);
 }
 

@@ -127,8 +127,9 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     }
     if (options_.check_timing) checkers_.push_back(ftt_checker(session_.options()));
     if (options_.count_frames || options_.record_trace || options_.check_timing) {
-      recorders_.push_back(buses_[r]->attach("trace", 1 << 20));
-      recorders_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
+      // Every frame as the bus carries it, error frames included (they belong in the trace).
+      listening_ = true;
+      buses_[r]->set_tap([this, r](const frames::TimedFrame& f) { record(r, f); });
     }
     laptops_.push_back(std::move(laptop));
   }
@@ -148,7 +149,6 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     session_.world().step();
     session_.after_step(now);
     if (options_.reference_laptop) set_pose_of_carried_robots();
-    record();
   });
 }
 
@@ -168,27 +168,21 @@ void VirtualDriver::set_pose_of_carried_robots() {
 }
 
 VirtualDriver::~VirtualDriver() {
+  for (auto& bus : buses_) bus->set_tap({});  // what is sent as the nodes go down is no longer this run's
   session_.on_vision_frame(nullptr);
   session_.on_detail(nullptr);
   if (rtdb_clock_set_) DB_set_clock(nullptr, nullptr);
 }
 
-void VirtualDriver::run_until(Nanos end) {
-  lockstep_.run_until(end);
-  record();
-}
+void VirtualDriver::run_until(Nanos end) { lockstep_.run_until(end); }
 
 void VirtualDriver::run_for(Nanos duration) { run_until(clock_.now() + duration); }
 
-void VirtualDriver::record() {
-  for (std::size_t r = 0; r < recorders_.size(); ++r) {
-    while (auto f = recorders_[r]->receive()) {
-      ++frame_counts_[r];
-      if (!bus_stats_.empty()) bus_stats_[r].add(*f);
-      if (!checkers_.empty()) checkers_[r].add(*f);
-      if (options_.record_trace) recorded_[r].push_back(*f);
-    }
-  }
+void VirtualDriver::record(std::size_t r, const frames::TimedFrame& f) {
+  ++frame_counts_[r];
+  if (!bus_stats_.empty()) bus_stats_[r].add(f);
+  if (!checkers_.empty()) checkers_[r].add(f);
+  if (options_.record_trace) recorded_[r].push_back(f);
 }
 
 std::uint64_t VirtualDriver::ftt_violations(std::size_t robot) const {
@@ -196,7 +190,7 @@ std::uint64_t VirtualDriver::ftt_violations(std::size_t robot) const {
 }
 
 void VirtualDriver::fill_detail(WorldSnapshot& s) {
-  if (recorders_.empty()) return;  // no listener on the buses: nothing measured
+  if (!listening_) return;  // no listener on the buses: nothing measured
   if (bus_stats_.empty()) {
     for (std::size_t r = 0; r < session_.robot_count(); ++r) {
       bus_stats_.emplace_back(session_.options().messages, session_.options().ftt.bit_rate);

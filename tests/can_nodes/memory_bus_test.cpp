@@ -135,6 +135,39 @@ TEST(MemoryBus, ErrorFramesOnlyWhereTheMaskAsks) {
   EXPECT_EQ(watcher->stats().errors, 1u);
 }
 
+TEST(MemoryBus, ATapSeesWhatACatchAllEndpointWouldInOrderAndStampedAlike) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto all = bus.attach("all");  // what the tap should see, the slow way
+  all->set_error_mask(frames::kErrorClassMask);
+  std::vector<frames::TimedFrame> tapped;
+  bus.set_tap([&tapped](const frames::TimedFrame& f) { tapped.push_back(f); });
+  a->send(make_data_frame(0x131, {1}));
+  clock.advance(1ms);
+  frames::CanFrame extended = make_data_frame(0x1FFFF, {2});  // outside the per-id routes
+  extended.extended = true;
+  b->send(extended);
+  bus.inject_error(frames::kErrorClassNoAck);
+  clock.advance(1ms);
+  bus.set_up(false);
+  a->send(make_data_frame(0x10, {}));  // refused: a down bus carries nothing
+  bus.set_up(true);
+  b->send(make_data_frame(0x7FF, {3}));
+  std::vector<frames::TimedFrame> expected;
+  while (auto f = all->receive()) expected.push_back(*f);
+  ASSERT_EQ(expected.size(), 4u);
+  ASSERT_EQ(tapped.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(tapped[i].frame, expected[i].frame) << "frame " << i;
+    EXPECT_EQ(tapped[i].time, expected[i].time) << "frame " << i;
+  }
+  bus.set_tap({});
+  a->send(make_data_frame(0x131, {4}));
+  EXPECT_EQ(tapped.size(), 4u) << "an empty function removes the tap";
+}
+
 TEST(MemoryBus, OverflowIsDroppedAndCounted) {
   SimulatedClock clock;
   MemoryBus bus(clock);

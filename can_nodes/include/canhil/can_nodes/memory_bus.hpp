@@ -9,6 +9,7 @@
 #pragma once
 
 #include <bitset>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -88,6 +89,11 @@ class MemoryBus {
   bool up() const { return up_; }
   const std::string& name() const { return name_; }
   std::uint64_t frames_carried() const { return carried_; }
+  /// A passive listener (a trace, a frame count, a timing check): sees every
+  /// frame the bus carries and every error frame put on it, in order, stamped
+  /// as an endpoint's copy would be, as it is carried and without an
+  /// endpoint's queue. One at a time; an empty function removes it.
+  void set_tap(std::function<void(const TimedFrame&)> tap) { tap_ = std::move(tap); }
 
  private:
   friend class MemoryEndpoint;
@@ -105,6 +111,7 @@ class MemoryBus {
   bool routes_stale_ = true;
   bool up_ = true;
   std::uint64_t carried_ = 0;
+  std::function<void(const TimedFrame&)> tap_;
 };
 
 }  // namespace canhil::can_nodes

@@ -83,7 +83,7 @@ class VirtualDriver {
   struct Laptop;  // the reference handler and agent of one robot
 
  private:
-  void record();
+  void record(std::size_t robot, const frames::TimedFrame& frame);  // a bus's tap
   void set_pose_of_carried_robots();
   void fill_detail(WorldSnapshot& s);
 
@@ -91,7 +91,7 @@ class VirtualDriver {
   VirtualOptions options_;
   can_nodes::SimulatedClock clock_;
   std::vector<std::unique_ptr<can_nodes::MemoryBus>> buses_;
-  std::vector<std::unique_ptr<can_nodes::MemoryEndpoint>> recorders_;
+  bool listening_ = false;                                 // the buses' taps count, check or record their frames
   std::vector<std::vector<frames::TimedFrame>> recorded_;  // kept only when record_trace
   std::vector<std::uint64_t> frame_counts_;
   // Measured once someone watches the run in detail (the viewer's plots); until then no cost.
