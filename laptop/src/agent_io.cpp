@@ -1,18 +1,34 @@
 #include "canhil/laptop/agent_io.hpp"
 
+#include <cstddef>
+
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
 
 namespace canhil::laptop {
+namespace {
+
+// VisionInfo's last two fields, as they lie in it.
+struct VisionBalls {
+  canhil_vec2 ball[MAX_BALLS];
+  int count;
+};
+static_assert(offsetof(VisionInfo, nBalls) - offsetof(VisionInfo, ball) == offsetof(VisionBalls, count) &&
+                  sizeof(VisionInfo) - offsetof(VisionInfo, ball) == sizeof(VisionBalls),
+              "VisionInfo ends with ball[] and nBalls");
+
+}  // namespace
 
 AgentInput AgentIo::read(double dt_s) {
   AgentInput in;
   in.dt_s = dt_s;
-  DB_get_from(space_, SELF, VISION_INFO, vision_.get());
-  in.ball_seen = vision_->nBalls > 0;
+  // Of VISION_INFO (4.8 kB) it needs the balls only, at the item's end.
+  VisionBalls balls{};
+  DB_get_part(space_, SELF, VISION_INFO, offsetof(VisionInfo, ball), sizeof balls, &balls);
+  in.ball_seen = balls.count > 0;
   if (in.ball_seen) {
-    in.ball_x_m = vision_->ball[0].x;
-    in.ball_y_m = vision_->ball[0].y;
+    in.ball_x_m = balls.ball[0].x;
+    in.ball_y_m = balls.ball[0].y;
   }
   CMD_Pos pos;
   DB_get_from(space_, SELF, CMD_POS, &pos);

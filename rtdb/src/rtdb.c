@@ -370,6 +370,21 @@ static void load_words(const slot_header* s, void* value) {
   }
 }
 
+/* Bytes [offset, offset + size) of the slot's value, by the words that hold them. */
+static void load_range(const slot_header* s, size_t offset, size_t size, void* value) {
+  const uint64_t* src = (const uint64_t*)(const void*)(s + 1);
+  char* dst = (char*)value;
+  size_t at = offset;
+  const size_t end = offset + size;
+  while (at < end) {
+    const uint64_t w = __atomic_load_n(src + at / 8, __ATOMIC_RELAXED);
+    const size_t from = at % 8;
+    const size_t n = (8 - from < end - at) ? 8 - from : end - at;
+    memcpy(dst + (at - offset), (const char*)&w + from, n);
+    at += n;
+  }
+}
+
 static void write_slot(slot_header* s, const void* value, int64_t stamp) {
   uint32_t seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
   for (;;) { /* take the slot: even -> odd (one writer at a time) */
@@ -385,11 +400,16 @@ static void write_slot(slot_header* s, const void* value, int64_t stamp) {
   atomic_store_explicit(&s->seq, seq + 2, memory_order_release);
 }
 
-static int read_slot(const slot_header* s, void* value) {
+/* The whole value (size = s->size, offset 0) or a part of it. */
+static int read_slot_range(const slot_header* s, size_t offset, size_t size, void* value) {
   for (;;) {
     const uint32_t before = atomic_load_explicit(&s->seq, memory_order_acquire);
     if (before & 1u) continue;
-    load_words(s, value);
+    if (offset == 0 && size == s->size) {
+      load_words(s, value);
+    } else {
+      load_range(s, offset, size, value);
+    }
     const int64_t stamp = __atomic_load_n(&s->stamp_ns, __ATOMIC_RELAXED);
     atomic_thread_fence(memory_order_acquire);
     if (atomic_load_explicit(&s->seq, memory_order_relaxed) == before) {
@@ -492,11 +512,20 @@ static int put_in(int space, int to_agent, int id, const void* value, int life) 
   return (int)s->size;
 }
 
+static int read_slot(const slot_header* s, void* value) { return read_slot_range(s, 0, s->size, value); }
+
 static int get_from(int space, int from_agent, int id, void* value) {
   if (!attached() || space < 0) return -1;
   const slot_header* s = slot(space, from_agent == SELF ? agent_of(space) : from_agent, id);
   if (s == NULL || value == NULL) return -1;
   return read_slot(s, value);
+}
+
+RTDB_EXPORT int DB_get_part(int agent, int from_agent, int id, size_t offset, size_t size, void* value) {
+  if (!attached() || agent < 0) return -1;
+  const slot_header* s = slot(agent, from_agent == SELF ? agent_of(agent) : from_agent, id);
+  if (s == NULL || value == NULL || offset > s->size || size > s->size - offset) return -1;
+  return read_slot_range(s, offset, size, value);
 }
 
 RTDB_EXPORT int DB_put(int id, void* value) { return g_me < 0 ? -1 : put_in(g_me, agent_of(g_me), id, value, 0); }

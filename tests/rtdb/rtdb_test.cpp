@@ -96,6 +96,39 @@ TEST_F(Rtdb, AgesFollowTheClockTheProcessSetsAndTheMonotonicOneAgain) {
   EXPECT_EQ(DB_get(CAMBADA_1, CMD_VEL, &back), 0) << "stamped ahead of the monotonic clock: fresh";
 }
 
+TEST_F(Rtdb, APartOfAnItemIsThoseBytesOfIt) {
+  ASSERT_EQ(DB_init(), 0);
+  VisionInfo v{};
+  for (int i = 0; i < MAX_POINTS; ++i) v.linePoints.point[i] = {static_cast<float>(i), -static_cast<float>(i)};
+  v.linePoints.nPoints = 7;
+  v.ball[0] = {1.25f, -2.5f};
+  v.nBalls = 1;
+  ASSERT_GT(DB_put(VISION_INFO, &v), 0);
+  // The ball and its count, at the item's end: two words, the first in part.
+  struct {
+    canhil_vec2 ball[MAX_BALLS];
+    int nBalls;
+  } tail{};
+  EXPECT_GE(DB_get_part(DB_space(), CAMBADA_1, VISION_INFO, offsetof(VisionInfo, ball), sizeof tail, &tail), 0);
+  EXPECT_EQ(tail.ball[0].x, 1.25f);
+  EXPECT_EQ(tail.ball[0].y, -2.5f);
+  EXPECT_EQ(tail.nBalls, 1);
+  // Every offset and length of a span in the middle, against the whole item.
+  VisionInfo whole{};
+  ASSERT_GE(DB_get(CAMBADA_1, VISION_INFO, &whole), 0);
+  const auto* bytes = reinterpret_cast<const unsigned char*>(&whole);
+  unsigned char part[24];
+  for (std::size_t offset = 2400; offset < 2420; ++offset) {
+    for (std::size_t size = 0; size <= sizeof part; ++size) {
+      ASSERT_GE(DB_get_part(DB_space(), SELF, VISION_INFO, offset, size, part), 0) << offset << " " << size;
+      EXPECT_EQ(std::memcmp(part, bytes + offset, size), 0) << offset << " " << size;
+    }
+  }
+  EXPECT_EQ(DB_get_part(DB_space(), SELF, VISION_INFO, sizeof(VisionInfo) - 4, 8, part), -1) << "past the end";
+  EXPECT_EQ(DB_get_part(DB_space(), SELF, VISION_INFO, sizeof(VisionInfo) + 1, 0, part), -1);
+  EXPECT_EQ(DB_get_part(DB_space(), SELF, N_ITEMS, 0, 4, part), -1) << "no such item";
+}
+
 TEST_F(Rtdb, BadIdsAndAgentsAreErrors) {
   CMD_Vel v{};
   EXPECT_EQ(DB_put(CMD_VEL, &v), -1) << "before DB_init";

@@ -8,8 +8,6 @@
 // second's (DB_space() for a process's own).
 #pragma once
 
-#include <memory>
-
 #include "canhil/laptop/agent.hpp"
 #include "canhil/rtdb/cambada_types.h"
 
@@ -17,14 +15,13 @@ namespace canhil::laptop {
 
 class AgentIo {
  public:
-  explicit AgentIo(int space) : space_(space), vision_(std::make_unique<VisionInfo>()) {}
+  explicit AgentIo(int space) : space_(space) {}
   /// The inputs as the agent's database holds them now; `dt_s` since the last decision.
   AgentInput read(double dt_s);
   void write(const AgentOutput& out);
 
  private:
   int space_;
-  std::unique_ptr<VisionInfo> vision_;  // large: kept, not on the stack or allocated per frame
 };
 
 }  // namespace canhil::laptop

@@ -51,6 +51,7 @@
 #include "../../rtdb_comm.h"
 #include "../../rtdb_sim.h"
 
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -97,6 +98,13 @@ int DB_wait_frame(int timeout_ms);
  * old. Set-up: not while other threads use the database; `now` is then
  * called from whichever thread reads or writes an item, under no lock. */
 void DB_set_clock(int64_t (*now)(void* context), void* context);
+
+/* Bytes [offset, offset + size) of an item, as DB_get_from would give them
+ * (one consistent write, under the same sequence lock), into `value`: a
+ * client that needs a few fields of a large item (the ball from VISION_INFO)
+ * copies those instead of the whole item. Returns the item's age in ms, or -1
+ * (no such item or agent, or the range reaches past the item). */
+int DB_get_part(int agent, int from_agent, int id, size_t offset, size_t size, void* value);
 
 #ifdef __cplusplus
 }
