@@ -154,12 +154,11 @@ LaptopLink::~LaptopLink() {
 
 void LaptopLink::vision_frame(std::size_t robot, const vision_emu::VisionFrame& frame) {
   Robot& r = *robots_.at(robot);
-  rtdb::ItemBuffer& b = *r.vision;
-  b.clear();
+  rtdb::ItemBuffer& b = *r.vision;  // cleared when made; written only here since
   const auto put = [this, &b](rtdb::Quantity q, const std::vector<Eigen::Vector2d>& pts) {
     points_.clear();
     for (const Eigen::Vector2d& p : pts) points_.push_back({p.x(), p.y()});
-    b.set_points(q, points_);
+    b.replace_points(q, points_);
   };
   put(r.obstacles, frame.obstacles);
   put(r.lines, frame.lines);

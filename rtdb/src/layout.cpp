@@ -429,6 +429,30 @@ void ItemBuffer::set_points(Quantity list, std::span<const std::array<double, 2>
   }
 }
 
+void ItemBuffer::replace_points(Quantity list, std::span<const std::array<double, 2>> points) noexcept {
+  if (!list) return;
+  CANHIL_DEMAND(list.kind() == QuantityKind::kPoints, "replace_points is for point lists");
+  const std::size_t capacity = list.binding_->capacity;
+  std::size_t held = capacity;
+  if (list.binding_->count != detail::Binding::kNone) {
+    const double n = get(Quantity(&item_->bindings_[list.binding_->count]));
+    held = n > 0 ? std::min(capacity, static_cast<std::size_t>(n)) : 0;
+  }
+  const std::size_t keep = std::min(points.size(), capacity);  // overwritten by set_points
+  const auto fields = item_->fields();
+  for (std::size_t i : list.binding_->fields) {
+    const FieldLayout& f = fields[i];
+    for (std::size_t e = keep; e < held && e < f.count; ++e) {
+      if (f.value) {
+        for (std::size_t c = 0; c < f.components; ++c) store(&bytes_[at_byte(f, e, c)], f.type, *f.value);
+      } else {
+        std::memset(&bytes_[at_byte(f, e, 0)], 0, f.element_bytes());
+      }
+    }
+  }
+  set_points(list, points);
+}
+
 double ItemBuffer::get(Quantity q, std::size_t index) const noexcept {
   if (!q) return 0;
   CANHIL_DEMAND(q.kind() != QuantityKind::kPoints, "a point list is read with get_point");

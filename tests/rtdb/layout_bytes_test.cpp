@@ -10,6 +10,7 @@
 #include <cstring>
 #include <memory>
 #include <numbers>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -208,6 +209,29 @@ TEST_F(CanhilLayout, VisionInfoAsTheVisionWritesIt) {
   buf.set_points(buf.quantity("lines"), lines);
   buf.set_points(buf.quantity("balls"), balls);
   EXPECT_EQ(std::memcmp(buf.data(), today.get(), sizeof(VisionInfo)), 0);
+}
+
+TEST(ItemBufferReplace, ReplacingPointListsFrameAfterFrameGivesTheBytesOfAFreshWrite) {
+  // Both shipped layouts (CAMBADA's stores lines in millimetres), lists that
+  // grow, shrink, empty and overflow in random order.
+  for (const char* name : {"canhil", "cambada"}) {
+    const Layout layout = Layout::shipped(name);
+    const ItemLayout& item = *layout.item("VISION_INFO");
+    ItemBuffer kept(item);
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<int> length(0, 320);
+    std::uniform_real_distribution<double> metres(-9, 9);
+    for (int frame = 0; frame < 200; ++frame) {
+      ItemBuffer fresh(item);
+      for (const char* list : {"obstacles", "lines", "balls"}) {
+        std::vector<std::array<double, 2>> points(static_cast<std::size_t>(frame % 7 == 3 ? 0 : length(rng)));
+        for (auto& p : points) p = {metres(rng), metres(rng)};
+        kept.replace_points(kept.quantity(list), points);
+        fresh.set_points(fresh.quantity(list), points);
+      }
+      ASSERT_EQ(std::memcmp(kept.data(), fresh.data(), kept.bytes().size()), 0) << name << " frame " << frame;
+    }
+  }
 }
 
 TEST_F(CanhilLayout, HandlerItemsAsTheHandlerWritesThem) {

@@ -285,6 +285,12 @@ class ItemBuffer {
   /// and that number into "<list>.count". Elements past them are left as
   /// they are (clear() first for zeros).
   void set_points(Quantity list, std::span<const std::array<double, 2>> points) noexcept;
+  /// set_points, after putting the elements the list held before back as
+  /// clear() leaves them (as many as its "<list>.count" says; all of them
+  /// when the layout has no count). A buffer written only so since its last
+  /// clear() holds the bytes clear() and set_points would give, without
+  /// zeroing the whole item each time (VISION_INFO, 30 times a second a robot).
+  void replace_points(Quantity list, std::span<const std::array<double, 2>> points) noexcept;
 
   /// The quantity back in SI from its first field (a bool as 1 / 0, an enum
   /// as its stored integer); 0 when not carried. Wrapping is not undone.
