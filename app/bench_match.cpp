@@ -107,7 +107,9 @@ bool bench_match(const std::optional<std::string>& config, double seconds,
               five_on, five_on / reference, five_target, five_on >= five_target ? "met" : "MISSED");
   std::printf("  %2zu robots, a match half, everything on:    %6.0fx  = %.2f of physics alone  target >= %.0fx: %s\n",
               ten.robot_count(), ten_on, ten_on / reference, ten_target, ten_on >= ten_target ? "met" : "MISSED");
-  std::printf("  (the targets' machine: bench/against_base.sh measures them against the code the issue measured)\n");
+  std::printf(
+      "  (these factors move with the machine's speed: bench/against_base.sh judges them against the code the "
+      "issue measured, in the same run)\n");
   return five_on >= five_target && ten_on >= ten_target;
 }
 
