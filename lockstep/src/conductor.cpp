@@ -241,7 +241,11 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
   const Nanos answer_limit = limit.value_or(options_.answer_limit);
   const Nanos start = wall_now();
   const Nanos until = start + answer_limit;
-  bool swept = false;
+  // A process that died without a word (killed, or a shell that exited
+  // without the shim's goodbye) is looked for every 50 ms of a long wait: it
+  // may die at any time during it, not only at its start.
+  constexpr Nanos kSweepEvery = std::chrono::milliseconds(50);
+  Nanos next_sweep = start + kSweepEvery;
   for (;;) {
     const std::uint32_t seen = board_->changes.load(std::memory_order_acquire);
     std::string who;
@@ -249,9 +253,9 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
     const std::string missing = processes_quiet && also ? also() : std::string();
     if (processes_quiet && missing.empty()) break;
     const Nanos now = wall_now();
-    if (!swept && now - start > std::chrono::milliseconds(50)) {
-      sweep_dead();  // a process that died without a word
-      swept = true;
+    if (now >= next_sweep) {
+      sweep_dead();
+      next_sweep = now + kSweepEvery;
       continue;
     }
     if (now > until) {

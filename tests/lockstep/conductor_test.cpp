@@ -15,6 +15,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "support/child_process.hpp"
@@ -223,6 +224,24 @@ TEST(Conductor, ReleasingTheBoardEndsEveryVirtualWaitSoAProcessCanStop) {
 }  // namespace
 
 namespace {
+
+TEST(Conductor, AProcessKilledWithoutAWordWhileCanhilWaitsIsNoLongerWaitedFor) {
+  // Killed well into a wait, not at its start: the wait ends quiet, rather
+  // than naming it after the answer limit (as it did when the dead were looked
+  // for once, 50 ms into a wait).
+  ConductorOptions options;
+  options.answer_limit = 5s;
+  Conductor conductor(options);
+  ChildProcess client(command(conductor, "spin"), "/tmp/canhil_lockstep_killed_later.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  std::thread killer([&client] {
+    std::this_thread::sleep_for(300ms);
+    client.kill_with(SIGKILL);
+  });
+  const std::string stuck = conductor.wait_quiet({}, "x");
+  killer.join();
+  EXPECT_EQ(stuck, "");
+}
 
 TEST(Conductor, AShellWhoseProgramIsMissingIsNoLongerWaitedFor) {
   // As canhil starts a team's processes: its own child, `sh -c "exec ..."`,
