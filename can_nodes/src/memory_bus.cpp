@@ -30,11 +30,13 @@ std::optional<TimedFrame> MemoryEndpoint::receive() {
 void MemoryEndpoint::set_filters(std::span<const Filter> filters) {
   if (bus_ != nullptr) bus_->routes_stale_ = true;
   filters_.assign(filters.begin(), filters.end());
-  CanFrame probe;
-  for (std::uint32_t id = 0; id < standard_data_.size(); ++id) {
-    probe.id = id;
-    standard_data_[id] =
-        std::any_of(filters_.begin(), filters_.end(), [&](const Filter& f) { return f.matches(probe); });
+  // The verdict on every 11-bit data frame, filter by filter: Filter::matches
+  // for a frame with that id, neither extended nor remote.
+  standard_data_.reset();
+  for (const Filter& f : filters_) {
+    for (std::uint32_t id = 0; id < standard_data_.size(); ++id) {
+      if (f.matches_standard_data(id)) standard_data_.set(id);
+    }
   }
 }
 
@@ -84,12 +86,16 @@ void MemoryBus::detach(MemoryEndpoint* endpoint) {
 
 void MemoryBus::route() {
   if (!routes_stale_) return;
-  routes_.assign(kStandardIds, {});
-  for (std::size_t id = 0; id < routes_.size(); ++id) {
+  // One list of endpoints, id after id; route_start_[id] is where id's begin.
+  route_start_.assign(kStandardIds + 1, 0);
+  route_list_.clear();
+  for (std::size_t id = 0; id < kStandardIds; ++id) {
+    route_start_[id] = static_cast<std::uint32_t>(route_list_.size());
     for (MemoryEndpoint* e : endpoints_) {
-      if (e->standard_data_[id]) routes_[id].push_back(e);
+      if (e->standard_data_[id]) route_list_.push_back(e);
     }
   }
+  route_start_[kStandardIds] = static_cast<std::uint32_t>(route_list_.size());
   routes_stale_ = false;
 }
 
@@ -99,7 +105,8 @@ void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
   if (tap_) tap_(timed);
   if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < kStandardIds) {
     route();
-    for (MemoryEndpoint* e : routes_[frame.id]) {
+    for (std::uint32_t k = route_start_[frame.id]; k < route_start_[frame.id + 1]; ++k) {
+      MemoryEndpoint* e = route_list_[k];
       if (e != from || e->receive_own_) e->accept(timed);
     }
     return;

@@ -39,6 +39,19 @@ struct Filter {
   }
   static Filter all() { return Filter{}; }
   bool matches(const CanFrame& frame) const noexcept;
+  /// matches() for a data frame with 11-bit identifier `id`, neither extended
+  /// nor remote (what a bus routes by table).
+  bool matches_standard_data(std::uint32_t standard_id) const noexcept { return hits(standard_id) != invert; }
+
+ private:
+  static constexpr std::uint32_t kEffFlag = 0x8000'0000u;  // CAN_EFF_FLAG
+  static constexpr std::uint32_t kRtrFlag = 0x4000'0000u;  // CAN_RTR_FLAG
+  // SocketCAN's test: the received id with its flags against the wanted one, under the mask.
+  bool hits(std::uint32_t rx) const noexcept {
+    const std::uint32_t want = id | (extended ? kEffFlag : 0u) | (remote ? kRtrFlag : 0u);
+    const std::uint32_t m = mask | (match_extended ? kEffFlag : 0u) | (match_remote ? kRtrFlag : 0u);
+    return (rx & m) == (want & m);
+  }
 };
 
 enum class SendStatus : std::uint8_t {

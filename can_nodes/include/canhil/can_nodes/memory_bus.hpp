@@ -106,8 +106,10 @@ class MemoryBus {
   std::string name_;
   std::vector<MemoryEndpoint*> endpoints_;
   // Per 11-bit data frame id, the endpoints whose filters take it, in attach
-  // order: a frame visits only those. Rebuilt after attach, detach or new filters.
-  std::vector<std::vector<MemoryEndpoint*>> routes_;
+  // order: a frame visits only those, route_list_[route_start_[id]] up to
+  // route_list_[route_start_[id + 1]]. Rebuilt after attach, detach or new filters.
+  std::vector<std::uint32_t> route_start_;
+  std::vector<MemoryEndpoint*> route_list_;
   bool routes_stale_ = true;
   bool up_ = true;
   std::uint64_t carried_ = 0;
