@@ -5,7 +5,9 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <mutex>
 #include <numbers>
@@ -119,8 +121,22 @@ struct RobotImpl {
   double z_body = 0;  // height of the chassis body origin
 
   explicit RobotImpl(const RobotParams& p) : params(&p), kinematics(p.geometry) {}
+  /// yaw_of(chassis), remembered with the two entries of the rotation it was
+  /// computed from (bit for bit): a step's pose is asked for several times.
+  double yaw() const {
+    const dReal* r = dBodyGetRotation(chassis);
+    const auto r0 = std::bit_cast<std::uint64_t>(r[0]);
+    const auto r4 = std::bit_cast<std::uint64_t>(r[4]);
+    if (!yaw_known_ || r0 != yaw_r0_ || r4 != yaw_r4_) {
+      yaw_ = yaw_of(chassis);
+      yaw_r0_ = r0;
+      yaw_r4_ = r4;
+      yaw_known_ = true;
+    }
+    return yaw_;
+  }
   Eigen::Vector3d front() const {
-    const double h = yaw_of(chassis) + kPi / 2;
+    const double h = yaw() + kPi / 2;
     return {std::cos(h), std::sin(h), 0};
   }
   double supply_v() const;
@@ -131,6 +147,12 @@ struct RobotImpl {
     return {rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z(), rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z(),
             rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z()};
   }
+
+ private:
+  mutable bool yaw_known_ = false;
+  mutable std::uint64_t yaw_r0_ = 0;
+  mutable std::uint64_t yaw_r4_ = 0;
+  mutable double yaw_ = 0;
 };
 
 struct RobotAccess {
@@ -877,7 +899,7 @@ double Robot::kicker_voltage_v() const { return impl_->state.kicker_voltage_v; }
 double Robot::last_kick_time_s() const { return impl_->state.last_kick_time_s; }
 
 double Robot::compass_heading_deg() const {
-  const double front_yaw_deg = (yaw_of(impl_->chassis) + kPi / 2) * 180.0 / kPi;
+  const double front_yaw_deg = (impl_->yaw() + kPi / 2) * 180.0 / kPi;
   double h = std::fmod(impl_->params->compass.north_offset_deg - front_yaw_deg, 360.0);
   if (h < 0) h += 360.0;
   return h >= 360.0 ? 0.0 : h;
@@ -906,13 +928,13 @@ void Robot::drain(const std::array<double, 3>& fraction) {
 
 kinematics::Pose Robot::pose() const {
   const dReal* p = dBodyGetPosition(impl_->chassis);
-  return kinematics::Pose{p[0], p[1], yaw_of(impl_->chassis)};
+  return kinematics::Pose{p[0], p[1], impl_->yaw()};
 }
 
 kinematics::Twist Robot::twist() const {
   const dReal* v = dBodyGetLinearVel(impl_->chassis);
   const dReal* w = dBodyGetAngularVel(impl_->chassis);
-  const double yaw = yaw_of(impl_->chassis);
+  const double yaw = impl_->yaw();
   const double c = std::cos(yaw);
   const double s = std::sin(yaw);
   return kinematics::Twist{c * v[0] + s * v[1], -s * v[0] + c * v[1], w[2]};
