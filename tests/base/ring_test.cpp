@@ -37,6 +37,24 @@ TEST(Ring, MovesInAndOut) {
   EXPECT_EQ(ring.front(), (std::vector<int>{4}));
 }
 
+TEST(Ring, DrainedItStartsAgainAtTheFirstSlot) {
+  // A queue drained as it fills keeps using its first slots (they stay in the cache).
+  Ring<int> ring;
+  ring.push_back(0);
+  const int* first = &ring.front();
+  ring.pop_front();
+  for (int i = 0; i < 100; ++i) {
+    ring.push_back(i);
+    ring.push_back(i + 1);
+    ASSERT_EQ(&ring.front(), first) << "round " << i;
+    ring.pop_front();
+    ASSERT_EQ(&ring.front(), first + 1) << "round " << i;
+    ASSERT_EQ(ring.front(), i + 1);
+    ring.pop_front();
+  }
+  EXPECT_TRUE(ring.empty());
+}
+
 TEST(Ring, AgreesWithADequeOnRandomPushesAndPops) {
   Ring<std::uint64_t> ring;
   std::deque<std::uint64_t> reference;

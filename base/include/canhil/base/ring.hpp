@@ -31,10 +31,10 @@ class Ring {
     ++size_;
   }
   /// Drops the front; its slot keeps what it held (move it out first to reuse it).
-  void pop_front() noexcept {
-    head_ = (head_ + 1) & (slots_.size() - 1);
-    --size_;
-  }
+  /// Emptied, it starts again at the first slot: a queue that is drained as
+  /// it fills (a bus endpoint in virtual time) keeps writing the same few
+  /// slots, which stay in the cache, instead of walking all of them.
+  void pop_front() noexcept { head_ = --size_ == 0 ? 0 : (head_ + 1) & (slots_.size() - 1); }
 
  private:
   void grow() {
