@@ -75,9 +75,9 @@ awk -v base="$base_x" -v five="$five_x" -v ten="$ten_x" -v sha="$sha" -v core="$
   five_met = (five / base >= five_target); ten_met = (ten / base >= ten_target)
   printf "issue 15 against %s, the best round of each figure, core %d:\n", sha, core
   printf "  base, five robots everything on:  %5.0fx  (the reference; the issue quotes 130x)\n", base
-  printf "  five robots, everything on:       %5.0fx  = %.2f of the base  target >= %.2f (180x where the base is 130x): %s\n",
+  printf "  five robots, everything on:       %5.1fx  = %.3f of the base  target >= %.3f (180x where the base is 130x): %s\n",
          five, five / base, five_target, five_met ? "met" : "MISSED"
-  printf "  ten robots, a match half:         %5.0fx  = %.2f of the base  target >= %.2f (80x where the base is 130x): %s\n",
+  printf "  ten robots, a match half:         %5.1fx  = %.3f of the base  target >= %.3f (80x where the base is 130x): %s\n",
          ten, ten / base, ten_target, ten_met ? "met" : "MISSED"
   exit (five_met && ten_met) ? 0 : 1
 }'
