@@ -7,7 +7,7 @@
 namespace canhil::can_nodes {
 
 MemoryEndpoint::MemoryEndpoint(MemoryBus* bus, std::string name, std::size_t capacity)
-    : bus_(bus), name_(std::move(name)), capacity_(capacity) {}
+    : bus_(bus), capacity_(capacity), name_(std::move(name)) {}
 
 MemoryEndpoint::~MemoryEndpoint() {
   if (bus_ != nullptr) bus_->detach(this);

@@ -5,11 +5,11 @@
 namespace canhil::can_nodes {
 
 Node::Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet> set)
-    : name_(std::move(name)),
-      bus_(bus),
+    : bus_(bus),
+      tm_length_(static_cast<std::uint8_t>(set->tm.message().def().length)),
+      tm_id_(set->tm.message().id()),
       set_(std::move(set)),
-      tm_id_(set_->tm.message().id()),
-      tm_length_(static_cast<std::uint8_t>(set_->tm.message().def().length)) {}
+      name_(std::move(name)) {}
 
 std::size_t Node::poll() { return poll(~std::size_t{0}); }
 
@@ -30,28 +30,31 @@ std::size_t Node::poll(std::size_t max_frames) {
   return n + poll_more(max_frames);
 }
 
-Nanos Node::next_wakeup() const noexcept {
-  Nanos t = wakes_.empty() ? kNever : wakes_.front();
-  if (!delayed_.empty()) t = std::min(t, delayed_.front().first);
-  return t;
+void Node::note_next() noexcept {
+  next_ = wakes_.empty() ? kNever : wakes_.front();
+  if (!delayed_.empty()) next_ = std::min(next_, delayed_.front().first);
 }
 
 void Node::wake_at(Nanos t) {
+  if (t < next_) next_ = t;
   const auto at = std::lower_bound(wakes_.begin(), wakes_.end(), t);
   if (at == wakes_.end() || *at != t) wakes_.insert(at, t);
 }
 
 void Node::tick(Nanos now) {
+  if (next_ > now) return;  // neither a delayed frame nor a wake-up is due
   while (!delayed_.empty() && delayed_.front().first <= now) {
     const frames::CanFrame f = delayed_.front().second;
-    delayed_.pop_front();
+    delayed_.erase(delayed_.begin());
     if (enabled_) send_now(f);
   }
   if (!wakes_.empty() && wakes_.front() <= now) {
     // Serve every request that is due with one step; step() may add more.
     wakes_.erase(wakes_.begin(), std::upper_bound(wakes_.begin(), wakes_.end(), now));
+    note_next();
     step(now);
   }
+  note_next();
 }
 
 void Node::emit(const frames::CanFrame& frame, Nanos now) {
@@ -76,6 +79,7 @@ void Node::emit(const frames::CanFrame& frame, Nanos now) {
       const auto at =
           std::upper_bound(delayed_.begin(), delayed_.end(), due, [](Nanos t, const auto& e) { return t < e.first; });
       delayed_.insert(at, {due, f});
+      note_next();
     } else {
       send_now(f);
     }

@@ -56,18 +56,20 @@ class MemoryEndpoint final : public Bus {
   void deliver(const TimedFrame& frame);
   void accept(const TimedFrame& frame);
 
+  // What a frame's delivery and receipt touch first, together (accept,
+  // receive): an endpoint is visited a few times an elementary cycle, cold.
   MemoryBus* bus_;
-  std::string name_;
   std::size_t capacity_;
   base::Ring<TimedFrame> queue_;
+  bool receive_own_ = false;
+  std::uint32_t error_mask_ = 0;
+  std::shared_ptr<Doorbell> bell_;  // shared: an endpoint may outlive its runner
+  std::size_t bell_index_ = 0;
+  BusStats stats_;
+  std::string name_;
   std::vector<Filter> filters_{Filter::all()};
   std::bitset<kStandardIds> standard_data_{
       std::bitset<kStandardIds>().set()};  // the filters' verdict on each 11-bit data frame
-  std::uint32_t error_mask_ = 0;
-  bool receive_own_ = false;
-  BusStats stats_;
-  std::shared_ptr<Doorbell> bell_;  // shared: an endpoint may outlive its runner
-  std::size_t bell_index_ = 0;
 };
 
 class MemoryBus {

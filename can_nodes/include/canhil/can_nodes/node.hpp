@@ -13,7 +13,6 @@
 // Not thread-safe: a node is driven from one thread.
 #pragma once
 
-#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -78,7 +77,7 @@ class Node {
   /// Acts at `now` (call when now >= next_wakeup()).
   void tick(Nanos now);
   /// The earliest time the node wants tick(); kNever when none.
-  Nanos next_wakeup() const noexcept;
+  Nanos next_wakeup() const noexcept { return next_; }
 
   void set_enabled(bool on) noexcept { enabled_ = on; }
   bool enabled() const noexcept { return enabled_; }
@@ -131,16 +130,21 @@ class Node {
  private:
   void send_now(frames::CanFrame frame);
 
-  std::string name_;
+  void note_next() noexcept;  // next_ from wakes_ and delayed_
+
+  // What poll(), tick() and next_wakeup() read come first, together: a node
+  // is visited a few times an elementary cycle, its lines cold each time.
   Bus& bus_;
-  std::shared_ptr<const frames::MessageSet> set_;
-  NodeCounters counters_;
   bool enabled_ = true;
-  FaultHook* hook_ = nullptr;
-  std::uint32_t tm_id_;
   std::uint8_t tm_length_;
-  std::vector<Nanos> wakes_;                                // requested wake-ups, ascending
-  std::deque<std::pair<Nanos, frames::CanFrame>> delayed_;  // by due time (fault delays)
+  std::uint32_t tm_id_;
+  Nanos next_ = kNever;  // the earlier of wakes_'s first and delayed_'s first
+  FaultHook* hook_ = nullptr;
+  NodeCounters counters_;
+  std::vector<Nanos> wakes_;                                 // requested wake-ups, ascending
+  std::vector<std::pair<Nanos, frames::CanFrame>> delayed_;  // by due time (fault delays; rare)
+  std::shared_ptr<const frames::MessageSet> set_;
+  std::string name_;
 };
 
 }  // namespace canhil::can_nodes
