@@ -39,6 +39,9 @@ TimingAnalyzer::TimingAnalyzer(std::shared_ptr<const frames::MessageSet> set, co
     PerMessage pm;
     pm.codec = &m;
     pm.ftt = set_->ftt(m);
+    pm.late_after =
+        std::max(config_.late_minimum,
+                 Nanos(static_cast<std::int64_t>(config_.late_fraction * static_cast<double>(pm.ftt.period.count()))));
     messages_.push_back(std::move(pm));
   }
 }
@@ -80,9 +83,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
       }
     } else {
       const Nanos period = m.ftt.period;
-      const Nanos tolerance =
-          std::max(config_.late_minimum,
-                   Nanos(static_cast<std::int64_t>(config_.late_fraction * static_cast<double>(period.count()))));
+      const Nanos tolerance = m.late_after;
       if (interval * 2 >= period * 3) {
         const auto missing = static_cast<std::uint64_t>((interval + period / 2) / period) - 1;
         std::snprintf(detail, sizeof detail, "%.3f ms after the previous (period %.0f ms): %llu missing", ms(interval),
