@@ -54,6 +54,7 @@ struct LaptopLink::Robot {
   int agent = 0;
   int vision_id = -1;
   std::unique_ptr<rtdb::ItemBuffer> vision;
+  bool vision_put = false;  // the slot holds the buffer's last image: later frames put only what changed
   rtdb::Quantity lines, obstacles, balls;
   int pos_id = -1;
   std::unique_ptr<rtdb::ItemBuffer> pos;
@@ -155,15 +156,23 @@ LaptopLink::~LaptopLink() {
 void LaptopLink::vision_frame(std::size_t robot, const vision_emu::VisionFrame& frame) {
   Robot& r = *robots_.at(robot);
   rtdb::ItemBuffer& b = *r.vision;  // cleared when made; written only here since
+  changed_.clear();
   const auto put = [this, &b](rtdb::Quantity q, const std::vector<Eigen::Vector2d>& pts) {
     points_.clear();
     for (const Eigen::Vector2d& p : pts) points_.push_back({p.x(), p.y()});
-    b.replace_points(q, points_);
+    b.replace_points(q, points_, &changed_);
   };
   put(r.obstacles, frame.obstacles);
   put(r.lines, frame.lines);
   put(r.balls, frame.balls);
-  db_->put(r.agent, r.agent, r.vision_id, b.bytes(), 0);
+  // A frame's points fill a quarter of the item or so: the rest is as the
+  // last frame left it, in the slot too (this is its only writer).
+  if (r.vision_put) {
+    db_->put_ranges(r.agent, r.agent, r.vision_id, b.bytes(), changed_, 0);
+  } else {
+    db_->put(r.agent, r.agent, r.vision_id, b.bytes(), 0);
+    r.vision_put = true;
+  }
   ++vision_writes_;
   if (masters_) masters_->tick(r.agent);
 }

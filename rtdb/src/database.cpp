@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <map>
 #include <mutex>
@@ -31,6 +32,7 @@ struct CApi {
   int (*whoami)() = nullptr;
   void (*set_config_file)(const char*) = nullptr;
   int (*item_size)(int) = nullptr;  // canhil's extension, where the library has it
+  int (*put_ranges)(int, int, int, const void*, const std::size_t*, int, int) = nullptr;  // canhil's too
 };
 
 // The libraries open in this process, with the set (team) each serves: a
@@ -149,6 +151,25 @@ class CApiDatabase final : public Database {
     }
     CANHIL_DEMAND(written >= 0,
                   (library() + " refused " + slot_name(space, owner, id) + ", which it had at open").c_str());
+  }
+
+  void put_ranges(int space, int owner, int id, std::span<const std::byte> bytes, std::span<const ByteRange> changed,
+                  int life_ms) override {
+    constexpr std::size_t kMost = 16;  // the ranges of a few point lists and their counts
+    if (api_.put_ranges == nullptr || changed.size() > kMost) {
+      put(space, owner, id, bytes, life_ms);
+      return;
+    }
+    demand_slot(space, owner, id, bytes.size());
+    CANHIL_DEMAND(life_ms >= 0, "an RTDB item cannot be written with a negative age");
+    std::array<std::size_t, 2 * kMost> flat{};
+    for (std::size_t i = 0; i < changed.size(); ++i) {
+      flat[2 * i] = changed[i].offset;
+      flat[2 * i + 1] = changed[i].size;
+    }
+    const int written = api_.put_ranges(first_space_ + space, owner, id, bytes.data(), flat.data(),
+                                        static_cast<int>(changed.size()), life_ms);
+    CANHIL_DEMAND(written >= 0, (library() + " refused ranges of " + slot_name(space, owner, id)).c_str());
   }
 
   std::optional<int> get(int space, int owner, int id, std::span<std::byte> bytes) override {
@@ -295,6 +316,7 @@ std::unique_ptr<Database> open_builtin(Scope scope, int set) {
   api.init_all = &DB_init_all;
   api.free_all = &DB_free_all;
   api.put_in = &DB_put_in;
+  api.put_ranges = &DB_put_ranges;
   api.get_from = &DB_get_from;
   api.init_one = &DB_init;
   api.free_one = &DB_free;
@@ -349,6 +371,8 @@ std::unique_ptr<Database> open_library(const std::filesystem::path& so, ItemTabl
   }
   if (config_file) api.set_config_file = loaded->symbol<void (*)(const char*)>("DB_set_config_file", &missing);
   api.item_size = loaded->symbol<int (*)(int)>("DB_item_size", nullptr);
+  api.put_ranges =
+      loaded->symbol<int (*)(int, int, int, const void*, const std::size_t*, int, int)>("DB_put_ranges", nullptr);
   const std::string library = so.string();
   if (!missing.empty()) {
     throw SetupError(library + " has no " + join(missing) +

@@ -429,12 +429,14 @@ void ItemBuffer::set_points(Quantity list, std::span<const std::array<double, 2>
   }
 }
 
-void ItemBuffer::replace_points(Quantity list, std::span<const std::array<double, 2>> points) noexcept {
+void ItemBuffer::replace_points(Quantity list, std::span<const std::array<double, 2>> points,
+                                std::vector<ByteRange>* changed) noexcept {
   if (!list) return;
   CANHIL_DEMAND(list.kind() == QuantityKind::kPoints, "replace_points is for point lists");
   const std::size_t capacity = list.binding_->capacity;
   std::size_t held = capacity;
-  if (list.binding_->count != detail::Binding::kNone) {
+  const bool counted = list.binding_->count != detail::Binding::kNone;
+  if (counted) {
     const double n = get(Quantity(&item_->bindings_[list.binding_->count]));
     held = n > 0 ? std::min(capacity, static_cast<std::size_t>(n)) : 0;
   }
@@ -449,8 +451,18 @@ void ItemBuffer::replace_points(Quantity list, std::span<const std::array<double
         std::memset(&bytes_[at_byte(f, e, 0)], 0, f.element_bytes());
       }
     }
+    const std::size_t touched = std::min(std::max(keep, held), f.count);
+    if (changed != nullptr && touched > 0) {
+      changed->push_back({at_byte(f, 0, 0), (touched - 1) * f.stride_bytes + f.element_bytes()});
+    }
   }
   set_points(list, points);
+  if (changed != nullptr && counted) {
+    for (std::size_t i : item_->bindings_[list.binding_->count].fields) {
+      const FieldLayout& f = fields[i];
+      changed->push_back({f.offset_bytes, f.end_bytes() - f.offset_bytes});
+    }
+  }
 }
 
 double ItemBuffer::get(Quantity q, std::size_t index) const noexcept {

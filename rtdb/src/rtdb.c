@@ -385,9 +385,25 @@ static void load_range(const slot_header* s, size_t offset, size_t size, void* v
   }
 }
 
-static void write_slot(slot_header* s, const void* value, int64_t stamp) {
+/* The words of the slot's value that hold bytes [offset, offset + size), from
+ * the whole image `value` (bytes past the item's end in its last word: zero,
+ * as store_words leaves them). */
+static void store_word_range(slot_header* s, const void* value, size_t offset, size_t size) {
+  uint64_t* dst = (uint64_t*)(void*)(s + 1);
+  const char* src = (const char*)value;
+  const size_t end = offset + size;
+  if (size == 0) return;
+  for (size_t i = offset - offset % 8; i < end; i += 8) {
+    uint64_t w = 0;
+    memcpy(&w, src + i, i + 8 <= s->size ? 8 : s->size - i);
+    __atomic_store_n(dst + i / 8, w, __ATOMIC_RELAXED);
+  }
+}
+
+/* Takes the slot (even -> odd: one writer at a time); returns the even sequence it had. */
+static uint32_t take_slot(slot_header* s) {
   uint32_t seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
-  for (;;) { /* take the slot: even -> odd (one writer at a time) */
+  for (;;) {
     if ((seq & 1u) == 0 &&
         atomic_compare_exchange_weak_explicit(&s->seq, &seq, seq + 1, memory_order_acquire, memory_order_relaxed)) {
       break;
@@ -395,9 +411,18 @@ static void write_slot(slot_header* s, const void* value, int64_t stamp) {
     seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
   }
   atomic_thread_fence(memory_order_release);
-  store_words(s, value);
+  return seq;
+}
+
+static void release_slot(slot_header* s, uint32_t seq, int64_t stamp) {
   __atomic_store_n(&s->stamp_ns, stamp, __ATOMIC_RELAXED);
   atomic_store_explicit(&s->seq, seq + 2, memory_order_release);
+}
+
+static void write_slot(slot_header* s, const void* value, int64_t stamp) {
+  const uint32_t seq = take_slot(s);
+  store_words(s, value);
+  release_slot(s, seq, stamp);
 }
 
 /* The whole value (size = s->size, offset 0) or a part of it. */
@@ -526,6 +551,20 @@ RTDB_EXPORT int DB_get_part(int agent, int from_agent, int id, size_t offset, si
   const slot_header* s = slot(agent, from_agent == SELF ? agent_of(agent) : from_agent, id);
   if (s == NULL || value == NULL || offset > s->size || size > s->size - offset) return -1;
   return read_slot_range(s, offset, size, value);
+}
+
+RTDB_EXPORT int DB_put_ranges(int agent, int to_agent, int id, const void* value, const size_t* ranges, int count,
+                              int life) {
+  if (!attached() || agent < 0 || count < 0 || life < 0 || value == NULL || (count > 0 && ranges == NULL)) return -1;
+  slot_header* s = slot(agent, to_agent == SELF ? agent_of(agent) : to_agent, id);
+  if (s == NULL) return -1;
+  for (int i = 0; i < count; ++i) {
+    if (ranges[2 * i] > s->size || ranges[2 * i + 1] > s->size - ranges[2 * i]) return -1;
+  }
+  const uint32_t seq = take_slot(s);
+  for (int i = 0; i < count; ++i) store_word_range(s, value, ranges[2 * i], ranges[2 * i + 1]);
+  release_slot(s, seq, now_ns() - (int64_t)life * 1000000);
+  return (int)s->size;
 }
 
 RTDB_EXPORT int DB_put(int id, void* value) { return g_me < 0 ? -1 : put_in(g_me, agent_of(g_me), id, value, 0); }

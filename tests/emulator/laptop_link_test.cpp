@@ -10,8 +10,11 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstring>
 #include <fstream>
+#include <random>
+#include <vector>
 
 #include "canhil/base/setup_error.hpp"
 #include "support/team_rtdb.hpp"
@@ -131,6 +134,43 @@ TEST_F(LaptopLinkTest, CanhilsOwnRtdbInCanhilsLayoutAndThePoseReadBack) {
   EXPECT_DOUBLE_EQ(p->x_m, 1.5);
   EXPECT_DOUBLE_EQ(p->heading_rad, 0.5);
   EXPECT_NE(link.replicator_stats(), nullptr) << "two robots: the replicator runs";
+}
+
+TEST_F(LaptopLinkTest, FramesPutInPartsLeaveVisionInfoAsWholeWritesWould) {
+  // canhil's RTDB takes only the parts of VISION_INFO a frame changed; the
+  // team's stand-in library (no DB_put_ranges) the whole item. Either way the
+  // item must read as a fresh write of the frame, through lists that grow,
+  // shrink and empty.
+  setenv("RTDB_KEY", std::to_string(0x5E000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  for (const bool builtin : {true, false}) {
+    LaptopLink link(builtin ? resolve_laptop({}, 1, false) : team(), {1}, coach(1));
+    rtdb::Database& db = link.database();
+    const int id = *db.items().id("VISION_INFO");
+    const rtdb::ItemLayout& item = *link.layout().item("VISION_INFO");
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> metres(-8, 8);
+    for (int n = 0; n < 40; ++n) {
+      vision_emu::VisionFrame f;
+      const std::size_t lines = n % 5 == 2 ? 0 : rng() % 320;
+      for (std::size_t k = 0; k < lines; ++k) f.lines.emplace_back(metres(rng), metres(rng));
+      for (std::size_t k = rng() % 40; k > 0; --k) f.obstacles.emplace_back(metres(rng), metres(rng));
+      if (n % 3 == 0) f.balls.emplace_back(metres(rng), metres(rng));
+      link.vision_frame(0, f);
+      rtdb::ItemBuffer fresh(item);
+      const auto as_points = [](const std::vector<Eigen::Vector2d>& v) {
+        std::vector<std::array<double, 2>> out;
+        for (const auto& p : v) out.push_back({p.x(), p.y()});
+        return out;
+      };
+      fresh.set_points(fresh.quantity("obstacles"), as_points(f.obstacles));
+      fresh.set_points(fresh.quantity("lines"), as_points(f.lines));
+      fresh.set_points(fresh.quantity("balls"), as_points(f.balls));
+      std::vector<std::byte> got(item.size_bytes());
+      ASSERT_TRUE(db.get(1, 1, id, got));
+      ASSERT_EQ(std::memcmp(got.data(), fresh.data(), got.size()), 0)
+          << (builtin ? "canhil's RTDB" : "the team's library") << ", frame " << n << " (" << lines << " line points)";
+    }
+  }
 }
 
 TEST_F(LaptopLinkTest, TheReplicatorCopiesOnceAReplicationPeriodWhateverTheStep) {

@@ -218,18 +218,44 @@ TEST(ItemBufferReplace, ReplacingPointListsFrameAfterFrameGivesTheBytesOfAFreshW
     const Layout layout = Layout::shipped(name);
     const ItemLayout& item = *layout.item("VISION_INFO");
     ItemBuffer kept(item);
+    // A copy of kept's bytes that is given only the ranges replace_points
+    // says it changed (what Database::put_ranges copies into the slot).
+    std::vector<std::byte> slot(kept.bytes().begin(), kept.bytes().end());
+    std::vector<ByteRange> changed;
     std::mt19937 rng(3);
     std::uniform_int_distribution<int> length(0, 320);
     std::uniform_real_distribution<double> metres(-9, 9);
     for (int frame = 0; frame < 200; ++frame) {
       ItemBuffer fresh(item);
+      changed.clear();
       for (const char* list : {"obstacles", "lines", "balls"}) {
         std::vector<std::array<double, 2>> points(static_cast<std::size_t>(frame % 7 == 3 ? 0 : length(rng)));
         for (auto& p : points) p = {metres(rng), metres(rng)};
-        kept.replace_points(kept.quantity(list), points);
+        kept.replace_points(kept.quantity(list), points, &changed);
         fresh.set_points(fresh.quantity(list), points);
       }
       ASSERT_EQ(std::memcmp(kept.data(), fresh.data(), kept.bytes().size()), 0) << name << " frame " << frame;
+      std::size_t copied = 0;
+      for (const ByteRange& r : changed) {
+        ASSERT_LE(r.offset + r.size, slot.size()) << name;
+        std::memcpy(slot.data() + r.offset, kept.bytes().data() + r.offset, r.size);
+        copied += r.size;
+      }
+      ASSERT_EQ(std::memcmp(slot.data(), kept.data(), slot.size()), 0)
+          << name << " frame " << frame << ": a change outside the ranges given";
+      EXPECT_GT(copied, 0u);
+    }
+    // Short lists after empty ones: the ranges are those few points and the counts, not the item.
+    for (const std::size_t n : {std::size_t{0}, std::size_t{10}}) {
+      changed.clear();
+      const std::vector<std::array<double, 2>> points(n, {1.0, 2.0});
+      for (const char* list : {"obstacles", "lines", "balls"})
+        kept.replace_points(kept.quantity(list), points, &changed);
+      std::size_t copied = 0;
+      for (const ByteRange& r : changed) copied += r.size;
+      if (n == 10) {
+        EXPECT_LE(copied, 3u * 10 * 8 + 3 * 4) << name;
+      }
     }
   }
 }

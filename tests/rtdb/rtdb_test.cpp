@@ -12,12 +12,15 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/database.hpp"
@@ -127,6 +130,61 @@ TEST_F(Rtdb, APartOfAnItemIsThoseBytesOfIt) {
   EXPECT_EQ(DB_get_part(DB_space(), SELF, VISION_INFO, sizeof(VisionInfo) - 4, 8, part), -1) << "past the end";
   EXPECT_EQ(DB_get_part(DB_space(), SELF, VISION_INFO, sizeof(VisionInfo) + 1, 0, part), -1);
   EXPECT_EQ(DB_get_part(DB_space(), SELF, N_ITEMS, 0, 4, part), -1) << "no such item";
+}
+
+TEST_F(Rtdb, PuttingRangesWritesThoseBytesOfTheImageAndStampsTheItem) {
+  ASSERT_EQ(DB_init(), 0);
+  VisionInfo before{};
+  for (int i = 0; i < MAX_POINTS; ++i) before.obstacles.point[i] = {static_cast<float>(i), 1.0f};
+  before.obstacles.nPoints = MAX_POINTS;
+  ASSERT_GT(DB_put(VISION_INFO, &before), 0);
+  // A new image that differs everywhere; only the ranges may reach the slot.
+  VisionInfo image{};
+  auto* raw = reinterpret_cast<unsigned char*>(&image);
+  for (std::size_t i = 0; i < sizeof image; ++i) raw[i] = static_cast<unsigned char>(i * 7 + 3);
+  std::mt19937 pick(11);
+  for (int round = 0; round < 50; ++round) {
+    ASSERT_GT(DB_put(VISION_INFO, &before), 0);
+    std::vector<std::size_t> ranges;  // offset, length, offset, length, ...
+    std::vector<bool> inside(sizeof image, false);
+    const int n = static_cast<int>(pick() % 4);
+    for (int k = 0; k < n; ++k) {
+      const std::size_t offset = pick() % sizeof image;
+      const std::size_t size = pick() % std::min<std::size_t>(64, sizeof image - offset + 1);
+      ranges.push_back(offset);
+      ranges.push_back(size);
+      for (std::size_t b = offset; b < offset + size; ++b) inside[b] = true;
+    }
+    ASSERT_EQ(DB_put_ranges(DB_space(), SELF, VISION_INFO, &image, ranges.data(), n, 0),
+              static_cast<int>(sizeof image));
+    VisionInfo got{};
+    ASSERT_GE(DB_get(CAMBADA_1, VISION_INFO, &got), 0);
+    const auto* g = reinterpret_cast<const unsigned char*>(&got);
+    const auto* b = reinterpret_cast<const unsigned char*>(&before);
+    for (std::size_t i = 0; i < sizeof image; ++i) {
+      // A range's whole words are copied: a byte beside one, in its word, may come from the image too.
+      if (inside[i]) {
+        ASSERT_EQ(g[i], raw[i]) << "round " << round << ", byte " << i;
+      }
+      const std::size_t word = i - i % 8;
+      bool near = false;
+      for (std::size_t w = word; w < word + 8 && w < sizeof image; ++w) near = near || inside[w];
+      if (!near) {
+        ASSERT_EQ(g[i], b[i]) << "round " << round << ", byte " << i << " is outside every range";
+      }
+    }
+  }
+  const std::size_t past[2] = {sizeof(VisionInfo) - 4, 8};
+  EXPECT_EQ(DB_put_ranges(DB_space(), SELF, VISION_INFO, &image, past, 1, 0), -1) << "past the end";
+  EXPECT_EQ(DB_put_ranges(DB_space(), SELF, VISION_INFO, &image, nullptr, -1, 0), -1);
+  EXPECT_EQ(DB_put_ranges(DB_space(), SELF, VISION_INFO, &image, nullptr, 0, -1), -1) << "a negative life";
+  EXPECT_EQ(DB_put_ranges(DB_space(), SELF, N_ITEMS, &image, nullptr, 0, 0), -1) << "no such item";
+  // Aged as DB_put_in ages: life 40 ms.
+  EXPECT_EQ(DB_put_ranges(DB_space(), SELF, VISION_INFO, &image, nullptr, 0, 40), static_cast<int>(sizeof image));
+  VisionInfo got{};
+  const int age = DB_get(CAMBADA_1, VISION_INFO, &got);
+  EXPECT_GE(age, 40);
+  EXPECT_LT(age, 1040);
 }
 
 TEST_F(Rtdb, BadIdsAndAgentsAreErrors) {

@@ -95,6 +95,7 @@ class LaptopLink {
   std::vector<CoachItem> coach_items_;
   std::set<std::string> warned_;               // names the layout cannot store, warned of once
   std::vector<std::array<double, 2>> points_;  // scratch for a frame's points
+  std::vector<rtdb::ByteRange> changed_;       // scratch: the parts of VISION_INFO a frame wrote
   Nanos coach_period_;
   Nanos next_coach_{0};
   Nanos next_replicate_{0};

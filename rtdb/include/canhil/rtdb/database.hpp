@@ -23,6 +23,7 @@
 #include <string_view>
 #include <vector>
 
+#include "canhil/rtdb/byte_range.hpp"
 #include "canhil/rtdb/item_table.hpp"
 
 namespace canhil::rtdb {
@@ -58,6 +59,15 @@ class Database {
   /// `bytes` exactly the item's size: a broken invariant otherwise (callers
   /// check with require() at set-up).
   virtual void put(int space, int owner, int id, std::span<const std::byte> bytes, int life_ms = 0) = 0;
+  /// put() of an item image that differs from the one last put into this
+  /// slot only inside `changed` (offsets into `bytes`), by the only writer of
+  /// the slot: canhil's library copies just those, in one write (DB_put_ranges);
+  /// a library without it is given the whole item. Same preconditions as put().
+  virtual void put_ranges(int space, int owner, int id, std::span<const std::byte> bytes,
+                          std::span<const ByteRange> changed, int life_ms = 0) {
+    (void)changed;
+    put(space, owner, id, bytes, life_ms);
+  }
   /// Reads it into `bytes` (same preconditions). The age in ms,
   /// kNeverWritten for an item never written, or nullopt when the library
   /// says the item does not exist.

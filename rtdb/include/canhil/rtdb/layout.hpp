@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/rtdb/byte_range.hpp"
 
 namespace canhil::rtdb {
 
@@ -290,7 +291,11 @@ class ItemBuffer {
   /// when the layout has no count). A buffer written only so since its last
   /// clear() holds the bytes clear() and set_points would give, without
   /// zeroing the whole item each time (VISION_INFO, 30 times a second a robot).
-  void replace_points(Quantity list, std::span<const std::array<double, 2>> points) noexcept;
+  /// `changed`, when given, is appended the byte ranges this may have
+  /// written (the elements kept and put back, and the count): the rest of the
+  /// buffer is as it was (Database::put_ranges copies only these).
+  void replace_points(Quantity list, std::span<const std::array<double, 2>> points,
+                      std::vector<ByteRange>* changed = nullptr) noexcept;
 
   /// The quantity back in SI from its first field (a bool as 1 / 0, an enum
   /// as its stored integer); 0 when not carried. Wrapping is not undone.

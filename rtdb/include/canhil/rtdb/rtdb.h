@@ -106,6 +106,17 @@ void DB_set_clock(int64_t (*now)(void* context), void* context);
  * (no such item or agent, or the range reaches past the item). */
 int DB_get_part(int agent, int from_agent, int id, size_t offset, size_t size, void* value);
 
+/* DB_put_in of a whole item image `value` that differs from what the slot
+ * holds only inside `count` byte ranges, ranges[2i] the offset and
+ * ranges[2i + 1] the length of range i: those are copied, in one write under
+ * the sequence lock (a reader sees all of them or none), and the item is
+ * stamped as by DB_put_in. For a writer that keeps an item's image and
+ * changes a few parts of a large item (a vision frame's point lists); bytes
+ * outside the ranges must already be in the slot (written from the same
+ * image). Returns the item's size, or -1 (no such item or agent, a range past
+ * the item, count < 0, life < 0). */
+int DB_put_ranges(int agent, int to_agent, int id, const void* value, const size_t* ranges, int count, int life);
+
 #ifdef __cplusplus
 }
 #endif
