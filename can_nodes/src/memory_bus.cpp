@@ -21,6 +21,10 @@ SendStatus MemoryEndpoint::send(const CanFrame& frame) {
 }
 
 std::optional<TimedFrame> MemoryEndpoint::receive() {
+  if (head_held_) {
+    head_held_ = false;
+    return head_;
+  }
   if (queue_.empty()) return std::nullopt;
   TimedFrame f = queue_.front();
   queue_.pop_front();
@@ -53,7 +57,7 @@ void MemoryEndpoint::deliver(const TimedFrame& frame) {
 }
 
 void MemoryEndpoint::accept(const TimedFrame& frame) {
-  if (queue_.size() >= capacity_) {
+  if (pending() >= capacity_) {
     ++stats_.rx_overflow;
     return;
   }
@@ -62,7 +66,12 @@ void MemoryEndpoint::accept(const TimedFrame& frame) {
   } else {
     ++stats_.received;
   }
-  queue_.push_back(frame);
+  if (!head_held_ && queue_.empty()) {
+    head_ = frame;
+    head_held_ = true;
+  } else {
+    queue_.push_back(frame);
+  }
   if (bell_ != nullptr) bell_->ring(bell_index_);
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <deque>
 #include <random>
 
 namespace canhil::can_nodes {
@@ -177,6 +178,42 @@ TEST(MemoryBus, OverflowIsDroppedAndCounted) {
   EXPECT_EQ(rx->pending(), 3u);
   EXPECT_EQ(rx->stats().rx_overflow, 2u);
   EXPECT_EQ(rx->stats().received + rx->stats().rx_overflow, 5u) << "every frame received or counted";
+}
+
+TEST(MemoryBus, SendsAndReceivesInAnyInterleavingKeepOrderAndCapacity) {
+  // The first waiting frame is held apart from the rest: any mix of sends and
+  // receives must still give the frames in order, count the waiting ones and
+  // drop past the capacity, as one queue would.
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  auto tx = bus.attach("tx");
+  auto rx = bus.attach("rx", 5);
+  std::deque<std::uint32_t> reference;
+  std::uint64_t dropped = 0;
+  std::mt19937 pick(17);
+  std::uint32_t next = 0;
+  for (int step = 0; step < 20'000; ++step) {
+    if (pick() % 100 < 52) {
+      tx->send(make_data_frame(next % 0x700, {}));
+      if (reference.size() < 5) {
+        reference.push_back(next % 0x700);
+      } else {
+        ++dropped;
+      }
+      ++next;
+    } else {
+      const auto f = rx->receive();
+      ASSERT_EQ(f.has_value(), !reference.empty()) << "step " << step;
+      if (f) {
+        ASSERT_EQ(f->frame.id, reference.front()) << "step " << step;
+        reference.pop_front();
+      }
+    }
+    ASSERT_EQ(rx->pending(), reference.size()) << "step " << step;
+    ASSERT_EQ(rx->may_have_frames(), !reference.empty()) << "step " << step;
+  }
+  EXPECT_EQ(rx->stats().rx_overflow, dropped);
+  EXPECT_GT(dropped, 0u) << "the walk reached the capacity";
 }
 
 TEST(MemoryBus, DownBusRefusesSendsAndReportsState) {

@@ -32,7 +32,7 @@ class MemoryEndpoint final : public Bus {
 
   SendStatus send(const CanFrame& frame) override;
   std::optional<TimedFrame> receive() override;
-  bool may_have_frames() const override { return !queue_.empty(); }
+  bool may_have_frames() const override { return head_held_ || !queue_.empty(); }
   bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) override {
     bell_ = bell;
     bell_index_ = index;
@@ -46,7 +46,7 @@ class MemoryEndpoint final : public Bus {
 
   /// Also receive this endpoint's own frames (CAN_RAW_RECV_OWN_MSGS).
   void set_receive_own(bool on) { receive_own_ = on; }
-  std::size_t pending() const { return queue_.size(); }
+  std::size_t pending() const { return (head_held_ ? 1 : 0) + queue_.size(); }
 
  private:
   friend class MemoryBus;
@@ -60,8 +60,13 @@ class MemoryEndpoint final : public Bus {
   // receive): an endpoint is visited a few times an elementary cycle, cold.
   MemoryBus* bus_;
   std::size_t capacity_;
-  base::Ring<TimedFrame> queue_;
+  // The oldest waiting frame is held here, in the endpoint, when it came to an
+  // empty queue (the usual case: a delivery round takes each frame at once);
+  // the frames after it wait in queue_, in order.
+  bool head_held_ = false;
   bool receive_own_ = false;
+  TimedFrame head_{};
+  base::Ring<TimedFrame> queue_;
   std::uint32_t error_mask_ = 0;
   std::shared_ptr<Doorbell> bell_;  // shared: an endpoint may outlive its runner
   std::size_t bell_index_ = 0;
