@@ -9,7 +9,9 @@ Node::Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet>
       tm_length_(static_cast<std::uint8_t>(set->tm.message().def().length)),
       tm_id_(set->tm.message().id()),
       set_(std::move(set)),
-      name_(std::move(name)) {}
+      name_(std::move(name)) {
+  wakes_.reserve(kWakesInside);  // in wake_space_: more grow into the heap
+}
 
 std::size_t Node::poll() { return poll(~std::size_t{0}); }
 
