@@ -17,8 +17,8 @@ void Participants::add(Participant& p) {
 }
 
 void Participants::add(Node& node) {
-  owned_.push_back(std::make_unique<NodeParticipant>(node));
-  add(*owned_.back());
+  owned_.emplace_back(node);
+  add(owned_.back());
 }
 
 std::size_t Participants::poll(std::size_t i) {

@@ -17,6 +17,7 @@
 // Not thread-safe: one thread runs it.
 #pragma once
 
+#include <deque>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -111,11 +112,11 @@ class Participants {
   std::size_t poll(std::size_t i);
 
   std::vector<Participant*> list_;
-  std::vector<std::unique_ptr<NodeParticipant>> owned_;
-  std::vector<Nanos> wake_;          // kept wake-ups (kNever for those asked)
-  std::vector<std::uint8_t> kept_;   // wakeup_is_own()
-  std::vector<std::uint8_t> rings_;  // set_doorbell() accepted
-  std::vector<std::size_t> asked_;   // indices whose wake-up is asked for each time
+  std::deque<NodeParticipant> owned_;  // side by side (a round reads each one's wake-up), and never moved
+  std::vector<Nanos> wake_;            // kept wake-ups (kNever for those asked)
+  std::vector<std::uint8_t> kept_;     // wakeup_is_own()
+  std::vector<std::uint8_t> rings_;    // set_doorbell() accepted
+  std::vector<std::size_t> asked_;     // indices whose wake-up is asked for each time
   std::shared_ptr<Doorbell> bell_ =
       std::make_shared<Doorbell>();  // rung: may have frames (those that cannot ring stay rung)
 };

@@ -143,13 +143,13 @@ class Node {
   std::uint32_t tm_id_;
   Nanos next_ = kNever;  // the earlier of wakes_'s first and delayed_'s first
   FaultHook* hook_ = nullptr;
+  NodeCounters counters_;
   // Requested wake-ups, ascending. A node has a few at a time (its slot, its
   // tick, a time-out): up to kWakesInside of them live in the node itself.
   static constexpr std::size_t kWakesInside = 8;
   alignas(Nanos) std::array<std::byte, kWakesInside * sizeof(Nanos)> wake_space_;
   std::pmr::monotonic_buffer_resource wake_arena_{wake_space_.data(), wake_space_.size()};
   std::pmr::vector<Nanos> wakes_{&wake_arena_};
-  NodeCounters counters_;
   std::vector<std::pair<Nanos, frames::CanFrame>> delayed_;  // by due time (fault delays; rare)
   std::shared_ptr<const frames::MessageSet> set_;
   std::string name_;
