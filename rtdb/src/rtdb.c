@@ -558,11 +558,12 @@ RTDB_EXPORT int DB_put_ranges(int agent, int to_agent, int id, const void* value
   if (!attached() || agent < 0 || count < 0 || life < 0 || value == NULL || (count > 0 && ranges == NULL)) return -1;
   slot_header* s = slot(agent, to_agent == SELF ? agent_of(agent) : to_agent, id);
   if (s == NULL) return -1;
-  for (int i = 0; i < count; ++i) {
+  const size_t n = (size_t)count;
+  for (size_t i = 0; i < n; ++i) {
     if (ranges[2 * i] > s->size || ranges[2 * i + 1] > s->size - ranges[2 * i]) return -1;
   }
   const uint32_t seq = take_slot(s);
-  for (int i = 0; i < count; ++i) store_word_range(s, value, ranges[2 * i], ranges[2 * i + 1]);
+  for (size_t i = 0; i < n; ++i) store_word_range(s, value, ranges[2 * i], ranges[2 * i + 1]);
   release_slot(s, seq, now_ns() - (int64_t)life * 1000000);
   return (int)s->size;
 }

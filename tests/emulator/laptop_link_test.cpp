@@ -159,6 +159,7 @@ TEST_F(LaptopLinkTest, FramesPutInPartsLeaveVisionInfoAsWholeWritesWould) {
       rtdb::ItemBuffer fresh(item);
       const auto as_points = [](const std::vector<Eigen::Vector2d>& v) {
         std::vector<std::array<double, 2>> out;
+        out.reserve(v.size());
         for (const auto& p : v) out.push_back({p.x(), p.y()});
         return out;
       };
