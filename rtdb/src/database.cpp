@@ -256,7 +256,25 @@ void check_set(int set) {
 }  // namespace
 
 Database::Database(ItemTable items, Scope scope, std::vector<int> spaces, std::string library)
-    : items_(std::move(items)), scope_(scope), spaces_(std::move(spaces)), library_(std::move(library)) {}
+    : items_(std::move(items)), scope_(scope), spaces_(std::move(spaces)), library_(std::move(library)) {
+  const int agents = items_.agent_count();
+  const int ids = items_.item_count();
+  slot_sizes_.assign(
+      static_cast<std::size_t>(agents) * static_cast<std::size_t>(agents) * static_cast<std::size_t>(ids), 0);
+  for (const int space : spaces_) {
+    if (space < 0 || space >= agents) continue;
+    for (int owner = 0; owner < agents; ++owner) {
+      for (int id = 0; id < ids; ++id) {
+        const ItemKind kind = items_.kind(owner, id);
+        if (owner == space ? kind == ItemKind::kNone : kind != ItemKind::kShared) continue;
+        slot_sizes_[(static_cast<std::size_t>(space) * static_cast<std::size_t>(agents) +
+                     static_cast<std::size_t>(owner)) *
+                        static_cast<std::size_t>(ids) +
+                    static_cast<std::size_t>(id)] = items_.size(id).value_or(0);
+      }
+    }
+  }
+}
 
 Database::~Database() = default;
 
@@ -264,7 +282,7 @@ bool Database::serves(int space) const noexcept {
   return std::find(spaces_.begin(), spaces_.end(), space) != spaces_.end();
 }
 
-void Database::demand_slot(int space, int owner, int id, std::size_t size) const {
+void Database::broken_slot(int space, int owner, int id, std::size_t size) const {
   CANHIL_DEMAND(serves(space), ("RTDB access to agent " + std::to_string(space) + "'s database, which " + library_ +
                                 " does not reach here (check with require() at set-up)")
                                    .c_str());
@@ -276,6 +294,7 @@ void Database::demand_slot(int space, int owner, int id, std::size_t size) const
   CANHIL_DEMAND(items_.size(id) == size, ("RTDB item " + items_.name(id) + " accessed with " + std::to_string(size) +
                                           " bytes; it has " + std::to_string(items_.size(id).value_or(0)))
                                              .c_str());
+  std::abort();  // unreachable: slot_sizes_ is built from the table the checks above read
 }
 
 int Database::require(std::string_view item, std::size_t size, int space) const {

@@ -152,6 +152,31 @@ TEST_F(TeamDatabase, RequireNamesWhatIsWrongAndWhatToDo) {
             std::string::npos);
 }
 
+TEST_F(TeamDatabase, ASlotOutsideTheTableIsABrokenInvariantThatSaysWhich) {
+  auto db = open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini);
+  const std::array<unsigned char, 16> vel{};
+  std::array<unsigned char, 16> back{};
+  const auto into = std::as_writable_bytes(std::span(back));
+  EXPECT_DEATH(db->put(kRobot1, kRobot1, kCmdVel, bytes_of(std::array<unsigned char, 15>{})),
+               "RTDB item CMD_VEL accessed with 15 bytes; it has 16");
+  EXPECT_DEATH(db->get(kRobot2, kRobot2, kCmdVel, into.first(8)), "RTDB item CMD_VEL accessed with 8 bytes; it has 16");
+  EXPECT_DEATH(db->put(kBaseStation, kRobot1, kCmdVel, bytes_of(vel)),
+               "RTDB item 3 of agent 1 is not in agent 0's database");
+  EXPECT_DEATH(db->put(kRobot1, kRobot1, kUnusedItem, {}), "RTDB item 4 of agent 1 is not in agent 1's database");
+  EXPECT_DEATH(db->get(3, 3, kCmdVel, into), "agent 3's database");
+  EXPECT_DEATH(db->get(-1, kRobot1, kCmdVel, into), "agent -1's database");
+  EXPECT_DEATH(db->get(kRobot1, kRobot1, 99, into), "RTDB item 99 of agent 1 is not in agent 1's database");
+  // The slots the table has are served, each at its size.
+  db->put(kRobot2, kRobot2, kCmdVel, bytes_of(vel));
+  EXPECT_EQ(db->get(kRobot2, kRobot2, kCmdVel, into), 0);
+
+  setenv("AGENT", "2", 1);
+  db.reset();
+  auto one = open_library(team_rtdb_library(), table(), Scope::kOneAgent, files_.ini);
+  EXPECT_DEATH(one->get(kRobot1, kRobot1, kCmdVel, into), "agent 1's database");
+  one->put(kRobot2, kRobot2, kCmdVel, bytes_of(vel));
+}
+
 TEST_F(TeamDatabase, AMissingSymbolIsNamed) {
   EXPECT_EQ(error_of([&] { open_library(team_rtdb_incomplete_library(), table(), Scope::kAllAgents, files_.ini); }),
             team_rtdb_incomplete_library() +

@@ -82,13 +82,33 @@ class Database {
  protected:
   Database(ItemTable items, Scope scope, std::vector<int> spaces, std::string library);
   /// The invariants put() and get() share (aborts with a message).
-  void demand_slot(int space, int owner, int id, std::size_t size) const;
+  void demand_slot(int space, int owner, int id, std::size_t size) const {
+    if (size == 0 || slot_size(space, owner, id) != size) broken_slot(space, owner, id, size);
+  }
 
  private:
+  // The size of item `id` of `owner` in `space`'s database, 0 when the slot
+  // is not there (a space not served, an item neither its own nor shared):
+  // one load, where the table's own answers take several (put and get ask
+  // it a few thousand times a simulated second).
+  std::size_t slot_size(int space, int owner, int id) const noexcept {
+    const auto agents = static_cast<unsigned>(items_.agent_count());
+    const auto ids = static_cast<unsigned>(items_.item_count());
+    if (static_cast<unsigned>(space) >= agents || static_cast<unsigned>(owner) >= agents ||
+        static_cast<unsigned>(id) >= ids) {
+      return 0;
+    }
+    return slot_sizes_[(static_cast<std::size_t>(space) * agents + static_cast<unsigned>(owner)) * ids +
+                       static_cast<unsigned>(id)];
+  }
+  /// demand_slot's verdict when the slot is not what was asked: says which invariant broke, and aborts.
+  [[noreturn]] void broken_slot(int space, int owner, int id, std::size_t size) const;
+
   ItemTable items_;
   Scope scope_;
   std::vector<int> spaces_;
   std::string library_;
+  std::vector<std::size_t> slot_sizes_;  // [space][owner][id], as slot_size()
 };
 
 /// canhil's linked RTDB (canhil::rtdb): every agent (DB_init_all) or this
