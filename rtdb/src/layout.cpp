@@ -413,6 +413,19 @@ void ItemBuffer::set_points(Quantity list, std::span<const std::array<double, 2>
       };
       // x then y, side by side (at_byte(f, p, 1) = at_byte(f, p, 0) + 4): one 8-byte copy a point.
       std::byte* at = bytes_.data() + at_byte(f, 0, 0);
+      // Within float's range, the usual case, to_float is the plain conversion
+      // (a NaN is passed on either way: std::max leaves it out of `largest`).
+      double largest = 0;
+      for (std::size_t p = 0; p < n; ++p) {
+        largest = std::max(largest, std::max(std::fabs(points[p][0]), std::fabs(points[p][1])));
+      }
+      if (largest <= kMax) {
+        for (std::size_t p = 0; p < n; ++p, at += f.stride_bytes) {
+          const std::array<float, 2> xy{static_cast<float>(points[p][0]), static_cast<float>(points[p][1])};
+          std::memcpy(at, xy.data(), sizeof xy);
+        }
+        continue;
+      }
       for (std::size_t p = 0; p < n; ++p, at += f.stride_bytes) {
         const std::array<float, 2> xy{to_float(points[p][0]), to_float(points[p][1])};
         std::memcpy(at, xy.data(), sizeof xy);

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -61,6 +62,36 @@ TEST_F(CambadaLayout, VisionInfoLinesInMillimetresTheRestInMetres) {
   EXPECT_EQ(v->nBalls, 1);
   EXPECT_EQ(v->ball[0].position.x, 0.3f);
   EXPECT_EQ(v->ball[0].position.y, 2.0f);
+}
+
+TEST_F(CambadaLayout, PointsInMetresAreRoundedToFloatsClampedToTheirRangeAndNonFiniteOnesKept) {
+  ItemBuffer buf = buffer("VISION_INFO");
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::nan("");
+  constexpr float kMax = std::numeric_limits<float>::max();
+  // A list with values beyond float's range, and one without (a NaN is in neither range).
+  const std::array<std::array<double, 2>, 4> wide{{{0.1, -0.2}, {1e300, -1e39}, {inf, -inf}, {nan, 1e-50}}};
+  const std::array<std::array<double, 2>, 3> narrow{{{0.1, -0.2}, {nan, 3.5}, {-3.4e38, 3.4e38}}};
+  buf.set_points(buf.quantity("obstacles"), wide);
+  auto v = std::make_unique<facts::VisionInfo>(as<facts::VisionInfo>(buf));
+  EXPECT_EQ(v->obstacles.nPoints, 4);
+  EXPECT_EQ(v->obstacles.point[0].x, 0.1f);
+  EXPECT_EQ(v->obstacles.point[0].y, -0.2f);
+  EXPECT_EQ(v->obstacles.point[1].x, kMax);
+  EXPECT_EQ(v->obstacles.point[1].y, -kMax);
+  EXPECT_EQ(v->obstacles.point[2].x, std::numeric_limits<float>::infinity());
+  EXPECT_EQ(v->obstacles.point[2].y, -std::numeric_limits<float>::infinity());
+  EXPECT_TRUE(std::isnan(v->obstacles.point[3].x));
+  EXPECT_EQ(v->obstacles.point[3].y, 0.0f);
+  buf.set_points(buf.quantity("obstacles"), narrow);
+  v = std::make_unique<facts::VisionInfo>(as<facts::VisionInfo>(buf));
+  EXPECT_EQ(v->obstacles.nPoints, 3);
+  EXPECT_EQ(v->obstacles.point[0].x, 0.1f);
+  EXPECT_EQ(v->obstacles.point[0].y, -0.2f);
+  EXPECT_TRUE(std::isnan(v->obstacles.point[1].x));
+  EXPECT_EQ(v->obstacles.point[1].y, 3.5f);
+  EXPECT_EQ(v->obstacles.point[2].x, -3.4e38f);
+  EXPECT_EQ(v->obstacles.point[2].y, 3.4e38f);
 }
 
 TEST_F(CambadaLayout, CommandsReadBackInSi) {
