@@ -3,7 +3,9 @@
 #include "canhil/vision_emu/gaussian.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 
@@ -165,6 +167,10 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
   const int n_obs = static_cast<int>(ray_cos_.size());
   thread_local std::vector<double> nearest;
   nearest.assign(static_cast<std::size_t>(n_obs), kInf);
+  // The sensors some circle's span reached, a bit each: most of the 240 see
+  // nothing, and the points are then taken from these alone, in sensor order.
+  thread_local std::vector<std::uint64_t> reached;
+  reached.assign((nearest.size() + 63) / 64, 0);
   const double step = 2 * kPi / n_obs;
   for (const Circle& c : circles) {
     if (c.dist - c.r > params_.obstacle_range_m) continue;
@@ -176,16 +182,26 @@ void Vision::see(const Scene& scene, std::size_t robot, NoiseEngine& rng, Vision
     auto i = static_cast<std::size_t>(((first % n_obs) + n_obs) % n_obs);  // one division, then wrap by hand
     for (int k = first; k <= last; ++k, i = i + 1 == nearest.size() ? 0 : i + 1) {
       const double t = ray_circle({ray_cos_[i], ray_sin_[i]}, c);
-      if (t < nearest[i]) nearest[i] = t;
+      if (t < nearest[i]) {
+        nearest[i] = t;
+        reached[i / 64] |= std::uint64_t{1} << (i % 64);
+      }
     }
   }
-  for (std::size_t i = 0; i < nearest.size(); ++i) {
-    if (nearest[i] > params_.obstacle_range_m) continue;
-    if (static_cast<int>(out.obstacles.size()) >= params_.max_obstacle_points) break;
-    if (detection < 1 && chance(rng) > detection) continue;
-    Eigen::Vector2d p(ray_cos_[i] * nearest[i], ray_sin_[i] * nearest[i]);
-    if (noisy) p += Eigen::Vector2d(point_noise(rng), point_noise(rng));
-    out.obstacles.push_back(p);
+  bool obstacle_room = true;
+  for (std::size_t w = 0; w < reached.size() && obstacle_room; ++w) {
+    for (std::uint64_t bits = reached[w]; bits != 0; bits &= bits - 1) {
+      const std::size_t i = w * 64 + static_cast<std::size_t>(std::countr_zero(bits));
+      if (nearest[i] > params_.obstacle_range_m) continue;
+      if (static_cast<int>(out.obstacles.size()) >= params_.max_obstacle_points) {
+        obstacle_room = false;
+        break;
+      }
+      if (detection < 1 && chance(rng) > detection) continue;
+      Eigen::Vector2d p(ray_cos_[i] * nearest[i], ray_sin_[i] * nearest[i]);
+      if (noisy) p += Eigen::Vector2d(point_noise(rng), point_noise(rng));
+      out.obstacles.push_back(p);
+    }
   }
 
   // --- line points: marking geometry in the robot frame, only what lies
