@@ -1,5 +1,6 @@
 #include "canhil/can_nodes/ftt.hpp"
 
+#include <bit>
 #include <numeric>
 #include <sstream>
 
@@ -42,6 +43,10 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   }
   std::uint64_t worst_ec = 0;
   Nanos longest{0};  // the longest synchronous window of the cycle
+  if (cycle <= kMostTabled) {
+    cycle_bitmaps_.resize(cycle);
+    for (std::uint64_t k = 0; k < cycle; ++k) cycle_bitmaps_[k] = due(k);
+  }
   for (std::uint64_t k = 0; k < cycle; ++k) {
     const Nanos w = sync_window(bitmap(k));
     if (w > longest) {
@@ -64,7 +69,7 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   }
 }
 
-std::uint32_t FttSchedule::bitmap(std::uint64_t ec_index) const noexcept {
+std::uint32_t FttSchedule::due(std::uint64_t ec_index) const noexcept {
   std::uint32_t b = 0;
   for (std::size_t i = 0; i < 32; ++i) {
     if (period_ecs_[i] != 0 && ec_index % period_ecs_[i] == 0) b |= 1u << i;
@@ -74,9 +79,7 @@ std::uint32_t FttSchedule::bitmap(std::uint64_t ec_index) const noexcept {
 
 Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
   Nanos w{0};
-  for (std::size_t i = 0; i < 32; ++i) {
-    if ((b >> i) & 1u) w += frame_time_[i];
-  }
+  for (; b != 0; b &= b - 1) w += frame_time_[static_cast<std::size_t>(std::countr_zero(b))];
   return w == Nanos{0} ? w : w + config_.sync_window_guard;
 }
 

@@ -5,7 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <utility>
 
+#include "canhil/frames/dbc.hpp"
 #include "canhil/frames/wire.hpp"
 #include "support/test_paths.hpp"
 
@@ -44,6 +49,32 @@ TEST_F(Ftt, TheWindowIsTheWorstCaseWireTimeOfWhatIsDuePlusTheGuard) {
   FttConfig slower = config;
   slower.bit_rate = 500'000;
   EXPECT_EQ(FttSchedule(*set_, slower).sync_window(s.bitmap(1)), 2 * 3 * frame + config.sync_window_guard);
+}
+
+TEST(FttScheduleCycles, ACycleTooLongToTableIsWorkedOutEachEcByTheSameRule) {
+  // M8 every 257 ECs and M9 every 256: the schedule repeats only after
+  // lcm(1, 3, 5, 256, 257) = 986 880 ECs, more than the schedule tables.
+  std::ifstream in(test::shipped_dbc());
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"BO_ 321 50;", "BO_ 321 2570;"},
+                                 std::pair<std::string, std::string>{"BO_ 337 30;", "BO_ 337 2560;"}}) {
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  }
+  const auto set = frames::MessageSet::create(frames::parse_dbc(text, "long_cycle.dbc"));
+  const auto shipped = frames::MessageSet::load(test::shipped_dbc());
+  const FttSchedule slow(*set, FttConfig{});
+  const FttSchedule tabled(*shipped, FttConfig{});
+  const auto bit = [&](const char* name) { return 1u << set->ftt(*set->codec().find(name)).index; };
+  const std::uint32_t m8 = bit("M8");
+  const std::uint32_t m9 = bit("M9");
+  for (const std::uint64_t ec : {0ULL, 1ULL, 255ULL, 256ULL, 257ULL, 512ULL, 771ULL, 65792ULL, 986880ULL, 986881ULL}) {
+    EXPECT_EQ((slow.bitmap(ec) & m8) != 0, ec % 257 == 0) << "EC " << ec;
+    EXPECT_EQ((slow.bitmap(ec) & m9) != 0, ec % 256 == 0) << "EC " << ec;
+    EXPECT_EQ(slow.bitmap(ec) & ~(m8 | m9), tabled.bitmap(ec) & ~(m8 | m9))
+        << "the other messages as shipped, EC " << ec;
+  }
 }
 
 TEST(FttScheduleChecks, RefusesAScheduleThatDoesNotFit) {

@@ -8,6 +8,7 @@
 // due (bit stuffing included) at the configured bit rate, plus a guard.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <string>
@@ -35,14 +36,22 @@ class FttSchedule {
 
   const FttConfig& config() const noexcept { return config_; }
   /// Synchronous messages due in EC `ec_index`, as sync_bitmap bits.
-  std::uint32_t bitmap(std::uint64_t ec_index) const noexcept;
+  std::uint32_t bitmap(std::uint64_t ec_index) const noexcept {
+    return cycle_bitmaps_.empty() ? due(ec_index) : cycle_bitmaps_[ec_index % cycle_bitmaps_.size()];
+  }
   /// Length of the synchronous window for a bitmap.
   Nanos sync_window(std::uint32_t bitmap) const noexcept;
 
  private:
+  // A cycle longer than this (periods with a huge least common multiple) is
+  // not tabled: bitmap() then works each EC's out.
+  static constexpr std::uint64_t kMostTabled = 1U << 16;
+  std::uint32_t due(std::uint64_t ec_index) const noexcept;
+
   FttConfig config_;
   std::array<std::uint32_t, 32> period_ecs_{};  // 0: no message at this index
   std::array<Nanos, 32> frame_time_{};
+  std::vector<std::uint32_t> cycle_bitmaps_;  // bitmap() of each EC of the cycle, the schedule repeating after it
 };
 
 }  // namespace canhil::can_nodes
