@@ -138,8 +138,7 @@ class CApiDatabase final : public Database {
   CApiDatabase& operator=(const CApiDatabase&) = delete;
 
   void put(int space, int owner, int id, std::span<const std::byte> bytes, int life_ms) override {
-    demand_slot(space, owner, id, bytes.size());
-    CANHIL_DEMAND(life_ms >= 0, "an RTDB item cannot be written with a negative age");
+    demand_put(space, owner, id, bytes.size(), life_ms);
     void* value = const_cast<std::byte*>(bytes.data());  // the C API's pointer is not const; it only reads
     int written = -1;
     if (scope() == Scope::kOneAgent && owner == space && life_ms == 0) {
@@ -149,9 +148,10 @@ class CApiDatabase final : public Database {
                     (library() + " has no DB_put_in: it writes only its own items, unaged").c_str());
       written = api_.put_in(first_space_ + space, owner, id, value, life_ms);
     }
-    CANHIL_DEMAND(written >= 0,
-                  (library() + " refused " + slot_name(space, owner, id) + ", which it had at open").c_str());
+    demand_written(written, space, owner, id);
   }
+
+  bool puts_ranges() const noexcept override { return api_.put_ranges != nullptr; }
 
   void put_ranges(int space, int owner, int id, std::span<const std::byte> bytes, std::span<const ByteRange> changed,
                   int life_ms) override {
@@ -160,8 +160,7 @@ class CApiDatabase final : public Database {
       put(space, owner, id, bytes, life_ms);
       return;
     }
-    demand_slot(space, owner, id, bytes.size());
-    CANHIL_DEMAND(life_ms >= 0, "an RTDB item cannot be written with a negative age");
+    demand_put(space, owner, id, bytes.size(), life_ms);
     std::array<std::size_t, 2 * kMost> flat{};
     for (std::size_t i = 0; i < changed.size(); ++i) {
       flat[2 * i] = changed[i].offset;
@@ -169,7 +168,7 @@ class CApiDatabase final : public Database {
     }
     const int written = api_.put_ranges(first_space_ + space, owner, id, bytes.data(), flat.data(),
                                         static_cast<int>(changed.size()), life_ms);
-    CANHIL_DEMAND(written >= 0, (library() + " refused ranges of " + slot_name(space, owner, id)).c_str());
+    demand_written(written, space, owner, id);
   }
 
   std::optional<int> get(int space, int owner, int id, std::span<std::byte> bytes) override {
@@ -221,6 +220,15 @@ class CApiDatabase final : public Database {
   std::string slot_name(int space, int owner, int id) const {
     return "item " + items().name(id) + " (id " + std::to_string(id) + ") of agent " + std::to_string(owner) +
            " in agent " + std::to_string(space) + "'s database";
+  }
+  // What put() and put_ranges() demand of their caller, and of the library's answer.
+  void demand_put(int space, int owner, int id, std::size_t size, int life_ms) const {
+    demand_slot(space, owner, id, size);
+    CANHIL_DEMAND(life_ms >= 0, "an RTDB item cannot be written with a negative age");
+  }
+  void demand_written(int written, int space, int owner, int id) const {
+    CANHIL_DEMAND(written >= 0,
+                  (library() + " refused " + slot_name(space, owner, id) + ", which it had at open").c_str());
   }
 
   CApi api_;

@@ -49,6 +49,7 @@ TEST_F(TeamDatabase, EveryAgentThroughTheTeamsLibrary) {
   auto db = open_library(team_rtdb_library(), table(), Scope::kAllAgents, files_.ini);
   EXPECT_EQ(db->spaces(), (std::vector<int>{0, 1, 2}));
   EXPECT_EQ(db->library(), team_rtdb_library());
+  EXPECT_FALSE(db->puts_ranges()) << "the team's library has no DB_put_ranges: whole items";
   const std::array<unsigned char, 16> vel{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
   db->put(kRobot1, kRobot1, kCmdVel, bytes_of(vel));
   EXPECT_EQ(standin_put_count(kRobot1, kCmdVel), 1) << "the write went through the team's library";
@@ -251,6 +252,7 @@ TEST_F(BuiltinDatabase, EveryAgent) {
   auto db = open_builtin(Scope::kAllAgents);
   EXPECT_EQ(static_cast<int>(db->spaces().size()), N_AGENTS);
   EXPECT_NE(db->library().find("canhil's linked RTDB"), std::string::npos);
+  EXPECT_TRUE(db->puts_ranges()) << "canhil's DB_put_ranges";
   EXPECT_EQ(db->require("CMD_VEL", sizeof(CMD_Vel), CAMBADA_2), CMD_VEL);
   const CMD_Vel v{1.5f, 0.5f, 0.25f, true};
   db->put(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_bytes(std::span(&v, 1)));

@@ -68,6 +68,8 @@ class Database {
     (void)changed;
     put(space, owner, id, bytes, life_ms);
   }
+  /// Whether put_ranges() writes only the ranges (else they need not be worked out).
+  virtual bool puts_ranges() const noexcept { return false; }
   /// Reads it into `bytes` (same preconditions). The age in ms,
   /// kNeverWritten for an item never written, or nullopt when the library
   /// says the item does not exist.
