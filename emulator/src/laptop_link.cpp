@@ -157,17 +157,19 @@ void LaptopLink::vision_frame(std::size_t robot, const vision_emu::VisionFrame& 
   Robot& r = *robots_.at(robot);
   rtdb::ItemBuffer& b = *r.vision;  // cleared when made; written only here since
   changed_.clear();
-  const auto put = [this, &b](rtdb::Quantity q, const std::vector<Eigen::Vector2d>& pts) {
+  // A library that takes whole items only (a team's own) needs no ranges.
+  std::vector<rtdb::ByteRange>* changed = r.vision_put && db_->puts_ranges() ? &changed_ : nullptr;
+  const auto put = [this, &b, changed](rtdb::Quantity q, const std::vector<Eigen::Vector2d>& pts) {
     points_.clear();
     for (const Eigen::Vector2d& p : pts) points_.push_back({p.x(), p.y()});
-    b.replace_points(q, points_, &changed_);
+    b.replace_points(q, points_, changed);
   };
   put(r.obstacles, frame.obstacles);
   put(r.lines, frame.lines);
   put(r.balls, frame.balls);
   // A frame's points fill a quarter of the item or so: the rest is as the
   // last frame left it, in the slot too (this is its only writer).
-  if (r.vision_put) {
+  if (changed != nullptr) {
     db_->put_ranges(r.agent, r.agent, r.vision_id, b.bytes(), changed_, 0);
   } else {
     db_->put(r.agent, r.agent, r.vision_id, b.bytes(), 0);
