@@ -97,6 +97,14 @@ MessageCodec::MessageCodec(const MessageDef& def) : def_(&def) {
     layouts_.push_back(l);
     initial_.push_back(l.initial);
   }
+  plain_integers_ = std::all_of(layouts_.begin(), layouts_.end(), [](const SignalLayout& l) {
+    return (l.type == ValueType::kUnsigned || l.type == ValueType::kSigned) && l.length <= 53 && l.factor == 1.0 &&
+           l.offset == 0.0;
+  });
+  if (plain_integers_) {
+    // What encode() makes of the initial value, before saturation: a whole number within 2^53.
+    for (const double v : initial_) initial_integers_.push_back(saturate_int64(std::nearbyint(v)));
+  }
 }
 
 std::optional<std::size_t> MessageCodec::index_of(std::string_view signal) const noexcept {
@@ -205,6 +213,11 @@ EncodeResult MessageCodec::encode(std::span<const double> values, CanFrame& out)
       le |= raw;
     }
   }
+  put_frame(le, be, out);
+  return r;
+}
+
+void MessageCodec::put_frame(std::uint64_t le, std::uint64_t be, CanFrame& out) const noexcept {
   le |= __builtin_bswap64(be);
   out = CanFrame{};
   out.id = def_->id;
@@ -212,6 +225,55 @@ EncodeResult MessageCodec::encode(std::span<const double> values, CanFrame& out)
   out.len = def_->length;
   std::memcpy(out.data.data(), &le, sizeof le);
   // Bytes past the length stay zero (the parser guarantees no signal reaches them).
+}
+
+DecodeResult MessageCodec::decode_integers(const CanFrame& frame, std::span<std::int64_t> out) const noexcept {
+  DecodeResult r;
+  if (frame.kind != FrameKind::kData) {
+    r.status = DecodeStatus::kNotData;
+    return r;
+  }
+  if (frame.len != def_->length) {
+    r.status = DecodeStatus::kWrongLength;
+    return r;
+  }
+  const std::uint64_t le = load_le(frame);
+  const std::uint64_t be = __builtin_bswap64(le);
+  const std::size_t n = layouts_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const SignalLayout& l = layouts_[i];
+    const std::uint64_t raw = ((l.motorola ? be : le) >> l.shift) & l.mask;
+    // At most 53 bits: an unsigned raw value is non-negative as int64.
+    const std::int64_t v = l.type == ValueType::kSigned ? sign_extend(raw, l.length) : static_cast<std::int64_t>(raw);
+    if (v < l.raw_min || v > l.raw_max) r.out_of_range |= std::uint64_t{1} << i;
+    out[i] = v;
+  }
+  return r;
+}
+
+EncodeResult MessageCodec::encode_integers(std::span<const std::int64_t> values, CanFrame& out) const noexcept {
+  EncodeResult r;
+  std::uint64_t le = 0;
+  std::uint64_t be = 0;
+  const std::size_t n = layouts_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const SignalLayout& l = layouts_[i];
+    std::int64_t v = values[i];
+    if (v < l.raw_min) {
+      v = l.raw_min;
+      r.saturated |= std::uint64_t{1} << i;
+    } else if (v > l.raw_max) {
+      v = l.raw_max;
+      r.saturated |= std::uint64_t{1} << i;
+    }
+    const std::uint64_t raw = (static_cast<std::uint64_t>(v) & l.mask) << l.shift;
+    if (l.motorola) {
+      be |= raw;
+    } else {
+      le |= raw;
+    }
+  }
+  put_frame(le, be, out);
   return r;
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <random>
 
@@ -244,6 +245,91 @@ TEST(MixedCodec, MotorolaFloatAndOffsetMatchHandWorkedBytes) {
   EXPECT_EQ(format_compact(f), "00000400#C000000000000000");
   ASSERT_EQ(e->decode(f, out).status, DecodeStatus::kOk);
   EXPECT_EQ(out[0], -2.0);
+}
+
+// Integer messages: Intel and Motorola, signed and unsigned, a declared range
+// narrower than the bits, 53 bits, start values (one beyond its range).
+constexpr const char* kIntegerDbc = R"(VERSION ""
+BU_: A B
+BO_ 512 INTS: 8 A
+ SG_ le_u5 : 0|5@1+ (1,0) [0|20] "" B
+ SG_ le_s11 : 5|11@1- (1,0) [-100|100] "" B
+ SG_ be_u12 : 23|12@0+ (1,0) [0|0] "" B
+ SG_ be_s9 : 27|9@0- (1,0) [0|0] "" B
+ SG_ le_s24 : 40|24@1- (1,0) [0|0] "" B
+BO_ 513 WIDE: 8 A
+ SG_ u53 : 0|53@1+ (1,0) [0|0] "" B
+ SG_ s11 : 53|11@1- (1,0) [0|0] "" B
+BO_ 514 SCALED: 8 A
+ SG_ a : 0|16@1- (1,0) [0|0] "" B
+ SG_ b : 16|16@1- (0.01,0) [0|0] "" B
+BA_DEF_ SG_  "GenSigStartValue" INT -2147483648 2147483647;
+BA_DEF_DEF_  "GenSigStartValue" 0;
+BA_ "GenSigStartValue" SG_ 512 le_s11 -7;
+BA_ "GenSigStartValue" SG_ 512 le_u5 30;
+)";
+
+TEST(IntegerCodec, GivesWhatTheGenericPathGivesForEveryFrameAndValue) {
+  const Codec codec(parse_dbc(kIntegerDbc, "ints.dbc"));
+  const Codec shipped(load_dbc(test::shipped_dbc()));
+  EXPECT_FALSE(codec.find("SCALED")->plain_integers()) << "a factor other than 1";
+  std::vector<const MessageCodec*> messages = {codec.find("INTS"), codec.find("WIDE")};
+  for (const char* name : {"TM", "M1", "M3_1"}) messages.push_back(shipped.find(name));
+  std::mt19937_64 rng(7);
+  for (const MessageCodec* m : messages) {
+    ASSERT_TRUE(m->plain_integers()) << m->name();
+    const std::size_t n = m->signal_count();
+    ASSERT_EQ(m->initial_integers().size(), n);
+    for (int trial = 0; trial < 20'000; ++trial) {
+      // Decoding: random bytes, now and then a wrong length or a remote frame.
+      CanFrame f;
+      f.id = m->id();
+      f.extended = m->def().extended;
+      f.len = static_cast<std::uint8_t>(trial % 97 == 0 ? 3 : m->def().length);
+      if (trial % 89 == 0) f.kind = FrameKind::kRemote;
+      const std::uint64_t bytes = rng();
+      std::memcpy(f.data.data(), &bytes, f.len);
+      std::array<double, kMaxSignals> as_doubles{};
+      std::array<std::int64_t, kMaxSignals> as_integers{};
+      const DecodeResult generic = m->decode(f, as_doubles);
+      const DecodeResult integers = m->decode_integers(f, as_integers);
+      ASSERT_EQ(integers.status, generic.status) << m->name() << " " << format_compact(f);
+      ASSERT_EQ(integers.out_of_range, generic.out_of_range) << m->name() << " " << format_compact(f);
+      if (generic.status == DecodeStatus::kOk) {
+        for (std::size_t i = 0; i < n; ++i) {
+          ASSERT_EQ(static_cast<double>(as_integers[i]), as_doubles[i]) << m->name() << " signal " << i;
+        }
+      }
+      // Encoding: values around and beyond each signal's range, or its start value.
+      std::array<std::int64_t, kMaxSignals> values{};
+      std::array<double, kMaxSignals> doubles{};
+      for (std::size_t i = 0; i < n; ++i) {
+        const SignalLayout& l = m->layout(i);
+        switch (rng() % 4) {
+          case 0:
+            values[i] = m->initial_integers()[i];
+            break;
+          case 1:
+            values[i] = (rng() % 2 != 0 ? l.raw_min : l.raw_max) + static_cast<std::int64_t>(rng() % 3) - 1;
+            break;
+          case 2:
+            values[i] = static_cast<std::int64_t>(rng() % (std::uint64_t{1} << 41)) - (std::int64_t{1} << 40);
+            break;
+          default:
+            values[i] =
+                l.raw_min + static_cast<std::int64_t>(rng() % static_cast<std::uint64_t>(l.raw_max - l.raw_min + 1));
+        }
+        doubles[i] = static_cast<double>(values[i]);
+        ASSERT_EQ(static_cast<double>(m->initial_integers()[i]), m->initial_values()[i]) << m->name() << " " << i;
+      }
+      CanFrame by_doubles;
+      CanFrame by_integers;
+      const EncodeResult a = m->encode(std::span<const double>(doubles.data(), n), by_doubles);
+      const EncodeResult b = m->encode_integers(std::span<const std::int64_t>(values.data(), n), by_integers);
+      ASSERT_EQ(b.saturated, a.saturated) << m->name();
+      ASSERT_EQ(format_compact(by_integers), format_compact(by_doubles)) << m->name();
+    }
+  }
 }
 
 // A database made in code skips the parser's checks: the codec itself must

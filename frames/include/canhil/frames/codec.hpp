@@ -85,10 +85,25 @@ class MessageCodec {
   /// Encodes `values` (size >= signal_count()) into a data frame of this message's id and length.
   EncodeResult encode(std::span<const double> values, CanFrame& out) const noexcept;
 
+  /// True when every signal is an integer of at most 53 bits with factor 1
+  /// and offset 0: its physical value is its raw value, and the two calls
+  /// below give what decode() and encode() give, without doubles.
+  bool plain_integers() const noexcept { return plain_integers_; }
+  /// decode() for plain_integers() messages: the values as integers.
+  DecodeResult decode_integers(const CanFrame& frame, std::span<std::int64_t> out) const noexcept;
+  /// encode() for plain_integers() messages: values outside a signal's range are saturated to it.
+  EncodeResult encode_integers(std::span<const std::int64_t> values, CanFrame& out) const noexcept;
+  /// initial_values() as integers (plain_integers() messages; empty otherwise).
+  std::span<const std::int64_t> initial_integers() const noexcept { return initial_integers_; }
+
  private:
+  void put_frame(std::uint64_t le, std::uint64_t be, CanFrame& out) const noexcept;
+
   const MessageDef* def_;
   std::vector<SignalLayout> layouts_;
   std::vector<double> initial_;
+  bool plain_integers_ = false;
+  std::vector<std::int64_t> initial_integers_;
 };
 
 /// The codec for a whole database; owns the Database it was built from.

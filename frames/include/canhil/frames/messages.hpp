@@ -159,8 +159,22 @@ CANHIL_MESSAGE_TRAITS(M10, "M10", field("alive", &M10::alive), field("errors", &
 /// A typed view of one message of a Codec. Cheap to copy; valid while the Codec lives.
 template <class T>
 class TypedCodec {
+  // Members whose every value is exact in a double and back: integers of up to 32 bits.
+  template <class Field>
+  struct SmallInteger;
+  template <class Struct, class Member>
+  struct SmallInteger<FieldRef<Struct, Member>>
+      : std::bool_constant<std::is_integral_v<Member> && sizeof(Member) <= sizeof(std::uint32_t)> {};
+  template <class Fields>
+  struct AllSmallIntegers;
+  template <class... Fields>
+  struct AllSmallIntegers<std::tuple<Fields...>> : std::bool_constant<(SmallInteger<Fields>::value && ...)> {};
+
  public:
   static constexpr std::size_t kFieldCount = std::tuple_size_v<decltype(MessageTraits<T>::kFields)>;
+  /// Every member an integer of up to 32 bits: on a MessageCodec::plain_integers()
+  /// message the values then go as integers, never through doubles (the same frames and values).
+  static constexpr bool kIntegerFields = AllSmallIntegers<std::remove_cv_t<decltype(MessageTraits<T>::kFields)>>::value;
 
   TypedCodec() = default;
   /// Binds by signal name; throws DbcError naming the message and the missing signal.
@@ -174,12 +188,14 @@ class TypedCodec {
     std::size_t k = 0;
     std::apply([&](const auto&... f) { ((index_[k++] = bind(codec.database().file, f.signal)), ...); },
                MessageTraits<T>::kFields);
+    integers_ = kIntegerFields && message_->plain_integers();
   }
 
   const MessageCodec& message() const noexcept { return *message_; }
 
   /// Encodes `value`; signals without a field keep their initial value.
   CanFrame encode(const T& value, EncodeResult* result = nullptr) const noexcept {
+    if (integers_) return encode_integers(value, result);
     std::array<double, kMaxSignals> values;  // only the first signal_count() are used; no zero fill
     const auto init = message_->initial_values();
     std::copy(init.begin(), init.end(), values.begin());
@@ -194,6 +210,7 @@ class TypedCodec {
 
   /// Decodes `frame` into `out`; `out` is untouched unless the status is kOk.
   DecodeResult decode(const CanFrame& frame, T& out) const noexcept {
+    if (integers_) return decode_integers(frame, out);
     std::array<double, kMaxSignals> values;  // decode fills the first signal_count()
     const DecodeResult r = message_->decode(frame, values);
     if (r.status != DecodeStatus::kOk) return r;
@@ -213,6 +230,31 @@ class TypedCodec {
     }
     return static_cast<std::uint8_t>(*i);
   }
+  CanFrame encode_integers(const T& value, EncodeResult* result) const noexcept {
+    std::array<std::int64_t, kMaxSignals> values;  // as encode()
+    const auto init = message_->initial_integers();
+    std::copy(init.begin(), init.end(), values.begin());
+    std::size_t k = 0;
+    std::apply([&](const auto&... f) { ((values[index_[k++]] = static_cast<std::int64_t>(value.*(f.member))), ...); },
+               MessageTraits<T>::kFields);
+    CanFrame frame;
+    const EncodeResult r =
+        message_->encode_integers(std::span<const std::int64_t>(values.data(), message_->signal_count()), frame);
+    if (result != nullptr) *result = r;
+    return frame;
+  }
+  DecodeResult decode_integers(const CanFrame& frame, T& out) const noexcept {
+    std::array<std::int64_t, kMaxSignals> values;  // as decode()
+    const DecodeResult r = message_->decode_integers(frame, values);
+    if (r.status != DecodeStatus::kOk) return r;
+    std::size_t k = 0;
+    std::apply(
+        [&](const auto&... f) {
+          ((out.*(f.member) = static_cast<std::remove_cvref_t<decltype(out.*(f.member))>>(values[index_[k++]])), ...);
+        },
+        MessageTraits<T>::kFields);
+    return r;
+  }
   template <class M>
   static void assign(M& member, double v) noexcept {
     if constexpr (std::is_floating_point_v<M>) {
@@ -224,6 +266,7 @@ class TypedCodec {
 
   const MessageCodec* message_ = nullptr;
   std::array<std::uint8_t, kFieldCount> index_{};
+  bool integers_ = false;  // kIntegerFields on a plain_integers() message
 };
 
 enum class FttKind : std::uint8_t { kTrigger, kSync, kAsync };
