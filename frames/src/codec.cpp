@@ -18,6 +18,19 @@ std::uint64_t load_le(const CanFrame& f) noexcept {
   return w;
 }
 
+// A payload as both byte orders' words: a signal's bits are a shift and a mask of one.
+struct Payload {
+  std::uint64_t le;  // Intel
+  std::uint64_t be;  // Motorola
+};
+Payload payload_of(const CanFrame& f) noexcept {
+  const std::uint64_t le = load_le(f);
+  return {le, __builtin_bswap64(le)};
+}
+std::uint64_t raw_of(const SignalLayout& l, const Payload& p) noexcept {
+  return ((l.motorola ? p.be : p.le) >> l.shift) & l.mask;
+}
+
 std::int64_t sign_extend(std::uint64_t raw, unsigned length) noexcept {
   if (length >= 64) return static_cast<std::int64_t>(raw);
   const std::uint64_t sign = std::uint64_t{1} << (length - 1);
@@ -115,28 +128,23 @@ std::optional<std::size_t> MessageCodec::index_of(std::string_view signal) const
 }
 
 std::uint64_t MessageCodec::raw_bits(const CanFrame& frame, std::size_t i) const noexcept {
-  const SignalLayout& l = layouts_[i];
-  std::uint64_t w = load_le(frame);
-  if (l.motorola) w = __builtin_bswap64(w);
-  return (w >> l.shift) & l.mask;
+  return raw_of(layouts_[i], payload_of(frame));
+}
+
+DecodeStatus MessageCodec::refusal(const CanFrame& frame) const noexcept {
+  if (frame.kind != FrameKind::kData) return DecodeStatus::kNotData;
+  if (frame.len != def_->length) return DecodeStatus::kWrongLength;
+  return DecodeStatus::kOk;
 }
 
 DecodeResult MessageCodec::decode(const CanFrame& frame, std::span<double> out) const noexcept {
   DecodeResult r;
-  if (frame.kind != FrameKind::kData) {
-    r.status = DecodeStatus::kNotData;
-    return r;
-  }
-  if (frame.len != def_->length) {
-    r.status = DecodeStatus::kWrongLength;
-    return r;
-  }
-  const std::uint64_t le = load_le(frame);
-  const std::uint64_t be = __builtin_bswap64(le);
-  const std::size_t n = layouts_.size();
-  for (std::size_t i = 0; i < n; ++i) {
+  r.status = refusal(frame);
+  if (r.status != DecodeStatus::kOk) return r;
+  const Payload payload = payload_of(frame);
+  for (std::size_t i = 0; i < layouts_.size(); ++i) {
     const SignalLayout& l = layouts_[i];
-    const std::uint64_t raw = ((l.motorola ? be : le) >> l.shift) & l.mask;
+    const std::uint64_t raw = raw_of(l, payload);
     double value = 0;
     switch (l.type) {
       case ValueType::kUnsigned: {
@@ -229,20 +237,12 @@ void MessageCodec::put_frame(std::uint64_t le, std::uint64_t be, CanFrame& out) 
 
 DecodeResult MessageCodec::decode_integers(const CanFrame& frame, std::span<std::int64_t> out) const noexcept {
   DecodeResult r;
-  if (frame.kind != FrameKind::kData) {
-    r.status = DecodeStatus::kNotData;
-    return r;
-  }
-  if (frame.len != def_->length) {
-    r.status = DecodeStatus::kWrongLength;
-    return r;
-  }
-  const std::uint64_t le = load_le(frame);
-  const std::uint64_t be = __builtin_bswap64(le);
-  const std::size_t n = layouts_.size();
-  for (std::size_t i = 0; i < n; ++i) {
+  r.status = refusal(frame);
+  if (r.status != DecodeStatus::kOk) return r;
+  const Payload payload = payload_of(frame);
+  for (std::size_t i = 0; i < layouts_.size(); ++i) {
     const SignalLayout& l = layouts_[i];
-    const std::uint64_t raw = ((l.motorola ? be : le) >> l.shift) & l.mask;
+    const std::uint64_t raw = raw_of(l, payload);
     // At most 53 bits: an unsigned raw value is non-negative as int64.
     const std::int64_t v = l.type == ValueType::kSigned ? sign_extend(raw, l.length) : static_cast<std::int64_t>(raw);
     if (v < l.raw_min || v > l.raw_max) r.out_of_range |= std::uint64_t{1} << i;

@@ -97,6 +97,8 @@ class MessageCodec {
   std::span<const std::int64_t> initial_integers() const noexcept { return initial_integers_; }
 
  private:
+  /// kOk when `frame` is a data frame of this message's length, else why not.
+  DecodeStatus refusal(const CanFrame& frame) const noexcept;
   void put_frame(std::uint64_t le, std::uint64_t be, CanFrame& out) const noexcept;
 
   const MessageDef* def_;
