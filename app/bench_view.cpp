@@ -1,21 +1,16 @@
 #include "bench_view.hpp"
 
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
+#include <atomic>
 #include <cstdio>
 #include <thread>
 
 #include "canhil/control/run_commands.hpp"
 #include "canhil/viewer/live_feed.hpp"
+#include "canhil/viewer/page_client.hpp"
 #include "virtual_loop.hpp"
 
 namespace canhil::app {
 namespace {
-
-namespace beast = boost::beast;
-namespace websocket = beast::websocket;
-using tcp = boost::asio::ip::tcp;
 
 // A page: connects and takes every message until told to stop; counts the states.
 class Page {
@@ -23,18 +18,10 @@ class Page {
   explicit Page(std::uint16_t port) {
     thread_ = std::thread([this, port] {
       try {
-        boost::asio::io_context io;
-        websocket::stream<beast::tcp_stream> ws(io);
-        tcp::resolver resolver(io);
-        beast::get_lowest_layer(ws).connect(*resolver.resolve("127.0.0.1", std::to_string(port)).begin());
-        ws.handshake("127.0.0.1", "/ws");
+        viewer::PageClient ws(port, "/ws");
         connected_ = true;
-        beast::flat_buffer b;
         while (!stop_) {
-          beast::get_lowest_layer(ws).expires_after(std::chrono::seconds(1));
-          ws.read(b);
-          if (beast::buffers_to_string(b.data()).find("\"type\":\"state\"") != std::string::npos) ++states_;
-          b.consume(b.size());
+          if (ws.receive(std::chrono::seconds(1)).find("\"type\":\"state\"") != std::string::npos) ++states_;
         }
       } catch (const std::exception&) {
         // the server went away or a read timed out at the end

@@ -18,8 +18,8 @@ namespace {
 
 using namespace canhil::frames;
 
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+std::atomic<bool> g_stop_dump{false};
+extern "C" void on_signal(int) { g_stop_dump = true; }
 
 /// Prints frames as they come and keeps the counts for the summary.
 class Printer {
@@ -128,7 +128,7 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   if (last != can_nodes::BusState::kUp)
     std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), can_nodes::state_name(last));
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  while (!g_stop && (count < 0 || static_cast<long long>(printer.frames()) < count) && clock.now() < deadline) {
+  while (!g_stop_dump && (count < 0 || static_cast<long long>(printer.frames()) < count) && clock.now() < deadline) {
     if (!bus->wait_readable(std::chrono::milliseconds(100))) {
       bus->refresh_state();
     }

@@ -14,8 +14,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_on_signal(int) { g_stop = true; }
+std::atomic<bool> g_stop_nodes{false};
+extern "C" void stop_on_signal(int) { g_stop_nodes = true; }
 
 // --emulate Motor1,Motor2,Motor3: the nodes canhil plays; the others are real boards on the bus.
 can_nodes::NodeSet parse_emulate(const std::string& text) {
@@ -77,8 +77,8 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   const Nanos end = duration_s > 0 ? start + from_seconds(duration_s) : kNever;
   Nanos next_report = start + std::chrono::seconds(5);
   const can_nodes::RobotNodes& nodes = *session.rig(0).nodes;
-  while (!g_stop && driver.clock().now() < end) {
-    driver.run_until(std::min(end, driver.clock().now() + std::chrono::seconds(1)), g_stop);
+  while (!g_stop_nodes && driver.clock().now() < end) {
+    driver.run_until(std::min(end, driver.clock().now() + std::chrono::seconds(1)), g_stop_nodes);
     for (const auto& [r, state] : driver.bus_state_changes()) {
       std::printf("canhil nodes: %s is %s\n", iface->c_str(), can_nodes::state_name(state));
       std::fflush(stdout);

@@ -16,8 +16,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_play(int) { g_stop = true; }
+std::atomic<bool> g_stop_play{false};
+extern "C" void stop_play(int) { g_stop_play = true; }
 
 std::vector<frames::LogEntry> read_trace(const std::string& path) {
   std::ifstream in(path);
@@ -81,7 +81,7 @@ int run_play(Args& args, const std::optional<std::string>&) {
   const Nanos start = clock.now() + std::chrono::milliseconds(20);
   std::uint64_t sent = 0, dropped = 0, skipped = 0, passes = 0;
   Nanos worst_late{0};
-  while (!g_stop) {
+  while (!g_stop_play) {
     const auto due = schedule.next();
     if (!due) break;
     passes = due->pass + 1;
@@ -91,8 +91,8 @@ int run_play(Args& args, const std::optional<std::string>&) {
       continue;
     }
     const Nanos deadline = start + due->at;
-    while (!g_stop && clock.now() < deadline) can_nodes::WallClock::sleep_until(deadline);
-    if (g_stop) break;
+    while (!g_stop_play && clock.now() < deadline) can_nodes::WallClock::sleep_until(deadline);
+    if (g_stop_play) break;
     worst_late = std::max(worst_late, clock.now() - deadline);
     if (bus->send(due->entry->frame) == can_nodes::SendStatus::kOk) {
       ++sent;
@@ -103,9 +103,9 @@ int run_play(Args& args, const std::optional<std::string>&) {
   std::printf(
       "canhil play: %s: %llu frame(s) sent in %llu pass(es), %llu not sent (interface down or queue full), "
       "%llu not mapped; worst lateness %.3f ms\n",
-      g_stop ? "stopped" : "done", static_cast<unsigned long long>(sent), static_cast<unsigned long long>(passes),
+      g_stop_play ? "stopped" : "done", static_cast<unsigned long long>(sent), static_cast<unsigned long long>(passes),
       static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(skipped), to_ms(worst_late));
-  return g_stop ? 130 : (dropped > 0 ? 1 : 0);
+  return g_stop_play ? 130 : (dropped > 0 ? 1 : 0);
 }
 
 }  // namespace canhil::app

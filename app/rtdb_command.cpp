@@ -20,8 +20,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_rtdb(int) { g_stop = true; }
+std::atomic<bool> g_stop_rtdb{false};
+extern "C" void stop_rtdb(int) { g_stop_rtdb = true; }
 
 int item_by_name(const std::string& name) {
   for (int i = 0; i < DB_item_count(); ++i) {
@@ -175,7 +175,7 @@ int run_rtdb(Args& args) {
                 static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.delay).count()),
                 cfg.loss);
     std::fflush(stdout);
-    rep.run([&clock] { return clock.now(); }, [](Nanos t) { can_nodes::WallClock::sleep_until(t); }, g_stop);
+    rep.run([&clock] { return clock.now(); }, [](Nanos t) { can_nodes::WallClock::sleep_until(t); }, g_stop_rtdb);
     std::printf("canhil rtdb replicate: %llu cycles, %llu copies, %llu lost\n",
                 static_cast<unsigned long long>(rep.stats().cycles),
                 static_cast<unsigned long long>(rep.stats().copied), static_cast<unsigned long long>(rep.stats().lost));
@@ -198,7 +198,7 @@ int run_rtdb(Args& args) {
                 age_text(age).c_str(), decode(words[2], raw).c_str());
     std::fflush(stdout);
     if (sub == "watch") std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  } while (sub == "watch" && !g_stop);
+  } while (sub == "watch" && !g_stop_rtdb);
   return 0;
 }
 

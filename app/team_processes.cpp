@@ -17,15 +17,16 @@
 #include "canhil/lockstep/conductor.hpp"
 
 namespace canhil::app {
+
+std::filesystem::path own_folder() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path() : exe.parent_path();
+}
+
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path own_folder() {
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? fs::path() : exe.parent_path();
-}
 
 // canhil's own laptop programs (canhil-hwcomm, canhil-agent) are found
 // without a path: installed beside canhil, or in the build tree's laptop/.

@@ -11,6 +11,7 @@
 #include <sys/types.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,9 @@
 #include "canhil/emulator/session.hpp"
 
 namespace canhil::app {
+
+/// The folder of the running canhil program (empty when /proc cannot say).
+std::filesystem::path own_folder();
 
 /// A command line with robot `robot`'s values in place of "{agent}",
 /// "{iface}", "{x}", "{y}", "{heading}" (its start placement in this run or

@@ -21,8 +21,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_timing(int) { g_stop = true; }
+std::atomic<bool> g_stop_timing{false};
+extern "C" void stop_timing(int) { g_stop_timing = true; }
 
 double number(const std::optional<std::string>& v, const char* name, double fallback) {
   if (!v) return fallback;
@@ -73,7 +73,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
     std::signal(SIGINT, stop_timing);
     if (!json)
       std::fprintf(stderr, "canhil timing: listening on %s for %.0f s (Ctrl-C stops early)\n", source.c_str(), seconds);
-    while (!g_stop && clock.now() < end) {
+    while (!g_stop_timing && clock.now() < end) {
       if (!bus->wait_readable(std::chrono::milliseconds(100))) continue;
       while (auto f = bus->receive()) analyzer.add(*f);
     }

@@ -13,8 +13,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_view(int) { g_stop = true; }
+std::atomic<bool> g_stop_view{false};
+extern "C" void stop_view(int) { g_stop_view = true; }
 
 }  // namespace
 
@@ -47,7 +47,7 @@ int run_view(Args& args, const std::optional<std::string>& dbc) {
   const auto server = start_viewer(view, *feed, "canhil view", stdout, /*required=*/true);
   std::signal(SIGINT, stop_view);
   std::signal(SIGTERM, stop_view);
-  serve_until(g_stop, duration.value_or(1e9));
+  serve_until(g_stop_view, duration.value_or(1e9));
   return 0;
 }
 

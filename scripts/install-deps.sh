@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
-# install-deps.sh — every system package canhil needs to build, test and run,
-# from Debian's archive. Idempotent and quick when everything is there.
+# install-deps.sh [main|all] — the system packages canhil needs, from Debian's
+# archive: `main` what the main job needs to build canhil and run it (the
+# compiler, the libraries, can-utils and the VM runner), `all` (the default)
+# also what the tests need (clang and its sanitizer runtime, the linters,
+# canmatrix, chromium). Idempotent and quick when everything is there.
 # Needs root (apt-get); CI and the developers' machines run as root.
 set -euo pipefail
 
+set_of="${1:-all}"
+[[ "$set_of" == main || "$set_of" == all ]] || { echo "install-deps: takes main or all, not $set_of" >&2; exit 2; }
 packages=(
-  # build
-  cmake ninja-build g++ clang libclang-rt-14-dev pkg-config clang-format clang-tidy
+  # build (ccache and mold speed it up; scripts/build.sh uses them where installed)
+  cmake ninja-build g++ pkg-config ccache mold
   libgtest-dev libgmock-dev libbenchmark-dev
   # physics
   libode-dev libeigen3-dev libtomlplusplus-dev
@@ -16,11 +21,17 @@ packages=(
   can-utils iproute2 kmod
   # the VM runner for kernels without CAN (vcan_setup/vm-run.sh)
   qemu-system-x86 linux-image-amd64 busybox-static cpio
-  # independent DBC decoder for the cross-check tests
-  python3 python3-canmatrix
-  # the viewer's browser tests (headless, driven by puppeteer-core from npm)
-  chromium
 )
+if [[ "$set_of" == all ]]; then
+  packages+=(
+    # the sanitized flavours and the lint step
+    clang libclang-rt-14-dev clang-format clang-tidy
+    # independent DBC decoder for the cross-check tests
+    python3 python3-canmatrix
+    # the viewer's browser tests (headless, driven by puppeteer-core from npm)
+    chromium
+  )
+fi
 
 # The viewer's page takes its one library (uPlot) from npm; the build copies it next to the page.
 npm_install() {

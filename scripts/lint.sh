@@ -1,16 +1,45 @@
 #!/usr/bin/env bash
 # lint.sh — clang-format check and clang-tidy (.clang-tidy) over canhil's own
-# sources, using build/plain's compile database. Fails on any finding.
+# sources, file by file with the plain build's compiler and flags (the compile
+# database of build/lint: scripts/build.sh lint configures it, since the
+# builds themselves compile sources in batches). Fails on any finding.
+#   scripts/lint.sh [--db BUILD_DIR] [--files REGEX] [--no-format]
+# --db: the build whose compile_commands.json to use (default build/lint,
+# configured first); --files: which of its files clang-tidy reads
+# (default canhil's sources); --no-format: clang-tidy only.
+# clang-tidy's result per file is cached (scripts/lint_tidy.py: a file whose
+# preprocessed text, arguments, configuration and clang-tidy are unchanged is
+# not analysed again); CANHIL_TIDY_CACHE=0 turns the cache off.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-[[ -f build/plain/compile_commands.json ]] || bash scripts/build.sh plain >/dev/null
-git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror
-# run-clang-tidy prints findings and exits non-zero on any (WarningsAsErrors).
-# -Wno-unknown-warning-option: the compile database is g++'s (its -Wno-restrict
-# is a g++ 12 workaround clang does not know).
-run-clang-tidy -p build/plain -quiet -extra-arg=-Wno-unknown-warning-option 'frames/src|can_nodes/src|kinematics/src|physics/src|emulator/src|rtdb/src|pman/src|laptop/src|vision_emu/src|timing/src|control/src|viewer/src|app/' > build/plain/clang-tidy.log 2>&1 || {
-  grep -E "error:|warning:" build/plain/clang-tidy.log | sort -u >&2
-  echo "lint: clang-tidy found problems (full log: build/plain/clang-tidy.log)" >&2
+db=build/lint
+files='frames/src|can_nodes/src|kinematics/src|physics/src|emulator/src|rtdb/src|pman/src|laptop/src|vision_emu/src|timing/src|control/src|viewer/src|app/'
+format=1
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --db) db=$2; shift 2 ;;
+    --files) files=$2; shift 2 ;;
+    --no-format) format=0; shift ;;
+    *) echo "lint.sh: unknown argument $1 (takes --db DIR, --files REGEX, --no-format)" >&2; exit 2 ;;
+  esac
+done
+if [[ "$db" == build/lint ]]; then
+  bash scripts/build.sh lint
+elif [[ ! -f "$db/compile_commands.json" ]]; then
+  echo "lint.sh: $db/compile_commands.json is missing" >&2
+  exit 2
+fi
+if [[ $format -eq 1 ]]; then
+  git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror
+fi
+cache=()
+[[ "${CANHIL_TIDY_CACHE:-1}" == 0 ]] && cache=(--cache '')
+# clang-tidy exits non-zero on any finding (WarningsAsErrors). The compile
+# database is g++'s: -Wno-unknown-warning-option for its g++-only warnings.
+python3 scripts/lint_tidy.py -p "$db" "${cache[@]}" "$files" > "$db/clang-tidy.log" 2>&1 || {
+  grep -E "error:|warning:" "$db/clang-tidy.log" | sort -u >&2
+  tail -1 "$db/clang-tidy.log" >&2
+  echo "lint: clang-tidy found problems (full log: $db/clang-tidy.log)" >&2
   exit 1
 }
-echo "lint: clang-format and clang-tidy clean"
+echo "lint: clang-format and clang-tidy clean ($(tail -1 "$db/clang-tidy.log" | sed 's/^lint_tidy: //'))"

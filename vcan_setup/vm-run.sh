@@ -38,7 +38,7 @@ die() { echo "vm-run: $*" >&2; exit 125; }
 need=()
 command -v qemu-system-x86_64 >/dev/null || need+=(qemu-system-x86)
 # a static busybox (ldd fails on static binaries) with insmod
-if ! [[ -x /bin/busybox ]] || ldd /bin/busybox >/dev/null 2>&1 || ! /bin/busybox --list | grep -qx insmod; then
+if ! [[ -x /bin/busybox ]] || ldd /bin/busybox >/dev/null 2>&1 || ! grep -qx insmod <<< "$(/bin/busybox --list)"; then
   need+=(busybox-static)
 fi
 command -v cpio >/dev/null || need+=(cpio)

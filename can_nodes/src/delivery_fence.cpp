@@ -11,12 +11,12 @@
 #include <cstring>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/memory_bus.hpp"
 
 namespace canhil::can_nodes {
 namespace {
 
 constexpr std::uint32_t kIdsPerSocket = 512;  // CAN_RAW_FILTER_MAX
-constexpr std::uint32_t kStandardIds = CAN_SFF_MASK + 1;
 constexpr int kReceiveBuffer = 1 << 20;
 
 std::string errno_text(int err) { return std::string(std::strerror(err)); }

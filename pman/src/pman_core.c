@@ -73,7 +73,6 @@ static int valid_name(const char* name) {
   return n > 0 && n <= PNAME_LEN;
 }
 
-static int slot_used(const PROC_TYPE* p) { return p->PROC_name[0] != '\0'; }
 
 static int slot_is(const PROC_TYPE* p, const char* name, size_t n) {
   return memcmp(p->PROC_name, name, n) == 0 && p->PROC_name[n] == '\0';

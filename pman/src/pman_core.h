@@ -29,6 +29,9 @@ typedef struct {
   canhil_pman_counters counters;
 } pman_view;
 
+/* A table slot holds a process (its name is set). */
+static inline int slot_used(const PROC_TYPE* p) { return p->PROC_name[0] != '\0'; }
+
 /* Set-up. create: a fresh, unpublished table (semaphore 0, held by the
  * creator); publish: semaphore 1. attach: a client's mapping, -16/-17/-18. */
 int pman_core_create(pman_view* v, key_t shm_key, key_t sem_key, int qos_size, pman_qos_fn qos_fn);

@@ -8,7 +8,6 @@
 
 #include "pman_core.h"
 
-static int slot_used(const PROC_TYPE* p) { return p->PROC_name[0] != '\0'; }
 
 /* A consistent copy of the slots, taken under the semaphore. */
 static int snapshot(pman_view* v, PROC_TYPE procs[PROC_TABLE_SIZE], int* ticks) {

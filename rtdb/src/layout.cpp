@@ -32,10 +32,6 @@ std::string format(const std::string& file, int line, const std::string& where, 
 
 constexpr std::array<std::string_view, 2> kShipped{"cambada", "canhil"};
 
-bool is_integer(ScalarType t) noexcept {
-  return t != ScalarType::kF32 && t != ScalarType::kF64 && t != ScalarType::kBool;
-}
-
 template <class T>
 T saturate(double v) noexcept {
   if (std::isnan(v)) return T{0};

@@ -34,6 +34,11 @@ std::span<const QuantityInfo> quantities_of(std::string_view item) noexcept;
 bool is_contract_item(std::string_view item) noexcept;
 std::span<const std::string_view> contract_items() noexcept;
 
+/// A whole-number type (not f32, f64 or bool).
+inline bool is_integer(ScalarType t) noexcept {
+  return t != ScalarType::kF32 && t != ScalarType::kF64 && t != ScalarType::kBool;
+}
+
 std::size_t edit_distance(std::string_view a, std::string_view b);
 /// ` did you mean X?` for the nearest candidate within distance 3, or "".
 std::string did_you_mean(std::string_view word, std::span<const std::string_view> candidates);

@@ -40,8 +40,6 @@ constexpr std::array<std::string_view, 2> kLayoutKeys{"name", "description"};
 
 int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
 
-bool is_integer(ScalarType t) { return t != ScalarType::kF32 && t != ScalarType::kF64 && t != ScalarType::kBool; }
-
 std::pair<double, double> range_of(ScalarType t) {
   switch (t) {
     case ScalarType::kI8:

@@ -8,15 +8,17 @@ build=$1
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 out=$(VIEW_HOLD=1 CANHIL_BUILD="$build" bash scripts/main.sh --no-realtime 2>&1)
 fail() { echo "FAIL: $*"; echo "$out"; exit 1; }
+# grep -q reads a here-string, never a pipe: it leaves at the first match, and
+# under pipefail the writer's SIGPIPE would fail the check that matched.
 lines=$(echo "$out" | wc -l)
 [[ $lines -le 110 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
 trace_lines=$(echo "$out" | grep -c '^(1700000000' || true)
 [[ $trace_lines -le 8 ]] || fail "$trace_lines lines of the sample trace (a few are enough)"
-echo "$out" | grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log' || fail "no decode summary"
-echo "$out" | grep -q 'GOAL at' || fail "the demo's outcome is missing"
-echo "$out" | grep -q 'FTT compliance: no violations' || fail "the demo's timing report is missing"
-echo "$out" | grep -q '^   virtual time: GOAL at' || fail "no closing line with the outcome"
-echo "$out" | tail -3 | grep -qE 'viewer (at|stays up)|no viewer' || fail "the main job does not end with the viewer's address"
+grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log' <<< "$out" || fail "no decode summary"
+grep -q 'GOAL at' <<< "$out" || fail "the demo's outcome is missing"
+grep -q 'FTT compliance: no violations' <<< "$out" || fail "the demo's timing report is missing"
+grep -q '^   virtual time: GOAL at' <<< "$out" || fail "no closing line with the outcome"
+grep -qE 'viewer (at|stays up)|no viewer' <<< "$(tail -3 <<< "$out")" || fail "the main job does not end with the viewer's address"
 while IFS= read -r header; do
   [[ "$header" == *"("*")"* ]] || fail "section header without where its files are: $header"
 done < <(echo "$out" | grep '^== [0-9]')

@@ -368,7 +368,7 @@ TEST(HostileNumbers, CodecStaysDefinedWhenTheRangeMissesTheBits) {
 }
 
 TEST(HostileNumbers, TheFuzzersFindingIsRefusedWithItsLine) {
-  const std::string path = std::string(CANHIL_TEST_SOURCE_DIR) + "/fuzz/corpus/dbc/regression-codec-raw-range-ub.dbc";
+  const std::string path = canhil::test::source_dir() + "/fuzz/corpus/dbc/regression-codec-raw-range-ub.dbc";
   try {
     load_dbc(path);
     FAIL() << "accepted";

@@ -13,6 +13,7 @@
 #include "canhil/lockstep/conductor.hpp"
 #include "canhil/pman/masters.hpp"
 #include "support/child_process.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -31,7 +32,7 @@ TEST(PmanLockstep, TheAgentRunsOneCycleAFrameAndNeverMissesItsDeadline) {
   std::string command = "env AGENT=" + std::to_string(kAgent) +
                         " TEAM_RTDB_KEY=" + std::to_string(0x7E200000 + ((getpid() & 0xFFF) << 8));
   for (const std::string& e : conductor.environment(CANHIL_TEST_TIMESHIM, nullptr)) command += " " + e;
-  ChildProcess agent(command + " " + CANHIL_TEST_TEAM_AGENT + " --ini " + CANHIL_TEST_SOURCE_DIR +
+  ChildProcess agent(command + " " + CANHIL_TEST_TEAM_AGENT + " --ini " + canhil::test::source_dir() +
                          "/tests/support/cambada_like/config/rtdb.ini",
                      "/tmp/canhil_lockstep_team_agent.log");
   ASSERT_GE(conductor.wait_attached(1, 10s), 1u) << agent.output();

@@ -1,11 +1,20 @@
 // tests/support/test_paths.hpp — where the tests find shipped files and binaries.
+// The paths are absolute and differ from one checkout to the next, so they live
+// in one generated unit (test_paths.cpp in the build tree, made by
+// tests/CMakeLists.txt) instead of a macro in every test: a second clone of
+// the same commit then compiles the tests to the same objects, and a compiler
+// cache shares them.
 #pragma once
 
 #include <string>
 
 namespace canhil::test {
-inline std::string shipped_dbc() { return CANHIL_TEST_SOURCE_DIR "/frames/canhil.dbc"; }
-inline std::string source_dir() { return CANHIL_TEST_SOURCE_DIR; }
-inline std::string canhil_binary() { return CANHIL_TEST_CANHIL_BINARY; }
-inline std::string build_dir() { return CANHIL_TEST_BUILD_DIR; }
+/// The checkout's root (the folder with frames/, emulator/, ...).
+std::string source_dir();
+/// The build tree's root.
+std::string build_dir();
+/// The `canhil` program of this build.
+std::string canhil_binary();
+/// frames/canhil.dbc in the checkout.
+inline std::string shipped_dbc() { return source_dir() + "/frames/canhil.dbc"; }
 }  // namespace canhil::test

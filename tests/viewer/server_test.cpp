@@ -1,5 +1,6 @@
-// The viewer's server without a browser: a WebSocket client of the test's
-// own (Boost.Beast) against a running session in virtual time. The hello,
+// The viewer's server without a browser: a WebSocket client written apart
+// from the server's library (viewer::PageClient, plain sockets) against a
+// running session in virtual time. The hello,
 // the state stream and its rate, every command and its effect on the world,
 // hostile messages refused with nothing changed, and the HTTP side: files
 // only from the page's folder, the token, the origin check.
@@ -8,11 +9,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <boost/asio/connect.hpp>
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/http.hpp>
-#include <boost/beast/websocket.hpp>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -21,46 +17,23 @@
 #include "canhil/control/save_commands.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/viewer/live_feed.hpp"
+#include "canhil/viewer/page_client.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::viewer {
 namespace {
 
-namespace beast = boost::beast;
-namespace http = beast::http;
-namespace websocket = beast::websocket;
-namespace net = boost::asio;
-using tcp = net::ip::tcp;
 using nlohmann::json;
 using namespace std::chrono_literals;
 
 // A page, as far as the protocol goes.
 class Client {
  public:
-  explicit Client(std::uint16_t port, const std::string& target = "/ws", const std::string& origin = "") : ws_(io_) {
-    tcp::resolver resolver(io_);
-    beast::get_lowest_layer(ws_).connect(*resolver.resolve("127.0.0.1", std::to_string(port)).begin());
-    ws_.set_option(websocket::stream_base::decorator([origin](websocket::request_type& req) {
-      if (!origin.empty()) req.set(http::field::origin, origin);
-    }));
-    beast::get_lowest_layer(ws_).expires_after(5s);
-    ws_.handshake("127.0.0.1:" + std::to_string(port), target);
-  }
-  void send(const std::string& text) {
-    beast::get_lowest_layer(ws_).expires_after(5s);
-    ws_.text(true);
-    ws_.write(net::buffer(text));
-  }
-  void send_binary(const std::string& bytes) {
-    ws_.binary(true);
-    ws_.write(net::buffer(bytes));
-  }
-  json next() {
-    beast::flat_buffer b;
-    beast::get_lowest_layer(ws_).expires_after(5s);
-    ws_.read(b);
-    return json::parse(beast::buffers_to_string(b.data()));
-  }
+  explicit Client(std::uint16_t port, const std::string& target = "/ws", const std::string& origin = "")
+      : page_(port, target, origin) {}
+  void send(const std::string& text) { page_.send_text(text); }
+  void send_binary(const std::string& bytes) { page_.send_binary(bytes); }
+  json next() { return json::parse(page_.receive(5s)); }
   // The next message of this type (others are skipped: states keep coming).
   json next(const std::string& type) {
     for (int i = 0; i < 1000; ++i) {
@@ -82,25 +55,11 @@ class Client {
   }
 
  private:
-  net::io_context io_;
-  websocket::stream<beast::tcp_stream> ws_;
+  PageClient page_;
 };
 
 // GET target -> (status, body)
-std::pair<int, std::string> get(std::uint16_t port, const std::string& target) {
-  net::io_context io;
-  beast::tcp_stream stream(io);
-  tcp::resolver resolver(io);
-  stream.connect(*resolver.resolve("127.0.0.1", std::to_string(port)).begin());
-  http::request<http::empty_body> req{http::verb::get, target, 11};
-  req.set(http::field::host, "127.0.0.1");
-  stream.expires_after(5s);
-  http::write(stream, req);
-  beast::flat_buffer b;
-  http::response<http::string_body> res;
-  http::read(stream, b, res);
-  return {static_cast<int>(res.result_int()), res.body()};
-}
+std::pair<int, std::string> get(std::uint16_t port, const std::string& target) { return http_get(port, target); }
 
 class ViewerServerTest : public ::testing::Test {
  protected:
@@ -290,9 +249,9 @@ TEST_F(ViewerServerTest, FilesOnlyFromThePagesFolder) {
 TEST_F(ViewerServerTest, BeyondLoopbackTheTokenIsNeededAndAForeignPageIsRefused) {
   serve("abc123");
   const auto port = server_->port();
-  EXPECT_THROW(Client(port, "/ws"), beast::system_error);
-  EXPECT_THROW(Client(port, "/ws?token=wrong"), beast::system_error);
-  EXPECT_THROW(Client(port, "/ws?token=abc123", "http://evil.example"), beast::system_error);
+  EXPECT_THROW(Client(port, "/ws"), PageClientError);
+  EXPECT_THROW(Client(port, "/ws?token=wrong"), PageClientError);
+  EXPECT_THROW(Client(port, "/ws?token=abc123", "http://evil.example"), PageClientError);
   Client ok(port, "/ws?token=abc123", "http://127.0.0.1:" + std::to_string(port));
   EXPECT_EQ(ok.next()["type"], "hello");
   EXPECT_EQ(get(port, "/api/replay").first, 403);
