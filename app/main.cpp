@@ -10,6 +10,7 @@
 
 #include "args.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/physics/solver_health.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -257,5 +258,8 @@ int main(int argc, char** argv) {
   } catch (const canhil::SetupError& e) {  // every other mistake a user can fix says what to do
     std::fprintf(stderr, "canhil: %s\n", e.what());
     return 2;
+  } catch (const canhil::physics::SolverError& e) {  // ODE stopped: the world cannot be simulated further
+    std::fprintf(stderr, "canhil: the physics stopped: %s (docs/physics.md, solver health)\n", e.what());
+    return 4;
   }
 }

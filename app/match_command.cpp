@@ -25,8 +25,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_match(int) { g_stop = true; }
+std::atomic<bool> g_stop_match{false};
+extern "C" void stop_match(int) { g_stop_match = true; }
 
 // Whole numbers only, in a range.
 long whole(Args& args, const std::string& name, long fallback, long low, long high) {
@@ -76,6 +76,16 @@ void print_table(const std::vector<std::string>& names, const std::vector<emulat
                 share(t[k].possession_s, t[1 - k].possession_s), t[k].shots, t[k].kicks,
                 static_cast<unsigned long long>(t[k].faults), static_cast<unsigned long long>(t[k].ftt_violations));
   }
+}
+
+// ODE's reports (physics/solver_health.hpp): the counts and the first few.
+nlohmann::json solver_json(const physics::SolverHealth& h) {
+  nlohmann::json first = nlohmann::json::array();
+  for (const physics::SolverReport& r : h.first) {
+    first.push_back(
+        {{"kind", physics::solver_report_kind_name(r.kind)}, {"code", r.code}, {"time_s", r.time_s}, {"text", r.text}});
+  }
+  return {{"messages", h.messages}, {"internal_errors", h.internal_errors}, {"errors", h.errors}, {"first", first}};
 }
 
 nlohmann::json tally_json(const emulator::TeamTally& t, const emulator::TeamTally& other, const std::string& name) {
@@ -174,12 +184,13 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   // Not between the lines of the teams' processes (their output is on stderr unless --logs).
   ProgressBar bar(!quiet && isatty(STDERR_FILENO) != 0 && !(external && !logs));
   std::vector<emulator::TeamTally> total(2);
+  physics::SolverHealth solver_total;
   std::vector<int> wins(3, 0);  // team 0, team 1, draws
   nlohmann::json matches = nlohmann::json::array();
   double wall = 0, simulated = 0;
   long played = 0;
   bool stuck = false;  // a process stopped answering: the match in progress is dropped
-  for (long k = 0; k < repeat && !g_stop; ++k) {
+  for (long k = 0; k < repeat && !g_stop_match; ++k) {
     scenario.seed = first_seed + static_cast<std::uint64_t>(k);
     match_number = static_cast<int>(k + 1);
     const std::string what = "match " + std::to_string(k + 1) + "/" + std::to_string(repeat);
@@ -190,7 +201,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
           [&](double s) {
             bar.show((static_cast<double>(k) * match_s + s) / (static_cast<double>(repeat) * match_s), what);
           },
-          &g_stop);
+          &g_stop_match);
     } catch (const SetupError& e) {
       bar.done();
       throw UsageError(path + ": " + e.what());
@@ -206,6 +217,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     wall += r.wall_s;
     simulated += r.virtual_s;
     for (std::size_t t = 0; t < 2; ++t) total[t] += r.teams[t];
+    solver_total.add(r.solver);
     const auto winner = r.winner();
     ++wins[winner ? *winner : 2];
     if (json) {
@@ -217,6 +229,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
            {"teams", {tally_json(r.teams[0], r.teams[1], names[0]), tally_json(r.teams[1], r.teams[0], names[1])}},
            {"goals", goals},
            {"referee_calls", r.referee_calls},
+           {"solver", solver_json(r.solver)},
            {"winner", winner ? nlohmann::json(names[*winner]) : nlohmann::json(nullptr)},
            {"virtual_s", r.virtual_s},
            {"wall_s", r.wall_s},
@@ -231,6 +244,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
       std::printf("  goal  half %d  %6.1f s  %s\n", g.half + 1, g.time_s, names[g.team].c_str());
     }
     print_table(names, r.teams);
+    if (r.solver.total() > 0) std::printf("  physics: %s\n", r.solver.summary().c_str());
     std::fflush(stdout);
   }
   if (json) {
@@ -242,10 +256,11 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
         {"total",
          {{"teams", {tally_json(total[0], total[1], names[0]), tally_json(total[1], total[0], names[1])}},
           {"wins", {{names[0], wins[0]}, {names[1], wins[1]}}},
-          {"draws", wins[2]}}},
+          {"draws", wins[2]},
+          {"solver", solver_json(solver_total)}}},
         {"virtual_s", simulated},
         {"wall_s", wall},
-        {"stopped", g_stop.load() || stuck}};
+        {"stopped", g_stop_match.load() || stuck}};
     std::printf("%s\n", out.dump(2).c_str());
   } else if (played > 1) {
     std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s); %.0f s of play in %.1f s (%s)\n", played,
@@ -253,8 +268,9 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
                 factor(simulated, wall).c_str());
     print_table(names, total);
   }
+  if (!json && played > 0) std::printf("physics: %s over the match(es)\n", solver_total.summary().c_str());
   if (stuck) return kProcessStuckStatus;
-  return g_stop ? 130 : 0;
+  return g_stop_match ? 130 : 0;
 }
 
 }  // namespace canhil::app

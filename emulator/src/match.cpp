@@ -181,6 +181,7 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
       result.goals.push_back({half, to_seconds(g.time), team});
     }
     if (const Referee* referee = session.referee()) result.referee_calls += referee->calls().size();
+    result.solver.add(session.world().solver_health());
     for (std::size_t r = 0; r < s.robot_count(); ++r) {
       TeamTally& t = half_tally[s.team_of(r)];
       for (const can_nodes::FaultCount& c : session.rig(r).faults->counts()) t.faults += c.applied;

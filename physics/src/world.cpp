@@ -2,65 +2,33 @@
 
 #include <ode/ode.h>
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
-#include <bit>
 #include <cmath>
-#include <cstdint>
-#include <deque>
 #include <mutex>
-#include <numbers>
 #include <stdexcept>
 
 #include "canhil/base/demand.hpp"
 #include "canhil/base/setup_error.hpp"
-#include "convex.hpp"
-#include "islands.hpp"
+#include "solver_scope.hpp"
+#include "world_impl.hpp"
 
 namespace canhil::physics {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using detail::Canon;
+using detail::Kind;
+using detail::Tag;
+using detail::vec;
+
 constexpr int kMaxContacts = 8;
 
 void init_ode_once() {
   static std::once_flag once;
-  std::call_once(once, [] { dInitODE2(0); });
+  std::call_once(once, [] {
+    dInitODE2(0);
+    detail::install_solver_handlers();
+  });
 }
-
-enum class Kind : std::uint8_t { kGround, kStatic, kBall, kChassis, kWheel, kObstacle };
-
-/// What a geom is; stored as the geom's data pointer. `id` is the creation
-/// order, used to process collision pairs in an order that does not depend on
-/// the spaces' internal history.
-struct Tag {
-  Kind kind;
-  int owner = -1;  // robot or obstacle index
-  int wheel = -1;
-  int id = 0;
-};
-
-// Quaternions: dBodySetQuaternion renormalises, which can change the last bit
-// of a quaternion ODE itself produced (and of the rotation matrix made from
-// it), and renormalising is not always idempotent. So every body's quaternion
-// is, after each step, fed once through dBodySetQuaternion and that input is
-// kept (Canon::q_in). Saving records the input and restoring feeds the same
-// input again, so ODE's internal q and R come back bit for bit.
-struct Canon {
-  dBodyID body = nullptr;
-  std::array<double, 4> q_in{1, 0, 0, 0};
-
-  void capture() {
-    const dReal* q = dBodyGetQuaternion(body);
-    q_in = {q[0], q[1], q[2], q[3]};
-    apply();
-  }
-  void apply() const {
-    const dQuaternion q = {q_in[0], q_in[1], q_in[2], q_in[3]};
-    dBodySetQuaternion(body, q);
-  }
-};
 
 BodyState read_body(const Canon& c) {
   dBodyID b = c.body;
@@ -95,138 +63,7 @@ void write_body(Canon& c, const BodyState& s) {
   }
 }
 
-Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
-
-double yaw_of(dBodyID b) {
-  const dReal* r = dBodyGetRotation(b);  // row-major 3x4
-  return std::atan2(r[4], r[0]);         // angle of the body's +x axis
-}
-
 }  // namespace
-
-struct RobotImpl {
-  World::Impl* world = nullptr;
-  int index = 0;
-  const RobotParams* params = nullptr;
-  kinematics::OmniKinematics kinematics;
-  dBodyID chassis = nullptr;
-  std::array<dBodyID, 3> wheel{};
-  std::array<dJointID, 3> hinge{};
-  std::array<dJointFeedback, 3> feedback{};
-  std::array<Eigen::Vector3d, 3> axle_body{};  // hinge axis in chassis coordinates
-  dSpaceID space = nullptr;                    // this robot's geoms (no self-collision)
-  std::vector<std::unique_ptr<Tag>> tags;
-  std::vector<ConvexShape> shapes;
-  RobotState state;
-  double z_body = 0;  // height of the chassis body origin
-
-  explicit RobotImpl(const RobotParams& p) : params(&p), kinematics(p.geometry) {}
-  /// yaw_of(chassis), remembered with the two entries of the rotation it was
-  /// computed from (bit for bit): a step's pose is asked for several times.
-  double yaw() const {
-    const dReal* r = dBodyGetRotation(chassis);
-    const auto r0 = std::bit_cast<std::uint64_t>(r[0]);
-    const auto r4 = std::bit_cast<std::uint64_t>(r[4]);
-    if (!yaw_known_ || r0 != yaw_r0_ || r4 != yaw_r4_) {
-      yaw_ = yaw_of(chassis);
-      yaw_r0_ = r0;
-      yaw_r4_ = r4;
-      yaw_known_ = true;
-    }
-    return yaw_;
-  }
-  Eigen::Vector3d front() const {
-    const double h = yaw() + kPi / 2;
-    return {std::cos(h), std::sin(h), 0};
-  }
-  double supply_v() const;
-  /// Wheel n's axle (hinge axis) in world coordinates.
-  Eigen::Vector3d axle_world(std::size_t n) const {
-    const dReal* rot = dBodyGetRotation(chassis);  // row-major 3x4
-    const Eigen::Vector3d& a = axle_body[n];
-    return {rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z(), rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z(),
-            rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z()};
-  }
-
- private:
-  mutable bool yaw_known_ = false;
-  mutable std::uint64_t yaw_r0_ = 0;
-  mutable std::uint64_t yaw_r4_ = 0;
-  mutable double yaw_ = 0;
-};
-
-struct RobotAccess {
-  static RobotImpl& impl(const Robot& r) { return *r.impl_; }
-  static std::unique_ptr<Robot> make(std::unique_ptr<RobotImpl> impl) {
-    return std::unique_ptr<Robot>(new Robot(std::move(impl)));
-  }
-};
-
-struct World::Impl {
-  WorldParams params;
-  std::vector<Canon> canon;  // every dynamic body, in creation order
-  Canon& canon_of(dBodyID b) {
-    for (Canon& c : canon) {
-      if (c.body == b) return c;
-    }
-    body_index.push_back(static_cast<int>(canon.size()));
-    dBodySetData(b, &body_index.back());
-    canon.push_back(Canon{b, {1, 0, 0, 0}});
-    return canon.back();
-  }
-  /// A body's place in `canon` (its data pointer); -1 for the static world.
-  static int index_of(dBodyID b) { return b == nullptr ? -1 : *static_cast<const int*>(dBodyGetData(b)); }
-  std::deque<int> body_index;     // each body's data points at its entry (a deque: entries never move)
-  Islands islands;                // this substep's, as ODE will form them
-  std::vector<char> big;          // per body: in an island stepped by QuickStep
-  std::vector<char> was_enabled;  // per body, across the two passes of a split step
-  std::uint64_t split_substeps = 0;
-  FieldMarkings markings;
-  dWorldID world = nullptr;
-  dSpaceID statics = nullptr;   // ground, goals, boundary, static obstacles
-  dSpaceID dynamics = nullptr;  // ball, robots (as sub-spaces), movable obstacles
-  dJointGroupID contacts = nullptr;
-  dBodyID ball = nullptr;
-  std::vector<std::unique_ptr<Robot>> robots;
-  std::vector<dBodyID> obstacle_bodies;  // nullptr for static obstacles
-  std::vector<dGeomID> obstacle_geoms;
-  std::vector<int> obstacle_idle;  // steps still, per obstacle
-  std::vector<ConvexShape> shapes;
-  std::vector<std::unique_ptr<Tag>> tags;
-  double time = 0;
-  unsigned long seed = 1;
-  bool ball_on_ground = false;
-
-  explicit Impl(WorldParams p);
-  ~Impl();
-  Tag* tag(Kind k, int owner = -1, int wheel = -1) {
-    tags.push_back(std::make_unique<Tag>(Tag{k, owner, wheel, next_tag_id++}));
-    return tags.back().get();
-  }
-  int next_tag_id = 0;
-  struct Pair {
-    std::uint64_t order;  // the lower creation id, then the higher: the order contacts are made in
-    dGeomID a, b;         // a has the lower id
-  };
-  std::vector<Pair> pairs;  // candidate pairs of the current substep
-  void add_static_box(double cx, double cy, double cz, double lx, double ly, double lz) {
-    dGeomID g = dCreateBox(statics, lx, ly, lz);
-    dGeomSetPosition(g, cx, cy, cz);
-    dGeomSetData(g, tag(Kind::kStatic));
-  }
-  void build_field();
-  void build_ball();
-  void build_robot(int index, const Placement& at);
-  void build_obstacle(int index, const ObstaclePlacement& o);
-  void substep(double h);
-  void step_split(double h);
-  void collide(dGeomID a, dGeomID b);
-  void apply_robot_inputs(RobotImpl& r);
-  void update_robot_after(RobotImpl& r, double h);
-  void apply_grabber(RobotImpl& r);
-  RobotImpl& robot(std::size_t i) { return RobotAccess::impl(*robots[i]); }
-  const RobotImpl& robot(std::size_t i) const { return RobotAccess::impl(*robots[i]); }
-};
 
 // ---------------------------------------------------------------------------
 // Construction
@@ -235,6 +72,18 @@ World::Impl::Impl(WorldParams p) : params(std::move(p)), markings(field_markings
   init_ode_once();
   const SimulationParams& s = params.simulation;
   if (!(s.step_s > 0) || s.substeps < 1) throw SetupError("simulation step and substeps must be positive");
+  const detail::SolverScope scope(solver, time);
+  try {
+    build();
+  } catch (...) {  // ODE stopped (SolverError): what was made so far is released
+    release();
+    throw;
+  }
+}
+
+void World::Impl::build() {
+  const SimulationParams& s = params.simulation;
+
   seed = s.seed;
   world = dWorldCreate();
   dWorldSetGravity(world, 0, 0, -s.gravity_mps2);
@@ -255,12 +104,17 @@ World::Impl::Impl(WorldParams p) : params(std::move(p)), markings(field_markings
   for (std::size_t i = 0; i < params.obstacles.size(); ++i) build_obstacle(static_cast<int>(i), params.obstacles[i]);
 }
 
-World::Impl::~Impl() {
+World::Impl::~Impl() { release(); }
+
+void World::Impl::release() noexcept {
   robots.clear();
-  dJointGroupDestroy(contacts);
-  dSpaceDestroy(dynamics);  // destroys contained geoms and sub-spaces (cleanup mode on)
-  dSpaceDestroy(statics);
-  dWorldDestroy(world);
+  if (contacts != nullptr) dJointGroupDestroy(contacts);
+  if (dynamics != nullptr) dSpaceDestroy(dynamics);  // destroys contained geoms and sub-spaces (cleanup mode on)
+  if (statics != nullptr) dSpaceDestroy(statics);
+  if (world != nullptr) dWorldDestroy(world);
+  contacts = nullptr;
+  dynamics = statics = nullptr;
+  world = nullptr;
 }
 
 void World::Impl::build_field() {
@@ -345,7 +199,7 @@ void World::Impl::build_robot(int index, const Placement& at) {
   // a positive hinge rate drives the base along F_n.
   const double wr = p.geometry.wheel_radius_m;
   for (std::size_t n = 0; n < 3; ++n) {
-    const double phi = p.geometry.wheel_angles_deg[n] * kPi / 180.0;
+    const double phi = p.geometry.wheel_angles_deg[n] * detail::kPi / 180.0;
     const Eigen::Vector3d u(std::cos(phi), std::sin(phi), 0);
     r.axle_body[n] = -u;
     dBodyID w = dBodyCreate(world);
@@ -386,7 +240,7 @@ void World::Impl::build_obstacle(int index, const ObstaclePlacement& o) {
     g = shapes.back().create(dynamics, body);
     dBodySetPosition(body, o.at.x_m, o.at.y_m, o.params.height_m / 2);
     dMatrix3 rot;
-    dRFromAxisAndAngle(rot, 0, 0, 1, o.at.heading_deg * kPi / 180.0);
+    dRFromAxisAndAngle(rot, 0, 0, 1, o.at.heading_deg * detail::kPi / 180.0);
     dBodySetRotation(body, rot);
     canon_of(body).capture();
   } else {
@@ -439,7 +293,7 @@ void World::Impl::apply_grabber(RobotImpl& r) {
   if (dist > g.range_m || dist < 1e-9) return;
   const Eigen::Vector3d front = r.front();
   const double bearing = std::acos(std::clamp(d.dot(front) / dist, -1.0, 1.0));
-  if (bearing > g.half_angle_deg * kPi / 180.0) return;
+  if (bearing > g.half_angle_deg * detail::kPi / 180.0) return;
   if (ball_pos.z() > r.params->barrier.max_height_m + params.ball.radius_m) return;
   // Pull towards the back of the mouth.
   const double hold = r.params->body_radius_m - r.params->mouth_depth_m + params.ball.radius_m;
@@ -660,7 +514,7 @@ void check_start_positions(const WorldParams& p) {
   const double ball_r = p.ball.radius_m;
   // A ball held in a robot's mouth (the front cut-out) is inside its disc but not its body.
   auto in_mouth = [&](std::size_t robot) {
-    const double yaw = p.robots[robot].heading_deg * kPi / 180.0;
+    const double yaw = p.robots[robot].heading_deg * detail::kPi / 180.0;
     const double dx = p.ball_start.x_m - p.robots[robot].x_m;
     const double dy = p.ball_start.y_m - p.robots[robot].y_m;
     const double across = std::cos(yaw) * dx + std::sin(yaw) * dy;  // robot frame, +x
@@ -691,6 +545,7 @@ World::~World() = default;
 const WorldParams& World::params() const noexcept { return impl_->params; }
 const FieldMarkings& World::markings() const noexcept { return impl_->markings; }
 double World::time_s() const noexcept { return impl_->time; }
+const SolverHealth& World::solver_health() const noexcept { return impl_->solver; }
 std::uint64_t World::large_island_substeps() const noexcept { return impl_->split_substeps; }
 std::size_t World::robot_count() const noexcept { return impl_->robots.size(); }
 Robot& World::robot(std::size_t i) { return *impl_->robots.at(i); }
@@ -706,6 +561,7 @@ Eigen::Vector3d World::obstacle_position(std::size_t i) const {
 }
 
 void World::step() {
+  const detail::SolverScope scope(impl_->solver, impl_->time);
   const SimulationParams& s = impl_->params.simulation;
   const double h = s.step_s / s.substeps;
   for (int k = 0; k < s.substeps; ++k) impl_->substep(h);
@@ -805,172 +661,6 @@ void World::restore(const WorldState& s) {
     }
   }
   impl_->obstacle_idle = s.obstacle_idle_steps;
-}
-
-// ---------------------------------------------------------------------------
-// Robot
-
-Robot::Robot(std::unique_ptr<RobotImpl> impl) : impl_(std::move(impl)) {}
-Robot::~Robot() = default;
-const RobotParams& Robot::params() const { return *impl_->params; }
-
-namespace {
-std::size_t wheel_index(int wheel) {
-  CANHIL_DEMAND(wheel >= 0 && wheel < 3, "wheel index must be 0, 1 or 2");
-  return static_cast<std::size_t>(wheel);
-}
-}  // namespace
-
-void Robot::set_wheel_speed(int wheel, double radps) {
-  const std::size_t n = wheel_index(wheel);
-  impl_->state.wheel_target_radps[n] = std::isfinite(radps) ? radps : 0.0;
-}
-void Robot::brake() {
-  for (int n = 0; n < 3; ++n) set_wheel_speed(n, 0.0);
-}
-double Robot::wheel_angle_rad(int wheel) const { return impl_->state.wheel_angle_rad[wheel_index(wheel)]; }
-double Robot::wheel_speed_radps(int wheel) const { return dJointGetHingeAngleRate(impl_->hinge[wheel_index(wheel)]); }
-std::int64_t Robot::encoder_count(int wheel) const {
-  return static_cast<std::int64_t>(std::floor(impl_->params->encoder.counts(wheel_angle_rad(wheel))));
-}
-double Robot::motor_current_a(int wheel) const { return impl_->state.motor_current_a[wheel_index(wheel)]; }
-bool Robot::over_current(int wheel) const {
-  return std::fabs(motor_current_a(wheel)) >= 0.98 * impl_->params->motor.current_limit_a;
-}
-bool Robot::wheel_stalled(int wheel) const {
-  const std::size_t n = wheel_index(wheel);
-  const double stall = impl_->params->motor.stall_speed_radps;
-  const bool commanded = std::fabs(impl_->state.wheel_target_radps[n]) > stall;
-  return commanded && std::fabs(wheel_speed_radps(wheel)) < stall && over_current(wheel);
-}
-
-bool Robot::ball_engaged() const {
-  const BarrierParams& b = impl_->params->barrier;
-  const Eigen::Vector3d centre = vec(dBodyGetPosition(impl_->chassis));
-  const Eigen::Vector3d ball = vec(dBodyGetPosition(impl_->world->ball));
-  Eigen::Vector3d d = ball - centre;
-  d.z() = 0;
-  const double dist = d.norm();
-  if (dist > b.max_distance_m || ball.z() > b.max_height_m) return false;
-  if (dist < 1e-9) return true;
-  const double bearing = std::acos(std::clamp(d.dot(impl_->front()) / dist, -1.0, 1.0));
-  return bearing <= b.half_angle_deg * kPi / 180.0;
-}
-
-KickOutcome kick_outcome(const KickerParams& kicker, int power, bool ball_engaged, double kicker_voltage_v) noexcept {
-  if (std::clamp(power, 0, kicker.max_power) == 0) return KickOutcome::kNoPower;
-  if (!ball_engaged) return KickOutcome::kNotEngaged;
-  if (kicker_voltage_v < kicker.min_fire_voltage_v) return KickOutcome::kLowVoltage;
-  return KickOutcome::kFired;
-}
-
-KickResult Robot::kick(bool low, int power) {
-  const KickerParams& k = impl_->params->kicker;
-  KickResult result;
-  RobotState& st = impl_->state;
-  result.outcome = kick_outcome(k, power, ball_engaged(), st.kicker_voltage_v);
-  if (!result.fired()) return result;
-  const int p = std::clamp(power, 0, k.max_power);
-  const double g = impl_->world->params.simulation.gravity_mps2;
-  const double theta = k.lob_angle_deg * kPi / 180.0;
-  const double v_max = std::sqrt(k.max_lob_range_m * g / std::sin(2.0 * theta));
-  const double speed = v_max * p / k.max_power * (st.kicker_voltage_v / k.full_voltage_v);
-  const Eigen::Vector3d front = impl_->front();
-  Eigen::Vector3d launch = low ? Eigen::Vector3d(front * speed)
-                               : Eigen::Vector3d(front.x() * std::cos(theta) * speed,
-                                                 front.y() * std::cos(theta) * speed, std::sin(theta) * speed);
-  // The kick adds to the robot's own motion at the ball.
-  const Eigen::Vector3d ball = vec(dBodyGetPosition(impl_->world->ball));
-  dVector3 v_at_ball;
-  dBodyGetPointVel(impl_->chassis, ball.x(), ball.y(), ball.z(), v_at_ball);
-  launch += Eigen::Vector3d(v_at_ball[0], v_at_ball[1], 0);
-  dBodySetLinearVel(impl_->world->ball, launch.x(), launch.y(), launch.z());
-  dBodySetAngularVel(impl_->world->ball, 0, 0, 0);
-  st.kicker_voltage_v *= std::sqrt(std::max(0.0, 1.0 - k.energy_per_full_kick * p / k.max_power));
-  st.grabber_release_left_s = k.grabber_release_s;
-  st.last_kick_time_s = impl_->world->time;
-  result.speed_mps = speed;
-  return result;
-}
-
-void Robot::set_grabber(int mode) { impl_->state.grabber_mode = std::clamp(mode, 0, 100); }
-int Robot::grabber_mode() const { return impl_->state.grabber_mode; }
-double Robot::kicker_voltage_v() const { return impl_->state.kicker_voltage_v; }
-double Robot::last_kick_time_s() const { return impl_->state.last_kick_time_s; }
-
-double Robot::compass_heading_deg() const {
-  const double front_yaw_deg = (impl_->yaw() + kPi / 2) * 180.0 / kPi;
-  double h = std::fmod(impl_->params->compass.north_offset_deg - front_yaw_deg, 360.0);
-  if (h < 0) h += 360.0;
-  return h >= 360.0 ? 0.0 : h;
-}
-
-BatteryVolts Robot::battery() const {
-  const BatteryParams& bp = impl_->params->battery;
-  const RobotState& st = impl_->state;
-  double motors = 0;
-  for (double i : st.motor_current_a) motors += std::fabs(i);
-  auto volts = [&](const RailParams& r, double charge, double current) {
-    return std::max(0.0, r.empty_v + (r.full_v - r.empty_v) * charge - current * r.internal_resistance_ohm);
-  };
-  return BatteryVolts{volts(bp.logic, st.charge[0], bp.logic.base_current_a),
-                      volts(bp.power12, st.charge[1], bp.power12.base_current_a),
-                      volts(bp.power24, st.charge[2], bp.power24.base_current_a + motors)};
-}
-
-std::array<double, 3> Robot::charge() const { return impl_->state.charge; }
-
-void Robot::drain(const std::array<double, 3>& fraction) {
-  for (std::size_t i = 0; i < fraction.size(); ++i) {
-    impl_->state.charge[i] = std::clamp(impl_->state.charge[i] - fraction[i], 0.0, 1.0);
-  }
-}
-
-kinematics::Pose Robot::pose() const {
-  const dReal* p = dBodyGetPosition(impl_->chassis);
-  return kinematics::Pose{p[0], p[1], impl_->yaw()};
-}
-
-kinematics::Twist Robot::twist() const {
-  const dReal* v = dBodyGetLinearVel(impl_->chassis);
-  const dReal* w = dBodyGetAngularVel(impl_->chassis);
-  const double yaw = impl_->yaw();
-  const double c = std::cos(yaw);
-  const double s = std::sin(yaw);
-  return kinematics::Twist{c * v[0] + s * v[1], -s * v[0] + c * v[1], w[2]};
-}
-
-void Robot::place(const Placement& at) {
-  RobotImpl& r = *impl_;
-  const double yaw = at.heading_deg * kPi / 180.0;
-  dMatrix3 rot;
-  dRFromAxisAndAngle(rot, 0, 0, 1, yaw);
-  dBodySetPosition(r.chassis, at.x_m, at.y_m, r.z_body);
-  dBodySetRotation(r.chassis, rot);
-  dBodySetLinearVel(r.chassis, 0, 0, 0);
-  dBodySetAngularVel(r.chassis, 0, 0, 0);
-  const double c = std::cos(yaw);
-  const double s = std::sin(yaw);
-  const RobotParams& p = *r.params;
-  for (std::size_t n = 0; n < 3; ++n) {
-    const double phi = p.geometry.wheel_angles_deg[n] * kPi / 180.0;
-    const double lx = p.geometry.wheel_distance_m * std::cos(phi);
-    const double ly = p.geometry.wheel_distance_m * std::sin(phi);
-    const double wz = p.geometry.wheel_radius_m;
-    dBodySetPosition(r.wheel[n], at.x_m + c * lx - s * ly, at.y_m + s * lx + c * ly, wz);
-    dBodySetRotation(r.wheel[n], rot);
-    dBodySetLinearVel(r.wheel[n], 0, 0, 0);
-    dBodySetAngularVel(r.wheel[n], 0, 0, 0);
-    // Re-attach so the hinge's reference angle is this pose.
-    dJointAttach(r.hinge[n], r.wheel[n], r.chassis);
-    dJointSetHingeAnchor(r.hinge[n], at.x_m + c * lx - s * ly, at.y_m + s * lx + c * ly, wz);
-    const Eigen::Vector3d& a = r.axle_body[n];
-    dJointSetHingeAxis(r.hinge[n], c * a.x() - s * a.y(), s * a.x() + c * a.y(), a.z());
-    dJointSetHingeParam(r.hinge[n], dParamFMax, 0);
-    r.state.hinge_angle_rad[n] = dJointGetHingeAngle(r.hinge[n]);
-  }
-  r.world->canon_of(r.chassis).capture();
-  for (dBodyID w : r.wheel) r.world->canon_of(w).capture();
 }
 
 }  // namespace canhil::physics

@@ -75,6 +75,7 @@ struct MatchResult {
   std::vector<TeamTally> teams;  ///< in the scenario's order
   std::vector<MatchGoal> goals;
   std::size_t referee_calls = 0;
+  physics::SolverHealth solver;  ///< what ODE reported over every half
   double virtual_s = 0;
   double wall_s = 0;
   bool stopped = false;  ///< cut short (the stop flag): the figures so far

@@ -24,6 +24,7 @@
 #include "canhil/kinematics/omni.hpp"
 #include "canhil/physics/field.hpp"
 #include "canhil/physics/params.hpp"
+#include "canhil/physics/solver_health.hpp"
 
 namespace canhil::physics {
 
@@ -159,6 +160,9 @@ class World {
   /// Advances the world by params().simulation.step_s.
   void step();
   double time_s() const noexcept;
+  /// What ODE reported while this world was built and stepped (solver_health.hpp).
+  /// A world whose ODE stopped threw SolverError from the constructor or step().
+  const SolverHealth& solver_health() const noexcept;
   /// Substeps so far in which an island larger than
   /// simulation.exact_solver_max_rows went to QuickStep (a scrum).
   std::uint64_t large_island_substeps() const noexcept;
