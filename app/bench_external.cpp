@@ -78,7 +78,7 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   options.external = true;
   emulator::Session session(sc, options);
   ExternalRun run;
-  run.duration_s = bench.seconds;
+  run.length = {bench.seconds, "the bench"};
   run.quiet = true;
   ExternalFigures fig;
   const int status = run_external(session, run, bench.shim, bench.team_preload, &fig);

@@ -179,7 +179,7 @@ JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator
       }
     } null;
     RealtimeOutput output;
-    output.duration_s = seconds;
+    output.length = {seconds, "the bench"};
     output.out = null.file != nullptr ? null.file : stdout;
     run_realtime(run, options, output);
   }

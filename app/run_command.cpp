@@ -30,8 +30,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_run(int) { g_stop = true; }
+std::atomic<bool> g_stop_run{false};
+extern "C" void stop_run(int) { g_stop_run = true; }
 
 void write_file(const std::string& path, const std::string& text, const char* what) {
   std::ofstream out(path);
@@ -52,7 +52,7 @@ physics::WorldState load_world(const std::string& path) {
 void print_virtual_summary(const emulator::Session& session, const emulator::VirtualDriver& driver, double wall_s) {
   const double simulated = to_seconds(driver.now());
   std::printf("canhil run: %s after %.2f s of virtual time in %.2f s of wall time (%.0fx real time)\n",
-              g_stop ? "stopped" : "done", simulated, wall_s, wall_s > 0 ? simulated / wall_s : 0.0);
+              g_stop_run ? "stopped" : "done", simulated, wall_s, wall_s > 0 ? simulated / wall_s : 0.0);
   const Eigen::Vector3d b = session.world().ball_position();
   std::printf("  ball at (%.2f, %.2f)\n", b.x(), b.y());
   const auto& teams = session.scenario().teams;
@@ -88,6 +88,7 @@ void print_virtual_summary(const emulator::Session& session, const emulator::Vir
   for (const auto& c : session.fault_counts()) {
     std::printf("  fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
   }
+  std::fputs(session.world().solver_health().describe("  ").c_str(), stdout);
 }
 
 struct VirtualOutputs {
@@ -99,20 +100,20 @@ struct VirtualOutputs {
 // The run's clock as the viewer and the control socket set it (pause, step,
 // speed): virtual time goes as far as RunControl's plan says, and while it
 // stands the session still takes changes (a robot dragged while paused moves).
-int run_virtual(emulator::Session& session, double duration, const VirtualOutputs& out, emulator::RunControl& control,
-                viewer::LiveFeed& feed) {
+int run_virtual(emulator::Session& session, const emulator::RunLength& length, const VirtualOutputs& out,
+                emulator::RunControl& control, viewer::LiveFeed& feed) {
   emulator::VirtualOptions options;
   options.record_trace = out.trace.has_value();  // a long run without --trace keeps no frames
   emulator::VirtualDriver driver(session, options);
   const emulator::Scenario& sc = session.scenario();
-  std::printf("canhil run: %zu robot(s), virtual time, %g s, seed %llu, %zu fault rule(s)\n", sc.robot_count(),
-              duration, static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  std::printf("canhil run: %zu robot(s), virtual time, %g s (%s), seed %llu, %zu fault rule(s)\n", sc.robot_count(),
+              length.seconds, length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
   std::fflush(stdout);
   std::signal(SIGINT, stop_run);
   std::signal(SIGTERM, stop_run);
-  const Nanos total = from_seconds(duration);
+  const Nanos total = from_seconds(length.seconds);
   const auto wall_start = std::chrono::steady_clock::now();
-  drive_virtual(driver, session, control, total, g_stop, [&] {
+  drive_virtual(driver, session, control, total, g_stop_run, [&] {
     if (out.quiet) return;
     const emulator::WorldSnapshot s = session.snapshot();
     const auto o = driver.outcomes();
@@ -141,7 +142,7 @@ int run_virtual(emulator::Session& session, double duration, const VirtualOutput
     write_file(*out.world_log, session.world_log(), "world log");
     std::printf("world log written to %s (CSV, one line every %g s)\n", out.world_log->c_str(), out.log_period_s);
   }
-  return g_stop ? 130 : 0;
+  return g_stop_run ? 130 : 0;
 }
 
 // The run's control socket (canhil coach, scripts): --control PATH (an error
@@ -229,7 +230,6 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
   const double rx_buffer_kb = number_option(args, "--rx-buffer-kb", 1024);
   const double priority = number_option(args, "--priority", 40);
-  const double duration = duration_given.value_or(scenario.duration_s);
   outputs.log_period_s = number_option(args, "--world-log-period", 0.05);
   scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
   if (seed) scenario.seed = *seed;
@@ -241,7 +241,13 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   if (wait_for && !(*wait_for >= 1 && *wait_for <= 64 && *wait_for == static_cast<int>(*wait_for))) {
     throw UsageError("--wait-for takes a number of processes, 1..64");
   }
-  if (!(duration > 0)) throw UsageError("--duration takes seconds above 0");
+  const emulator::RunLength length = [&] {
+    try {
+      return scenario.run_length(duration_given, !virtual_time);
+    } catch (const SetupError& e) {
+      throw UsageError(e.what());
+    }
+  }();
   double speed = 0;  // as fast as possible
   if (speed_text && *speed_text != "max") {
     char* end = nullptr;
@@ -294,7 +300,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     rt.receive_buffer_bytes = static_cast<int>(rx_buffer_kb * 1024);
     rt.priority = static_cast<int>(priority);
     RealtimeOutput output;
-    output.duration_s = duration_given.value_or(0);  // none: until Ctrl-C
+    output.length = length;
     output.quiet = outputs.quiet;
     output.save_world = outputs.save_world;
     const auto s = session();
@@ -306,7 +312,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     log_commands(commands, shown.get());
     const int status = run_realtime(*s, rt, output);
     feed.set_ended();
-    hold_viewer(view, shown.get(), "canhil run", g_stop, stdout);
+    hold_viewer(view, shown.get(), "canhil run", g_stop_run, stdout);
     return status;
   }
   if (std::getenv("RTDB_KEY") == nullptr) {
@@ -329,7 +335,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     control::Commands commands(*s);
     const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
     ExternalRun run;
-    run.duration_s = duration;
+    run.length = length;
     run.quiet = outputs.quiet;
     run.trace = outputs.trace;
     run.world_log = outputs.world_log;
@@ -348,8 +354,8 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   log_commands(commands, shown.get());
   if (start_paused)
     std::printf("canhil run: paused at the start (resume or step from the viewer or the control socket)\n");
-  const int status = run_virtual(*s, duration, outputs, clock, feed);
-  hold_viewer(view, shown.get(), "canhil run", g_stop, stdout);
+  const int status = run_virtual(*s, length, outputs, clock, feed);
+  hold_viewer(view, shown.get(), "canhil run", g_stop_run, stdout);
   return status;
 }
 

@@ -28,16 +28,10 @@ namespace fs = std::filesystem;
 constexpr const char* kRestartedVariable = "CANHIL_TIMESHIM_RESTARTED";
 constexpr const char* kTeamPreloadVariable = "CANHIL_TEAM_PRELOAD";
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_external(int) { g_stop = true; }
+std::atomic<bool> g_stop_run_external{false};
+extern "C" void stop_external(int) { g_stop_run_external = true; }
 
 double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
-
-fs::path own_folder() {
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? fs::path() : exe.parent_path();
-}
 
 void write_text(const std::string& path, const std::string& text, const char* what) {
   std::ofstream out(path);
@@ -75,6 +69,7 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
   for (const auto& c : session.fault_counts()) {
     std::printf("  fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());
   }
+  std::fputs(session.world().solver_health().describe("  ").c_str(), stdout);
 }
 
 }  // namespace
@@ -156,8 +151,8 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   driver_options.start_limit = from_seconds(side.attach_limit_s);
   emulator::ExternalDriver driver(session, conductor, driver_options);
   const std::size_t robots = session.robot_count();
-  std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s, seed %llu\n", robots,
-              run.duration_s, static_cast<unsigned long long>(session.scenario().seed));
+  std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s (%s), seed %llu\n", robots,
+              run.length.seconds, run.length.source.c_str(), static_cast<unsigned long long>(session.scenario().seed));
   std::size_t expected = 0;
   const std::vector<std::string> environment =
       conductor.environment(shim, team_preload.empty() ? nullptr : team_preload.c_str());
@@ -186,9 +181,9 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     status = kProcessStuckStatus;
     how = "not started";
   } else {
-    const Nanos total = from_seconds(run.duration_s);
+    const Nanos total = from_seconds(run.length.seconds);
     try {
-      while (driver.now() < total && !g_stop) {
+      while (driver.now() < total && !g_stop_run_external) {
         driver.run_until(std::min<Nanos>(driver.now() + std::chrono::seconds(1), total));
         started.reap(driver.now());
         if (const std::string why = started.not_started(); !why.empty()) throw emulator::ProcessStuck(why);
@@ -206,7 +201,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
       status = kProcessStuckStatus;
       how = "stopped (a process did not answer, or never ran)";
     }
-    if (g_stop && status == 0) {
+    if (g_stop_run_external && status == 0) {
       status = 130;
       how = "stopped";
     }

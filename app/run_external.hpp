@@ -17,7 +17,7 @@
 namespace canhil::app {
 
 struct ExternalRun {
-  double duration_s = 20;
+  emulator::RunLength length{20, "the default"};
   bool quiet = false;
   std::optional<std::string> trace, world_log;
   double log_period_s = 0.05;

@@ -8,8 +8,8 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void stop_realtime(int) { g_stop = true; }
+std::atomic<bool> g_stop_run_realtime{false};
+extern "C" void stop_realtime(int) { g_stop_run_realtime = true; }
 
 void print_summary(FILE* out, const emulator::Session& session, const emulator::RealtimeDriver& driver, Nanos now) {
   const emulator::RealtimeStats st = driver.physics_stats();
@@ -17,7 +17,7 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
   const Eigen::Vector3d b = world.ball_position();
   std::fprintf(out,
                "canhil run: %s after %.2f s; physics steps %llu, late %llu, skipped %llu, worst lateness %.1f ms\n",
-               g_stop ? "stopped" : "done", to_seconds(now - driver.start_time()),
+               g_stop_run_realtime ? "stopped" : "done", to_seconds(now - driver.start_time()),
                static_cast<unsigned long long>(st.physics_steps), static_cast<unsigned long long>(st.late_steps),
                static_cast<unsigned long long>(st.skipped_steps), to_ms(st.worst_lateness));
   std::fprintf(out, "  ball at (%.2f, %.2f); %zu goal(s)\n", b.x(), b.y(), session.goals().size());
@@ -39,6 +39,7 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
     }
   }
   if (const emulator::LaptopLink* laptop = session.laptop()) std::fputs(laptop->summary().c_str(), out);
+  std::fputs(world.solver_health().describe("  ").c_str(), out);
 }
 
 }  // namespace
@@ -50,10 +51,10 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   std::signal(SIGINT, stop_realtime);
   std::signal(SIGTERM, stop_realtime);
   char length[32] = "until Ctrl-C";
-  if (output.duration_s > 0) std::snprintf(length, sizeof length, "%g s", output.duration_s);
+  if (output.length.seconds > 0) std::snprintf(length, sizeof length, "%g s", output.length.seconds);
   const emulator::Scenario& sc = session.scenario();
-  std::fprintf(out, "canhil run: %zu robot(s), real time, %s, seed %llu, %zu fault rule(s)\n", sc.robot_count(), length,
-               static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  std::fprintf(out, "canhil run: %zu robot(s), real time, %s (%s), seed %llu, %zu fault rule(s)\n", sc.robot_count(),
+               length, output.length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
     std::fprintf(out, "  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,
@@ -64,13 +65,13 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
     }
   }
   std::fflush(out);
-  const Nanos end = output.duration_s > 0 ? start + from_seconds(output.duration_s) : kNever;
+  const Nanos end = output.length.seconds > 0 ? start + from_seconds(output.length.seconds) : kNever;
   Nanos next_report = start + std::chrono::seconds(1);
   std::size_t goals_reported = 0;
   driver.start();
   bool priority_said = false;
-  while (!g_stop && driver.clock().now() < end) {
-    driver.run_until(std::min(end, driver.clock().now() + std::chrono::milliseconds(200)), g_stop);
+  while (!g_stop_run_realtime && driver.clock().now() < end) {
+    driver.run_until(std::min(end, driver.clock().now() + std::chrono::milliseconds(200)), g_stop_run_realtime);
     if (!priority_said && !driver.priority_problem().empty()) {
       std::fprintf(out, "canhil run: %s\n", driver.priority_problem().c_str());
       priority_said = true;
@@ -99,7 +100,7 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
     physics::save_state(session.world().save(), *output.save_world);
     std::fprintf(out, "  world saved to %s (start a run from it with --restore-world)\n", output.save_world->c_str());
   }
-  return g_stop ? 130 : 0;
+  return g_stop_run_realtime ? 130 : 0;
 }
 
 }  // namespace canhil::app

@@ -12,7 +12,7 @@
 namespace canhil::app {
 
 struct RealtimeOutput {
-  double duration_s = 0;                  ///< 0: until Ctrl-C (or `stop`)
+  emulator::RunLength length;             ///< seconds 0: until Ctrl-C (or `stop`)
   bool quiet = false;                     ///< no progress lines
   FILE* out = stdout;                     ///< where everything goes (a benchmark passes /dev/null)
   std::optional<std::string> save_world;  ///< where to save the world at the end

@@ -17,10 +17,12 @@ for a in "$@"; do
   esac
 done
 if [[ -z "${CANHIL_BUILD:-}" ]]; then
-  bash scripts/install-deps.sh
-  echo "== building canhil (build/plain; the full log in build/plain/main-build.log)"
+  bash scripts/install-deps.sh main
+  echo "== building canhil, canhil-hwcomm and canhil-agent (build/plain; the full log in build/plain/main-build.log)"
   mkdir -p build/plain
-  bash scripts/build.sh plain >build/plain/main-build.log 2>&1 || { tail -20 build/plain/main-build.log; exit 1; }
+  # Only the programs this job runs; scripts/test.sh builds the rest.
+  bash scripts/build.sh plain canhil canhil-hwcomm canhil-agent >build/plain/main-build.log 2>&1 ||
+    { tail -20 build/plain/main-build.log; exit 1; }
 fi
 bin=${CANHIL_BUILD:-build/plain}
 canhil=$bin/app/canhil

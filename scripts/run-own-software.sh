@@ -4,12 +4,13 @@
 # libraries and layout, `canhil-hwcomm` as the robot's handler on the same
 # RTDB, and the team's agent. Ctrl-C (or the agent ending) stops them in
 # order: the handler, then the run (which closes the PMan tables: the agent
-# gets SIGINT), and prints the run's summary. Logs go to --logs (default
+# gets SIGINT), and prints the run's summary. The run lasts until then, or
+# --duration S seconds (the scenario's duration_s is not used here). Logs go to --logs (default
 # ./canhil-own-software/).
 #
 #   scripts/run-own-software.sh [--canhil DIR] [--config SCENARIO.toml] [--iface vcan0] [--agent-number 1]
 #       [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]
-#       [--pman-lib LIB] [--agent-dir DIR] [--logs DIR] -- AGENT_COMMAND [ARG...]
+#       [--pman-lib LIB] [--agent-dir DIR] [--logs DIR] [--duration S] -- AGENT_COMMAND [ARG...]
 #
 # --canhil: the folder with canhil's programs (app/canhil and laptop/canhil-hwcomm
 # of a build, or an installed bin/); default build/plain, else what is on PATH.
@@ -18,12 +19,13 @@ set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 die() { echo "run-own-software.sh: $*" >&2; exit 2; }
 
-canhil_dir="" config="" iface=vcan0 agent=1 layout="" pman_lib="" agent_dir="" logs="$PWD/canhil-own-software"
+canhil_dir="" config="" duration=0 iface=vcan0 agent=1 layout="" pman_lib="" agent_dir="" logs="$PWD/canhil-own-software"
 rtdb=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --canhil) canhil_dir=$2; shift 2 ;;
     --config) config=$2; shift 2 ;;
+    --duration) duration=$2; shift 2 ;;
     --iface) iface=$2; shift 2 ;;
     --agent-number) agent=$2; shift 2 ;;
     --rtdb-lib|--rtdb-items|--rtdb-ini) rtdb+=("$1" "$2"); shift 2 ;;
@@ -51,6 +53,7 @@ laptop=("${rtdb[@]}")
 [[ -n "$layout" ]] && laptop+=(--layout "$layout")
 run_args=(run)
 [[ -n "$config" ]] && run_args+=(--config "$config")
+run_args+=(--duration "$duration")  # 0: until Ctrl-C
 run_args+=("${laptop[@]}")
 [[ -n "$pman_lib" ]] && run_args+=(--pman-lib "$pman_lib")
 

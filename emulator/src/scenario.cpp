@@ -18,6 +18,7 @@ void read_run(const TableReader& r, Scenario& s, std::size_t robots) {
     const auto v = n->value<double>();
     if (!v || !(*v > 0)) r.fail(*n, "duration_s", "must be a number of seconds above 0");
     s.duration_s = *v;
+    s.duration_given = true;
   }
   if (const toml::node* n = r.get("seed")) {
     const auto v = n->value<std::int64_t>();
@@ -315,6 +316,20 @@ std::filesystem::path shipped_scenario(const std::string& name) {
     if (fs::exists(installed, ec)) return installed;
   }
   return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
+}
+
+RunLength Scenario::run_length(std::optional<double> flag, bool realtime) const {
+  if (flag) {
+    if (realtime && *flag == 0) return {0, "--duration 0"};
+    if (!(*flag > 0)) {
+      throw SetupError(realtime ? "--duration takes seconds above 0, or 0 for until Ctrl-C"
+                                : "--duration takes seconds above 0");
+    }
+    return {*flag, "--duration"};
+  }
+  if (duration_given) return {duration_s, "the scenario's duration_s"};
+  if (realtime) return {0, "no --duration, no duration_s in the scenario"};
+  return {duration_s, "the default: no duration_s in the scenario"};
 }
 
 }  // namespace canhil::emulator

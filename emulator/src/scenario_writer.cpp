@@ -27,8 +27,9 @@ std::string scenario_toml(const Scenario& sc, const WorldSnapshot& now) {
   if (!sc.source_toml.empty()) root = toml::parse(sc.source_toml);  // it was parsed once already
   for (const char* key : {"run", "coach", "robots", "obstacles", "ball_start", "laptop"}) root.erase(key);
 
-  toml::table run{
-      {"duration_s", sc.duration_s}, {"seed", static_cast<std::int64_t>(sc.seed)}, {"kick_power", sc.kick_power}};
+  toml::table run{{"seed", static_cast<std::int64_t>(sc.seed)}, {"kick_power", sc.kick_power}};
+  // Only a length the scenario gave: without one a real-time run goes on until Ctrl-C.
+  if (sc.duration_given) run.insert("duration_s", sc.duration_s);
   toml::array interfaces, agents, faults;
   for (const auto& i : sc.interfaces) interfaces.push_back(i);
   for (const int a : sc.agents) agents.push_back(a);

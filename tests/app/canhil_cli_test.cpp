@@ -249,7 +249,8 @@ TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
       "drop:M4_2:0.5 --fault error:M9:0.5 --fault battery:power24:10@2 --seed 3 --trace " +
       trace + " --world-log " + world);
   ASSERT_EQ(r.status, 0) << r.out;
-  EXPECT_TRUE(has(r, "1 robot(s), virtual time, 4 s, seed 3, 3 fault rule(s)")) << r.out;
+  EXPECT_TRUE(has(r, "1 robot(s), virtual time, 4 s (--duration), seed 3, 3 fault rule(s)")) << r.out;
+  EXPECT_TRUE(has(r, "physics: 0 solver message(s), 0 internal error(s), 0 error(s)")) << r.out;
   EXPECT_TRUE(has(r, "fault drop:M4_2:0.5")) << r.out;
   EXPECT_TRUE(has(r, "fault error:M9:0.5")) << r.out;
   EXPECT_TRUE(has(r, "fault battery:power24:10@2     drained for 2.0 s")) << r.out;
@@ -269,6 +270,23 @@ TEST(CanhilRun, RunsTheOneRobotScenarioWithFaultsTraceAndWorldLog) {
   EXPECT_FALSE(has(r, " 0 error frames")) << "the error frames are in the trace\n" << r.out;
   std::remove(trace.c_str());
   std::remove(world.c_str());
+}
+
+TEST(CanhilRun, TheFirstLineSaysWhereTheRunsLengthCameFrom) {
+  CliRun file = canhil("run --virtual-time --config emulator/scenarios/one_robot.toml --quiet --no-control");
+  ASSERT_EQ(file.status, 0) << file.out;
+  EXPECT_TRUE(has(file, "virtual time, 8 s (the scenario's duration_s)")) << file.out;
+  const std::string silent = "/tmp/canhil_cli_no_duration.toml";
+  {
+    std::ofstream f(silent);
+    f << "[run]\nseed = 2\n";
+  }
+  CliRun fallback = canhil("run --virtual-time --config " + silent + " --quiet --no-control");
+  ASSERT_EQ(fallback.status, 0) << fallback.out;
+  EXPECT_TRUE(has(fallback, "virtual time, 20 s (the default: no duration_s in the scenario)")) << fallback.out;
+  CliRun zero = canhil("run --virtual-time --config " + silent + " --duration 0");
+  EXPECT_EQ(zero.status, 2) << zero.out;
+  EXPECT_TRUE(has(zero, "--duration takes seconds above 0")) << zero.out;
 }
 
 TEST(CanhilRun, ARunWhoseDefaultControlSocketCannotBeServedGoesOnAndSaysSo) {

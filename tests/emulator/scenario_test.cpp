@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
 #include "support/error_of.hpp"
 #include "support/test_paths.hpp"
@@ -33,6 +34,28 @@ TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
   const Scenario one = load_scenario(test::source_dir() + "/emulator/scenarios/one_robot.toml");
   EXPECT_EQ(one.world.robots.size(), 1u);
   EXPECT_DOUBLE_EQ(one.duration_s, 8);
+}
+
+TEST(Scenarios, ARunLastsTheFlagsTimeElseTheScenariosElseTwentySecondsOrUntilCtrlCInRealTime) {
+  const Scenario given = parse_scenario("[run]\nduration_s = 60\n", "given.toml");
+  const Scenario silent = parse_scenario("[run]\nseed = 2\n", "silent.toml");
+  for (const bool realtime : {false, true}) {
+    const RunLength flag = given.run_length(5.0, realtime);
+    EXPECT_EQ(flag.seconds, 5.0);
+    EXPECT_EQ(flag.source, "--duration");
+    const RunLength file = given.run_length(std::nullopt, realtime);
+    EXPECT_EQ(file.seconds, 60.0) << "the scenario's value holds in real time too";
+    EXPECT_EQ(file.source, "the scenario's duration_s");
+    EXPECT_THROW(given.run_length(-1.0, realtime), SetupError);
+  }
+  const RunLength virtual_default = silent.run_length(std::nullopt, false);
+  EXPECT_EQ(virtual_default.seconds, 20.0);
+  EXPECT_EQ(virtual_default.source, "the default: no duration_s in the scenario");
+  const RunLength open_ended = silent.run_length(std::nullopt, true);
+  EXPECT_EQ(open_ended.seconds, 0.0) << "no value and no flag: until Ctrl-C";
+  EXPECT_EQ(open_ended.source, "no --duration, no duration_s in the scenario");
+  EXPECT_EQ(given.run_length(0.0, true).seconds, 0.0) << "--duration 0: until Ctrl-C whatever the scenario says";
+  EXPECT_THROW(given.run_length(0.0, false), SetupError) << "a virtual run must end";
 }
 
 TEST(Scenarios, TheLaptopTableNamesTheTeamsSoftwareRelativeToTheFile) {

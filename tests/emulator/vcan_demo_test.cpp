@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -57,9 +59,9 @@ TEST(VcanDemo, OneRobotInRealTimeKicksTheBallTowardTheGoal) {
   setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
   setenv("AGENT", "1", 1);
   const std::string bin = canhil::test::build_dir();
-  canhil::test::ChildProcess emulator(
-      bin + "/app/canhil run --config " + canhil::test::source_dir() + "/emulator/scenarios/one_robot.toml",
-      "/tmp/canhil_vcan_demo_run.log");
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --config " + canhil::test::source_dir() +
+                                          "/emulator/scenarios/one_robot.toml --duration 0",
+                                      "/tmp/canhil_vcan_demo_run.log");
   std::this_thread::sleep_for(1s);  // the emulator creates the RTDB and starts the bus
   canhil::test::ChildProcess handler(bin + "/laptop/canhil-hwcomm --iface vcan0", "/tmp/canhil_vcan_demo_hwcomm.log");
   canhil::test::ChildProcess agent(bin + "/laptop/canhil-agent --pose -3,0,-90", "/tmp/canhil_vcan_demo_agent.log");
@@ -88,9 +90,9 @@ TEST(VcanDemo, KillingTheHandlerLeavesTheEmulatorRunningAndTheMotorsBraked) {
   setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8) + 0x40).c_str(), 1);
   setenv("AGENT", "1", 1);
   const std::string bin = canhil::test::build_dir();
-  canhil::test::ChildProcess emulator(
-      bin + "/app/canhil run --config " + canhil::test::source_dir() + "/emulator/scenarios/one_robot.toml",
-      "/tmp/canhil_vcan_kill_run.log");
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --config " + canhil::test::source_dir() +
+                                          "/emulator/scenarios/one_robot.toml --duration 0",
+                                      "/tmp/canhil_vcan_kill_run.log");
   std::this_thread::sleep_for(1s);
   canhil::test::ChildProcess handler(bin + "/laptop/canhil-hwcomm --iface vcan0", "/tmp/canhil_vcan_kill_hwcomm.log");
   std::this_thread::sleep_for(2s);
@@ -164,6 +166,26 @@ TEST(VcanDemo, InterfaceDownAndUpIsReportedAndTheRunResumesWithoutABurst) {
   // Flowing again: a count, not a rate (under ASan inside the TCG VM the emulator
   // runs at a third of real time and skips physics steps to keep up).
   EXPECT_GE(tms.size(), 10u) << "trigger messages flow again\n" << out;
+}
+
+// A scenario's duration_s ends a real-time run as it ends a virtual one, and
+// the first line says where the length came from.
+TEST(VcanDemo, TheScenariosDurationEndsARealTimeRun) {
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8) + 0x40).c_str(), 1);
+  const std::string scenario = "/tmp/canhil_vcan_duration.toml";
+  {
+    std::ofstream f(scenario);
+    f << "[run]\nduration_s = 1.5\n";
+  }
+  const std::string bin = canhil::test::build_dir();
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --quiet --no-control --config " + scenario,
+                                      "/tmp/canhil_vcan_duration_run.log");
+  const std::optional<int> status = emulator.wait_end(60s);
+  const std::string out = emulator.output();
+  ASSERT_TRUE(status.has_value()) << "still running 60 s after a 1.5 s run began\n" << out;
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << "ended by itself, with status 0\n" << out;
+  EXPECT_NE(out.find("real time, 1.5 s (the scenario's duration_s)"), std::string::npos) << out;
+  EXPECT_NE(out.find("canhil run: done after"), std::string::npos) << out;
 }
 
 // The figures of the run summary's "bus:" line.

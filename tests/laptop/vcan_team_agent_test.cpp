@@ -98,7 +98,8 @@ TEST(VcanTeamAgent, TheTeamsAgentOnItsOwnLibrariesDrivesToTheBallAndStopsWhenThe
   ASSERT_TRUE(wait_for(agent, 30s, [](const std::string& o) { return has(o, "no PMan table yet, waiting"); }))
       << agent.output();
   ChildProcess emulator(canhil::test::build_dir() + "/app/canhil run --config " + canhil::test::source_dir() +
-                            "/emulator/scenarios/one_robot.toml" + libs + " --pman-lib " + CANHIL_TEST_LIBPMAN,
+                            "/emulator/scenarios/one_robot.toml --duration 0" + libs + " --pman-lib " +
+                            CANHIL_TEST_LIBPMAN,
                         "/tmp/canhil_vcan_team_run.log");
   ASSERT_TRUE(wait_for(emulator, 60s, [](const std::string& o) { return has(o, "robot 0 on vcan0"); }))
       << emulator.output();

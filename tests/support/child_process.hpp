@@ -14,7 +14,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 namespace canhil::test {
@@ -38,6 +40,21 @@ class ChildProcess {
 
   /// SIGINT, then waits; returns the wait status (or -1 if already stopped).
   int stop() { return kill_with(SIGINT); }
+  /// Waits up to `limit` for the process to end by itself: its wait status,
+  /// or nothing while it still runs (stop() or the destructor ends it then).
+  std::optional<int> wait_end(std::chrono::milliseconds limit) {
+    if (pid_ <= 0) return std::nullopt;
+    int status = 0;
+    for (auto waited = std::chrono::milliseconds(0); waited <= limit; waited += std::chrono::milliseconds(100)) {
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        check_sanitizers();
+        return status;
+      }
+      usleep(100'000);
+    }
+    return std::nullopt;
+  }
   /// Sends `sig` (e.g. SIGKILL: the process dies without cleaning up) and reaps it.
   int kill_with(int sig) {
     if (pid_ <= 0) return -1;

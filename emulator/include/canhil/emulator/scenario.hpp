@@ -3,7 +3,8 @@
 // start poses, [[obstacles]], ball_start) plus a [run] table:
 //
 //   [run]
-//   duration_s = 20                  # virtual-time runs; real time runs until Ctrl-C
+//   duration_s = 20                  # how long a run lasts (default 20 s in virtual time;
+//                                    #   in real time: until Ctrl-C when not given)
 //   seed = 1                         # fault draws
 //   kick_power = 40                  # the reference agent's kick, 0..max_power
 //   interfaces = ["vcan0"]           # one per robot; default vcan0, vcan1, ...
@@ -130,9 +131,16 @@ struct VisionImperfections {
 /// At most two teams (CAMBADA's RTDB has two sets of databases).
 inline constexpr std::size_t kMostTeams = 2;
 
+/// How long a run lasts and who said so (the first line of a run prints both).
+struct RunLength {
+  double seconds = 0;  ///< 0: until Ctrl-C (real time only)
+  std::string source;  ///< "--duration", "the scenario's duration_s", ...
+};
+
 struct Scenario {
   physics::WorldParams world;
   double duration_s = 20;
+  bool duration_given = false;  ///< [run] duration_s was in the file (it then holds in real time too)
   std::uint64_t seed = 1;
   int kick_power = 40;
   std::vector<std::string> interfaces;  ///< one per robot after complete()
@@ -157,6 +165,11 @@ struct Scenario {
   /// A team's laptop side and processes: its own, else the scenario's.
   const LaptopSide& laptop_of(std::size_t team) const noexcept;
   const ExternalSide& external_of(std::size_t team) const noexcept;
+  /// The run's length: `flag` (--duration) over the scenario's duration_s
+  /// over the default; in real time the default is until Ctrl-C, and a flag
+  /// of 0 asks for that whatever the scenario says. Throws SetupError for a
+  /// length that is not a number of seconds above 0 (0 too in virtual time).
+  RunLength run_length(std::optional<double> flag, bool realtime) const;
 };
 
 /// Fills in what the scenario leaves out — one robot at kDefaultPlacement when
