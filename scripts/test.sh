@@ -7,10 +7,11 @@
 # inside the VM runner; they never skip.
 #   scripts/test.sh            every flavour, then the lint step
 #   scripts/test.sh plain      one flavour (also: sanitize, tsan, lint)
-# With lint and a flavour asked for, the lint step starts first, at idle
-# priority (SCHED_IDLE): it takes only the CPU the builds and tests leave (the
-# tests wait on the VM runner and on wall-clock timeouts much of their time)
-# and never slows them; its verdict comes at the end, in the usual place.
+# With lint and a flavour asked for, the lint step starts after the first
+# build, at idle priority (SCHED_IDLE), and runs while the tests run (they
+# wait on the VM runner and on wall-clock timeouts much of their time, and
+# leave most of the CPU); it is paused (SIGSTOP) while a build runs, so a
+# build's time is its own; its verdict comes at the end, in the usual place.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install-deps.sh
@@ -21,7 +22,9 @@ early_lint=0
 # Each stage's wall time, so CI's log shows where its minutes go.
 stage() { printf '== canhil %s: %d min %d s\n' "$1" $((SECONDS / 60)) $((SECONDS % 60)); SECONDS=0; }
 lint_pid=""
-stop_lint() { [[ -z "$lint_pid" ]] || kill -- "-$lint_pid" 2>/dev/null || true; }
+stop_lint() { [[ -z "$lint_pid" ]] || kill -CONT -- "-$lint_pid" 2>/dev/null; [[ -z "$lint_pid" ]] || kill -- "-$lint_pid" 2>/dev/null || true; }
+pause_lint() { [[ -z "$lint_pid" ]] || kill -STOP -- "-$lint_pid" 2>/dev/null || true; }
+resume_lint() { [[ -z "$lint_pid" ]] || kill -CONT -- "-$lint_pid" 2>/dev/null || true; }
 trap stop_lint EXIT
 start_lint() {
   local idle=(nice -n 19)
@@ -32,19 +35,19 @@ start_lint() {
   setsid bash -c '"$@" > build/lint.out 2>&1; echo $? > build/lint.status' lint \
     "${idle[@]}" bash scripts/lint.sh &
   lint_pid=$!
-  echo "== canhil lint: started at idle priority beside the tests (its verdict comes last)"
+  echo "== canhil lint: started at idle priority beside the tests, paused during builds (its verdict comes last)"
 }
 total_start=$(date +%s)
 SECONDS=0
-[[ $early_lint -eq 1 ]] && start_lint
 for flavour in "${flavours[@]}"; do
   if [[ "$flavour" == lint ]]; then
     echo "== canhil lint: clang-format, clang-tidy"
     if [[ -n "$lint_pid" ]]; then
+      resume_lint
       wait "$lint_pid" || true
       lint_pid=""
       cat build/lint.out
-      stage "lint took (after the tests; $(( $(date +%s) - lint_start )) s since it started beside them)"
+      stage "lint took (after the tests; $(( $(date +%s) - lint_start )) s since it started beside them, builds included)"
       [[ "$(cat build/lint.status 2>/dev/null)" == 0 ]] || exit 1
     else
       bash scripts/lint.sh
@@ -53,8 +56,10 @@ for flavour in "${flavours[@]}"; do
     continue
   fi
   echo "== canhil tests: $flavour build"
+  pause_lint
   bash scripts/build.sh "$flavour"
   stage "$flavour build took"
+  if [[ $early_lint -eq 1 && -z "$lint_pid" ]]; then start_lint; else resume_lint; fi
   ctest --test-dir "build/$flavour" --output-on-failure -j2
   stage "$flavour tests took"
 done
