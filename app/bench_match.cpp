@@ -103,10 +103,12 @@ bool bench_match(const std::optional<std::string>& config, double seconds,
   std::printf("  physics alone, five_robots.toml:           %6.0fx  (for scale: the world with nothing around it)\n",
               reference);
   std::printf("  physics alone, %-26s %6.0fx\n", (path.filename().string() + ":").c_str(), reference_ten);
-  std::printf("  five robots, everything on:                %6.1fx  = %.2f of physics alone  target >= %.0fx: %s\n",
+  // Each scenario's figure against its own world's physics alone.
+  std::printf("  five robots, everything on:                %6.1fx  = %.2f of its physics alone  target >= %.0fx: %s\n",
               five_on, five_on / reference, five_target, five_on >= five_target ? "met" : "MISSED");
-  std::printf("  %2zu robots, a match half, everything on:    %6.1fx  = %.2f of physics alone  target >= %.0fx: %s\n",
-              ten.robot_count(), ten_on, ten_on / reference, ten_target, ten_on >= ten_target ? "met" : "MISSED");
+  std::printf(
+      "  %2zu robots, a match half, everything on:    %6.1fx  = %.2f of its physics alone  target >= %.0fx: %s\n",
+      ten.robot_count(), ten_on, ten_on / reference_ten, ten_target, ten_on >= ten_target ? "met" : "MISSED");
   std::printf(
       "  (these factors move with the machine's speed: bench/against_base.sh judges them against the code the "
       "issue measured, in the same run)\n");

@@ -13,6 +13,7 @@ namespace {
 lockstep::ConductorOptions conductor_options(const emulator::Session& session) {
   lockstep::ConductorOptions o;
   o.answer_limit = from_seconds(session.scenario().external.answer_limit_s);
+  o.busy_limit = from_seconds(session.scenario().external.busy_limit_s);
   return o;
 }
 

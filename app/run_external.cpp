@@ -146,6 +146,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   const emulator::ExternalSide& side = session.scenario().external;
   lockstep::ConductorOptions conductor_options;
   conductor_options.answer_limit = from_seconds(side.answer_limit_s);
+  conductor_options.busy_limit = from_seconds(side.busy_limit_s);
   lockstep::Conductor conductor(conductor_options);
   emulator::ExternalOptions driver_options;
   driver_options.start_limit = from_seconds(side.attach_limit_s);

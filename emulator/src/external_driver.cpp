@@ -1,6 +1,7 @@
 #include "canhil/emulator/external_driver.hpp"
 
 #include <cstdio>
+#include <optional>
 
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/rtdb/rtdb.h"
@@ -48,6 +49,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   recorded_.resize(n);
   fenced_.assign(n, 0);
   woken_.assign(n, false);
+  cycled_.assign(n, false);
   for (std::size_t r = 0; r < n; ++r) {
     if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
     observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
@@ -151,6 +153,10 @@ std::size_t ExternalDriver::settle() {
   // Until nothing new happens: wait for the processes to be quiet and for every
   // frame sent to have reached every socket; then, if frames are new to the
   // processes or an agent was activated, nudge them to look again.
+  // An agent's first activation has the start-up limit.
+  bool first_activation = false;
+  for (std::size_t r = 0; r < woken_.size(); ++r) first_activation = first_activation || (woken_[r] && !cycled_[r]);
+  const std::optional<Nanos> limit = first_activation ? std::optional<Nanos>(options_.start_limit) : std::nullopt;
   for (;;) {
     std::uint64_t sent = 0;
     const std::string stuck = conductor_.wait_quiet(
@@ -167,7 +173,7 @@ std::size_t ExternalDriver::settle() {
           }
           return {};
         },
-        "what canhil did at " + at_time(clock_.now()));
+        "what canhil did at " + at_time(clock_.now()), limit);
     if (!stuck.empty()) {
       observe();  // what reached the bus up to the stop belongs in the trace
       throw ProcessStuck(stuck);
@@ -178,6 +184,7 @@ std::size_t ExternalDriver::settle() {
     woke = false;
     conductor_.nudge();
   }
+  for (std::size_t r = 0; r < woken_.size(); ++r) cycled_[r] = cycled_[r] || woken_[r];
   woken_.assign(woken_.size(), false);
   settled_once_ = true;
   settled_epoch_ = conductor_.epoch();

@@ -240,7 +240,13 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
                                   std::optional<Nanos> limit) {
   const Nanos answer_limit = limit.value_or(options_.answer_limit);
   const Nanos start = wall_now();
-  const Nanos until = start + answer_limit;
+  Nanos until = start + answer_limit;
+  // Past the limit the processes' CPU time says whether they are computing
+  // (wait on, up to the busy limit) or stuck (named now).
+  const Nanos busy_until = start + std::max(answer_limit, options_.busy_limit);
+  Nanos cpu_then = processes_cpu();
+  Nanos cpu_seen_at = start;
+  bool computing = false;
   // A process that died without a word (killed, or a shell that exited
   // without the shim's goodbye) is looked for every 50 ms of a long wait: it
   // may die at any time during it, not only at its start.
@@ -259,16 +265,55 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
       continue;
     }
     if (now > until) {
+      const Nanos cpu_now = processes_cpu();
+      computing = (cpu_now - cpu_then) * 10 >= now - cpu_seen_at;
+      if (computing && now < busy_until) {
+        cpu_then = cpu_now;
+        cpu_seen_at = now;
+        until = std::min(busy_until, now + std::min(answer_limit, Nanos(std::chrono::milliseconds(500))));
+        continue;
+      }
       waited_ += now - start;
-      const std::string within = seconds(answer_limit) + " of wall time";
-      if (!processes_quiet) return who + " within " + within + " after " + waiting_for;
-      return "canhil waited " + within + " after " + waiting_for + " for " + missing;
+      const std::string within = seconds(computing ? busy_until - start : answer_limit) + " of wall time";
+      const std::string state =
+          computing ? " (still computing on the CPU: hung in a loop? busy_limit_s in [external] waits longer)"
+                    : " (not on the CPU: blocked on something canhil will not give)";
+      if (!processes_quiet) return who + " within " + within + " after " + waiting_for + state;
+      return "canhil waited " + within + " after " + waiting_for + " for " + missing + state;
     }
     const timespec a_while{0, 1'000'000};  // canhil's own condition may change without a board change
     futex(&board_->changes, FUTEX_WAIT, seen, &a_while);
   }
   waited_ += wall_now() - start;
   return {};
+}
+
+Nanos Conductor::processes_cpu() const {
+  std::vector<int> pids;
+  for (const Slot& s : board_->slots) {
+    if (state_of(s) == SlotState::kFree) continue;
+    const int pid = s.pid.load(std::memory_order_relaxed);
+    if (pid > 0 && std::find(pids.begin(), pids.end(), pid) == pids.end()) pids.push_back(pid);
+  }
+  static const long kTicks = sysconf(_SC_CLK_TCK);
+  long long ticks = 0;
+  for (const int pid : pids) {
+    char path[64];
+    std::snprintf(path, sizeof path, "/proc/%d/stat", pid);
+    FILE* f = std::fopen(path, "r");
+    if (f == nullptr) continue;
+    char line[1024] = "";
+    const bool read = std::fgets(line, sizeof line, f) != nullptr;
+    std::fclose(f);
+    // After the command's closing parenthesis: state, then fields 4..; utime and stime are 14 and 15.
+    const char* after = read ? std::strrchr(line, ')') : nullptr;
+    unsigned long long user = 0, system = 0;
+    if (after != nullptr &&
+        std::sscanf(after + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &user, &system) == 2) {
+      ticks += static_cast<long long>(user + system);
+    }
+  }
+  return Nanos(kTicks > 0 ? ticks * (1'000'000'000LL / kTicks) : 0);
 }
 
 std::uint64_t Conductor::frames_sent() const noexcept {

@@ -4,6 +4,7 @@
 
 #include <cstdarg>
 #include <cstdio>
+#include <mutex>
 #include <utility>
 
 #include "solver_scope.hpp"
@@ -122,13 +123,17 @@ void on_error(int code, const char* format, va_list ap) { report(SolverReportKin
 }  // namespace
 
 void install_solver_handlers() {
-  dSetMessageHandler(on_message);
-  dSetDebugHandler(on_debug);
-  dSetErrorHandler(on_error);
+  static std::once_flag once;
+  std::call_once(once, [] {
+    dSetMessageHandler(on_message);
+    dSetDebugHandler(on_debug);
+    dSetErrorHandler(on_error);
+  });
 }
 
 SolverScope::SolverScope(SolverHealth& health, const double& time_s) noexcept
     : health_(health), time_s_(time_s), outer_(t_current) {
+  install_solver_handlers();  // a scope without a World first (a test) is routed too
   t_current = this;
 }
 

@@ -6,7 +6,8 @@
 
 namespace canhil::physics::detail {
 
-/// Installs canhil's handlers in ODE (once per process; after dInitODE2).
+/// Installs canhil's handlers in ODE (the first call in a process; World and
+/// SolverScope call it).
 void install_solver_handlers();
 
 /// While one lives, ODE's reports on this thread go to `health`, stamped with

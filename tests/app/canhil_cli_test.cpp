@@ -438,8 +438,20 @@ TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOf
   EXPECT_TRUE(has(r, "physics alone, five_robots.toml:")) << r.out;
   EXPECT_TRUE(has(r, "five robots, everything on:")) << r.out;
   EXPECT_TRUE(has(r, "10 robots, a match half, everything on:")) << r.out;
-  EXPECT_TRUE(has(r, "of physics alone  target >= 180x")) << r.out;
-  EXPECT_TRUE(has(r, "of physics alone  target >= 80x")) << r.out;
+  EXPECT_TRUE(has(r, "of its physics alone  target >= 180x")) << r.out;
+  EXPECT_TRUE(has(r, "of its physics alone  target >= 80x")) << r.out;
+  // Each figure over its own scenario's physics alone (the ten robots' was once over the five's).
+  const auto figure_after = [&](const std::string& label) {
+    const std::size_t at = r.out.find(label);
+    return at == std::string::npos ? -1.0 : std::strtod(r.out.c_str() + at + label.size(), nullptr);
+  };
+  const double alone_ten = figure_after("physics alone, two_teams.toml:");
+  const double ten_on = figure_after("10 robots, a match half, everything on:");
+  const std::size_t eq = r.out.find("= ", r.out.find("10 robots, a match half"));
+  ASSERT_GT(alone_ten, 0) << r.out;
+  ASSERT_NE(eq, std::string::npos) << r.out;
+  EXPECT_NEAR(std::strtod(r.out.c_str() + eq + 2, nullptr), ten_on / alone_ten, 0.01 + 0.02 * ten_on / alone_ten)
+      << r.out;
   EXPECT_TRUE(has(r, "bench/against_base.sh")) << r.out;
   EXPECT_FALSE(has(r, "real-time factor, everything on:")) << "only the part asked for\n" << r.out;
 }

@@ -164,6 +164,7 @@ TEST(Conductor, TheSameProgramGivesTheSameOutputEveryTime) {
 TEST(Conductor, AProcessThatNeverWaitsIsNamedWithWhatCanhilWaitedFor) {
   ConductorOptions options;
   options.answer_limit = 300ms;
+  options.busy_limit = 900ms;  // it computes for ever: named after the busy limit
   Conductor conductor(options);
   ChildProcess client(command(conductor, "spin"), "/tmp/canhil_lockstep_spin.log");
   ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
@@ -171,7 +172,37 @@ TEST(Conductor, AProcessThatNeverWaitsIsNamedWithWhatCanhilWaitedFor) {
   EXPECT_NE(stuck.find("lockstep_client (pid "), std::string::npos) << stuck;
   EXPECT_NE(stuck.find("kept running and did not wait again"), std::string::npos) << stuck;
   EXPECT_NE(stuck.find("after the trigger message at t = 0.010 s"), std::string::npos) << stuck;
+  EXPECT_NE(stuck.find("0.900 s of wall time"), std::string::npos) << stuck;
+  EXPECT_NE(stuck.find("still computing on the CPU: hung in a loop?"), std::string::npos) << stuck;
+}
+
+// A process busy on the CPU for longer than the answer limit (a team's agent
+// building its maps in its first cycle) is waited for, not named: issue 29's
+// CAMBADA agent, stopped after 1 s while it computed.
+TEST(Conductor, AProcessComputingLongerThanTheAnswerLimitIsWaitedFor) {
+  ConductorOptions options;
+  options.answer_limit = 200ms;
+  options.busy_limit = 60s;
+  Conductor conductor(options);
+  ChildProcess client(command(conductor, "compute 700"), "/tmp/canhil_lockstep_compute.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  EXPECT_EQ(drive(conductor, 50ms), "") << client.output();
+  EXPECT_NE(client.output().find("slept"), std::string::npos) << client.output();
+}
+
+// One blocked where canhil will never wake it (off the CPU) is named within
+// the answer limit, however long the busy limit.
+TEST(Conductor, AProcessBlockedOffTheCpuIsNamedWithinTheAnswerLimit) {
+  ConductorOptions options;
+  options.answer_limit = 300ms;
+  options.busy_limit = 60s;
+  Conductor conductor(options);
+  ChildProcess client(command(conductor, "blocked"), "/tmp/canhil_lockstep_blocked.log");
+  ASSERT_EQ(conductor.wait_attached(1, 10s), 1u);
+  const std::string stuck = conductor.wait_quiet({}, "the frame at 10 ms");
+  EXPECT_NE(stuck.find("lockstep_client (pid "), std::string::npos) << stuck;
   EXPECT_NE(stuck.find("0.300 s of wall time"), std::string::npos) << stuck;
+  EXPECT_NE(stuck.find("not on the CPU: blocked on something canhil will not give"), std::string::npos) << stuck;
 }
 
 TEST(Conductor, CanhilsOwnConditionIsWaitedForAndNamed) {
@@ -183,7 +214,10 @@ TEST(Conductor, CanhilsOwnConditionIsWaitedForAndNamed) {
             "");
   EXPECT_EQ(asked, 3);
   const std::string stuck = conductor.wait_quiet([] { return std::string("agent1's epilogue"); }, "the frame at 33 ms");
-  EXPECT_EQ(stuck, "canhil waited 0.200 s of wall time after the frame at 33 ms for agent1's epilogue");
+  EXPECT_EQ(
+      stuck,
+      "canhil waited 0.200 s of wall time after the frame at 33 ms for agent1's epilogue (not on the CPU: blocked "
+      "on something canhil will not give)");
 }
 
 TEST(Conductor, AProcessKilledWithoutAWordIsNoLongerWaitedFor) {

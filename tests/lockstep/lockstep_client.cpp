@@ -7,6 +7,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <sys/select.h>
+#include <sys/syscall.h>
 #include <sys/time.h>
 #include <sys/timerfd.h>
 #include <time.h>
@@ -15,6 +16,7 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -119,6 +121,34 @@ int spin() {
   for (;;) n = n + 1;
 }
 
+// CPU time by the system call itself (the shim gives clocks of virtual time).
+double cpu_seconds() {
+  timespec t{};
+  syscall(SYS_clock_gettime, CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+}
+
+// A slow first cycle (a team's agent building its maps): `ms` of CPU time
+// without a call the shim sees, then a virtual sleep of 10 ms.
+int compute(double ms) {
+  say("computing");
+  volatile unsigned long n = 0;
+  while (cpu_seconds() < ms / 1000) n = n + 1;
+  say("computed");
+  const timespec ten_ms{0, 10'000'000};
+  nanosleep(&ten_ms, nullptr);
+  say("slept");
+  return 0;
+}
+
+// Blocked where canhil cannot see or end it: 30 s of the real clock.
+int blocked() {
+  say("blocking");
+  const timespec wall{30, 0};
+  syscall(SYS_nanosleep, &wall, nullptr);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -128,6 +158,8 @@ int main(int argc, char** argv) {
   if (mode == "timerfd") return ticks();
   if (mode == "thread") return thread();
   if (mode == "spin") return spin();
+  if (mode == "compute" && argc > 2) return compute(std::atof(argv[2]));
+  if (mode == "blocked") return blocked();
   if (mode == "patient") return patient();
   std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin\n");
   return 2;

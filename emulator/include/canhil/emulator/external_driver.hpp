@@ -33,8 +33,10 @@ struct ExternalOptions {
   /// constant memory: ftt_violations().
   bool check_timing = false;
   /// Wall time the processes may take from their start until they first all
-  /// wait (loading configuration, building tables); then each instant has the
-  /// conductor's answer limit.
+  /// wait (loading configuration, building tables), and an agent for its first
+  /// activation (its first cycle, where a team's agent builds its maps); then
+  /// each instant has the conductor's answer limit (and, while the processes
+  /// compute, its busy limit).
   Nanos start_limit = std::chrono::seconds(60);
 };
 
@@ -97,7 +99,8 @@ class ExternalDriver {
   bool settled_once_ = false;
   bool started_ = false;
   std::uint64_t from_processes_ = 0;
-  std::vector<bool> woken_;  // robots whose agents PMan activated at this instant
+  std::vector<bool> woken_;   // robots whose agents PMan activated at this instant
+  std::vector<bool> cycled_;  // robots whose agents have ended a first activation
   std::unique_ptr<Processes> processes_;
   can_nodes::Lockstep lockstep_;
 };

@@ -100,6 +100,7 @@ struct ExternalSide {
   std::vector<std::string> processes;  ///< shell command lines, one process each, per robot
   double answer_limit_s = 1.0;         ///< wall time a process may take over one instant
   double attach_limit_s = 60.0;        ///< wall time the processes may take to start, until they first all wait
+  double busy_limit_s = 60.0;          ///< wall time an instant may take while the processes compute on the CPU
 };
 
 /// Robots that play together: one goal to attack, one RTDB set (the first

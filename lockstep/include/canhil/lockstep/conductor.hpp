@@ -32,8 +32,15 @@ Nanos wall_clock() noexcept;
 
 struct ConductorOptions {
   /// How long (wall time) a process may take to become quiet before the run
-  /// names it and stops.
+  /// names it and stops, when it is not computing: blocked on something
+  /// canhil will never give, or gone silent.
   Nanos answer_limit = std::chrono::seconds(1);
+  /// How long a wait goes on while the processes are computing (their CPU
+  /// time grows by at least a tenth of the wall time that passes: a team's
+  /// agent building its maps at start, a slow first cycle): a process busy on
+  /// the CPU is not one that stopped answering, but one that computes for
+  /// longer than this is named as hung in a loop.
+  Nanos busy_limit = std::chrono::seconds(60);
   /// CLOCK_REALTIME at virtual 0 (gettimeofday, time): 2026-01-01 00:00:00 UTC,
   /// the same in every run so that what the processes print is the same.
   std::int64_t realtime_base_ns = 1'767'225'600LL * 1'000'000'000;
@@ -95,7 +102,8 @@ class Conductor {
   /// the answer limit, a sentence naming who did not answer and what canhil
   /// waited for (`waiting_for`, e.g. "the trigger message at t = 1.230 s").
   /// `limit`, when given, replaces the answer limit (a program's start may
-  /// take longer than an instant).
+  /// take longer than an instant). Past the limit, while the processes'
+  /// CPU time grows, the wait goes on, up to busy_limit from its start.
   std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
                          std::optional<Nanos> limit = std::nullopt);
 
@@ -114,6 +122,8 @@ class Conductor {
   bool quiet(std::string* who);
   bool quiet_pass(std::string* who, bool& retired);
   void sweep_dead();
+  /// User and system CPU time of every process on the board, summed.
+  Nanos processes_cpu() const;
   void retire(Slot& slot);
 
   ConductorOptions options_;
