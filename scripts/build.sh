@@ -11,7 +11,7 @@
 # The sanitized flavours keep line tables only (-gline-tables-only: a report's
 # stack still names every function, file and line; CANHIL_DEBUG_INFO=full for
 # gdb's variables). Every flavour is a unity build (a target's sources compiled
-# eight at a time, each header parsed once for them: half the time of a build
+# sixteen at a time, each header parsed once for them: half the time of a build
 # from scratch; CANHIL_UNITY=0 compiles file by file, quicker after a one-file
 # change).
 # Where they are installed (scripts/install-deps.sh installs both):
@@ -41,7 +41,7 @@ case "$flavour" in
 esac
 unity=ON
 [[ "${CANHIL_UNITY:-1}" == 0 || "$flavour" == lint ]] && unity=OFF
-args+=(-DCMAKE_UNITY_BUILD=$unity)
+args+=(-DCMAKE_UNITY_BUILD=$unity -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
 
 if [[ "${CANHIL_CCACHE:-1}" != 0 ]] && command -v ccache >/dev/null; then
   args+=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)

@@ -12,6 +12,7 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "errno_text.hpp"
 
 namespace canhil::can_nodes {
 namespace {
@@ -19,7 +20,7 @@ namespace {
 constexpr std::uint32_t kIdsPerSocket = 512;  // CAN_RAW_FILTER_MAX
 constexpr int kReceiveBuffer = 1 << 20;
 
-std::string errno_text(int err) { return std::string(std::strerror(err)); }
+using detail::errno_text;
 
 // A socket on `ifindex` that receives exactly the standard data frames with
 // ids first .. first + kIdsPerSocket - 1, each through its own single-id filter.

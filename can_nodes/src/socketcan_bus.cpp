@@ -1,4 +1,5 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
+#include "errno_text.hpp"
 
 #include <fcntl.h>
 #include <linux/can.h>
@@ -17,7 +18,7 @@
 namespace canhil::can_nodes {
 namespace {
 
-std::string errno_text(int err) { return std::string(std::strerror(err)); }
+using detail::errno_text;
 
 can_frame to_kernel(const CanFrame& f) {
   can_frame k{};

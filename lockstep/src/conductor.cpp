@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <climits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <new>
 
@@ -305,11 +306,14 @@ Nanos Conductor::processes_cpu() const {
     char line[1024] = "";
     const bool read = std::fgets(line, sizeof line, f) != nullptr;
     std::fclose(f);
-    // After the command's closing parenthesis: state, then fields 4..; utime and stime are 14 and 15.
-    const char* after = read ? std::strrchr(line, ')') : nullptr;
-    unsigned long long user = 0, system = 0;
-    if (after != nullptr &&
-        std::sscanf(after + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &user, &system) == 2) {
+    // After the command's closing parenthesis come field 3 (the state) and
+    // on; utime and stime are fields 14 and 15: the 12th and 13th words there.
+    const char* p = read ? std::strrchr(line, ')') : nullptr;
+    for (int word = 0; p != nullptr && word < 12; ++word) p = std::strchr(p + 1, ' ');
+    if (p != nullptr) {
+      char* end = nullptr;
+      const unsigned long long user = std::strtoull(p + 1, &end, 10);
+      const unsigned long long system = end != nullptr ? std::strtoull(end, nullptr, 10) : 0;
       ticks += static_cast<long long>(user + system);
     }
   }

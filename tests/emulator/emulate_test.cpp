@@ -37,7 +37,7 @@ duration_s = 6
 emulate = ["Motor1", "Motor2", "Motor3", "Pic_odom", "compass", "SYSMON"]
 )";
 
-std::string error_of(const std::string& text) {
+std::string bench_error_of(const std::string& text) {
   return test::error_of<physics::ConfigError>([&] { parse_scenario(text, "bench.toml"); });
 }
 
@@ -91,21 +91,22 @@ x_m = 2
 }
 
 TEST(Emulate, MistakesInTheListsAreNamedWithTheirLine) {
-  EXPECT_NE(error_of("[run]\nemulate = [\"Motor4\"]\n")
+  EXPECT_NE(bench_error_of("[run]\nemulate = [\"Motor4\"]\n")
                 .find("bench.toml:2: run.emulate: not a node's name; the nodes "
                       "are FTT_master, Pic_base"),
             std::string::npos)
-      << error_of("[run]\nemulate = [\"Motor4\"]\n");
-  EXPECT_NE(error_of("[run]\nemulate = [\"Motor1\", \"motor1\"]\n").find("motor1 appears twice"), std::string::npos);
-  EXPECT_NE(error_of("[run]\nemulate = []\n").find("run.emulate: must list the nodes canhil emulates"),
+      << bench_error_of("[run]\nemulate = [\"Motor4\"]\n");
+  EXPECT_NE(bench_error_of("[run]\nemulate = [\"Motor1\", \"motor1\"]\n").find("motor1 appears twice"),
             std::string::npos);
-  EXPECT_NE(error_of("[run]\nemulate = \"Motor1\"\n").find("run.emulate: must be a list"), std::string::npos);
-  EXPECT_NE(error_of("[run]\nemulate = [[\"Motor1\"], [\"Motor2\"]]\n").find("give one list per robot"),
+  EXPECT_NE(bench_error_of("[run]\nemulate = []\n").find("run.emulate: must list the nodes canhil emulates"),
             std::string::npos);
-  EXPECT_NE(
-      error_of("[[teams]]\n[[teams.robots]]\nemulate = [\"Pic_bse\"]\n").find("bench.toml:3: teams.robots.emulate"),
-      std::string::npos)
-      << error_of("[[teams]]\n[[teams.robots]]\nemulate = [\"Pic_bse\"]\n");
+  EXPECT_NE(bench_error_of("[run]\nemulate = \"Motor1\"\n").find("run.emulate: must be a list"), std::string::npos);
+  EXPECT_NE(bench_error_of("[run]\nemulate = [[\"Motor1\"], [\"Motor2\"]]\n").find("give one list per robot"),
+            std::string::npos);
+  EXPECT_NE(bench_error_of("[[teams]]\n[[teams.robots]]\nemulate = [\"Pic_bse\"]\n")
+                .find("bench.toml:3: teams.robots.emulate"),
+            std::string::npos)
+      << bench_error_of("[[teams]]\n[[teams.robots]]\nemulate = [\"Pic_bse\"]\n");
   Scenario none;
   none.emulate = {NodeSet()};
   EXPECT_NE(test::error_of([&] { complete(none); }).find("robot 1 emulates no node"), std::string::npos);

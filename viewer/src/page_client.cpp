@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 
@@ -85,7 +86,7 @@ Head read_head(int fd, Clock::time_point deadline) {
   h.text = got.substr(0, end);
   h.rest = got.substr(end + 4);
   if (h.text.compare(0, 5, "HTTP/") != 0 || h.text.size() < 12) throw PageClientError("not an HTTP answer: " + h.text);
-  h.status = std::atoi(h.text.c_str() + h.text.find(' ') + 1);
+  h.status = static_cast<int>(std::strtol(h.text.c_str() + h.text.find(' ') + 1, nullptr, 10));
   return h;
 }
 
@@ -93,8 +94,9 @@ std::string base64(const std::array<unsigned char, 16>& bytes) {
   static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) | (i + 1 < bytes.size() ? bytes[i + 1] << 8 : 0) |
-                            (i + 2 < bytes.size() ? bytes[i + 2] : 0);
+    const std::uint32_t second = i + 1 < bytes.size() ? std::uint32_t{bytes[i + 1]} : 0U;
+    const std::uint32_t third = i + 2 < bytes.size() ? std::uint32_t{bytes[i + 2]} : 0U;
+    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) | (second << 8) | third;
     out += kDigits[(n >> 18) & 63];
     out += kDigits[(n >> 12) & 63];
     out += i + 1 < bytes.size() ? kDigits[(n >> 6) & 63] : '=';
