@@ -245,7 +245,9 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
   // Past the limit the processes' CPU time says whether they are computing
   // (wait on, up to the busy limit) or stuck (named now).
   const Nanos busy_until = start + std::max(answer_limit, options_.busy_limit);
-  Nanos cpu_then = processes_cpu();
+  // Read only once a wait outlasts the limit (never on the instants that
+  // answer in time): a first sample, then a short window to judge by.
+  std::optional<Nanos> cpu_then;
   Nanos cpu_seen_at = start;
   bool computing = false;
   // A process that died without a word (killed, or a shell that exited
@@ -266,12 +268,19 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
       continue;
     }
     if (now > until) {
+      const Nanos window = std::min(answer_limit, Nanos(std::chrono::milliseconds(200)));
+      if (!cpu_then) {
+        cpu_then = processes_cpu();
+        cpu_seen_at = now;
+        until = now + window;
+        continue;
+      }
       const Nanos cpu_now = processes_cpu();
-      computing = (cpu_now - cpu_then) * 10 >= now - cpu_seen_at;
+      computing = (cpu_now - *cpu_then) * 10 >= now - cpu_seen_at;
       if (computing && now < busy_until) {
         cpu_then = cpu_now;
         cpu_seen_at = now;
-        until = std::min(busy_until, now + std::min(answer_limit, Nanos(std::chrono::milliseconds(500))));
+        until = std::min(busy_until, now + window);
         continue;
       }
       waited_ += now - start;

@@ -102,8 +102,9 @@ class Conductor {
   /// the answer limit, a sentence naming who did not answer and what canhil
   /// waited for (`waiting_for`, e.g. "the trigger message at t = 1.230 s").
   /// `limit`, when given, replaces the answer limit (a program's start may
-  /// take longer than an instant). Past the limit, while the processes'
-  /// CPU time grows, the wait goes on, up to busy_limit from its start.
+  /// take longer than an instant). Past the limit the processes' CPU time is
+  /// watched for up to 200 ms more: while it grows, the wait goes on, up to
+  /// busy_limit from its start (an instant that answers in time reads none).
   std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
                          std::optional<Nanos> limit = std::nullopt);
 
