@@ -10,6 +10,11 @@
 # clang-tidy's result per file is cached (scripts/lint_tidy.py: a file whose
 # preprocessed text, arguments, configuration and clang-tidy are unchanged is
 # not analysed again); CANHIL_TIDY_CACHE=0 turns the cache off.
+# Most checks run over batches of eight files compiled as one unit (the
+# headers walked once for eight); the static analyser and the checks that
+# depend on the main file run file by file (scripts/lint_tidy.py says which);
+# CANHIL_TIDY_BATCH=1 runs every check file by file, the reference the
+# batches give the same findings as (tests/scripts/lint_test.sh).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 db=build/lint
@@ -32,11 +37,12 @@ fi
 if [[ $format -eq 1 ]]; then
   git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror
 fi
-cache=()
-[[ "${CANHIL_TIDY_CACHE:-1}" == 0 ]] && cache=(--cache '')
+options=()
+[[ "${CANHIL_TIDY_CACHE:-1}" == 0 ]] && options=(--cache '')
+options+=(--batch "${CANHIL_TIDY_BATCH:-8}")
 # clang-tidy exits non-zero on any finding (WarningsAsErrors). The compile
 # database is g++'s: -Wno-unknown-warning-option for its g++-only warnings.
-python3 scripts/lint_tidy.py -p "$db" "${cache[@]}" "$files" > "$db/clang-tidy.log" 2>&1 || {
+python3 scripts/lint_tidy.py -p "$db" "${options[@]}" "$files" > "$db/clang-tidy.log" 2>&1 || {
   grep -E "error:|warning:" "$db/clang-tidy.log" | sort -u >&2
   tail -1 "$db/clang-tidy.log" >&2
   echo "lint: clang-tidy found problems (full log: $db/clang-tidy.log)" >&2
