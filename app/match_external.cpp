@@ -10,13 +10,6 @@
 namespace canhil::app {
 namespace {
 
-lockstep::ConductorOptions conductor_options(const emulator::Session& session) {
-  lockstep::ConductorOptions o;
-  o.answer_limit = from_seconds(session.scenario().external.answer_limit_s);
-  o.busy_limit = from_seconds(session.scenario().external.busy_limit_s);
-  return o;
-}
-
 emulator::ExternalOptions driver_options(const emulator::Session& session) {
   emulator::ExternalOptions o;
   o.start_limit = from_seconds(session.scenario().external.attach_limit_s);
@@ -33,7 +26,7 @@ class ExternalHalf final : public emulator::HalfDriver {
   ExternalHalf(emulator::Session& session, const ExternalMatch& how, const std::string& name,
                const std::string& file_prefix)
       : name_(name),
-        conductor_(conductor_options(session)),
+        conductor_(conductor_options(session.scenario().external)),
         driver_(session, conductor_, driver_options(session)),
         processes_(conductor_.environment(how.shim, how.team_preload.empty() ? nullptr : how.team_preload.c_str()),
                    stderr, ProcessOutput{how.logs, file_prefix, true}) {

@@ -144,10 +144,7 @@ void apply_external_options(emulator::Scenario& scenario, const std::vector<std:
 int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
                  const std::string& team_preload, ExternalFigures* figures) {
   const emulator::ExternalSide& side = session.scenario().external;
-  lockstep::ConductorOptions conductor_options;
-  conductor_options.answer_limit = from_seconds(side.answer_limit_s);
-  conductor_options.busy_limit = from_seconds(side.busy_limit_s);
-  lockstep::Conductor conductor(conductor_options);
+  lockstep::Conductor conductor(conductor_options(side));
   emulator::ExternalOptions driver_options;
   driver_options.start_limit = from_seconds(side.attach_limit_s);
   emulator::ExternalDriver driver(session, conductor, driver_options);

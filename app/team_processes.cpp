@@ -85,6 +85,13 @@ pid_t start(const std::string& command, const std::vector<std::string>& environm
 
 }  // namespace
 
+lockstep::ConductorOptions conductor_options(const emulator::ExternalSide& side) {
+  lockstep::ConductorOptions o;
+  o.answer_limit = from_seconds(side.answer_limit_s);
+  o.busy_limit = from_seconds(side.busy_limit_s);
+  return o;
+}
+
 std::string expand_command(std::string command, const emulator::Session& session, std::size_t robot) {
   const auto replace = [&command](const std::string& key, const std::string& value) {
     for (std::size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size())) {

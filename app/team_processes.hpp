@@ -18,11 +18,16 @@
 
 #include "canhil/base/time.hpp"
 #include "canhil/emulator/session.hpp"
+#include "canhil/lockstep/conductor.hpp"
 
 namespace canhil::app {
 
 /// The folder of the running canhil program (empty when /proc cannot say).
 std::filesystem::path own_folder();
+
+/// The lockstep conductor's limits from a scenario's [external] side (answer
+/// and busy limits; the attach limit is the caller's, for the start).
+lockstep::ConductorOptions conductor_options(const emulator::ExternalSide& side);
 
 /// A command line with robot `robot`'s values in place of "{agent}",
 /// "{iface}", "{x}", "{y}", "{heading}" (its start placement in this run or

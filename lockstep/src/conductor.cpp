@@ -17,6 +17,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <optional>
+#include <string>
 
 #include "canhil/base/setup_error.hpp"
 
@@ -41,19 +43,27 @@ std::string seconds(Nanos t) {
   return out;
 }
 
+// A /proc stat line from the command's closing parenthesis on ("pid (comm)
+// S ...": ") S ...", the command's name may hold spaces and parentheses);
+// nullopt when the file cannot be read (the process or thread is gone).
+std::optional<std::string> stat_fields(const std::string& path) {
+  FILE* f = std::fopen(path.c_str(), "r");
+  if (f == nullptr) return std::nullopt;
+  char line[1024] = {};
+  const bool read = std::fgets(line, sizeof line, f) != nullptr;
+  std::fclose(f);
+  const char* end_of_name = read ? std::strrchr(line, ')') : nullptr;
+  return std::string(end_of_name != nullptr ? end_of_name : "");
+}
+
 // Whether a thread exists and has not ended: a process that exited stays a
 // zombie until its parent reaps it, and a zombie runs no more.
 bool running_thread(int pid, int tid) {
   if (syscall(SYS_tgkill, pid, tid, 0) != 0 && errno == ESRCH) return false;
-  const std::string path = "/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/stat";
-  FILE* f = std::fopen(path.c_str(), "r");
-  if (f == nullptr) return false;
-  char line[512] = {};
-  const bool read = std::fgets(line, sizeof line, f) != nullptr;
-  std::fclose(f);
-  const char* end_of_name = read ? std::strrchr(line, ')') : nullptr;  // "tid (comm) S ..."
-  if (end_of_name == nullptr || end_of_name[1] == '\0') return true;
-  const char state = end_of_name[2];
+  const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/stat");
+  if (!fields) return false;
+  if (fields->size() < 3) return true;
+  const char state = (*fields)[2];
   return state != 'Z' && state != 'X';
 }
 
@@ -308,16 +318,11 @@ Nanos Conductor::processes_cpu() const {
   static const long kTicks = sysconf(_SC_CLK_TCK);
   long long ticks = 0;
   for (const int pid : pids) {
-    char path[64];
-    std::snprintf(path, sizeof path, "/proc/%d/stat", pid);
-    FILE* f = std::fopen(path, "r");
-    if (f == nullptr) continue;
-    char line[1024] = "";
-    const bool read = std::fgets(line, sizeof line, f) != nullptr;
-    std::fclose(f);
-    // After the command's closing parenthesis come field 3 (the state) and
-    // on; utime and stime are fields 14 and 15: the 12th and 13th words there.
-    const char* p = read ? std::strrchr(line, ')') : nullptr;
+    const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/stat");
+    if (!fields || fields->empty()) continue;
+    // After the parenthesis come field 3 (the state) and on; utime and stime
+    // are fields 14 and 15: the 12th and 13th words there.
+    const char* p = fields->c_str();
     for (int word = 0; p != nullptr && word < 12; ++word) p = std::strchr(p + 1, ' ');
     if (p != nullptr) {
       char* end = nullptr;
