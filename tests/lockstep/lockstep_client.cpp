@@ -158,9 +158,9 @@ int main(int argc, char** argv) {
   if (mode == "timerfd") return ticks();
   if (mode == "thread") return thread();
   if (mode == "spin") return spin();
-  if (mode == "compute" && argc > 2) return compute(std::atof(argv[2]));
+  if (mode == "compute" && argc > 2) return compute(std::strtod(argv[2], nullptr));
   if (mode == "blocked") return blocked();
   if (mode == "patient") return patient();
-  std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin\n");
+  std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient\n");
   return 2;
 }
