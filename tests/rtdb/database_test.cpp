@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <optional>
 #include <thread>
 
 #include "canhil/base/setup_error.hpp"
@@ -167,9 +168,17 @@ TEST_F(TeamDatabase, ASlotOutsideTheTableIsABrokenInvariantThatSaysWhich) {
   EXPECT_DEATH(db->get(3, 3, kCmdVel, into), "agent 3's database");
   EXPECT_DEATH(db->get(-1, kRobot1, kCmdVel, into), "agent -1's database");
   EXPECT_DEATH(db->get(kRobot1, kRobot1, 99, into), "RTDB item 99 of agent 1 is not in agent 1's database");
-  // The slots the table has are served, each at its size.
-  db->put(kRobot2, kRobot2, kCmdVel, bytes_of(vel));
-  EXPECT_EQ(db->get(kRobot2, kRobot2, kCmdVel, into), 0);
+  // The slots the table has are served, each at its size. The age is a
+  // wall-clock figure (a loaded machine may cross a millisecond between the
+  // two calls): what must hold is that it is no read of a stale or unwritten slot.
+  std::array<unsigned char, 16> marked{};
+  marked.fill(0x5a);
+  db->put(kRobot2, kRobot2, kCmdVel, bytes_of(marked));
+  const std::optional<int> age = db->get(kRobot2, kRobot2, kCmdVel, into);
+  ASSERT_TRUE(age.has_value());
+  EXPECT_GE(*age, 0);
+  EXPECT_LT(*age, 1000);
+  EXPECT_EQ(back, marked);
 
   setenv("AGENT", "2", 1);
   db.reset();
