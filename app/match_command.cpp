@@ -21,6 +21,7 @@
 #include "dbc_choice.hpp"
 #include "match_external.hpp"
 #include "run_external.hpp"
+#include "team_processes.hpp"
 
 namespace canhil::app {
 namespace {
@@ -142,6 +143,11 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
                        ": --external starts each robot's processes from its team's [teams.external] (else "
                        "[external]) processes = [...] lines, and this scenario gives none; add them, or give "
                        "--process \"COMMAND\" for both teams (docs/teams.md)");
+    }
+    try {
+      require_told_goal(scenario, halves > 1, stderr);
+    } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
+      throw SetupError(path + ": " + e.what());
     }
   }
   emulator::MatchOptions match;

@@ -12,7 +12,7 @@ namespace {
 
 emulator::ExternalOptions driver_options(const emulator::Session& session) {
   emulator::ExternalOptions o;
-  o.start_limit = from_seconds(session.scenario().external.attach_limit_s);
+  o.start_limit = from_seconds(attach_limit_s(session.scenario()));
   o.record_trace = false;  // a match keeps its figures, not its frames
   o.check_timing = true;
   return o;
@@ -26,19 +26,20 @@ class ExternalHalf final : public emulator::HalfDriver {
   ExternalHalf(emulator::Session& session, const ExternalMatch& how, const std::string& name,
                const std::string& file_prefix)
       : name_(name),
-        conductor_(conductor_options(session.scenario().external)),
+        conductor_(conductor_options(session.scenario())),
         driver_(session, conductor_, driver_options(session)),
         processes_(conductor_.environment(how.shim, how.team_preload.empty() ? nullptr : how.team_preload.c_str()),
                    stderr, ProcessOutput{how.logs, file_prefix, true}) {
     std::fprintf(stderr, "canhil match: %s, the teams' processes:\n", name.c_str());
     const std::size_t expected = processes_.start_all(session);
-    const double limit = session.scenario().external.attach_limit_s;
+    const double limit = attach_limit_s(session.scenario());
     const std::size_t attached = conductor_.wait_attached(expected, from_seconds(limit));
     if (attached < expected) {
       conductor_.release();  // the destructor does not run for a half that never began
       processes_.stop_all();
       char text[160];
-      std::snprintf(text, sizeof text, ": %zu of %zu process(es) attached within %g s (attach_limit_s in [external])",
+      std::snprintf(text, sizeof text,
+                    ": %zu of %zu process(es) attached within %g s (attach_limit_s in [external] or [teams.external])",
                     attached, expected, limit);
       throw emulator::ProcessStuck(name + text);
     }

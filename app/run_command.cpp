@@ -22,9 +22,11 @@
 #include "canhil/viewer/live_feed.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "play_summary.hpp"
 #include "run_external.hpp"
 #include "run_realtime.hpp"
 #include "run_view.hpp"
+#include "team_processes.hpp"
 #include "virtual_loop.hpp"
 
 namespace canhil::app {
@@ -56,25 +58,7 @@ void print_virtual_summary(const emulator::Session& session, const emulator::Vir
   const Eigen::Vector3d b = session.world().ball_position();
   std::printf("  ball at (%.2f, %.2f)\n", b.x(), b.y());
   const auto& teams = session.scenario().teams;
-  for (const emulator::Goal& g : session.goals()) {
-    if (teams.size() == 1) {
-      std::printf("  GOAL at %.2f s in the %s goal\n", to_seconds(g.time), g.positive_x ? "+x (opponent)" : "-x (own)");
-      continue;
-    }
-    const std::size_t scorer = teams[0].attacks_positive_x == g.positive_x ? 0 : 1;
-    std::printf("  GOAL at %.2f s in the %s goal, for %s\n", to_seconds(g.time), g.positive_x ? "+x" : "-x",
-                teams[scorer].name.c_str());
-  }
-  if (const emulator::Referee* referee = session.referee()) {
-    std::printf("  referee: %zu call(s)", referee->calls().size());
-    for (std::size_t t = 0; t < teams.size(); ++t) {
-      std::printf("%s %s %d", t == 0 ? ", score" : " :", teams[t].name.c_str(), referee->score()[t]);
-    }
-    std::printf("\n");
-    for (const emulator::RefereeCall& c : referee->calls()) {
-      std::printf("    %7.2f s  %s\n", to_seconds(c.time), c.text.c_str());
-    }
-  }
+  print_play(session, stdout);
   const auto outcomes = driver.outcomes();
   for (std::size_t r = 0; r < outcomes.size(); ++r) {
     const auto& o = outcomes[r];
@@ -322,6 +306,11 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   if (outputs.world_log) options.world_log_period = from_seconds(outputs.log_period_s);
   if (external) {
     if (outputs.save_world) throw UsageError("--save-world is not available with --external yet");
+    try {
+      require_told_goal(scenario, false, stderr);
+    } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
+      throw SetupError((config ? *config + ": " : std::string()) + e.what());
+    }
     // Before anything is set up: canhil may start itself again, with the shim preloaded.
     const std::string shim = find_timeshim();
     const std::string team_preload = preload_shim_into_self(shim);

@@ -17,7 +17,9 @@
 #include "args.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/external_driver.hpp"
+#include "canhil/emulator/referee.hpp"
 #include "canhil/lockstep/conductor.hpp"
+#include "play_summary.hpp"
 #include "team_processes.hpp"
 
 namespace canhil::app {
@@ -47,12 +49,13 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
               w, w > 0 ? simulated / w : 0.0);
   const emulator::WorldSnapshot s = session.snapshot();
   std::printf("  ball at (%.2f, %.2f)\n", s.ball.x(), s.ball.y());
-  for (const emulator::Goal& g : session.goals()) {
-    std::printf("  GOAL at %.2f s in the %s goal\n", to_seconds(g.time), g.positive_x ? "+x (opponent)" : "-x (own)");
-  }
+  print_play(session, stdout);
+  const auto& teams = session.scenario().teams;
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
-    std::printf("  %s agent %d: at (%.2f, %.2f)\n", rig.interface.c_str(), rig.agent, s.robots[r].x_m, s.robots[r].y_m);
+    const std::string team = teams.size() > 1 ? " (" + teams[rig.team].name + ")" : "";
+    std::printf("  %s agent %d%s: at (%.2f, %.2f)\n", rig.interface.c_str(), rig.agent, team.c_str(), s.robots[r].x_m,
+                s.robots[r].y_m);
   }
   std::printf("  frames: %llu from the processes, %llu physics steps\n",
               static_cast<unsigned long long>(driver.frames_from_processes()),
@@ -139,14 +142,17 @@ void apply_external_options(emulator::Scenario& scenario, const std::vector<std:
   if (!answer_limit) return;
   if (!(*answer_limit >= 0.01 && *answer_limit <= 3600)) throw UsageError("--answer-limit takes 0.01..3600 s");
   scenario.external.answer_limit_s = *answer_limit;
+  for (emulator::Team& team : scenario.teams) {
+    if (team.external) team.external->answer_limit_s = *answer_limit;  // the flag is the whole run's
+  }
 }
 
 int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
                  const std::string& team_preload, ExternalFigures* figures) {
-  const emulator::ExternalSide& side = session.scenario().external;
-  lockstep::Conductor conductor(conductor_options(side));
+  const double attach_limit = attach_limit_s(session.scenario());
+  lockstep::Conductor conductor(conductor_options(session.scenario()));
   emulator::ExternalOptions driver_options;
-  driver_options.start_limit = from_seconds(side.attach_limit_s);
+  driver_options.start_limit = from_seconds(attach_limit);
   emulator::ExternalDriver driver(session, conductor, driver_options);
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s (%s), seed %llu\n", robots,
@@ -164,22 +170,25 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     expected = run.wait_for > 0 ? run.wait_for : 2 * robots;
     std::printf("  start your handler and agent (AGENT=N) with:\n   ");
     for (const std::string& e : environment) std::printf(" %s", e.c_str());
-    std::printf("\n  waiting for %zu process(es), %g s at most\n", expected, side.attach_limit_s);
+    std::printf("\n  waiting for %zu process(es), %g s at most\n", expected, attach_limit);
   }
   std::fflush(stdout);
   std::signal(SIGINT, stop_external);
   std::signal(SIGTERM, stop_external);
-  const std::size_t attached = conductor.wait_attached(expected, from_seconds(side.attach_limit_s));
+  const std::size_t attached = conductor.wait_attached(expected, from_seconds(attach_limit));
   int status = 0;
   const char* how = "done";
   const Nanos wall_start = lockstep::wall_clock();
   if (attached < expected) {
-    std::fprintf(stderr, "canhil run: %zu of %zu process(es) attached within %g s (attach_limit_s in [external])\n",
-                 attached, expected, side.attach_limit_s);
+    std::fprintf(
+        stderr,
+        "canhil run: %zu of %zu process(es) attached within %g s (attach_limit_s in [external] or [teams.external])\n",
+        attached, expected, attach_limit);
     status = kProcessStuckStatus;
     how = "not started";
   } else {
     const Nanos total = from_seconds(run.length.seconds);
+    std::size_t calls_shown = 0;
     try {
       while (driver.now() < total && !g_stop_run_external) {
         driver.run_until(std::min<Nanos>(driver.now() + std::chrono::seconds(1), total));
@@ -192,6 +201,12 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
           std::printf("  %s (%5.2f, %5.2f)", session.rig(r).interface.c_str(), s.robots[r].x_m, s.robots[r].y_m);
         }
         std::printf("\n");
+        if (const emulator::Referee* referee = session.referee()) {  // the calls of that second, as they came
+          for (; calls_shown < referee->calls().size(); ++calls_shown) {
+            const emulator::RefereeCall& c = referee->calls()[calls_shown];
+            std::printf("  t=%5.1f s  referee: %s\n", to_seconds(c.time), c.text.c_str());
+          }
+        }
         std::fflush(stdout);
       }
     } catch (const emulator::ProcessStuck& e) {

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
@@ -14,6 +15,7 @@
 #include <filesystem>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/laptop_link.hpp"
 #include "canhil/lockstep/conductor.hpp"
 
 namespace canhil::app {
@@ -85,11 +87,58 @@ pid_t start(const std::string& command, const std::vector<std::string>& environm
 
 }  // namespace
 
-lockstep::ConductorOptions conductor_options(const emulator::ExternalSide& side) {
+std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenario& scenario) {
+  std::vector<const emulator::ExternalSide*> sides;
+  for (std::size_t t = 0; t < scenario.teams.size(); ++t) sides.push_back(&scenario.external_of(t));
+  if (sides.empty()) sides.push_back(&scenario.external);
+  return sides;
+}
+
+lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario) {
   lockstep::ConductorOptions o;
-  o.answer_limit = from_seconds(side.answer_limit_s);
-  o.busy_limit = from_seconds(side.busy_limit_s);
+  double answer = 0;
+  double busy = 0;
+  for (const emulator::ExternalSide* side : external_sides(scenario)) {
+    answer = std::max(answer, side->answer_limit_s);
+    busy = std::max(busy, side->busy_limit_s);
+  }
+  o.answer_limit = from_seconds(answer);
+  o.busy_limit = from_seconds(busy);
   return o;
+}
+
+double attach_limit_s(const emulator::Scenario& scenario) {
+  double limit = 0;
+  for (const emulator::ExternalSide* side : external_sides(scenario)) limit = std::max(limit, side->attach_limit_s);
+  return limit;
+}
+
+void require_told_goal(const emulator::Scenario& scenario, bool both_ends, FILE* warn) {
+  for (std::size_t t = 0; t < scenario.teams.size(); ++t) {
+    const emulator::Team& team = scenario.teams[t];
+    if (team.attacks_positive_x && !both_ends) continue;
+    const std::vector<std::string>& commands = scenario.external_of(t).processes;
+    const bool by_command = std::any_of(commands.begin(), commands.end(),
+                                        [](const std::string& c) { return c.find("{goal_x}") != std::string::npos; });
+    if (by_command) continue;
+    const emulator::LaptopSide side = emulator::resolve_laptop(scenario.laptop_of(t), team.robots, false);
+    const rtdb::Layout layout = emulator::load_layout(side.layout);
+    if (emulator::layout_tells_attacks(layout)) continue;
+    const std::string when = team.attacks_positive_x ? " in the second half (ends change at half time)" : "";
+    const std::string what = "team " + team.name + " attacks the -x goal" + when + ", but its layout " + layout.name() +
+                             " (" + layout.file() + ") has no COACH_INFO quantity `attacks`";
+    if (commands.empty()) {
+      std::fprintf(warn,
+                   "canhil: warning: %s, and canhil does not start its processes: unless your own start-up tells "
+                   "its agents which goal is theirs, they believe they attack +x\n",
+                   what.c_str());
+      continue;
+    }
+    throw SetupError(what +
+                     " and none of its command lines passes {goal_x}: its software, told nothing, would believe it "
+                     "attacks +x and play backwards. Map `attacks` in the team's layout (docs/layouts.md; CAMBADA's "
+                     "goalColor) or pass {goal_x} to its agent (docs/teams.md)");
+  }
 }
 
 std::string expand_command(std::string command, const emulator::Session& session, std::size_t robot) {

@@ -25,9 +25,27 @@ namespace canhil::app {
 /// The folder of the running canhil program (empty when /proc cannot say).
 std::filesystem::path own_folder();
 
-/// The lockstep conductor's limits from a scenario's [external] side (answer
-/// and busy limits; the attach limit is the caller's, for the start).
-lockstep::ConductorOptions conductor_options(const emulator::ExternalSide& side);
+/// The external sides a run's processes come from: each team's
+/// [teams.external], else the scenario's [external].
+std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenario& scenario);
+
+/// The lockstep conductor's limits for a run: every process waits on the one
+/// virtual clock, so each limit is the longest any team gives (answer_limit_s,
+/// busy_limit_s); a team's processes get at least their own team's. The
+/// attach limit is attach_limit_s().
+lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario);
+/// How long (wall time) the run waits for all its processes to attach: the
+/// longest attach_limit_s of the teams' sides.
+double attach_limit_s(const emulator::Scenario& scenario);
+
+/// Every team that attacks the -x goal (in any half, with `both_ends`: a
+/// match of more than one half changes ends) must be told so: its layout
+/// carries COACH_INFO's `attacks` (CAMBADA's goalColor), or one of the command
+/// lines canhil starts for it passes "{goal_x}". Software told nothing
+/// believes it attacks +x and plays backwards: SetupError naming the team and
+/// both ways. A team whose processes the user starts (no command lines) gets
+/// a warning on `warn` instead: canhil cannot see what they are told.
+void require_told_goal(const emulator::Scenario& scenario, bool both_ends, FILE* warn);
 
 /// A command line with robot `robot`'s values in place of "{agent}",
 /// "{iface}", "{x}", "{y}", "{heading}" (its start placement in this run or

@@ -26,14 +26,19 @@ LaptopSide resolve_laptop(LaptopSide side, std::size_t robots, bool realtime) {
   return side;
 }
 
-namespace {
-
 rtdb::Layout load_layout(const std::string& name) {
   for (const std::string_view shipped : rtdb::Layout::shipped_names()) {
     if (name == shipped) return rtdb::Layout::shipped(name);
   }
   return rtdb::Layout::load(name);
 }
+
+bool layout_tells_attacks(const rtdb::Layout& layout) {
+  const rtdb::ItemLayout* coach = layout.item("COACH_INFO");
+  return coach != nullptr && coach->has("attacks");
+}
+
+namespace {
 
 std::unique_ptr<rtdb::Database> open_database(const LaptopSide& side, int set) {
   if (side.rtdb_lib == "builtin") return rtdb::open_builtin(rtdb::Scope::kAllAgents, set);
@@ -95,6 +100,7 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
       c.running = c.buffer->quantity("running");
       c.role_auto = c.buffer->quantity("role_auto");
       c.role = c.buffer->quantity("role");
+      c.attacks = c.buffer->quantity("attacks");
     }
     const rtdb::ItemTable& table = db_->items();
     const auto id = table.id(name);
@@ -198,6 +204,7 @@ void LaptopLink::write_coach(const CoachState& coach) {
       b.set(c.running, p.running ? 1.0 : 0.0, agent);
       b.set(c.role_auto, p.role_auto ? 1.0 : 0.0, agent);
       set_name(c.role, p.role, agent);
+      set_name(c.attacks, coach.attacks_positive_x ? "positive_x" : "negative_x", agent);
     }
     for (const auto& [space, owner] : c.targets) db_->put(space, owner, c.id, b.bytes(), 0);
   }

@@ -232,6 +232,7 @@ CoachState Session::team_coach(std::size_t team) const {
   const Team& t = scenario_.teams.at(team);
   CoachState c;
   c.game_state = coach_.state_of(team);
+  c.attacks_positive_x = t.attacks_positive_x;
   const auto first = coach_.players.begin() + static_cast<std::ptrdiff_t>(t.first_robot);
   c.players.assign(first, first + static_cast<std::ptrdiff_t>(t.robots));
   return c;

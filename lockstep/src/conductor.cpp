@@ -295,9 +295,9 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
       }
       waited_ += now - start;
       const std::string within = seconds(computing ? busy_until - start : answer_limit) + " of wall time";
-      const std::string state =
-          computing ? " (still computing on the CPU: hung in a loop? busy_limit_s in [external] waits longer)"
-                    : " (not on the CPU: blocked on something canhil will not give)";
+      const std::string state = computing ? " (still computing on the CPU: hung in a loop? busy_limit_s in [external] "
+                                            "or [teams.external] waits longer)"
+                                          : " (not on the CPU: blocked on something canhil will not give)";
       if (!processes_quiet) return who + " within " + within + " after " + waiting_for + state;
       return "canhil waited " + within + " after " + waiting_for + " for " + missing + state;
     }

@@ -43,6 +43,7 @@ constexpr std::array<std::string_view, 20> kRoles{
     "cursor",      "penalty",        "parking", "tour",          "a",          "b",    "c",        "receiver",
     "receiver_fp", "kick_calibrate", "taxi",    "goalie_penalty"};
 constexpr std::array<std::string_view, 4> kColors{"blue", "yellow", "magenta", "cyan"};
+constexpr std::array<std::string_view, 2> kEnds{"positive_x", "negative_x"};
 
 constexpr QuantityInfo number(std::string_view item, std::string_view name, std::string_view unit,
                               std::string_view meaning) {
@@ -120,7 +121,8 @@ constexpr std::array<QuantityInfo, 52> kContract{{
     boolean("COACH_INFO", "role_auto", "the robot chooses its role", true),
     enumerated("COACH_INFO", "role", kRoles, "the role the coach gives", true),
     enumerated("COACH_INFO", "team_color", kColors, "the team's colour", true),
-    enumerated("COACH_INFO", "goal_color", kColors, "the colour of the goal attacked", true),
+    enumerated("COACH_INFO", "attacks", kEnds,
+               "the goal the robot's team attacks (this half): the one at world +x or at -x", true),
     number("CMD_SETPOSE", "x", "m", "pose to set"),
     number("CMD_SETPOSE", "y", "m", "pose to set"),
     number("CMD_SETPOSE", "heading", "rad", "pose to set, counter-clockwise"),

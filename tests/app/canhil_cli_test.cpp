@@ -497,4 +497,22 @@ TEST(CanhilMatch, ExternalOptionsNeedExternalAndExternalNeedsProcesses) {
   EXPECT_TRUE(has(limit, "--answer-limit takes 0.01..3600 s")) << limit.out;
 }
 
+TEST(CanhilMatch, ATeamAttackingMinusXThatIsToldNothingIsRefused) {
+  // canhil's layout has no COACH_INFO `attacks`; `agent` is given no {goal_x}:
+  // the second team's software would believe it attacks +x.
+  const CliRun one = canhil("match emulator/scenarios/two_teams.toml --external --process agent --halves 1");
+  EXPECT_EQ(one.status, 2) << one.out;
+  EXPECT_TRUE(has(one, "team old attacks the -x goal, but its layout canhil (")) << one.out;
+  EXPECT_TRUE(has(one, "none of its command lines passes {goal_x}")) << one.out;
+  EXPECT_TRUE(has(one, "Map `attacks` in the team's layout")) << one.out;
+  // Two halves: the first team attacks -x after half time.
+  const CliRun two = canhil("match emulator/scenarios/two_teams.toml --external --process agent --halves 2");
+  EXPECT_EQ(two.status, 2) << two.out;
+  EXPECT_TRUE(has(two, "team new attacks the -x goal in the second half (ends change at half time)")) << two.out;
+  // canhil run --external: the same rule.
+  const CliRun run = canhil("run --config emulator/scenarios/two_teams.toml --external --process agent");
+  EXPECT_EQ(run.status, 2) << run.out;
+  EXPECT_TRUE(has(run, "two_teams.toml: team old attacks the -x goal")) << run.out;
+}
+
 }  // namespace

@@ -4,8 +4,10 @@
 // SECOND_RTDB=1. The same seed plays the same match twice; a robot attacks
 // the goal its team attacks in each half (ends changed at half time: {x},
 // {y}, {heading} and {goal_x} follow); both teams' processes drive their
-// robots; a process that never attaches is named. Wall time never decides a
-// result here: it only bounds how long a match may take.
+// robots; a process that never attaches is named; a CAMBADA-like agent told
+// its goal only through COACH_INFO (goalColor) attacks the right one on
+// either side. Wall time never decides a result here: it only bounds how long
+// a match may take.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -56,18 +58,22 @@ Finished canhil_match(const std::string& arguments) {
 
 int exit_status(const Finished& f) { return WIFEXITED(f.status) ? WEXITSTATUS(f.status) : -1; }
 
-// One robot a team on vcan0 and vcan1; the teams' processes from [external].
+// One robot a team on vcan0 and vcan1; the teams' processes from [external],
+// or, with `team_tables`, from each team's own [teams.external] (which then
+// holds `more_external` too).
 std::string write_scenario(const std::string& name, double old_x, double old_y, const std::string& agent,
-                           const std::string& more_external = "") {
+                           const std::string& more_external = "", bool team_tables = false) {
   std::string path = scratch(name + ".toml");
   std::ofstream out(path);
+  const std::string external = "processes = [\"canhil-hwcomm --iface {iface}\", \"" + agent + "\"]\n" + more_external;
+  const std::string team_external = team_tables ? "[teams.external]\n" + external + "\n" : "";
   out << "[run]\nseed = 1\nkick_power = 40\n\n"
       << "[ball_start]\nx_m = 0.0\ny_m = 0.0\nz_m = 0.11\n\n"
-      << "[external]\nprocesses = [\"canhil-hwcomm --iface {iface}\", \"" << agent << "\"]\n"
-      << more_external << "\n"
-      << "[[teams]]\nname = \"new\"\nattacks = \"+x\"\n\n"
+      << (team_tables ? "" : "[external]\n" + external + "\n") << "[[teams]]\nname = \"new\"\nattacks = \"+x\"\n"
+      << team_external << "\n"
       << "[[teams.robots]]\nx_m = -1.0\ny_m = 0.0\nheading_deg = -90.0\ninterface = \"vcan0\"\n\n"
-      << "[[teams]]\nname = \"old\"\nattacks = \"-x\"\n\n"
+      << "[[teams]]\nname = \"old\"\nattacks = \"-x\"\n"
+      << team_external << "\n"
       << "[[teams.robots]]\nx_m = " << old_x << "\ny_m = " << old_y << "\nheading_deg = 90.0\ninterface = \"vcan1\"\n";
   return path;
 }
@@ -147,11 +153,14 @@ TEST(VcanMatch, BothTeamsProcessesDriveTheirRobotsAndEachProcessWritesItsOwnLog)
 TEST(VcanMatch, AProcessThatNeverAnswersStopsTheMatchNamingItsMatchAndHalf) {
   // The agent's process drops the lockstep's board before its program starts:
   // canhil never hears from it again, and says so after the attach limit.
+  // The limit is the teams' own ([teams.external]; [external]'s is 60 s).
   const std::string scenario =
-      write_scenario("stuck", 3.0, 2.0, "env -u CANHIL_LOCKSTEP sleep 30", "attach_limit_s = 3");
+      write_scenario("stuck", 3.0, 2.0, "env -u CANHIL_LOCKSTEP GOAL_X={goal_x} sleep 30", "attach_limit_s = 3", true);
   const Finished f = canhil_match(scenario + " --external --half-minutes 0.1 --quiet --json");
   EXPECT_EQ(exit_status(f), 3) << f.output << f.errors;
   EXPECT_NE(f.errors.find("canhil match: stopped: match 1, half 1"), std::string::npos) << f.errors;
+  EXPECT_NE(f.errors.find("within 3.000 s of wall time"), std::string::npos) << "the teams' attach_limit_s\n"
+                                                                             << f.errors;
   const nlohmann::json j = nlohmann::json::parse(f.output);  // what was played before: nothing, said so
   EXPECT_TRUE(j["stopped"].get<bool>());
   EXPECT_TRUE(j["matches"].empty());
@@ -166,6 +175,77 @@ TEST(VcanMatch, AProgramThatIsNotFoundStopsTheMatchSayingSo) {
   EXPECT_NE(f.errors.find("never ran: the shell found no such program (exit status 127)"), std::string::npos)
       << f.errors;
   EXPECT_TRUE(nlohmann::json::parse(f.output)["stopped"].get<bool>());
+  std::remove(scenario.c_str());
+}
+
+// Both teams the CAMBADA-like agent (tests/laptop/team_agent.cpp --attack),
+// relinked against canhil's librtdb.so as a team relinks its agent for the
+// second team (SECOND_RTDB), with its handler in CAMBADA's layout: neither is
+// given {goal_x}, so each learns its goal only as CAMBADA's agent does, from
+// COACH_INFO's goalColor and the compass. The first team's robot is parked
+// (running = false); the second team's starts on the -x side of the ball: told
+// right, it goes round the ball and scores in -x; told wrong (goalColor
+// Yellow, as before the layout mapped `attacks`), it would kick from where it
+// stands towards +x.
+std::string write_cambada_like(const std::string& name) {
+  const std::string team = canhil::test::source_dir() + "/tests/support/cambada_like/";
+  const std::string libs = std::string("--rtdb-lib ") + CANHIL_TEST_LIBRTDB + " --rtdb-items " + team +
+                           "rtdb_user.h --rtdb-ini " + team + "config/rtdb.ini --layout cambada";
+  const std::string laptop = std::string("[teams.laptop]\nrtdb_lib = \"") + CANHIL_TEST_LIBRTDB +
+                             "\"\nrtdb_items = \"" + team + "rtdb_user.h\"\nrtdb_ini = \"" + team +
+                             "config/rtdb.ini\"\nlayout = \"cambada\"\npman = \"builtin\"\n";
+  const std::string external = "[teams.external]\nprocesses = [\"canhil-hwcomm --iface {iface} " + libs + "\", \"" +
+                               CANHIL_TEST_TEAM_AGENT_RELINKED + " --ini " + team +
+                               "config/rtdb.ini --attack\"]\nattach_limit_s = 60\nanswer_limit_s = 10\n";
+  std::string path = scratch(name + ".toml");
+  std::ofstream out(path);
+  out << "[run]\nseed = 2\nkick_power = 40\n\n"
+      << "[ball_start]\nx_m = 0.0\ny_m = 0.0\nz_m = 0.11\n\n"
+      << "[[teams]]\nname = \"first\"\nattacks = \"+x\"\n"
+      << laptop << external << "\n"
+      << "[[teams.robots]]\nx_m = 6.0\ny_m = 4.0\nheading_deg = 90.0\ninterface = \"vcan0\"\nrunning = false\n\n"
+      << "[[teams]]\nname = \"second\"\nattacks = \"-x\"\n"
+      << laptop << external << "\n"
+      << "[[teams.robots]]\nx_m = -1.2\ny_m = 0.3\nheading_deg = -60.0\ninterface = \"vcan1\"\n";
+  return path;
+}
+
+TEST(VcanMatch, ACambadaLikeAgentToldItsGoalByTheCoachAttacksMinusXForTheSecondTeam) {
+  const std::string scenario = write_cambada_like("cambada");
+  const std::string logs = scratch("_cambada_logs");
+  fs::remove_all(logs);
+  const Finished f =
+      canhil_match(scenario + " --external --halves 1 --half-minutes 0.15 --json --quiet --logs " + logs);
+  ASSERT_EQ(exit_status(f), 0) << f.output << f.errors;
+  const nlohmann::json j = nlohmann::json::parse(f.output);
+  const nlohmann::json& m = j["matches"][0];
+  ASSERT_GE(m["goals"].size(), 1u) << j.dump(2) << f.errors;
+  EXPECT_EQ(m["goals"][0]["team"], "second") << "in the -x goal, the one the second team attacks\n" << j.dump(2);
+  EXPECT_GT(m["teams"][1]["kicks"].get<int>(), 0) << j.dump(2);
+  EXPECT_GT(m["referee_calls"].get<int>(), 0) << "the goal's kick-off at least\n" << j.dump(2);
+  const std::string program = fs::path(CANHIL_TEST_TEAM_AGENT_RELINKED).filename().string();
+  const std::string first = read_file(logs + "/match1-half1-first-agent1-" + program + ".log");
+  const std::string second = read_file(logs + "/match1-half1-second-agent1-" + program + ".log");
+  EXPECT_NE(first.find("goalColor Yellow"), std::string::npos) << first;
+  EXPECT_NE(second.find("goalColor Blue: the compass turned by 180 degrees"), std::string::npos) << second;
+  fs::remove_all(logs);
+
+  // canhil run --external prints the referee's calls as they come and in the
+  // summary, and the world log carries them.
+  const std::string log = scratch("_cambada_world.csv");
+  const std::string out = scratch("_cambada_run.out");
+  const int status = std::system(("timeout 300 " + canhil::test::canhil_binary() + " run --config " + scenario +
+                                  " --external --duration 9 --world-log " + log + " > " + out + " 2>&1")
+                                     .c_str());
+  const std::string run = read_file(out);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << run;
+  EXPECT_NE(run.find("GOAL at "), std::string::npos) << run;
+  EXPECT_NE(run.find("in the -x goal, for second"), std::string::npos) << run;
+  EXPECT_NE(run.find("referee: goal for second in the -x goal (0:1)"), std::string::npos) << "as it came\n" << run;
+  EXPECT_NE(run.find("score first 0 : second 1"), std::string::npos) << run;
+  EXPECT_NE(read_file(log).find("#referee"), std::string::npos);
+  std::remove(log.c_str());
+  std::remove(out.c_str());
   std::remove(scenario.c_str());
 }
 

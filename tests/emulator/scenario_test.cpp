@@ -6,6 +6,7 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
+#include "canhil/physics/field.hpp"
 #include "support/error_of.hpp"
 #include "support/test_paths.hpp"
 
@@ -34,6 +35,31 @@ TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
   const Scenario one = load_scenario(test::source_dir() + "/emulator/scenarios/one_robot.toml");
   EXPECT_EQ(one.world.robots.size(), 1u);
   EXPECT_DOUBLE_EQ(one.duration_s, 8);
+}
+
+TEST(Scenarios, TheCambadaFieldIsTheOneCambadasConfigurationDescribes) {
+  // cambada-pub's config/cambada.conf.xml, in millimetres there: field_length
+  // 17875, field_width 11375, center_circle_radius 1875, goal_area 625 x 3375,
+  // penalty_area 2125 x 6375, corner_arc_radius 625, goal 2000 wide, 500 deep.
+  const Scenario s = load_scenario(test::source_dir() + "/emulator/scenarios/cambada_field.toml");
+  const physics::FieldParams& f = s.world.field;
+  EXPECT_DOUBLE_EQ(f.length_m, 17.875);
+  EXPECT_DOUBLE_EQ(f.width_m, 11.375);
+  EXPECT_DOUBLE_EQ(f.centre_circle_radius_m, 1.875);
+  EXPECT_DOUBLE_EQ(f.goal_area_depth_m, 0.625);
+  EXPECT_DOUBLE_EQ(f.goal_area_width_m, 3.375);
+  EXPECT_DOUBLE_EQ(f.penalty_area_depth_m, 2.125);
+  EXPECT_DOUBLE_EQ(f.penalty_area_width_m, 6.375);
+  EXPECT_DOUBLE_EQ(f.corner_arc_radius_m, 0.625);
+  EXPECT_DOUBLE_EQ(f.goal.width_m, 2.0);
+  EXPECT_DOUBLE_EQ(f.goal.depth_m, 0.5);
+  // Its lines where CAMBADA's localisation draws them (their centres).
+  const physics::FieldMarkings m = physics::field_markings(f);
+  EXPECT_NEAR(m.distance_to_nearest(17.875 / 2, 2.0), 0.0, 1e-12) << "a goal line";
+  EXPECT_NEAR(m.distance_to_nearest(1.0, 11.375 / 2), 0.0, 1e-12) << "a touch line";
+  EXPECT_NEAR(m.distance_to_nearest(9.0, 2.0), 0.0625, 1e-12) << "canhil's default goal line is off it";
+  ASSERT_EQ(s.teams.size(), 2u);
+  EXPECT_FALSE(s.teams[1].attacks_positive_x);
 }
 
 TEST(Scenarios, ARunLastsTheFlagsTimeElseTheScenariosElseTwentySecondsOrUntilCtrlCInRealTime) {

@@ -201,7 +201,14 @@ TEST_F(CambadaLayout, CoachInfoPerRobot) {
   EXPECT_EQ(c.playerInfo[1].role, 3);
   EXPECT_EQ(c.playerInfo[1].teamColor, 1);
   EXPECT_EQ(c.gameState, 3);
-  for (const facts::PlayerInfo& p : c.playerInfo) EXPECT_EQ(p.goalColor, 1) << "Yellow, always";
+  for (const facts::PlayerInfo& p : c.playerInfo) EXPECT_EQ(p.goalColor, 0) << "nothing set yet: 0, Blue";
+  // The team's goal as CAMBADA is told it: Yellow attacks with the compass as
+  // it reads (+x), Blue turns it by 180 degrees (-x).
+  coach.set(coach.quantity("attacks"), "positive_x", 1);
+  coach.set(coach.quantity("attacks"), "negative_x", 2);
+  EXPECT_EQ(as<facts::CoachInfo>(coach).playerInfo[0].goalColor, 1) << "Yellow";
+  EXPECT_EQ(as<facts::CoachInfo>(coach).playerInfo[1].goalColor, 0) << "Blue";
+  EXPECT_THROW(coach.set(coach.quantity("attacks"), "+x", 1), LayoutError) << "the contract's names only";
   coach.set(coach.quantity("running"), 1, 7);  // no seventh robot: nothing written
   coach.set(coach.quantity("running"), 1, 0);
   EXPECT_EQ(as<facts::CoachInfo>(coach).playerInfo[5].running, false);

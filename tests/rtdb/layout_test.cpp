@@ -311,8 +311,8 @@ TEST(ShippedLayouts, CarryEveryQuantityCanhilUses) {
   const Layout cambada = Layout::shipped("cambada");
   const Layout canhil = Layout::shipped("canhil");
   for (const QuantityInfo& q : contract()) {
-    const bool cambada_lacks = q.item == "CMD_SETPOSE" || q.name == "raw" ||
-                               (q.item == "CMD_GRABBER_INFO" && q.name == "grabber") || q.name == "goal_color";
+    const bool cambada_lacks =
+        q.item == "CMD_SETPOSE" || q.name == "raw" || (q.item == "CMD_GRABBER_INFO" && q.name == "grabber");
     const bool canhil_lacks = q.item == "LAST_CMD_VEL" || (q.item == "COACH_INFO" && q.name != "game_state");
     const ItemLayout* a = cambada.item(q.item);
     const ItemLayout* b = canhil.item(q.item);
@@ -362,7 +362,8 @@ TEST(ShippedLayouts, EveryQuantityRoundTrips) {
           continue;
         }
         if (info.kind == QuantityKind::kEnum) {
-          const std::string_view value = info.names[3];  // ready, striker, cyan
+          const std::string_view value =
+              info.names[std::min<std::size_t>(3, info.names.size() - 1)];  // ready, striker, cyan, negative_x
           buf.set(q, value, index);
           EXPECT_EQ(buf.get_enum(q, index), value);
           continue;

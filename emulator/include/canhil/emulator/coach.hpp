@@ -36,6 +36,9 @@ struct CoachState {
   /// Each team's own game state (two teams: "our_kickoff" for one is
   /// "their_kickoff" for the other); empty: game_state for all.
   std::vector<std::string> team_game_states;
+  /// The goal the team attacks (a team's own coach state, Session::team_coach:
+  /// its Team's attacks; a layout's COACH_INFO `attacks` tells its agents).
+  bool attacks_positive_x = true;
   const std::string& state_of(std::size_t team) const noexcept {
     return team < team_game_states.size() ? team_game_states[team] : game_state;
   }

@@ -48,6 +48,14 @@ namespace canhil::emulator {
 /// library without its rtdb.ini, or an rtdb_user.h without a team library.
 LaptopSide resolve_laptop(LaptopSide side, std::size_t robots, bool realtime);
 
+/// The layout a resolved side names: a shipped one by name, else the file.
+/// SetupError (rtdb::LayoutError) for a file that cannot be read or parsed.
+rtdb::Layout load_layout(const std::string& name);
+
+/// Whether `layout` tells a team's agents which goal their team attacks
+/// (COACH_INFO's `attacks` quantity, e.g. CAMBADA's goalColor).
+bool layout_tells_attacks(const rtdb::Layout& layout);
+
 class LaptopLink {
  public:
   /// `side` as resolve_laptop() gives it; `agents` the team's robots' agent
@@ -84,8 +92,8 @@ class LaptopLink {
   struct CoachItem {
     int id = -1;
     std::unique_ptr<rtdb::ItemBuffer> buffer;
-    std::vector<std::pair<int, int>> targets;             // (space, owner) of every copy written
-    rtdb::Quantity game_state, running, role_auto, role;  // COACH_INFO's (FORMATION_INFO: written as zeros)
+    std::vector<std::pair<int, int>> targets;                      // (space, owner) of every copy written
+    rtdb::Quantity game_state, running, role_auto, role, attacks;  // COACH_INFO's (FORMATION_INFO: zeros)
   };
   std::unique_ptr<rtdb::Database> db_;
   rtdb::Layout layout_;
