@@ -75,11 +75,17 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) lockstep_.add(*node);
   }
   lockstep_.add(*processes_);
-  // A team's agent was activated through its PMan table; canhil's own waits on canhil's RTDB's frame signal.
+  // A team's agent is activated through its PMan table; canhil's own waits on
+  // canhil's RTDB's frame signal. Both only in settle(), once the processes'
+  // clock reads the frame's instant: a frame is written during the step, and
+  // an agent woken there could read the previous instant's time.
+  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
+    if (LaptopLink* laptop = session_.laptop(t)) laptop->defer_activation(true);
+  }
   session_.on_vision_frame([this](std::size_t r, Nanos) {
     const std::size_t team = session_.rig(r).team;
     if (session_.scenario().laptop_of(team).rtdb_lib == "builtin")
-      DB_signal_frame(static_cast<int>(team) * DB_agent_count() + session_.rig(r).agent);
+      signals_due_.push_back(static_cast<int>(team) * DB_agent_count() + session_.rig(r).agent);
     woken_[r] = true;
   });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) {
@@ -90,7 +96,20 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   });
 }
 
-ExternalDriver::~ExternalDriver() { session_.on_vision_frame(nullptr); }
+ExternalDriver::~ExternalDriver() {
+  session_.on_vision_frame(nullptr);
+  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
+    if (LaptopLink* laptop = session_.laptop(t)) laptop->defer_activation(false);
+  }
+}
+
+void ExternalDriver::activate_agents() {
+  for (const int space : signals_due_) DB_signal_frame(space);
+  signals_due_.clear();
+  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
+    if (LaptopLink* laptop = session_.laptop(t)) laptop->activate();
+  }
+}
 
 void ExternalDriver::run_until(Nanos end) {
   if (!started_) {
@@ -136,6 +155,7 @@ std::string ExternalDriver::in_flight(std::uint64_t sent) {
 
 std::size_t ExternalDriver::settle() {
   conductor_.set_time(clock_.now());
+  activate_agents();  // the frames of this instant's step: the clock reads its time now
   const std::uint64_t ours = canhil_sent();
   bool woke = false;
   for (const bool w : woken_) woke = woke || w;

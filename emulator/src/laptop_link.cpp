@@ -182,7 +182,19 @@ void LaptopLink::vision_frame(std::size_t robot, const vision_emu::VisionFrame& 
     r.vision_put = true;
   }
   ++vision_writes_;
-  if (masters_) masters_->tick(r.agent);
+  if (!masters_) return;
+  if (deferred_) {
+    pending_.push_back(r.agent);
+  } else {
+    masters_->tick(r.agent);
+  }
+}
+
+std::size_t LaptopLink::activate() {
+  const std::size_t n = pending_.size();
+  for (const int agent : pending_) masters_->tick(agent);
+  pending_.clear();
+  return n;
 }
 
 void LaptopLink::write_coach(const CoachState& coach) {

@@ -228,6 +228,13 @@ TEST(VcanMatch, ACambadaLikeAgentToldItsGoalByTheCoachAttacksMinusXForTheSecondT
   const std::string second = read_file(logs + "/match1-half1-second-agent1-" + program + ".log");
   EXPECT_NE(first.find("goalColor Yellow"), std::string::npos) << first;
   EXPECT_NE(second.find("goalColor Blue: the compass turned by 180 degrees"), std::string::npos) << second;
+  // Woken only once their clocks read the frame's instant: the clock never
+  // moves under a running cycle (it did when PMan's tick went out in the step).
+  for (const std::string* log : {&first, &second}) {
+    const auto at = log->rfind("clock moved in ");
+    ASSERT_NE(at, std::string::npos) << *log;
+    EXPECT_EQ(std::atol(log->c_str() + at + 15), 0) << *log;
+  }
   fs::remove_all(logs);
 
   // canhil run --external prints the referee's calls as they come and in the

@@ -19,10 +19,14 @@
 // and kicks towards it. SIGINT (the master's
 // PMAN_close) ends it. It prints what it did, one line per event, and its
 // counts (at each change of the coach's word and at the end) for the tests:
-//   team_agent: cycles N, before vision M, playing P, stopped S, kicks K, vision age A..B ms
+//   team_agent: cycles N, before vision M, playing P, stopped S, kicks K, vision age A..B ms, clock moved in C
+// (C: cycles in which CLOCK_MONOTONIC read differently at the start and at the
+// end; the end comes after a little spinning on the CPU, so that a clock that
+// moves under a running cycle, which lockstep must never do, is caught.)
 // Exit status: 0 after SIGINT, 3 if the RTDB cannot be opened, 4 if its
 // process name is not in the table.
 #include <signal.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -50,13 +54,16 @@ struct Options {
 };
 
 struct Counts {
-  long cycles = 0, before_vision = 0, playing = 0, stopped = 0, kicks = 0;
+  long cycles = 0, before_vision = 0, playing = 0, stopped = 0, kicks = 0, clock_moved = 0;
   int youngest_vision_ms = INT_MAX, oldest_vision_ms = INT_MIN;  // VISION_INFO's age as DB_get answers it
 };
 
 void print_counts(const Counts& n) {
-  std::printf("team_agent: cycles %ld, before vision %ld, playing %ld, stopped %ld, kicks %ld, vision age %d..%d ms\n",
-              n.cycles, n.before_vision, n.playing, n.stopped, n.kicks, n.youngest_vision_ms, n.oldest_vision_ms);
+  std::printf(
+      "team_agent: cycles %ld, before vision %ld, playing %ld, stopped %ld, kicks %ld, vision age %d..%d ms, clock "
+      "moved in %ld\n",
+      n.cycles, n.before_vision, n.playing, n.stopped, n.kicks, n.youngest_vision_ms, n.oldest_vision_ms,
+      n.clock_moved);
   std::fflush(stdout);
 }
 
@@ -100,6 +107,12 @@ bool attack(float bx, float by, float orientation, facts::CMD_Vel& vel) {
   vel.va = std::clamp(-2.0F * orientation, -2.0F, 2.0F);
   const float to_ball = std::hypot(bx, by);
   return behind && to_ball < 0.4F && std::abs(orientation) < 0.25F && std::abs(std::atan2(-bx, by)) < 0.3F;
+}
+
+long long monotonic_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return t.tv_sec * 1'000'000'000LL + t.tv_nsec;
 }
 
 void cycle(int agent, const Options& options, Counts& n, bool& was_playing, int& goal_color) {
@@ -220,7 +233,11 @@ int main(int argc, char** argv) {
     int sig = 0;
     sigwait(&set, &sig);
     if (sig != SIGCONT) break;
+    const long long start = monotonic_ns();
     cycle(agent, options, n, was_playing, goal_color);
+    volatile int spun = 0;  // a little work on the CPU, which no clock call stands in for
+    for (int i = 0; i < 100'000; ++i) spun = spun + 1;
+    if (monotonic_ns() != start) ++n.clock_moved;
     PMAN_epilogue(name.c_str());
   }
   facts::CMD_Vel stop{};

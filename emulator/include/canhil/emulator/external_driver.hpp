@@ -81,6 +81,9 @@ class ExternalDriver {
   /// Lets the processes see this instant and waits until they are done with
   /// it; returns how many frames they sent since the last time.
   std::size_t settle();
+  /// Wakes the agents whose frames the last step wrote (PMan ticks, canhil's
+  /// RTDB's frame signal): called once the processes' clock reads the instant.
+  void activate_agents();
 
   Session& session_;
   lockstep::Conductor& conductor_;
@@ -99,7 +102,8 @@ class ExternalDriver {
   bool settled_once_ = false;
   bool started_ = false;
   std::uint64_t from_processes_ = 0;
-  std::vector<bool> woken_;   // robots whose agents PMan activated at this instant
+  std::vector<bool> woken_;        // robots whose agents PMan activated at this instant
+  std::vector<int> signals_due_;  // memory spaces whose frame signal waits for activate_agents()
   std::vector<bool> cycled_;  // robots whose agents have ended a first activation
   std::unique_ptr<Processes> processes_;
   can_nodes::Lockstep lockstep_;

@@ -66,8 +66,18 @@ class LaptopLink {
   LaptopLink(const LaptopLink&) = delete;
   LaptopLink& operator=(const LaptopLink&) = delete;
 
-  /// Robot r's frame into its agent's VISION_INFO, then one tick of its PMan table.
+  /// Robot r's frame into its agent's VISION_INFO, then one tick of its PMan
+  /// table (or, with deferred activation, the tick kept for activate()).
   void vision_frame(std::size_t robot, const vision_emu::VisionFrame& frame);
+  /// Keep each frame's PMan tick until activate() instead of sending it at
+  /// once. In lockstep the agents' clocks must read the frame's instant when
+  /// they wake: the driver moves the processes' clock there first, then
+  /// activates (an agent woken before that reads the previous instant's time
+  /// for part of its cycle, whenever the scheduler lets it run first).
+  void defer_activation(bool deferred) noexcept { deferred_ = deferred; }
+  /// The PMan ticks kept since the last call, in the order of their frames;
+  /// returns how many.
+  std::size_t activate();
   /// The coach's orders into every robot's database (COACH_INFO as the base
   /// station's copy and the robot's own, where the team's table has them).
   void write_coach(const CoachState& coach);
@@ -107,6 +117,8 @@ class LaptopLink {
   Nanos coach_period_;
   Nanos next_coach_{0};
   Nanos next_replicate_{0};
+  bool deferred_ = false;
+  std::vector<int> pending_;  // agents whose tick is kept (deferred activation)
   std::uint64_t vision_writes_ = 0;
   std::uint64_t coach_writes_ = 0;
 };
