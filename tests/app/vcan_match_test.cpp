@@ -233,7 +233,7 @@ TEST(VcanMatch, ACambadaLikeAgentToldItsGoalByTheCoachAttacksMinusXForTheSecondT
   for (const std::string* log : {&first, &second}) {
     const auto at = log->rfind("clock moved in ");
     ASSERT_NE(at, std::string::npos) << *log;
-    EXPECT_EQ(std::atol(log->c_str() + at + 15), 0) << *log;
+    EXPECT_EQ(std::strtol(log->c_str() + at + 15, nullptr, 10), 0) << *log;
   }
   fs::remove_all(logs);
 
