@@ -88,12 +88,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       signals_due_.push_back(static_cast<int>(team) * DB_agent_count() + session_.rig(r).agent);
     woken_[r] = true;
   });
-  lockstep_.set_step(session_.step_period(), [this](Nanos now) {
-    session_.apply_bus_changes();
-    session_.before_step();
-    session_.world().step();
-    session_.after_step(now);
-  });
+  lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
 }
 
 ExternalDriver::~ExternalDriver() {

@@ -46,11 +46,9 @@ void RealtimePhysics::loop(Nanos start) {
     }
     const Nanos now = can_nodes::WallClock{}.now();
     book_step(stats, now, next, step, max_behind_);
-    session_.before_step();
-    session_.world().step();
+    session_.step(now, false);  // the bus changes: on the nodes' thread (RealtimeDriver)
     ++stats.physics_steps;
     next += step;
-    session_.after_step(now);
     const std::lock_guard lock(mutex_);
     stats_ = stats;
   }

@@ -220,6 +220,13 @@ void Session::settle() {
   publish(steps_);
 }
 
+void Session::step(Nanos now, bool with_bus_changes) {
+  if (with_bus_changes) apply_bus_changes();
+  before_step();
+  world_->step();
+  after_step(now);
+}
+
 void Session::before_step() {
   apply_world_changes();
   serve_state_requests();

@@ -144,10 +144,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     if (laptops_[r]->agent) laptops_[r]->agent->frame_ready(now);
   });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) {
-    session_.apply_bus_changes();
-    session_.before_step();
-    session_.world().step();
-    session_.after_step(now);
+    session_.step(now);
     if (options_.reference_laptop) set_pose_of_carried_robots();
   });
 }

@@ -2,10 +2,11 @@
 // its own, on the wall clock.
 //
 // Step k happens at start + k * step on the wall clock (CLOCK_REALTIME,
-// absolute sleeps, as the node loop). Each step is the session's: before_step
-// (queued changes, the nodes' commands through SharedRobotIo), the world's
-// step, after_step (sensor values published, battery faults, vision, goals,
-// the snapshot), all on this thread: the node thread never waits for a step,
+// absolute sleeps, as the node loop). Each step is the session's
+// (Session::step, without the bus changes, which the node thread applies):
+// before_step (queued changes, the nodes' commands through SharedRobotIo), the
+// world's step, after_step (sensor values published, battery faults, vision,
+// goals, the snapshot), all on this thread: the node thread never waits for a step,
 // so physics and vision load does not move the frames on the bus. Falling
 // behind is counted (late steps, worst lateness) and past `max_behind` the
 // missed steps are skipped rather than run as a burst.

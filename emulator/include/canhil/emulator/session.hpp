@@ -177,6 +177,11 @@ class Session {
   const can_nodes::NodeParams& node_params() const noexcept { return node_params_; }
   /// The physics step period.
   Nanos step_period() const noexcept { return step_period_; }
+  /// One world step at `now` on the nodes' clock, in the one order every
+  /// driver uses: the queued bus changes (`with_bus_changes`: a driver whose
+  /// nodes run on this thread; the real-time driver applies them on the nodes'
+  /// thread each pass instead), before_step(), the physics step, after_step().
+  void step(Nanos now, bool with_bus_changes = true);
   /// Before a step: the queued world changes (and, with shared I/O, the nodes' commands).
   void before_step();
   /// After a step at `now` on the nodes' clock: battery drain, vision, goals,
