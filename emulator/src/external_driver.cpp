@@ -4,7 +4,6 @@
 #include <optional>
 
 #include "canhil/emulator/laptop_link.hpp"
-#include "canhil/rtdb/rtdb.h"
 #include "merged_trace.hpp"
 
 namespace canhil::emulator {
@@ -80,27 +79,26 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   // clock reads the frame's instant: a frame is written during the step, and
   // an agent woken there could read the previous instant's time.
   for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) laptop->defer_activation(true);
+    if (LaptopLink* laptop = session_.laptop(t)) {
+      laptop->signal_frames(true);
+      laptop->defer_activation(true);
+    }
   }
-  session_.on_vision_frame([this](std::size_t r, Nanos) {
-    const std::size_t team = session_.rig(r).team;
-    if (session_.scenario().laptop_of(team).rtdb_lib == "builtin")
-      signals_due_.push_back(static_cast<int>(team) * DB_agent_count() + session_.rig(r).agent);
-    woken_[r] = true;
-  });
+  session_.on_vision_frame([this](std::size_t r, Nanos) { woken_[r] = true; });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
 }
 
 ExternalDriver::~ExternalDriver() {
   session_.on_vision_frame(nullptr);
   for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) laptop->defer_activation(false);
+    if (LaptopLink* laptop = session_.laptop(t)) {
+      laptop->defer_activation(false);
+      laptop->signal_frames(false);
+    }
   }
 }
 
 void ExternalDriver::activate_agents() {
-  for (const int space : signals_due_) DB_signal_frame(space);
-  signals_due_.clear();
   for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
     if (LaptopLink* laptop = session_.laptop(t)) laptop->activate();
   }

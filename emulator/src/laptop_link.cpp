@@ -182,17 +182,22 @@ void LaptopLink::vision_frame(std::size_t robot, const vision_emu::VisionFrame& 
     r.vision_put = true;
   }
   ++vision_writes_;
-  if (!masters_) return;
+  if (!masters_ && !signal_frames_) return;
   if (deferred_) {
     pending_.push_back(r.agent);
   } else {
-    masters_->tick(r.agent);
+    wake(r.agent);
   }
+}
+
+void LaptopLink::wake(int agent) {
+  if (signal_frames_) db_->signal_frame(agent);
+  if (masters_) masters_->tick(agent);
 }
 
 std::size_t LaptopLink::activate() {
   const std::size_t n = pending_.size();
-  for (const int agent : pending_) masters_->tick(agent);
+  for (const int agent : pending_) wake(agent);
   pending_.clear();
   return n;
 }

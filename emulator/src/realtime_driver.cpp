@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "canhil/emulator/fifo_scheduling.hpp"
-#include "canhil/rtdb/rtdb.h"
+#include "canhil/emulator/laptop_link.hpp"
 
 namespace canhil::emulator {
 namespace {
@@ -83,16 +83,16 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
   }
   loop_->on_pass([this] { session_.apply_bus_changes(); });
   // canhil's own agent waits on canhil's RTDB's frame signal; a team's agents on their PMan.
-  if (session_.scenario().laptop.rtdb_lib == "builtin") {
-    session_.on_vision_frame([this](std::size_t r, Nanos) {
-      DB_signal_frame(static_cast<int>(session_.rig(r).team) * DB_agent_count() + session_.rig(r).agent);
-    });
+  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
+    if (LaptopLink* laptop = session_.laptop(t)) laptop->signal_frames(true);
   }
 }
 
 RealtimeDriver::~RealtimeDriver() {
   stop();
-  session_.on_vision_frame(nullptr);
+  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
+    if (LaptopLink* laptop = session_.laptop(t)) laptop->signal_frames(false);
+  }
 }
 
 void RealtimeDriver::start() {

@@ -33,6 +33,7 @@ struct CApi {
   void (*set_config_file)(const char*) = nullptr;
   int (*item_size)(int) = nullptr;  // canhil's extension, where the library has it
   int (*put_ranges)(int, int, int, const void*, const std::size_t*, int, int) = nullptr;  // canhil's too
+  int (*signal_frame)(int) = nullptr;                                                     // canhil's linked RTDB only
 };
 
 // The libraries open in this process, with the set (team) each serves: a
@@ -127,6 +128,9 @@ class CApiDatabase final : public Database {
         loaded_(std::move(loaded)),
         set_(set),
         first_space_(set * this->items().agent_count()) {}
+  void signal_frame(int agent) override {
+    if (api_.signal_frame != nullptr) api_.signal_frame(first_space_ + agent);
+  }
   ~CApiDatabase() override {  // frees, then (loaded_) unloads
     if (scope() == Scope::kAllAgents) {
       api_.free_all(set_);
@@ -351,6 +355,7 @@ std::unique_ptr<Database> open_builtin(Scope scope, int set) {
   api.get_one = &DB_get;
   api.whoami = &Whoami;
   api.item_size = &DB_item_size;
+  api.signal_frame = &DB_signal_frame;
   std::vector<int> spaces;
   if (scope == Scope::kOneAgent) set = set_from_environment();
   if (scope == Scope::kAllAgents) {

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <sched.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/rtdb/rtdb.h"
 #include "support/team_rtdb.hpp"
 #include "support/test_paths.hpp"
 
@@ -213,6 +215,49 @@ TEST_F(LaptopLinkTest, EachRobotsPmanTableIsTickedAfterItsVisionInfo) {
   link.vision_frame(0, frame());
   EXPECT_EQ(link.masters()->counts(1).at(0).activations, 0u) << "no client attached: nobody to wake";
   EXPECT_NE(link.summary().find("agent 1 agent1: 0 activations"), std::string::npos) << link.summary();
+}
+
+TEST_F(LaptopLinkTest, TheFrameSignalGoesToTheAgentsSpaceInItsSetAndWaitsForActivateWhenDeferred) {
+  // An agent of the second team on canhil's RTDB (AGENT=1, SECOND_RTDB=1), in a
+  // child process, asks without waiting whether its frame signal came; the
+  // pipes order the two processes, no clock does.
+  setenv("RTDB_KEY", std::to_string(0x5E000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  LaptopLink link(resolve_laptop({}, 1, false), {1}, coach(1), 1);
+  link.signal_frames(true);
+  link.defer_activation(true);
+  int to_child[2];
+  int to_parent[2];
+  ASSERT_EQ(pipe(to_child), 0);
+  ASSERT_EQ(pipe(to_parent), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    setenv("AGENT", "1", 1);
+    setenv("SECOND_RTDB", "1", 1);
+    char answer = DB_init() == 0 ? 'r' : 'x';
+    char go = 0;
+    for (int round = 0; round < 2; ++round) {
+      if (write(to_parent[1], &answer, 1) != 1 || read(to_child[0], &go, 1) != 1) _exit(2);
+      answer = static_cast<char>('0' + DB_wait_frame(0));  // 0 woken, 1 not (yet)
+    }
+    _exit(write(to_parent[1], &answer, 1) == 1 ? 0 : 2);
+  }
+  const auto ask = [&](char& answer) {
+    const char go = 'g';
+    return write(to_child[1], &go, 1) == 1 && read(to_parent[0], &answer, 1) == 1;
+  };
+  char answer = 0;
+  ASSERT_EQ(read(to_parent[0], &answer, 1), 1);
+  ASSERT_EQ(answer, 'r') << "the child joined the second set as agent 1";
+  link.vision_frame(0, frame());
+  ASSERT_TRUE(ask(answer));
+  EXPECT_EQ(answer, '1') << "deferred: the frame is written, the agent not yet woken";
+  EXPECT_EQ(link.activate(), 1u);
+  ASSERT_TRUE(ask(answer));
+  EXPECT_EQ(answer, '0') << "activate() posts the frame signal of memory space N + 1";
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
 }
 
 TEST_F(LaptopLinkTest, ATableThatDisagreesWithTheLayoutStopsTheRunNamingTheItem) {

@@ -102,9 +102,8 @@ class ExternalDriver {
   bool settled_once_ = false;
   bool started_ = false;
   std::uint64_t from_processes_ = 0;
-  std::vector<bool> woken_;       // robots whose agents PMan activated at this instant
-  std::vector<int> signals_due_;  // memory spaces whose frame signal waits for activate_agents()
-  std::vector<bool> cycled_;      // robots whose agents have ended a first activation
+  std::vector<bool> woken_;   // robots whose agents PMan activated at this instant
+  std::vector<bool> cycled_;  // robots whose agents have ended a first activation
   std::unique_ptr<Processes> processes_;
   can_nodes::Lockstep lockstep_;
 };

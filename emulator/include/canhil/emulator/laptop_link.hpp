@@ -66,17 +66,23 @@ class LaptopLink {
   LaptopLink(const LaptopLink&) = delete;
   LaptopLink& operator=(const LaptopLink&) = delete;
 
-  /// Robot r's frame into its agent's VISION_INFO, then one tick of its PMan
-  /// table (or, with deferred activation, the tick kept for activate()).
+  /// Robot r's frame into its agent's VISION_INFO, then its agent woken: one
+  /// tick of its PMan table and, with signal_frames(), canhil's RTDB's frame
+  /// signal (or, with deferred activation, both kept for activate()).
   void vision_frame(std::size_t robot, const vision_emu::VisionFrame& frame);
+  /// After each frame, post canhil's RTDB's frame signal too (agents that wait
+  /// on DB_wait_frame: the real-time and external drivers; a team's library
+  /// has no such signal). Off by default: the in-process reference agent is
+  /// told directly.
+  void signal_frames(bool on) noexcept { signal_frames_ = on; }
   /// Keep each frame's PMan tick until activate() instead of sending it at
   /// once. In lockstep the agents' clocks must read the frame's instant when
   /// they wake: the driver moves the processes' clock there first, then
   /// activates (an agent woken before that reads the previous instant's time
   /// for part of its cycle, whenever the scheduler lets it run first).
   void defer_activation(bool deferred) noexcept { deferred_ = deferred; }
-  /// The PMan ticks kept since the last call, in the order of their frames;
-  /// returns how many.
+  /// The wake-ups kept since the last call (PMan ticks, frame signals), in
+  /// the order of their frames; returns how many frames they were for.
   std::size_t activate();
   /// The coach's orders into every robot's database (COACH_INFO as the base
   /// station's copy and the robot's own, where the team's table has them).
@@ -118,7 +124,9 @@ class LaptopLink {
   Nanos next_coach_{0};
   Nanos next_replicate_{0};
   bool deferred_ = false;
-  std::vector<int> pending_;  // agents whose tick is kept (deferred activation)
+  bool signal_frames_ = false;
+  std::vector<int> pending_;  // agents whose wake-up is kept (deferred activation)
+  void wake(int agent);
   std::uint64_t vision_writes_ = 0;
   std::uint64_t coach_writes_ = 0;
 };

@@ -70,6 +70,11 @@ class Database {
   }
   /// Whether put_ranges() writes only the ranges (else they need not be worked out).
   virtual bool puts_ranges() const noexcept { return false; }
+  /// Tells agent `agent`'s process that a camera frame is in its database:
+  /// canhil's RTDB posts its frame signal (DB_signal_frame on the agent's
+  /// memory space in this database's set; DB_wait_frame returns). A team's
+  /// library has no such signal (its agents are woken through PMan): nothing.
+  virtual void signal_frame(int agent) { (void)agent; }
   /// Reads it into `bytes` (same preconditions). The age in ms,
   /// kNeverWritten for an item never written, or nullopt when the library
   /// says the item does not exist.
