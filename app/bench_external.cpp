@@ -16,8 +16,6 @@ namespace {
 
 constexpr double kTarget = 20;  // times real time, one robot, one core
 
-double seconds_of(Nanos t) { return std::chrono::duration<double>(t).count(); }
-
 // Pins this thread (and what it starts) to one core for its lifetime.
 class PinnedToCore {
  public:
@@ -84,21 +82,21 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   const int status = run_external(session, run, bench.shim, bench.team_preload, &fig);
   if (status != 0 || fig.simulated < from_seconds(bench.seconds)) {
     std::printf("  external run: NOT MEASURED (canhil run --external ended with status %d at t = %.3f s)\n", status,
-                seconds_of(fig.simulated));
+                to_seconds(fig.simulated));
     return false;
   }
-  const double factor_in = bench.seconds / seconds_of(in_process);
-  const double wall = seconds_of(fig.wall);
+  const double factor_in = bench.seconds / to_seconds(in_process);
+  const double wall = to_seconds(fig.wall);
   const double factor = bench.seconds / wall;
   std::printf("  in-process, canhil's handler and agent:         %7.1fx real time (wall %.3f s)\n", factor_in,
-              seconds_of(in_process));
+              to_seconds(in_process));
   std::printf("  external processes in lockstep:                 %7.1fx real time (wall %.3f s)  target >= %gx: %s\n",
               factor, wall, kTarget, factor >= kTarget ? "met" : "MISSED");
   std::printf("  external / in-process, in this run:             %7.2f (the share of the in-process speed kept)\n",
               factor / factor_in);
   // Where the external run's wall time went.
-  const double canhil_own = wall - seconds_of(fig.waited);
-  const double emulation = std::min(seconds_of(in_process), canhil_own);
+  const double canhil_own = wall - to_seconds(fig.waited);
+  const double emulation = std::min(to_seconds(in_process), canhil_own);
   double running = 0;
   const auto share = [wall](double s) { return wall > 0 ? 100 * s / wall : 0.0; };
   std::printf("  where the external run's wall time went:\n");
@@ -106,12 +104,12 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   std::printf("    canhil, lockstep work (sockets, fence, trace):     %7.3f s %3.0f %%\n", canhil_own - emulation,
               share(canhil_own - emulation));
   for (const lockstep::ProcessReport& p : fig.processes) {
-    const double busy = seconds_of(p.busy_wall);
+    const double busy = to_seconds(p.busy_wall);
     running += busy;
     std::printf("    %-16s running (its code and the shim's): %7.3f s %3.0f %%  %llu waits\n", p.name.c_str(), busy,
                 share(busy), static_cast<unsigned long long>(p.blocks));
   }
-  const double handover = seconds_of(fig.waited) - running;
+  const double handover = to_seconds(fig.waited) - running;
   std::printf("    hand-overs (wake-ups, context switches):           %7.3f s %3.0f %%\n", handover, share(handover));
   return factor >= kTarget;
 }

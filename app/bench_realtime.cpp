@@ -134,8 +134,7 @@ RateFigures measure_rate(const std::string& iface, std::uint64_t frames, const s
   }
   r.lost = (frames > r.received ? frames - r.received : 0) + listener.stats().rx_overflow + gaps;
   if (got.size() > 1) {
-    r.frames_per_s =
-        static_cast<double>(got.size() - 1) / std::chrono::duration<double>(got.back().time - got.front().time).count();
+    r.frames_per_s = static_cast<double>(got.size() - 1) / to_seconds(got.back().time - got.front().time);
   }
   return r;
 }
@@ -148,7 +147,7 @@ JitterFigures bare_loop_jitter(const std::string& iface, double seconds, Nanos p
   auto tx = can_nodes::SocketCanBus::open(iface);
   const emulator::MemoryLock memory(priority > 0);
   const emulator::FifoScheduling fifo(priority);
-  const auto n = static_cast<std::uint32_t>(seconds / std::chrono::duration<double>(period).count());
+  const auto n = static_cast<std::uint32_t>(seconds / to_seconds(period));
   Nanos deadline = (can_nodes::WallClock{}.now() / period + 2) * period;
   for (std::uint32_t k = 0; k < n; ++k, deadline += period) {
     const timespec at = to_timespec(deadline);

@@ -9,6 +9,8 @@
 #include <set>
 #include <sstream>
 
+#include "canhil/base/spelling.hpp"
+
 namespace canhil::physics {
 namespace {
 
@@ -23,20 +25,6 @@ std::string format(const std::string& file, int line, const std::string& field, 
 }
 
 int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
-
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> prev(b.size() + 1);
-  std::vector<std::size_t> cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-    }
-    std::swap(prev, cur);
-  }
-  return prev[b.size()];
-}
 
 struct Range {
   double min = -std::numeric_limits<double>::infinity();
@@ -165,15 +153,7 @@ class Reader {
     for (const auto& [k, v] : table_) {
       const std::string key(k.str());
       if (known_.count(key) != 0) continue;
-      std::string best;
-      std::size_t best_d = 4;
-      for (const auto& candidate : known_) {
-        const std::size_t d = edit_distance(key, candidate);
-        if (d < best_d) {
-          best_d = d;
-          best = candidate;
-        }
-      }
+      const std::string best(nearest_word(key, known_));
       std::string allowed;
       for (const auto& candidate : known_) allowed += (allowed.empty() ? "" : ", ") + candidate;
       fail(&v, key, "unknown field" + (best.empty() ? "" : "; did you mean " + best + "?") + " Known here: " + allowed);

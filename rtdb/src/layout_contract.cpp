@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 
+#include "canhil/base/spelling.hpp"
 #include "layout_internal.hpp"
 
 namespace canhil::rtdb {
@@ -208,30 +209,8 @@ double units_per(const UnitInfo& stored, const UnitInfo& given) noexcept {
   return p == 0 ? ratio : ratio * std::pow(3.14159265358979323846, p);
 }
 
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> prev(b.size() + 1);
-  std::vector<std::size_t> cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-    }
-    std::swap(prev, cur);
-  }
-  return prev[b.size()];
-}
-
 std::string did_you_mean(std::string_view word, std::span<const std::string_view> candidates) {
-  std::string_view best;
-  std::size_t best_d = 4;
-  for (std::string_view c : candidates) {
-    const std::size_t d = edit_distance(word, c);
-    if (d < best_d) {
-      best_d = d;
-      best = c;
-    }
-  }
+  const std::string_view best = nearest_word(word, candidates);
   return best.empty() ? "" : " Did you mean " + std::string(best) + "?";
 }
 

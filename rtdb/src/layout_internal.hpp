@@ -39,7 +39,6 @@ inline bool is_integer(ScalarType t) noexcept {
   return t != ScalarType::kF32 && t != ScalarType::kF64 && t != ScalarType::kBool;
 }
 
-std::size_t edit_distance(std::string_view a, std::string_view b);
 /// ` did you mean X?` for the nearest candidate within distance 3, or "".
 std::string did_you_mean(std::string_view word, std::span<const std::string_view> candidates);
 
