@@ -15,6 +15,7 @@
 #include <iterator>
 
 #include "args.hpp"
+#include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/external_driver.hpp"
 #include "canhil/emulator/referee.hpp"
@@ -33,8 +34,6 @@ constexpr const char* kTeamPreloadVariable = "CANHIL_TEAM_PRELOAD";
 std::atomic<bool> g_stop_run_external{false};
 extern "C" void stop_external(int) { g_stop_run_external = true; }
 
-double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
-
 void write_text(const std::string& path, const std::string& text, const char* what) {
   std::ofstream out(path);
   out << text;
@@ -43,8 +42,8 @@ void write_text(const std::string& path, const std::string& text, const char* wh
 
 void print_summary(const emulator::Session& session, const emulator::ExternalDriver& driver,
                    const lockstep::Conductor& conductor, Nanos wall, const char* how) {
-  const double simulated = seconds(driver.now());
-  const double w = seconds(wall);
+  const double simulated = to_seconds(driver.now());
+  const double w = to_seconds(wall);
   std::printf("canhil run: %s after %.2f s of virtual time in %.2f s of wall time (%.1fx real time)\n", how, simulated,
               w, w > 0 ? simulated / w : 0.0);
   const emulator::WorldSnapshot s = session.snapshot();
@@ -62,11 +61,11 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
               static_cast<unsigned long long>(driver.physics_steps()));
   const Nanos waited = conductor.waited_wall();
   std::printf("  wall time: canhil %.3f s (%.0f %%), waiting for the processes %.3f s (%.0f %%)\n",
-              seconds(wall - waited), w > 0 ? 100 * seconds(wall - waited) / w : 0.0, seconds(waited),
-              w > 0 ? 100 * seconds(waited) / w : 0.0);
+              to_seconds(wall - waited), w > 0 ? 100 * to_seconds(wall - waited) / w : 0.0, to_seconds(waited),
+              w > 0 ? 100 * to_seconds(waited) / w : 0.0);
   for (const lockstep::ProcessReport& p : conductor.processes()) {
     std::printf("    %-16s pid %-7d %.3f s running, %llu waits, %llu CAN frames written, %d thread(s)\n",
-                p.name.c_str(), p.pid, seconds(p.busy_wall), static_cast<unsigned long long>(p.blocks),
+                p.name.c_str(), p.pid, to_seconds(p.busy_wall), static_cast<unsigned long long>(p.blocks),
                 static_cast<unsigned long long>(p.frames_sent), p.threads);
   }
   for (const auto& c : session.fault_counts()) {
@@ -78,12 +77,11 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
 }  // namespace
 
 std::string find_timeshim() {
-  const char* given = std::getenv("CANHIL_TIMESHIM");
-  if (given != nullptr && *given != '\0') {
-    if (!fs::exists(given)) throw SetupError(std::string("CANHIL_TIMESHIM=") + given + ": no such file");
-    return fs::absolute(given).string();
+  if (const auto given = path_from_environment("CANHIL_TIMESHIM")) {
+    if (!fs::exists(*given)) throw SetupError("CANHIL_TIMESHIM=" + given->string() + ": no such file");
+    return fs::absolute(*given).string();
   }
-  const fs::path here = own_folder();
+  const fs::path here = program_folder();
   std::vector<fs::path> places = {here.parent_path() / CANHIL_INSTALL_LIBDIR / "libcanhil-timeshim.so",
                                   CANHIL_BUILD_TIMESHIM};
   std::string looked;
@@ -210,7 +208,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
         std::fflush(stdout);
       }
     } catch (const emulator::ProcessStuck& e) {
-      std::fprintf(stderr, "canhil run: stopped at t = %.3f s: %s\n", seconds(driver.now()), e.what());
+      std::fprintf(stderr, "canhil run: stopped at t = %.3f s: %s\n", to_seconds(driver.now()), e.what());
       status = kProcessStuckStatus;
       how = "stopped (a process did not answer, or never ran)";
     }

@@ -14,17 +14,12 @@
 #include <ctime>
 #include <filesystem>
 
+#include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/lockstep/conductor.hpp"
 
 namespace canhil::app {
-
-std::filesystem::path own_folder() {
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return ec ? std::filesystem::path() : exe.parent_path();
-}
 
 namespace {
 
@@ -33,7 +28,7 @@ namespace fs = std::filesystem;
 // canhil's own laptop programs (canhil-hwcomm, canhil-agent) are found
 // without a path: installed beside canhil, or in the build tree's laptop/.
 std::string search_path() {
-  const fs::path here = own_folder();
+  const fs::path here = program_folder();
   std::string path;
   for (const fs::path& p : {here, here.parent_path() / "laptop"}) {
     std::error_code ec;

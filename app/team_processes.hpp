@@ -22,9 +22,6 @@
 
 namespace canhil::app {
 
-/// The folder of the running canhil program (empty when /proc cannot say).
-std::filesystem::path own_folder();
-
 /// The external sides a run's processes come from: each team's
 /// [teams.external], else the scenario's [external].
 std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenario& scenario);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
 #include "table_reader.hpp"
@@ -310,13 +311,7 @@ Scenario load_scenario(const std::filesystem::path& path) {
 
 std::filesystem::path shipped_scenario(const std::string& name) {
   namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "scenarios" / name;
-    if (fs::exists(installed, ec)) return installed;
-  }
-  return fs::path(CANHIL_SOURCE_SCENARIOS) / name;
+  return installed_or_built({fs::path("../share/canhil/scenarios") / name}, fs::path(CANHIL_SOURCE_SCENARIOS) / name);
 }
 
 RunLength Scenario::run_length(std::optional<double> flag, bool realtime) const {

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "canhil/base/assets.hpp"
+
 namespace canhil::frames {
 namespace {
 
@@ -878,17 +880,8 @@ Database load_dbc(const std::filesystem::path& path) {
 }
 
 std::filesystem::path default_dbc_path() {
-  namespace fs = std::filesystem;
-  if (const char* env = std::getenv("CANHIL_DBC"); env != nullptr && *env != '\0') return env;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& candidate :
-         {exe.parent_path() / "canhil.dbc", exe.parent_path().parent_path() / "share" / "canhil" / "canhil.dbc"}) {
-      if (fs::exists(candidate, ec)) return candidate;
-    }
-  }
-  return CANHIL_SOURCE_DBC;
+  if (auto given = path_from_environment("CANHIL_DBC")) return *given;
+  return installed_or_built({"canhil.dbc", "../share/canhil/canhil.dbc"}, CANHIL_SOURCE_DBC);
 }
 
 }  // namespace canhil::frames

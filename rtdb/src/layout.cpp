@@ -12,6 +12,7 @@
 #include <limits>
 #include <sstream>
 
+#include "canhil/base/assets.hpp"
 #include "canhil/base/demand.hpp"
 #include "layout_internal.hpp"
 
@@ -294,16 +295,8 @@ std::filesystem::path Layout::shipped_path(std::string_view name) {
                       "CAMBADA structs) and canhil (canhil's own); or give your description file's path");
   }
   const std::string file = std::string(name) + ".toml";
-  std::error_code ec;
-  if (const char* dir = std::getenv("CANHIL_LAYOUT_DIR"); dir != nullptr && *dir != '\0') {
-    return fs::path(dir) / file;
-  }
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "layouts" / file;
-    if (fs::exists(installed, ec)) return installed;
-  }
-  return fs::path(CANHIL_SOURCE_LAYOUTS) / file;
+  if (auto dir = path_from_environment("CANHIL_LAYOUT_DIR")) return *dir / file;
+  return installed_or_built({fs::path("../share/canhil/layouts") / file}, fs::path(CANHIL_SOURCE_LAYOUTS) / file);
 }
 
 Layout Layout::shipped(std::string_view name) { return load(shipped_path(name)); }

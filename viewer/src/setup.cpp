@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/viewer/server.hpp"
 
@@ -33,14 +34,11 @@ bool is_loopback(const std::string& address) {
 
 std::filesystem::path default_web_root() {
   namespace fs = std::filesystem;
-  if (const char* env = std::getenv("CANHIL_VIEWER_ROOT"); env != nullptr && *env != '\0') return env;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    fs::path installed = exe.parent_path().parent_path() / "share" / "canhil" / "viewer";
-    if (fs::is_regular_file(installed / "index.html", ec)) return installed;
-  }
-  return CANHIL_BUILD_VIEWER_ROOT;
+  if (auto given = path_from_environment("CANHIL_VIEWER_ROOT")) return *given;
+  return installed_or_built({"../share/canhil/viewer"}, CANHIL_BUILD_VIEWER_ROOT, [](const fs::path& p) {
+    std::error_code ec;
+    return fs::is_regular_file(p / "index.html", ec);
+  });
 }
 
 }  // namespace canhil::viewer
