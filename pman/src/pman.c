@@ -13,6 +13,7 @@
 #include <string.h>
 #include <sys/ipc.h>
 
+#include "canhil/base/second_set.h"
 #include "canhil/pman/pman_master.h"
 #include "pman_core.h"
 
@@ -97,9 +98,7 @@ PMAN_EXPORT int PMAN_init(key_t shmem_pman_key, key_t sem_pman_key, void* QoSfun
   errno = 0;
   const long agent = strtol(text, &end, 10);
   /* A process of a second team (SECOND_RTDB set, and not "0", as for its RTDB set). */
-  const char* second = getenv("SECOND_RTDB");
-  const long long set_offset =
-      second != NULL && second[0] != '\0' && strcmp(second, "0") != 0 ? CANHIL_PMAN_SECOND_SET_OFFSET : 0;
+  const long long set_offset = canhil_second_set_from_environment() ? CANHIL_PMAN_SECOND_SET_OFFSET : 0;
   const long long shm_key = (long long)shmem_pman_key + 2LL * agent + set_offset;
   const long long sem_key = (long long)sem_pman_key + 2LL * agent + set_offset;
   if (errno != 0 || *end != '\0' || agent < 0 || shm_key > INT_MAX || sem_key > INT_MAX) {

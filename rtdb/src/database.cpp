@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "canhil/base/demand.hpp"
+#include "canhil/base/second_set.h"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/rtdb/rtdb.h"
 
@@ -254,10 +255,7 @@ std::vector<int> all_agents(const ItemTable& t) {
 }
 
 // SECOND_RTDB as canhil's library reads it (a one-agent Database's set).
-int set_from_environment() {
-  const char* s = std::getenv("SECOND_RTDB");
-  return s != nullptr && *s != '\0' && std::string_view(s) != "0" ? 1 : 0;
-}
+int set_from_environment() { return canhil_second_set_from_environment() != 0 ? 1 : 0; }
 
 void check_set(int set) {
   if (set != 0 && set != 1) {

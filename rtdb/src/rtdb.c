@@ -20,6 +20,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "canhil/base/second_set.h"
+
 #include "rtdb_internal.h"
 
 #define RTDB_MAGIC 0x43484C52u /* "CHLR" */
@@ -461,12 +463,6 @@ static int parse_agent(void) {
   return (int)n;
 }
 
-/* SECOND_RTDB set (and not "0"): this process is an agent of the second set. */
-static int second_set_from_environment(void) {
-  const char* s = getenv("SECOND_RTDB");
-  return s != NULL && *s != '\0' && strcmp(s, "0") != 0;
-}
-
 RTDB_EXPORT int DB_init(void) {
   if (g_me >= 0) {
     ++g_me_nesting;
@@ -475,7 +471,7 @@ RTDB_EXPORT int DB_init(void) {
   if (table(1) == NULL) return -1;
   const int agent = parse_agent();
   if (agent < 0 || (!attached() && compute_layout() < 0)) return -1;
-  const int me = agent + (second_set_from_environment() ? (int)g_table->n_agents : 0);
+  const int me = agent + (canhil_second_set_from_environment() ? (int)g_table->n_agents : 0);
   if (attach(me) < 0) return -1;
   g_me = me;
   g_me_nesting = 1;
