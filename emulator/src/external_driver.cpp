@@ -78,30 +78,24 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   // canhil's RTDB's frame signal. Both only in settle(), once the processes'
   // clock reads the frame's instant: a frame is written during the step, and
   // an agent woken there could read the previous instant's time.
-  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) {
-      laptop->signal_frames(true);
-      laptop->defer_activation(true);
-    }
-  }
+  session_.for_each_laptop([](LaptopLink& laptop) {
+    laptop.signal_frames(true);
+    laptop.defer_activation(true);
+  });
   session_.on_vision_frame([this](std::size_t r, Nanos) { woken_[r] = true; });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
 }
 
 ExternalDriver::~ExternalDriver() {
   session_.on_vision_frame(nullptr);
-  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) {
-      laptop->defer_activation(false);
-      laptop->signal_frames(false);
-    }
-  }
+  session_.for_each_laptop([](LaptopLink& laptop) {
+    laptop.defer_activation(false);
+    laptop.signal_frames(false);
+  });
 }
 
 void ExternalDriver::activate_agents() {
-  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) laptop->activate();
-  }
+  session_.for_each_laptop([](LaptopLink& laptop) { laptop.activate(); });
 }
 
 void ExternalDriver::run_until(Nanos end) {

@@ -83,16 +83,12 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
   }
   loop_->on_pass([this] { session_.apply_bus_changes(); });
   // canhil's own agent waits on canhil's RTDB's frame signal; a team's agents on their PMan.
-  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) laptop->signal_frames(true);
-  }
+  session_.for_each_laptop([](LaptopLink& laptop) { laptop.signal_frames(true); });
 }
 
 RealtimeDriver::~RealtimeDriver() {
   stop();
-  for (std::size_t t = 0; t < session_.scenario().teams.size(); ++t) {
-    if (LaptopLink* laptop = session_.laptop(t)) laptop->signal_frames(false);
-  }
+  session_.for_each_laptop([](LaptopLink& laptop) { laptop.signal_frames(false); });
 }
 
 void RealtimeDriver::start() {

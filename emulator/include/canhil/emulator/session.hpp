@@ -192,6 +192,11 @@ class Session {
   /// From now on, error-frame faults are refused with this reason (a driver
   /// on CAN hardware, which no software can make send an error frame).
   void refuse_error_frames(std::string why);
+  /// `f(link)` for every team's laptop link, in the teams' order (none without vision).
+  template <class F>
+  void for_each_laptop(F f) {
+    for (const auto& link : laptops_) f(*link);
+  }
   /// The seam to the team's laptop software (RTDB, layout, PMan, coach,
   /// replicator), or nullptr without vision.
   /// A team's laptop link (the first team's by default), or nullptr without vision.
