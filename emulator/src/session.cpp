@@ -4,37 +4,13 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
-#include <numbers>
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/emulator/physics_robot_io.hpp"
+#include "canhil/emulator/referee_desk.hpp"
 
 namespace canhil::emulator {
-
-bool ball_in_goal(const physics::WorldParams& world, const Eigen::Vector3d& b) noexcept {
-  const auto& f = world.field;
-  const double r = world.ball.radius_m;
-  return std::fabs(b.x()) > f.length_m / 2 + r && std::fabs(b.y()) < f.goal.width_m / 2 && b.z() < f.goal.height_m &&
-         std::fabs(b.x()) < f.length_m / 2 + f.goal.depth_m + r;
-}
-
-bool GoalWatcher::step(const physics::World& world, Nanos now) {
-  const Eigen::Vector3d b = world.ball_position();
-  const bool in = ball_in_goal(params_, b);
-  const bool scored = in && !in_;
-  if (scored) goals_.push_back(Goal{now, b.x() > 0});
-  in_ = in;
-  return scored;
-}
-
-can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const can_nodes::FttConfig& ftt) {
-  can_nodes::NodeParams p;
-  p.ftt = ftt;
-  p.geometry = robot.geometry;
-  p.encoder = robot.encoder;
-  return p;
-}
 
 namespace {
 
@@ -69,14 +45,9 @@ Session::Session(Scenario scenario, SessionOptions options)
     }
   }
   step_period_ = from_seconds(scenario_.world.simulation.step_s);
-  if (scenario_.referee.enabled.value_or(scenario_.teams.size() > 1)) {
-    std::vector<RefereeTeam> teams;
-    for (const Team& t : scenario_.teams) teams.push_back({t.name, t.attacks_positive_x, t.first_robot, t.robots});
-    referee_ = std::make_unique<Referee>(scenario_.world, std::move(teams), scenario_.referee, scenario_.seed);
-  }
+  if (scenario_.referee.enabled.value_or(scenario_.teams.size() > 1)) referee_ = std::make_unique<RefereeDesk>(scenario_);
   const std::size_t n = scenario_.robot_count();
   rigs_.resize(n);
-  referee_placements_.assign(n, 0);
   for (std::size_t r = 0; r < n; ++r) {
     Rig& rig = rigs_[r];
     rig.index = r;
@@ -134,25 +105,11 @@ Session::Session(Scenario scenario, SessionOptions options)
         });
   }
   if (options_.world_log_period > Nanos{0}) {
-    world_log_ = "time_s,ball_x_m,ball_y_m,ball_z_m";
-    for (std::size_t r = 0; r < n; ++r) {
-      const std::string p = "robot" + std::to_string(r) + "_";
-      world_log_ += "," + p + "x_m," + p + "y_m," + p + "heading_deg," + p + "reported_x_m," + p + "reported_y_m," + p +
-                    "reported_heading_deg";
-    }
-    world_log_ += '\n';
-    if (scenario_.teams.size() > 1) {
-      // Who played for whom, for a replay (ReplayFeed); one team's logs stay as they always were.
-      for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
-        const Team& team = scenario_.teams[t];
-        world_log_ +=
-            "#team," + std::to_string(t) + "," + team.name + "," + (team.attacks_positive_x ? "+x" : "-x") + "\n";
-      }
-      for (std::size_t r = 0; r < n; ++r) {
-        world_log_ += "#robot," + std::to_string(r) + "," + std::to_string(rigs_[r].team) + "," +
-                      std::to_string(rigs_[r].agent) + "," + rigs_[r].interface + "\n";
-      }
-    }
+    std::vector<WorldLogTeam> teams;
+    for (const Team& t : scenario_.teams) teams.push_back({t.name, t.attacks_positive_x});
+    std::vector<WorldLogRobot> robots;
+    for (const Rig& rig : rigs_) robots.push_back({rig.team, rig.agent, rig.interface});
+    world_log_.emplace(options_.world_log_period, teams, robots);
   }
   publish(0);
 }
@@ -253,101 +210,23 @@ void Session::write_coaches() {
 }
 
 void Session::referee_step(Nanos now, bool scored) {
-  RefereeView& v = referee_view_;
-  v.ball = world_->ball_position();
-  v.ball_velocity = world_->ball_velocity();
-  v.robots.resize(rigs_.size());
-  for (std::size_t r = 0; r < rigs_.size(); ++r) {
-    const kinematics::Pose p = world_->robot(r).pose();
-    v.robots[r] = {p.x_m, p.y_m};
-  }
   const auto goal = scored ? std::optional<bool>(goals_.goals().back().positive_x) : std::nullopt;
-  if (const auto call = referee_->step(v, now, goal)) {
-    carry_out(*call);
-  } else if (referee_->resume_due(now)) {
+  const RefereeDesk::Outcome out = referee_->step(*world_, now, goal);
+  if (out.call) {
+    const Referee& referee = referee_->referee();
+    std::vector<std::string> states;
+    for (std::size_t t = 0; t < scenario_.teams.size(); ++t) states.push_back(referee.state_for(*out.call, t));
+    set_team_states(std::move(states));
+    if (world_log_) {
+      WorldLogCall logged{to_seconds(out.call->time), std::string(restart_name(out.call->restart)),
+                          out.call->team ? scenario_.teams[*out.call->team].name : std::string("-"),
+                          out.call->spot.x(), out.call->spot.y(), {}};
+      for (const int goals : referee.score()) logged.score.push_back(std::to_string(goals));
+      world_log_->call(logged);
+    }
+    if (referee_hook_) referee_hook_(*out.call);
+  } else if (out.resume) {
     set_team_states(std::vector<std::string>(scenario_.teams.size(), "start"));
-  }
-}
-
-// The call carried out at once, on the stepping thread: the ball to its spot,
-// at a kick-off the robots back to their places, each team's restart state.
-void Session::carry_out(const RefereeCall& call) {
-  world_->place_ball({call.spot.x(), call.spot.y(), scenario_.world.ball.radius_m}, Eigen::Vector3d::Zero());
-  if (call.restart == Restart::kKickoff) {
-    for (std::size_t r = 0; r < rigs_.size(); ++r) {
-      world_->robot(r).place(scenario_.world.robots[r]);
-      ++referee_placements_[r];
-    }
-  } else {
-    keep_away_from(call.spot);
-  }
-  std::vector<std::string> states;
-  for (std::size_t t = 0; t < scenario_.teams.size(); ++t) states.push_back(referee_->state_for(call, t));
-  set_team_states(std::move(states));
-  log_call(call);
-  if (referee_hook_) referee_hook_(call);
-}
-
-// A call in the world log, among the rows and in time order:
-// "#referee,TIME,RESTART,TEAM,SPOT_X,SPOT_Y,SCORE_1,SCORE_2" (TEAM "-" for a
-// dropped ball). CSV readers take it as a comment; canhil view marks it.
-void Session::log_call(const RefereeCall& call) {
-  if (options_.world_log_period <= Nanos{0}) return;
-  char buf[200];
-  const std::string team = call.team ? scenario_.teams[*call.team].name : std::string("-");
-  std::snprintf(buf, sizeof buf, "#referee,%.3f,%s,%s,%.3f,%.3f", to_seconds(call.time),
-                std::string(restart_name(call.restart)).c_str(), team.c_str(), call.spot.x(), call.spot.y());
-  world_log_ += buf;
-  for (const int goals : referee_->score()) world_log_ += "," + std::to_string(goals);
-  world_log_ += '\n';
-}
-
-// Every robot keeps its distance from a restart (1 m): one nearer steps back
-// towards its own goal, to the first place on the field that no other robot
-// or obstacle takes (robots placed into each other would be thrown apart).
-void Session::keep_away_from(const Eigen::Vector2d& spot) {
-  constexpr double kDistance = 1.0;
-  const physics::WorldParams& w = scenario_.world;
-  const double radius = w.robot.body_radius_m;
-  std::vector<Eigen::Vector2d> at(rigs_.size());
-  for (std::size_t r = 0; r < rigs_.size(); ++r) {
-    const kinematics::Pose p = world_->robot(r).pose();
-    at[r] = {p.x_m, p.y_m};
-  }
-  const auto free = [&](const Eigen::Vector2d& c, std::size_t self) {
-    if (std::fabs(c.x()) > w.field.length_m / 2 - radius || std::fabs(c.y()) > w.field.width_m / 2 - radius) {
-      return false;
-    }
-    if ((c - spot).norm() < kDistance) return false;
-    for (std::size_t o = 0; o < at.size(); ++o) {
-      if (o != self && (at[o] - c).norm() < 2 * radius + 0.1) return false;
-    }
-    for (std::size_t o = 0; o < w.obstacles.size(); ++o) {
-      const Eigen::Vector3d ob = world_->obstacle_position(o);
-      if (Eigen::Vector2d(ob.x() - c.x(), ob.y() - c.y()).norm() < radius + w.obstacles[o].params.radius_m + 0.1) {
-        return false;
-      }
-    }
-    return true;
-  };
-  for (std::size_t r = 0; r < rigs_.size(); ++r) {
-    if ((at[r] - spot).norm() >= kDistance) continue;
-    const double own = scenario_.teams[rigs_[r].team].attacks_positive_x ? -1.0 : 1.0;
-    std::optional<Eigen::Vector2d> place;
-    for (double back = kDistance; back <= 4.0 && !place; back += 0.5) {
-      for (const double side : {0.0, 0.6, -0.6, 1.2, -1.2, 1.8, -1.8}) {
-        const Eigen::Vector2d c(spot.x() + own * back, at[r].y() + side);
-        if (free(c, r)) {
-          place = c;
-          break;
-        }
-      }
-    }
-    if (!place) continue;  // nowhere free near: it stays
-    at[r] = *place;
-    const double heading_deg = world_->robot(r).pose().heading_rad * 180.0 / std::numbers::pi;
-    world_->robot(r).place({place->x(), place->y(), heading_deg});
-    ++referee_placements_[r];
   }
 }
 
@@ -557,23 +436,16 @@ std::vector<can_nodes::FaultCount> Session::fault_counts() const {
 }
 
 void Session::log_world(Nanos now) {
-  if (options_.world_log_period <= Nanos{0} || now < next_log_) return;
-  next_log_ = now + options_.world_log_period;
-  char buf[160];
-  const Eigen::Vector3d b = world_->ball_position();
-  std::snprintf(buf, sizeof buf, "%.3f,%.4f,%.4f,%.4f", to_seconds(now), b.x(), b.y(), b.z());
-  world_log_ += buf;
+  if (!world_log_ || !world_log_->due(now)) return;
+  world_log_->begin_row(now, world_->ball_position());
   for (const Rig& rig : rigs_) {
-    const kinematics::Pose p = world_->robot(rig.index).pose();
     // The pose as stored (a float in canhil's layout), so the log reads as before.
     const kinematics::Pose reported =
         !laptops_.empty() ? laptops_[rig.team]->reported_pose(local_index(rig.index)).value_or(kinematics::Pose{})
                           : kinematics::Pose{};
-    std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.2f,%.4f,%.4f,%.2f", p.x_m, p.y_m, p.heading_rad * 180 / M_PI,
-                  reported.x_m, reported.y_m, reported.heading_rad * 180 / M_PI);
-    world_log_ += buf;
+    world_log_->robot(world_->robot(rig.index).pose(), reported);
   }
-  world_log_ += '\n';
+  world_log_->end_row();
 }
 
 timing::TimingAnalyzer ftt_checker(const SessionOptions& options) {

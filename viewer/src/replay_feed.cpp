@@ -7,6 +7,7 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
+#include "canhil/emulator/world_log.hpp"
 #include "canhil/frames/describe.hpp"
 #include "canhil/viewer/live_feed.hpp"
 #include "http_paths.hpp"
@@ -15,18 +16,6 @@ namespace canhil::viewer {
 namespace {
 
 using nlohmann::json;
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    out.push_back(line.substr(start, comma - start));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return out;
-}
 
 std::string where(const std::filesystem::path& file, std::size_t line) {
   return file.string() + ":" + std::to_string(line) + ": ";
@@ -43,66 +32,22 @@ constexpr double kKickSpeedJump = 1.5;
 ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std::filesystem::path> trace,
                        physics::WorldParams world, std::shared_ptr<const frames::MessageSet> messages)
     : world_(std::move(world)), messages_(std::move(messages)) {
-  std::ifstream in(world_log);
-  if (!in) throw SetupError("cannot read the world log " + world_log.string());
+  emulator::WorldLog log = emulator::read_world_log(world_log);
+  columns_ = std::move(log.columns);
+  rows_ = std::move(log.rows);
+  robots_ = log.robots;
+  teams_ = std::move(log.teams);
+  robot_info_ = std::move(log.robot_info);
+  for (const emulator::WorldLogCall& c : log.calls) {
+    std::string text = c.restart + (c.team == "-" ? std::string() : " for " + c.team);
+    for (std::size_t k = 0; k < c.score.size(); ++k) text += (k == 0 ? ", score " : ":") + c.score[k];
+    events_.push_back({c.time_s, "referee", std::move(text), std::nullopt});
+  }
   std::string line;
-  std::getline(in, line);
-  columns_ = split(line);
-  const std::vector<std::string> first = {"time_s", "ball_x_m", "ball_y_m", "ball_z_m"};
-  if (columns_.size() < first.size() || !std::equal(first.begin(), first.end(), columns_.begin())) {
-    throw SetupError(where(world_log, 1) +
-                     "not a world log: its header starts time_s,ball_x_m,ball_y_m,ball_z_m (write one with canhil run "
-                     "--virtual-time --world-log FILE)");
-  }
-  while (robots_ < 1000 &&
-         std::find(columns_.begin(), columns_.end(), "robot" + std::to_string(robots_) + "_x_m") != columns_.end()) {
-    ++robots_;
-  }
-  if (columns_.size() != first.size() + 6 * robots_) {
-    throw SetupError(where(world_log, 1) + "expected 4 columns and 6 per robot, got " +
-                     std::to_string(columns_.size()) + " for " + std::to_string(robots_) + " robot(s)");
-  }
-  for (std::size_t r = 0; r < robots_; ++r)
-    robot_info_.push_back({0, static_cast<int>(r + 1), "robot " + std::to_string(r)});
-  std::size_t number = 1;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty()) continue;
-    if (line[0] == '#') {
-      // A referee's call, a team or a robot; other comments are skipped.
-      referee_line(line);
-      team_line(line);
-      robot_line(line);
-      continue;
-    }
-    const auto cells = split(line);
-    if (cells.size() != columns_.size()) {
-      throw SetupError(where(world_log, number) + std::to_string(cells.size()) + " values where the header has " +
-                       std::to_string(columns_.size()));
-    }
-    std::vector<double> row;
-    for (const std::string& c : cells) {
-      char* end = nullptr;
-      const double v = std::strtod(c.c_str(), &end);
-      if (c.empty() || end != c.c_str() + c.size() || !std::isfinite(v)) {
-        throw SetupError(where(world_log, number) + "'" + c + "' is not a number");
-      }
-      row.push_back(v);
-    }
-    if (!rows_.empty() && row[0] < rows_.back()[0]) {
-      throw SetupError(where(world_log, number) + "time goes back; a world log is in time order");
-    }
-    rows_.push_back(std::move(row));
-  }
-  if (rows_.empty()) throw SetupError(world_log.string() + ": the world log has no rows");
-  // A robot of a team the log does not name is of no team it knows: the first.
-  for (ReplayRobot& r : robot_info_) {
-    if (r.team >= std::max<std::size_t>(1, teams_.size())) r.team = 0;
-  }
   if (trace) {
     std::ifstream t(*trace);
     if (!t) throw SetupError("cannot read the trace " + trace->string());
-    number = 0;
+    std::size_t number = 0;
     while (std::getline(t, line)) {
       ++number;
       if (line.empty()) continue;
@@ -129,50 +74,6 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
     events.push_back(std::move(event));
   }
   replay_json_ = json{{"columns", columns_}, {"robots", robots_}, {"rows", rows_}, {"events", events}}.dump();
-}
-
-// "#referee,TIME,RESTART,TEAM,X,Y,SCORE..." (Session::log_call): a mark on
-// the scrubber. A line that does not read so is a comment like any other.
-void ReplayFeed::referee_line(const std::string& line) {
-  const auto cells = split(line);
-  if (cells.size() < 6 || cells[0] != "#referee") return;
-  char* end = nullptr;
-  const double t = std::strtod(cells[1].c_str(), &end);
-  if (end != cells[1].c_str() + cells[1].size() || !std::isfinite(t)) return;
-  std::string text = cells[2] + (cells[3] == "-" ? std::string() : " for " + cells[3]);
-  if (cells.size() > 6) {
-    text += ", score";
-    for (std::size_t k = 6; k < cells.size(); ++k) text += (k == 6 ? " " : ":") + cells[k];
-  }
-  events_.push_back({t, "referee", std::move(text), std::nullopt});
-}
-
-namespace {
-// Whole numbers only: "3" reads, "3x", "-1" and "" do not.
-std::optional<std::size_t> whole_number(const std::string& text) {
-  if (text.empty() || text.size() > 6 || text.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
-  return static_cast<std::size_t>(std::stoul(text));
-}
-}  // namespace
-
-// "#team,INDEX,NAME,+x|-x" (Session's world log with two teams), in index
-// order from 0. A line that does not read so is a comment like any other.
-void ReplayFeed::team_line(const std::string& line) {
-  const auto cells = split(line);
-  if (cells.size() != 4 || cells[0] != "#team" || cells[2].empty() || (cells[3] != "+x" && cells[3] != "-x")) return;
-  if (whole_number(cells[1]) != teams_.size()) return;
-  teams_.push_back({cells[2], cells[3] == "+x"});
-}
-
-// "#robot,INDEX,TEAM,AGENT,INTERFACE".
-void ReplayFeed::robot_line(const std::string& line) {
-  const auto cells = split(line);
-  if (cells.size() != 5 || cells[0] != "#robot") return;
-  const auto index = whole_number(cells[1]);
-  const auto team = whole_number(cells[2]);
-  const auto agent = whole_number(cells[3]);
-  if (!index || !team || !agent || *index >= robot_info_.size() || cells[4].empty()) return;
-  robot_info_[*index] = {*team, static_cast<int>(*agent), cells[4]};
 }
 
 // GoalWatcher's rule, on the logged ball.
@@ -220,12 +121,12 @@ json ReplayFeed::hello() {
   h["mode"] = "replay";
   json robots = json::array();
   for (std::size_t r = 0; r < robots_; ++r) {
-    const ReplayRobot& info = robot_info_[r];
+    const emulator::WorldLogRobot& info = robot_info_[r];
     robots.push_back({{"index", r}, {"agent", info.agent}, {"interface", info.interface}, {"team", info.team}});
   }
   h["robots"] = robots;
   json teams = json::array();  // as live: none said, one team
-  for (const ReplayTeam& t : teams_) teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
+  for (const emulator::WorldLogTeam& t : teams_) teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
   h["teams"] = teams;
   h["obstacles"] = json::array();
   h["virtual_time"] = false;

@@ -33,6 +33,7 @@ struct RefereeRules {
   double stuck_radius_m = 0.5;     ///< (two robots pushing it to and fro do not unstick it)
   double restart_pause_s = 2.0;    ///< the restart's states held this long (robots take their places), then "start"
   double touch_distance_m = 0.05;  ///< a robot this close to the ball (beyond both radii) touches it
+  double restart_distance_m = 1.0;  ///< at a restart other than a kick-off, robots nearer the spot step back this far
 };
 
 enum class Restart { kKickoff, kThrowIn, kCorner, kGoalKick, kDroppedBall };

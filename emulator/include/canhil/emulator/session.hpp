@@ -37,8 +37,10 @@
 #include "canhil/can_nodes/fault.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
+#include "canhil/emulator/referee_desk.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/shared_robot_io.hpp"
+#include "canhil/emulator/world_log.hpp"
 #include "canhil/physics/world.hpp"
 #include "canhil/timing/analysis.hpp"
 #include "canhil/vision_emu/runner.hpp"
@@ -244,18 +246,18 @@ class Session {
   // --- results (after the run, or from the stepping thread) -------------------
   const std::vector<Goal>& goals() const noexcept { return goals_.goals(); }
   /// The referee, when the scenario's is on (its score and calls), else nullptr.
-  const Referee* referee() const noexcept { return referee_.get(); }
+  const Referee* referee() const noexcept { return referee_ ? &referee_->referee() : nullptr; }
   /// Called at each referee call, on the stepping thread (for the run's log).
   void on_referee_call(std::function<void(const RefereeCall&)> hook) { referee_hook_ = std::move(hook); }
   /// How many times the referee has put robot r somewhere (a kick-off's
   /// places, a step back from a restart's spot): a robot carried, not driven,
   /// whose odometry no longer knows where it is. Read on the stepping thread.
-  std::uint32_t referee_placements(std::size_t r) const { return referee_placements_.at(r); }
+  std::uint32_t referee_placements(std::size_t r) const { return referee_ ? referee_->placements(r) : 0; }
   /// What each fault rule did, summed over the robots.
   std::vector<can_nodes::FaultCount> fault_counts() const;
   /// The world log (CSV with a header line; with a referee, its calls as
   /// "#referee,..." lines among the rows); empty when world_log_period is 0.
-  const std::string& world_log() const noexcept { return world_log_; }
+  const std::string& world_log() const noexcept { return world_log_ ? world_log_->text() : no_world_log_; }
 
  private:
   void log_world(Nanos now);
@@ -273,19 +275,14 @@ class Session {
   std::unique_ptr<vision_emu::VisionRunner> vision_;
   std::function<void(std::size_t, Nanos)> frame_hook_;
   GoalWatcher goals_;
-  std::unique_ptr<Referee> referee_;  // when the scenario's referee is on
-  RefereeView referee_view_;          // kept: filled every step
+  std::unique_ptr<RefereeDesk> referee_;  // when the scenario's referee is on
   void referee_step(Nanos now, bool scored);
-  void carry_out(const RefereeCall& call);
-  void keep_away_from(const Eigen::Vector2d& spot);
   void set_team_states(std::vector<std::string> states);
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
   std::function<void(const RefereeCall&)> referee_hook_;
-  std::vector<std::uint32_t> referee_placements_;  // per robot
   std::function<void(WorldSnapshot&)> detail_hook_;
   std::function<void(Nanos)> step_hook_;
-  void log_call(const RefereeCall& call);
   // With vision, per team: its RTDB set, layout, PMan, coach, replicator.
   std::vector<std::unique_ptr<LaptopLink>> laptops_;
   std::vector<CoachState> team_coaches_;                       // team_coach(t), kept with coach_
@@ -293,9 +290,9 @@ class Session {
     return robot - scenario_.teams[rigs_[robot].team].first_robot;
   }
   void write_coaches();
-  std::string world_log_;
+  std::optional<WorldLogWriter> world_log_;  // with a world log period
+  std::string no_world_log_;
   std::string error_frames_refused_;  // empty: allowed
-  Nanos next_log_{0};
   std::uint64_t steps_ = 0;
   Nanos now_{0};  // the time of the step in progress (the vision's frame time)
 

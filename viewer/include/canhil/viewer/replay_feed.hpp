@@ -1,6 +1,7 @@
 // canhil/viewer/replay_feed.hpp — a recorded run for the viewer (`canhil
 // view WORLD_LOG [--trace TRACE]`): the world log's rows, who played for
-// whom (its "#team" and "#robot" lines, written with two teams), and the
+// whom (its "#team" and "#robot" lines, written with two teams; read by
+// emulator/world_log.hpp), and the
 // events in them (goals from the ball's path; the referee's calls from its
 // "#referee" lines; kicks from the laptop's kick commands in
 // the trace, or from the ball's jumps in speed without one), and the trace's
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "canhil/emulator/world_log.hpp"
 #include "canhil/frames/candump.hpp"
 #include "canhil/frames/messages.hpp"
 #include "canhil/physics/params.hpp"
@@ -27,19 +29,6 @@ struct ReplayEvent {
   std::optional<bool> positive_x;  ///< a goal's side: in the +x goal (as live `goals` say)
 };
 
-/// A team as the world log's "#team,INDEX,NAME,+x|-x" line gives it.
-struct ReplayTeam {
-  std::string name;
-  bool attacks_positive_x = true;
-};
-
-/// A robot as its "#robot,INDEX,TEAM,AGENT,INTERFACE" line gives it (without
-/// one: team 0, agent index + 1, interface "robot INDEX").
-struct ReplayRobot {
-  std::size_t team = 0;
-  int agent = 0;
-  std::string interface;
-};
 
 class ReplayFeed final : public Feed {
  public:
@@ -57,16 +46,12 @@ class ReplayFeed final : public Feed {
   std::size_t rows() const noexcept { return rows_.size(); }
   const std::vector<ReplayEvent>& events() const noexcept { return events_; }
   /// Empty when the log does not say (one team's logs never do).
-  const std::vector<ReplayTeam>& teams() const noexcept { return teams_; }
-  const std::vector<ReplayRobot>& robot_info() const noexcept { return robot_info_; }
+  const std::vector<emulator::WorldLogTeam>& teams() const noexcept { return teams_; }
   /// Frames of the trace from `from_s` to `to_s`, at most `most`, as JSON.
   nlohmann::json frames_between(double from_s, double to_s, std::size_t most = kMostFrames) const;
   static constexpr std::size_t kMostFrames = 500;
 
  private:
-  void referee_line(const std::string& line);
-  void team_line(const std::string& line);
-  void robot_line(const std::string& line);
   void find_goals();
   void find_kicks();
 
@@ -77,8 +62,8 @@ class ReplayFeed final : public Feed {
   std::size_t robots_ = 0;
   std::vector<frames::LogEntry> trace_;  // in time order
   std::vector<ReplayEvent> events_;
-  std::vector<ReplayTeam> teams_;
-  std::vector<ReplayRobot> robot_info_;
+  std::vector<emulator::WorldLogTeam> teams_;
+  std::vector<emulator::WorldLogRobot> robot_info_;
   std::string replay_json_;  // /api/replay, made once
 };
 
