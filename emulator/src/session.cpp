@@ -45,7 +45,8 @@ Session::Session(Scenario scenario, SessionOptions options)
     }
   }
   step_period_ = from_seconds(scenario_.world.simulation.step_s);
-  if (scenario_.referee.enabled.value_or(scenario_.teams.size() > 1)) referee_ = std::make_unique<RefereeDesk>(scenario_);
+  if (scenario_.referee.enabled.value_or(scenario_.teams.size() > 1))
+    referee_ = std::make_unique<RefereeDesk>(scenario_);
   const std::size_t n = scenario_.robot_count();
   rigs_.resize(n);
   for (std::size_t r = 0; r < n; ++r) {
@@ -218,9 +219,12 @@ void Session::referee_step(Nanos now, bool scored) {
     for (std::size_t t = 0; t < scenario_.teams.size(); ++t) states.push_back(referee.state_for(*out.call, t));
     set_team_states(std::move(states));
     if (world_log_) {
-      WorldLogCall logged{to_seconds(out.call->time), std::string(restart_name(out.call->restart)),
+      WorldLogCall logged{to_seconds(out.call->time),
+                          std::string(restart_name(out.call->restart)),
                           out.call->team ? scenario_.teams[*out.call->team].name : std::string("-"),
-                          out.call->spot.x(), out.call->spot.y(), {}};
+                          out.call->spot.x(),
+                          out.call->spot.y(),
+                          {}};
       for (const int goals : referee.score()) logged.score.push_back(std::to_string(goals));
       world_log_->call(logged);
     }

@@ -79,8 +79,8 @@ WorldLogWriter::WorldLogWriter(Nanos period, const std::vector<WorldLogTeam>& te
   if (teams.size() > 1) {
     // Who played for whom, for a replay; one team's logs stay as they always were.
     for (std::size_t t = 0; t < teams.size(); ++t) {
-      text_ += "#team," + std::to_string(t) + "," + teams[t].name + "," + (teams[t].attacks_positive_x ? "+x" : "-x") +
-               "\n";
+      text_ +=
+          "#team," + std::to_string(t) + "," + teams[t].name + "," + (teams[t].attacks_positive_x ? "+x" : "-x") + "\n";
     }
     for (std::size_t r = 0; r < robots.size(); ++r) {
       text_ += "#robot," + std::to_string(r) + "," + std::to_string(robots[r].team) + "," +
@@ -131,10 +131,11 @@ WorldLog read_world_log(const std::filesystem::path& path) {
     ++robots;
   }
   if (log.columns.size() != first.size() + 6 * robots) {
-    throw SetupError(where(path, 1) + "expected 4 columns and 6 per robot, got " +
-                     std::to_string(log.columns.size()) + " for " + std::to_string(robots) + " robot(s)");
+    throw SetupError(where(path, 1) + "expected 4 columns and 6 per robot, got " + std::to_string(log.columns.size()) +
+                     " for " + std::to_string(robots) + " robot(s)");
   }
-  for (std::size_t r = 0; r < robots; ++r) log.robot_info.push_back({0, static_cast<int>(r + 1), "robot " + std::to_string(r)});
+  for (std::size_t r = 0; r < robots; ++r)
+    log.robot_info.push_back({0, static_cast<int>(r + 1), "robot " + std::to_string(r)});
   std::size_t number = 1;
   while (std::getline(in, line)) {
     ++number;

@@ -126,7 +126,8 @@ json ReplayFeed::hello() {
   }
   h["robots"] = robots;
   json teams = json::array();  // as live: none said, one team
-  for (const emulator::WorldLogTeam& t : teams_) teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
+  for (const emulator::WorldLogTeam& t : teams_)
+    teams.push_back({{"name", t.name}, {"attacks_positive_x", t.attacks_positive_x}});
   h["teams"] = teams;
   h["obstacles"] = json::array();
   h["virtual_time"] = false;

@@ -25,14 +25,14 @@ namespace canhil::emulator {
 
 /// The referee's rules ([referee] in a scenario); each can be switched off.
 struct RefereeRules {
-  std::optional<bool> enabled;     ///< default: on with two teams, off otherwise
-  bool kickoff_after_goal = true;  ///< ball to the centre, robots to their places, kick-off for who conceded
-  bool out_of_play = true;         ///< throw-ins, corners and goal kicks
-  bool dropped_ball = true;        ///< a stuck game restarted at the ball
-  double stuck_s = 10.0;           ///< the ball within stuck_radius_m of one spot this long: stuck
-  double stuck_radius_m = 0.5;     ///< (two robots pushing it to and fro do not unstick it)
-  double restart_pause_s = 2.0;    ///< the restart's states held this long (robots take their places), then "start"
-  double touch_distance_m = 0.05;  ///< a robot this close to the ball (beyond both radii) touches it
+  std::optional<bool> enabled;      ///< default: on with two teams, off otherwise
+  bool kickoff_after_goal = true;   ///< ball to the centre, robots to their places, kick-off for who conceded
+  bool out_of_play = true;          ///< throw-ins, corners and goal kicks
+  bool dropped_ball = true;         ///< a stuck game restarted at the ball
+  double stuck_s = 10.0;            ///< the ball within stuck_radius_m of one spot this long: stuck
+  double stuck_radius_m = 0.5;      ///< (two robots pushing it to and fro do not unstick it)
+  double restart_pause_s = 2.0;     ///< the restart's states held this long (robots take their places), then "start"
+  double touch_distance_m = 0.05;   ///< a robot this close to the ball (beyond both radii) touches it
   double restart_distance_m = 1.0;  ///< at a restart other than a kick-off, robots nearer the spot step back this far
 };
 

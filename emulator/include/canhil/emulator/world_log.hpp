@@ -47,8 +47,8 @@ struct WorldLogRobot {
 /// A "#referee,TIME,RESTART,TEAM,SPOT_X,SPOT_Y,SCORE..." line.
 struct WorldLogCall {
   double time_s = 0;
-  std::string restart;             ///< restart_name()'s words: "throwin", "kickoff", ...
-  std::string team;                ///< the taker's name, "-" for none
+  std::string restart;  ///< restart_name()'s words: "throwin", "kickoff", ...
+  std::string team;     ///< the taker's name, "-" for none
   double spot_x_m = 0, spot_y_m = 0;
   std::vector<std::string> score;  ///< goals per team, as written
 };

@@ -29,7 +29,6 @@ struct ReplayEvent {
   std::optional<bool> positive_x;  ///< a goal's side: in the +x goal (as live `goals` say)
 };
 
-
 class ReplayFeed final : public Feed {
  public:
   /// Reads both files; SetupError naming the file and line of a malformed
