@@ -4,7 +4,6 @@
 #include <optional>
 
 #include "canhil/emulator/laptop_link.hpp"
-#include "merged_trace.hpp"
 
 namespace canhil::emulator {
 namespace {
@@ -34,7 +33,11 @@ class ExternalDriver::Processes final : public can_nodes::Participant {
 };
 
 ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor, ExternalOptions options)
-    : session_(session), conductor_(conductor), options_(options), lockstep_(clock_) {
+    : session_(session),
+      conductor_(conductor),
+      options_(options),
+      watch_(session, {options.record_trace, options.check_timing}),
+      lockstep_(clock_) {
   if (session_.scenario().mixes_real_boards()) {
     throw SetupError(
         "emulate = [...] leaves nodes to real boards, and a board keeps the wall clock's time, not "
@@ -45,7 +48,6 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
   socket_options.clock = &clock_;  // a frame arrives in the instant it is read
   sockets_.resize(n);
-  recorded_.resize(n);
   fenced_.assign(n, 0);
   woken_.assign(n, false);
   cycled_.assign(n, false);
@@ -53,7 +55,6 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
     observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
     observers_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
-    if (options_.check_timing) checkers_.push_back(ftt_checker(session_.options()));
     if (observers_.back()->state() != can_nodes::BusState::kUp) {
       const std::string& iface = session_.rig(r).interface;
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
@@ -122,8 +123,7 @@ void ExternalDriver::observe() {
       ++observed_;
       if (can_nodes::DeliveryFence::counts(f->frame)) ++fenced_[r];
       for (can_nodes::SocketCanBus* s : sockets_[r]) s->note_frame_on_bus(f->frame);
-      if (options_.record_trace) recorded_[r].push_back({f->frame, clock_.now()});
-      if (!checkers_.empty()) checkers_[r].add({f->frame, clock_.now()});
+      watch_.add(r, {f->frame, clock_.now()});
     }
   }
 }
@@ -204,14 +204,8 @@ std::size_t ExternalDriver::settle() {
   return static_cast<std::size_t>(fresh);
 }
 
-std::string ExternalDriver::trace() const {
-  std::vector<std::string> names;
-  for (std::size_t r = 0; r < session_.robot_count(); ++r) names.push_back(session_.rig(r).interface);
-  return merged_trace(recorded_, names);
-}
+std::string ExternalDriver::trace() const { return watch_.trace(); }
 
-std::uint64_t ExternalDriver::ftt_violations(std::size_t robot) const {
-  return robot < checkers_.size() ? checkers_[robot].violation_count() : 0;
-}
+std::uint64_t ExternalDriver::ftt_violations(std::size_t robot) const { return watch_.ftt_violations(robot); }
 
 }  // namespace canhil::emulator

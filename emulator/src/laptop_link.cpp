@@ -64,6 +64,8 @@ struct LaptopLink::Robot {
   int pos_id = -1;
   std::unique_ptr<rtdb::ItemBuffer> pos;
   rtdb::Quantity pos_x, pos_y, pos_heading;
+  int setpose_id = -1;  // resolved at the first place()
+  std::unique_ptr<rtdb::ItemBuffer> setpose;
 };
 
 LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, const CoachState& coach, int rtdb_set)
@@ -240,6 +242,35 @@ void LaptopLink::step(Nanos now, const CoachState& coach) {
   } else {
     replicator_->deliver(now);  // delayed copies due by now
   }
+}
+
+int LaptopLink::memory_space(std::size_t robot) const { return db_->memory_space(robots_.at(robot)->agent); }
+
+void LaptopLink::clear_items(std::size_t robot) {
+  const int agent = robots_.at(robot)->agent;
+  const rtdb::ItemTable& table = db_->items();
+  std::vector<std::byte> zero;
+  for (int id = 0; id < table.item_count(); ++id) {
+    if (table.kind(agent, id) == rtdb::ItemKind::kNone) continue;
+    zero.assign(table.size(id).value_or(0), std::byte{0});
+    db_->put(agent, agent, id, zero);
+  }
+}
+
+void LaptopLink::place(std::size_t robot, const kinematics::Pose& at) {
+  Robot& r = *robots_.at(robot);
+  if (!r.setpose) {
+    const rtdb::ItemLayout& item = rtdb::require(layout_, "CMD_SETPOSE", {"x", "y", "heading", "pending"});
+    r.setpose_id = db_->require("CMD_SETPOSE", item.size_bytes(), r.agent);
+    r.setpose = std::make_unique<rtdb::ItemBuffer>(item);
+  }
+  rtdb::ItemBuffer& b = *r.setpose;
+  b.set(b.quantity("x"), at.x_m);
+  b.set(b.quantity("y"), at.y_m);
+  b.set(b.quantity("heading"), at.heading_rad);
+  b.set(b.quantity("command"), 0.0);
+  b.set(b.quantity("pending"), 1.0);
+  db_->put(r.agent, r.agent, r.setpose_id, b.bytes());
 }
 
 std::optional<kinematics::Pose> LaptopLink::reported_pose(std::size_t robot) {

@@ -54,6 +54,7 @@ Session::Session(Scenario scenario, SessionOptions options)
     rig.index = r;
     rig.team = scenario_.team_of(r);
     rig.agent = scenario_.agents[r];
+    rig.in_team = r - scenario_.teams[rig.team].first_robot;
     rig.interface = scenario_.interfaces[r];
     // Robot r draws from seed + r: robots' faults are independent and repeatable.
     // Every robot has an injector, rules or not, so a fault injected later needs no new hook.
@@ -93,7 +94,7 @@ Session::Session(Scenario scenario, SessionOptions options)
     }
     vision_ = std::make_unique<vision_emu::VisionRunner>(
         std::move(vision), [this](std::size_t r, const vision_emu::VisionFrame& f, double) {
-          laptops_[rigs_[r].team]->vision_frame(local_index(r), f);
+          laptops_[rigs_[r].team]->vision_frame(rigs_[r].in_team, f);
           if (r == vision_watched_.load(std::memory_order_relaxed)) {
             if (!vision_seen_) vision_seen_.emplace();
             vision_seen_->robot = r;
@@ -393,7 +394,7 @@ void Session::publish(std::uint64_t step) {
     for (const Rig& rig : rigs_) {
       RobotDetail& d = s.detail[rig.index];
       d.achieved = world_->robot(rig.index).twist();
-      d.odometry = !laptops_.empty() ? laptops_[rig.team]->reported_pose(local_index(rig.index)) : std::nullopt;
+      d.odometry = !laptops_.empty() ? laptops_[rig.team]->reported_pose(rig.in_team) : std::nullopt;
       // The base node's state belongs to the nodes' thread: read only when that is this one.
       d.commanded = rig.shared == nullptr && rig.nodes && rig.nodes->emulates(can_nodes::NodeId::kPicBase)
                         ? rig.nodes->pic_base().commanded()
@@ -444,20 +445,12 @@ void Session::log_world(Nanos now) {
   world_log_->begin_row(now, world_->ball_position());
   for (const Rig& rig : rigs_) {
     // The pose as stored (a float in canhil's layout), so the log reads as before.
-    const kinematics::Pose reported =
-        !laptops_.empty() ? laptops_[rig.team]->reported_pose(local_index(rig.index)).value_or(kinematics::Pose{})
-                          : kinematics::Pose{};
+    const kinematics::Pose reported = !laptops_.empty()
+                                          ? laptops_[rig.team]->reported_pose(rig.in_team).value_or(kinematics::Pose{})
+                                          : kinematics::Pose{};
     world_log_->robot(world_->robot(rig.index).pose(), reported);
   }
   world_log_->end_row();
-}
-
-timing::TimingAnalyzer ftt_checker(const SessionOptions& options) {
-  timing::TimingConfig config;
-  config.elementary_cycle = options.ftt.elementary_cycle;
-  config.bit_rate = options.ftt.bit_rate;
-  config.violations_only = true;
-  return {options.messages, config};
 }
 
 }  // namespace canhil::emulator

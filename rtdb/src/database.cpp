@@ -35,6 +35,7 @@ struct CApi {
   int (*item_size)(int) = nullptr;  // canhil's extension, where the library has it
   int (*put_ranges)(int, int, int, const void*, const std::size_t*, int, int) = nullptr;  // canhil's too
   int (*signal_frame)(int) = nullptr;                                                     // canhil's linked RTDB only
+  void (*set_clock)(std::int64_t (*)(void*), void*) = nullptr;                            // canhil's linked RTDB only
 };
 
 // The libraries open in this process, with the set (team) each serves: a
@@ -131,6 +132,12 @@ class CApiDatabase final : public Database {
         first_space_(set * this->items().agent_count()) {}
   void signal_frame(int agent) override {
     if (api_.signal_frame != nullptr) api_.signal_frame(first_space_ + agent);
+  }
+  int memory_space(int agent) const noexcept override { return first_space_ + agent; }
+  bool set_clock(std::int64_t (*now)(void* context), void* context) override {
+    if (api_.set_clock == nullptr) return false;
+    api_.set_clock(now, context);
+    return true;
   }
   ~CApiDatabase() override {  // frees, then (loaded_) unloads
     if (scope() == Scope::kAllAgents) {
@@ -354,6 +361,7 @@ std::unique_ptr<Database> open_builtin(Scope scope, int set) {
   api.whoami = &Whoami;
   api.item_size = &DB_item_size;
   api.signal_frame = &DB_signal_frame;
+  api.set_clock = &DB_set_clock;
   std::vector<int> spaces;
   if (scope == Scope::kOneAgent) set = set_from_environment();
   if (scope == Scope::kAllAgents) {

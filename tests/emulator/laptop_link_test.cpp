@@ -138,6 +138,29 @@ TEST_F(LaptopLinkTest, CanhilsOwnRtdbInCanhilsLayoutAndThePoseReadBack) {
   EXPECT_NE(link.replicator_stats(), nullptr) << "two robots: the replicator runs";
 }
 
+TEST_F(LaptopLinkTest, ARobotPlacedAsksItsHandlerThroughTheLayoutAndAClearedDatabaseHoldsZeros) {
+  // The second team's set, so that the agent's memory space in canhil's C API is N + agent.
+  setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  LaptopLink link(resolve_laptop({}, 2, false), {1, 2}, coach(2), 1);
+  rtdb::Database& db = link.database();
+  const int setpose = *db.items().id("CMD_SETPOSE");
+  link.place(1, {1.25, -3.5, 0.75});
+  std::vector<std::byte> b(16);
+  ASSERT_TRUE(db.get(2, 2, setpose, b));
+  EXPECT_FLOAT_EQ(f32_at(b, 0), 1.25F) << "canhil's layout: x, y, heading as floats";
+  EXPECT_FLOAT_EQ(f32_at(b, 4), -3.5F);
+  EXPECT_FLOAT_EQ(f32_at(b, 8), 0.75F);
+  EXPECT_EQ(static_cast<int>(b[12]), 0) << "command: set the pose";
+  EXPECT_EQ(static_cast<int>(b[13]), 1) << "pending";
+  ASSERT_TRUE(db.get(1, 1, setpose, b));
+  EXPECT_EQ(f32_at(b, 0), 0.0F) << "robot 0's agent was not asked";
+  link.clear_items(1);
+  ASSERT_TRUE(db.get(2, 2, setpose, b));
+  EXPECT_EQ(static_cast<int>(b[13]), 0) << "cleared";
+  EXPECT_EQ(link.memory_space(1), DB_agent_count() + 2) << "the second set's agent 2";
+  EXPECT_EQ(LaptopLink(resolve_laptop({}, 1, false), {1}, coach(1)).memory_space(0), 1);
+}
+
 TEST_F(LaptopLinkTest, FramesPutInPartsLeaveVisionInfoAsWholeWritesWould) {
   // canhil's RTDB takes only the parts of VISION_INFO a frame changed; the
   // team's stand-in library (no DB_put_ranges) the whole item. Either way the

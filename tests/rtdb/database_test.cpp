@@ -67,6 +67,8 @@ TEST_F(TeamDatabase, EveryAgentThroughTheTeamsLibrary) {
   const std::array<unsigned char, 20> ws{42};
   db->put(kBaseStation, kRobot2, kRobotWs, bytes_of(ws), 300);
   EXPECT_EQ(standin_put_count(kBaseStation, kRobotWs), 1);
+  EXPECT_FALSE(db->set_clock([](void*) -> std::int64_t { return 0; }, nullptr))
+      << "a team's library keeps the wall clock";
   std::array<unsigned char, 20> ws_back{};
   EXPECT_GE(db->get(kBaseStation, kRobot2, kRobotWs, std::as_writable_bytes(std::span(ws_back))), 300);
   EXPECT_EQ(ws_back[0], 42);
@@ -271,6 +273,19 @@ TEST_F(BuiltinDatabase, EveryAgent) {
   CMD_Vel back{};
   EXPECT_GE(db->get(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_writable_bytes(std::span(&back, 1))), 0);
   EXPECT_EQ(std::memcmp(&back, &v, sizeof v), 0);
+  EXPECT_EQ(db->memory_space(CAMBADA_2), CAMBADA_2) << "the first set: the agent's own number";
+  // Its clock, through the database: an item put at 5 s is 2000 ms old at 7 s.
+  std::int64_t now_ns = 5'000'000'000;
+  ASSERT_TRUE(db->set_clock([](void* t) { return *static_cast<std::int64_t*>(t); }, &now_ns));
+  db->put(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_bytes(std::span(&v, 1)));
+  now_ns = 7'000'000'000;
+  EXPECT_EQ(db->get(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_writable_bytes(std::span(&back, 1))), 2000);
+  EXPECT_TRUE(db->set_clock(nullptr, nullptr));
+}
+
+TEST_F(BuiltinDatabase, TheSecondSetsMemorySpacesFollowTheFirstSets) {
+  auto db = open_builtin(Scope::kAllAgents, 1);
+  EXPECT_EQ(db->memory_space(CAMBADA_2), N_AGENTS + CAMBADA_2);
 }
 
 TEST_F(BuiltinDatabase, OneAgentAndSeveralAtOnce) {

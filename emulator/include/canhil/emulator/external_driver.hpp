@@ -20,9 +20,9 @@
 #include "canhil/can_nodes/delivery_fence.hpp"
 #include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
+#include "canhil/emulator/bus_watch.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/lockstep/conductor.hpp"
-#include "canhil/timing/analysis.hpp"
 
 namespace canhil::emulator {
 
@@ -93,8 +93,7 @@ class ExternalDriver {
   can_nodes::DeliveryFence fence_;                                   // opened before any other socket
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
-  std::vector<std::vector<frames::TimedFrame>> recorded_;
-  std::vector<timing::TimingAnalyzer> checkers_;  // check_timing: per robot
+  BusWatch watch_;
   std::uint64_t observed_ = 0;
   std::uint64_t observed_at_settle_ = 0;
   std::uint64_t announced_ = 0;      // frames on the buses when the processes were last nudged

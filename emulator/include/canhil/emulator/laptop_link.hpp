@@ -90,6 +90,18 @@ class LaptopLink {
   /// Periodic work at `now`: the coach again every coach period, the replicator
   /// every replication period (its delayed copies at any step).
   void step(Nanos now, const CoachState& coach);
+  /// Every item of robot r's agent zeroed in its own database (a fresh start
+  /// for the in-process reference laptop).
+  void clear_items(std::size_t robot);
+  /// Asks robot r's handler to set its odometry to `at` (CMD_SETPOSE in the
+  /// team's layout: x, y, heading, command 0, pending). SetupError when the
+  /// layout or the team's table lacks it.
+  void place(std::size_t robot, const kinematics::Pose& at);
+  /// Robot r's agent's memory space in canhil's C API (the second team's set
+  /// is N + agent), for the in-process reference agent, which uses that API.
+  int memory_space(std::size_t robot) const;
+  /// The RTDB's clock (rtdb::Database::set_clock); false where the library keeps the wall clock.
+  bool set_clock(std::int64_t (*now)(void* context), void* context) { return db_->set_clock(now, context); }
   /// Robot r's pose as its handler reported it (CMD_POS), when the layout carries it.
   std::optional<kinematics::Pose> reported_pose(std::size_t robot);
 

@@ -42,7 +42,6 @@
 #include "canhil/emulator/shared_robot_io.hpp"
 #include "canhil/emulator/world_log.hpp"
 #include "canhil/physics/world.hpp"
-#include "canhil/timing/analysis.hpp"
 #include "canhil/vision_emu/runner.hpp"
 
 namespace canhil::emulator {
@@ -66,15 +65,12 @@ struct SessionOptions {
   std::optional<physics::WorldState> initial_state;
 };
 
-/// A checker of one robot's bus by `canhil timing`'s rules with the session's
-/// elementary cycle and bit rate, counting violations only (constant memory).
-timing::TimingAnalyzer ftt_checker(const SessionOptions& options);
-
 /// One robot's part of a run.
 struct Rig {
   std::size_t index = 0;
-  std::size_t team = 0;  ///< its team (Scenario::teams); also its RTDB set
-  int agent = 0;         ///< its agent number within its team
+  std::size_t team = 0;     ///< its team (Scenario::teams); also its RTDB set
+  int agent = 0;            ///< its agent number within its team
+  std::size_t in_team = 0;  ///< its index among its team's robots (the LaptopLink's robot number)
   std::string interface;
   std::unique_ptr<can_nodes::RobotIo> io;  ///< PhysicsRobotIo or SharedRobotIo
   SharedRobotIo* shared = nullptr;         ///< io, when the nodes run on another thread than the physics
@@ -285,10 +281,7 @@ class Session {
   std::function<void(Nanos)> step_hook_;
   // With vision, per team: its RTDB set, layout, PMan, coach, replicator.
   std::vector<std::unique_ptr<LaptopLink>> laptops_;
-  std::vector<CoachState> team_coaches_;                       // team_coach(t), kept with coach_
-  std::size_t local_index(std::size_t robot) const noexcept {  // robot's index in its team
-    return robot - scenario_.teams[rigs_[robot].team].first_robot;
-  }
+  std::vector<CoachState> team_coaches_;  // team_coach(t), kept with coach_
   void write_coaches();
   std::optional<WorldLogWriter> world_log_;  // with a world log period
   std::string no_world_log_;

@@ -18,10 +18,9 @@
 
 #include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/emulator/bus_watch.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/laptop/hwcomm.hpp"
-#include "canhil/timing/analysis.hpp"
-#include "canhil/timing/live.hpp"
 
 namespace canhil::emulator {
 
@@ -83,7 +82,6 @@ class VirtualDriver {
   struct Laptop;  // the reference handler and agent of one robot
 
  private:
-  void record(std::size_t robot, const frames::TimedFrame& frame);  // a bus's tap
   void set_pose_of_carried_robots();
   void fill_detail(WorldSnapshot& s);
 
@@ -91,12 +89,8 @@ class VirtualDriver {
   VirtualOptions options_;
   can_nodes::SimulatedClock clock_;
   std::vector<std::unique_ptr<can_nodes::MemoryBus>> buses_;
-  bool listening_ = false;                                 // the buses' taps count, check or record their frames
-  std::vector<std::vector<frames::TimedFrame>> recorded_;  // kept only when record_trace
-  std::vector<std::uint64_t> frame_counts_;
-  // Measured once someone watches the run in detail (the viewer's plots); until then no cost.
-  std::vector<timing::LiveBusStats> bus_stats_;
-  std::vector<timing::TimingAnalyzer> checkers_;  // check_timing
+  bool listening_ = false;  // the buses' taps count, check or record their frames
+  BusWatch watch_;
   std::vector<std::unique_ptr<Laptop>> laptops_;
   can_nodes::Lockstep lockstep_;
   bool rtdb_clock_set_ = false;  // the RTDB stamps and ages items in this run's virtual time

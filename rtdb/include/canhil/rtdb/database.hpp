@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -75,6 +76,19 @@ class Database {
   /// memory space in this database's set; DB_wait_frame returns). A team's
   /// library has no such signal (its agents are woken through PMan): nothing.
   virtual void signal_frame(int agent) { (void)agent; }
+  /// Agent `agent`'s memory space in the library's own calls (the second
+  /// team's set is N + agent): for code that uses canhil's C API directly
+  /// on this database, such as the in-process reference agent.
+  virtual int memory_space(int agent) const noexcept { return agent; }
+  /// Items stamped and aged by `now` (nanoseconds; nullptr: the wall clock
+  /// again) instead of the wall clock: canhil's RTDB only, whose clock is
+  /// one per process, for every set (false: the library keeps the wall
+  /// clock, as a team's does).
+  virtual bool set_clock(std::int64_t (*now)(void* context), void* context) {
+    (void)now;
+    (void)context;
+    return false;
+  }
   /// Reads it into `bytes` (same preconditions). The age in ms,
   /// kNeverWritten for an item never written, or nullopt when the library
   /// says the item does not exist.
