@@ -16,6 +16,7 @@
 
 #include "canhil/emulator/external_driver.hpp"
 #include "canhil/emulator/match.hpp"
+#include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
@@ -134,7 +135,11 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   if (!external && (!processes.empty() || logs || answer_limit)) {
     throw UsageError("--process, --logs and --answer-limit are for matches with --external");
   }
-  apply_external_options(scenario, processes, answer_limit);
+  try {
+    emulator::apply_external_overrides(scenario, processes, answer_limit);
+  } catch (const emulator::OverrideError& e) {
+    throw UsageError(e.what());
+  }
   if (external) {
     bool any = false;
     for (std::size_t t = 0; t < scenario.teams.size(); ++t) any |= !scenario.external_of(t).processes.empty();

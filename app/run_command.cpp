@@ -16,6 +16,7 @@
 #include "canhil/control/save_commands.hpp"
 #include "canhil/control/unix_server.hpp"
 #include "canhil/emulator/run_control.hpp"
+#include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
@@ -170,181 +171,206 @@ void log_commands(control::Commands& commands, viewer::Server* shown) {
 }
 
 // The team's laptop side from the command line, over the scenario's [laptop].
-void laptop_options(Args& args, emulator::LaptopSide& side) {
-  if (auto v = args.option("--rtdb-lib")) side.rtdb_lib = *v;
-  if (auto v = args.option("--rtdb-items")) side.rtdb_items = *v;
-  if (auto v = args.option("--rtdb-ini")) side.rtdb_ini = *v;
-  if (auto v = args.option("--layout")) side.layout = *v;
+void laptop_options(Args& args, emulator::RunOverrides& o) {
+  o.rtdb_lib = args.option("--rtdb-lib");
+  o.rtdb_items = args.option("--rtdb-items");
+  o.rtdb_ini = args.option("--rtdb-ini");
+  o.layout = args.option("--layout");
   const auto pman_lib = args.option("--pman-lib");
   const bool no_pman = args.flag("--no-pman");
   if (pman_lib && no_pman) throw UsageError("give --pman-lib PATH or --no-pman, not both");
-  if (pman_lib) side.pman = *pman_lib;
-  if (no_pman) side.pman = "none";
+  if (pman_lib) o.pman = *pman_lib;
+  if (no_pman) o.pman = "none";
 }
 
-}  // namespace
+// What `canhil run` was asked: every option read and checked once.
+struct RunRequest {
+  emulator::RunOverrides overrides;
+  std::optional<std::string> config, restore_world, control_path, speed_text;
+  VirtualOutputs outputs;
+  std::optional<double> wait_for;
+  ViewChoice view;
+  double speed = 0;  // virtual seconds per wall second; 0: as fast as possible
+  bool start_paused = false, no_control = false;
+  double bit_rate = 0, rx_buffer_kb = 0, priority = 0;
+};
 
-int run_run(Args& args, const std::optional<std::string>& dbc) {
+RunRequest read_request(Args& args) {
+  RunRequest q;
+  emulator::RunOverrides& o = q.overrides;
   const bool external = args.flag("--external");
   const bool virtual_time = args.flag("--virtual-time") || external;  // --external runs in virtual time
-  std::vector<std::string> processes;
-  while (auto p = args.option("--process")) processes.push_back(*p);
-  const std::optional<double> answer_limit = optional_number(args, "--answer-limit");
-  const std::optional<double> wait_for = optional_number(args, "--wait-for");
-  const auto config = args.option("--config");
-  VirtualOutputs outputs;
-  outputs.trace = args.option("--trace");
-  outputs.world_log = args.option("--world-log");
-  outputs.save_world = args.option("--save-world");
-  const auto restore_world = args.option("--restore-world");
-  std::vector<std::string> fault_texts;
-  while (auto f = args.option("--fault")) fault_texts.push_back(*f);
-  const std::optional<std::uint64_t> seed = seed_option(args);
-  outputs.quiet = args.flag("--quiet");
-  const auto control_path = args.option("--control");
-  const ViewChoice view = view_options(args);
-  const auto speed_text = args.option("--speed");
-  const bool start_paused = args.flag("--paused");
-  const bool no_control = args.flag("--no-control");
-  if (control_path && no_control) throw UsageError("give --control PATH or --no-control, not both");
-  emulator::Scenario scenario =
-      emulator::load_scenario(config ? std::filesystem::path(*config) : emulator::shipped_scenario("one_robot.toml"));
-  laptop_options(args, scenario.laptop);
-  const std::optional<double> duration_given = optional_number(args, "--duration");
-  const double bit_rate = number_option(args, "--bit-rate", 1'000'000);
-  const double rx_buffer_kb = number_option(args, "--rx-buffer-kb", 1024);
-  const double priority = number_option(args, "--priority", 40);
-  outputs.log_period_s = number_option(args, "--world-log-period", 0.05);
-  scenario.kick_power = static_cast<int>(number_option(args, "--kick-power", scenario.kick_power));
-  if (seed) scenario.seed = *seed;
+  o.mode = external       ? emulator::RunMode::kExternal
+           : virtual_time ? emulator::RunMode::kVirtual
+                          : emulator::RunMode::kRealtime;
+  while (auto p = args.option("--process")) o.processes.push_back(*p);
+  o.answer_limit_s = optional_number(args, "--answer-limit");
+  q.wait_for = optional_number(args, "--wait-for");
+  q.config = args.option("--config");
+  q.outputs.trace = args.option("--trace");
+  q.outputs.world_log = args.option("--world-log");
+  q.outputs.save_world = args.option("--save-world");
+  q.restore_world = args.option("--restore-world");
+  while (auto f = args.option("--fault")) o.faults.push_back(*f);
+  o.seed = seed_option(args);
+  q.outputs.quiet = args.flag("--quiet");
+  q.control_path = args.option("--control");
+  q.view = view_options(args);
+  q.speed_text = args.option("--speed");
+  q.start_paused = args.flag("--paused");
+  q.no_control = args.flag("--no-control");
+  if (q.control_path && q.no_control) throw UsageError("give --control PATH or --no-control, not both");
+  laptop_options(args, o);
+  o.duration_s = optional_number(args, "--duration");
+  q.bit_rate = number_option(args, "--bit-rate", 1'000'000);
+  q.rx_buffer_kb = number_option(args, "--rx-buffer-kb", 1024);
+  q.priority = number_option(args, "--priority", 40);
+  q.outputs.log_period_s = number_option(args, "--world-log-period", 0.05);
+  if (const auto k = optional_number(args, "--kick-power")) o.kick_power = static_cast<int>(*k);
   if (args.positionals().size() != 1) throw UsageError("run takes no other arguments");
-  if (!external && (!processes.empty() || answer_limit || wait_for)) {
+  if (!external && (!o.processes.empty() || o.answer_limit_s || q.wait_for)) {
     throw UsageError("--process, --answer-limit and --wait-for are for runs with --external");
   }
-  apply_external_options(scenario, processes, answer_limit);
-  if (wait_for && !(*wait_for >= 1 && *wait_for <= 64 && *wait_for == static_cast<int>(*wait_for))) {
+  if (q.wait_for && !(*q.wait_for >= 1 && *q.wait_for <= 64 && *q.wait_for == static_cast<int>(*q.wait_for))) {
     throw UsageError("--wait-for takes a number of processes, 1..64");
   }
-  const emulator::RunLength length = [&] {
-    try {
-      return scenario.run_length(duration_given, !virtual_time);
-    } catch (const SetupError& e) {
-      throw UsageError(e.what());
-    }
-  }();
-  double speed = 0;  // as fast as possible
-  if (speed_text && *speed_text != "max") {
+  if (q.speed_text && *q.speed_text != "max") {
     char* end = nullptr;
-    speed = std::strtod(speed_text->c_str(), &end);
-    bool fine = end == speed_text->c_str() + speed_text->size();
+    q.speed = std::strtod(q.speed_text->c_str(), &end);
+    bool fine = end == q.speed_text->c_str() + q.speed_text->size();
     try {
-      emulator::RunControl::check_speed(speed);
+      emulator::RunControl::check_speed(q.speed);
     } catch (const SetupError&) {
       fine = false;
     }
     if (!fine)
       throw UsageError("--speed takes max, or virtual seconds per wall second from 0.01 to 1000 (1: real time)");
   }
-  if ((speed_text || start_paused) && (!virtual_time || external)) {
+  if ((q.speed_text || q.start_paused) && (!virtual_time || external)) {
     throw UsageError("--speed and --paused are for --virtual-time runs (without --external)");
   }
-  if (!(outputs.log_period_s > 0)) throw UsageError("--world-log-period takes seconds above 0");
-  for (const auto& f : fault_texts) {
-    try {
-      scenario.faults.push_back(can_nodes::parse_fault(f));
-    } catch (const SetupError& e) {
-      throw UsageError(std::string("--fault: ") + e.what());
-    }
-  }
-  emulator::SessionOptions options;
-  options.realtime = !virtual_time;
-  options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-  if (restore_world) options.initial_state = load_world(*restore_world);
-  const auto session = [&] {
-    try {
-      return std::make_unique<emulator::Session>(scenario, options);
-    } catch (const SetupError& e) {
-      throw UsageError((config ? *config + ": " : std::string()) +
-                       (restore_world ? "--restore-world " + *restore_world + ": " : std::string()) + e.what());
-    }
-  };
+  if (!(q.outputs.log_period_s > 0)) throw UsageError("--world-log-period takes seconds above 0");
   if (!virtual_time) {
-    if (outputs.trace || outputs.world_log) {
+    if (q.outputs.trace || q.outputs.world_log) {
       throw UsageError(
           "--trace and --world-log are for --virtual-time runs; in real time record the buses with `candump -l "
           "vcan0` or `canhil dump vcan0`");
     }
-    if (!(bit_rate >= 10'000 && bit_rate <= 1'000'000)) throw UsageError("--bit-rate takes 10000..1000000 bit/s");
-    if (!(rx_buffer_kb >= 16 && rx_buffer_kb <= 65536)) throw UsageError("--rx-buffer-kb takes 16..65536 KiB");
-    if (!(priority >= 0 && priority <= 99 && priority == static_cast<int>(priority))) {
+    if (!(q.bit_rate >= 10'000 && q.bit_rate <= 1'000'000)) throw UsageError("--bit-rate takes 10000..1000000 bit/s");
+    if (!(q.rx_buffer_kb >= 16 && q.rx_buffer_kb <= 65536)) throw UsageError("--rx-buffer-kb takes 16..65536 KiB");
+    if (!(q.priority >= 0 && q.priority <= 99 && q.priority == static_cast<int>(q.priority))) {
       throw UsageError("--priority takes a SCHED_FIFO priority 1..99, or 0 for the normal scheduler");
     }
-    options.ftt.bit_rate = static_cast<std::uint32_t>(bit_rate);
-    emulator::RealtimeOptions rt;
-    rt.receive_buffer_bytes = static_cast<int>(rx_buffer_kb * 1024);
-    rt.priority = static_cast<int>(priority);
-    RealtimeOutput output;
-    output.length = length;
-    output.quiet = outputs.quiet;
-    output.save_world = outputs.save_world;
-    const auto s = session();
-    control::Commands commands(*s);
-    control::add_save_commands(commands, *s, view.save_dir);
-    const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
-    viewer::LiveFeed feed(*s, commands, nullptr, view.save_dir);
-    const auto shown = start_viewer(view, feed, "canhil run", stdout);
-    log_commands(commands, shown.get());
-    const int status = run_realtime(*s, rt, output);
-    feed.set_ended();
-    hold_viewer(view, shown.get(), "canhil run", g_stop_run, stdout);
-    return status;
   }
-  if (std::getenv("RTDB_KEY") == nullptr) {
+  if (external && q.outputs.save_world) throw UsageError("--save-world is not available with --external yet");
+  return q;
+}
+
+// The run's plan: the scenario with the request's overrides, resolved once.
+emulator::RunPlan make_plan(const RunRequest& q, const std::optional<std::string>& dbc) {
+  emulator::SessionOptions options;
+  options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
+  if (q.restore_world) options.initial_state = load_world(*q.restore_world);
+  if (q.overrides.mode == emulator::RunMode::kRealtime) {
+    options.ftt.bit_rate = static_cast<std::uint32_t>(q.bit_rate);
+  } else if (q.outputs.world_log) {
+    options.world_log_period = from_seconds(q.outputs.log_period_s);
+  }
+  try {
+    return emulator::plan_run(q.config ? std::optional<std::filesystem::path>(*q.config) : std::nullopt, q.overrides,
+                              std::move(options));
+  } catch (const emulator::OverrideError& e) {
+    throw UsageError(e.what());
+  }
+}
+
+// The session and what serves it, the same for every mode: the commands (the
+// run's clock's, where it has one; saving, except with --external), the
+// control socket, and, except with --external, the live feed, the viewer and
+// the log of what they did.
+struct RunSetup {
+  std::unique_ptr<emulator::Session> session;
+  std::unique_ptr<control::Commands> commands;
+  std::unique_ptr<control::UnixServer> server;
+  std::unique_ptr<viewer::LiveFeed> feed;
+  std::unique_ptr<viewer::Server> shown;
+};
+
+RunSetup set_up(emulator::RunPlan plan, const RunRequest& q, emulator::RunControl* clock) {
+  RunSetup s;
+  try {
+    s.session = std::make_unique<emulator::Session>(std::move(plan));
+  } catch (const SetupError& e) {
+    throw UsageError((q.config ? *q.config + ": " : std::string()) +
+                     (q.restore_world ? "--restore-world " + *q.restore_world + ": " : std::string()) + e.what());
+  }
+  const bool external = q.overrides.mode == emulator::RunMode::kExternal;
+  s.commands = std::make_unique<control::Commands>(*s.session);
+  if (clock != nullptr) control::add_run_commands(*s.commands, *clock);
+  if (!external) control::add_save_commands(*s.commands, *s.session, q.view.save_dir);
+  if (!q.no_control) s.server = serve_control(*s.commands, q.control_path, stdout);
+  if (external) return s;
+  s.feed = std::make_unique<viewer::LiveFeed>(*s.session, *s.commands, clock, q.view.save_dir);
+  s.shown = start_viewer(q.view, *s.feed, "canhil run", stdout);
+  log_commands(*s.commands, s.shown.get());
+  return s;
+}
+
+}  // namespace
+
+int run_run(Args& args, const std::optional<std::string>& dbc) {
+  const RunRequest q = read_request(args);
+  const emulator::RunMode mode = q.overrides.mode;
+  if (mode != emulator::RunMode::kRealtime && std::getenv("RTDB_KEY") == nullptr) {
     // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
     setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
   }
-  if (outputs.world_log) options.world_log_period = from_seconds(outputs.log_period_s);
-  if (external) {
-    if (outputs.save_world) throw UsageError("--save-world is not available with --external yet");
+  emulator::RunPlan plan = make_plan(q, dbc);
+  if (mode == emulator::RunMode::kRealtime) {
+    emulator::RealtimeOptions rt;
+    rt.receive_buffer_bytes = static_cast<int>(q.rx_buffer_kb * 1024);
+    rt.priority = static_cast<int>(q.priority);
+    RealtimeOutput output;
+    output.length = plan.length;
+    output.quiet = q.outputs.quiet;
+    output.save_world = q.outputs.save_world;
+    const RunSetup s = set_up(std::move(plan), q, nullptr);
+    const int status = run_realtime(*s.session, rt, output);
+    s.feed->set_ended();
+    hold_viewer(q.view, s.shown.get(), "canhil run", g_stop_run, stdout);
+    return status;
+  }
+  if (mode == emulator::RunMode::kExternal) {
     try {
-      require_told_goal(scenario, false, stderr);
+      require_told_goal(plan.scenario, false, stderr);
     } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
-      throw SetupError((config ? *config + ": " : std::string()) + e.what());
+      throw SetupError((q.config ? *q.config + ": " : std::string()) + e.what());
     }
     // Before anything is set up: canhil may start itself again, with the shim preloaded.
     const std::string shim = find_timeshim();
     const std::string team_preload = preload_shim_into_self(shim);
-    options.external = true;
-    if (view.on) {
+    if (q.view.on) {
       std::printf(
           "canhil run: no viewer with --external yet (its server would run under the time shim); watch the "
           "run with --world-log and canhil view\n");
     }
-    const auto s = session();
-    control::Commands commands(*s);
-    const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
     ExternalRun run;
-    run.length = length;
-    run.quiet = outputs.quiet;
-    run.trace = outputs.trace;
-    run.world_log = outputs.world_log;
-    run.log_period_s = outputs.log_period_s;
-    run.wait_for = wait_for ? static_cast<std::size_t>(*wait_for) : 0;
-    return run_external(*s, run, shim, team_preload);
+    run.length = plan.length;
+    run.quiet = q.outputs.quiet;
+    run.trace = q.outputs.trace;
+    run.world_log = q.outputs.world_log;
+    run.log_period_s = q.outputs.log_period_s;
+    run.wait_for = q.wait_for ? static_cast<std::size_t>(*q.wait_for) : 0;
+    const RunSetup s = set_up(std::move(plan), q, nullptr);
+    return run_external(*s.session, run, shim, team_preload);
   }
-  const auto s = session();
-  control::Commands commands(*s);
-  emulator::RunControl clock(options.ftt.elementary_cycle, speed, start_paused);
-  control::add_run_commands(commands, clock);
-  control::add_save_commands(commands, *s, view.save_dir);
-  const auto server = no_control ? nullptr : serve_control(commands, control_path, stdout);
-  viewer::LiveFeed feed(*s, commands, &clock, view.save_dir);
-  const auto shown = start_viewer(view, feed, "canhil run", stdout);
-  log_commands(commands, shown.get());
-  if (start_paused)
+  emulator::RunControl clock(plan.options.ftt.elementary_cycle, q.speed, q.start_paused);
+  const emulator::RunLength length = plan.length;
+  const RunSetup s = set_up(std::move(plan), q, &clock);
+  if (q.start_paused)
     std::printf("canhil run: paused at the start (resume or step from the viewer or the control socket)\n");
-  const int status = run_virtual(*s, length, outputs, clock, feed);
-  hold_viewer(view, shown.get(), "canhil run", g_stop_run, stdout);
+  const int status = run_virtual(*s.session, length, q.outputs, clock, *s.feed);
+  hold_viewer(q.view, s.shown.get(), "canhil run", g_stop_run, stdout);
   return status;
 }
 

@@ -134,17 +134,6 @@ std::string preload_shim_into_self(const std::string& shim) {
   throw SetupError(std::string("canhil could not start itself again with the time shim: ") + std::strerror(errno));
 }
 
-void apply_external_options(emulator::Scenario& scenario, const std::vector<std::string>& processes,
-                            const std::optional<double>& answer_limit) {
-  if (!processes.empty()) scenario.external.processes = processes;
-  if (!answer_limit) return;
-  if (!(*answer_limit >= 0.01 && *answer_limit <= 3600)) throw UsageError("--answer-limit takes 0.01..3600 s");
-  scenario.external.answer_limit_s = *answer_limit;
-  for (emulator::Team& team : scenario.teams) {
-    if (team.external) team.external->answer_limit_s = *answer_limit;  // the flag is the whole run's
-  }
-}
-
 int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
                  const std::string& team_preload, ExternalFigures* figures) {
   const double attach_limit = attach_limit_s(session.scenario());

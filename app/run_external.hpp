@@ -47,11 +47,6 @@ std::string find_timeshim();
 /// (LD_PRELOAD as canhil was first given it). SetupError when it cannot.
 std::string preload_shim_into_self(const std::string& shim);
 
-/// `--process` lines (when any: they replace [external]'s list) and
-/// `--answer-limit` into the scenario; UsageError for a limit out of 0.01..3600 s.
-void apply_external_options(emulator::Scenario& scenario, const std::vector<std::string>& processes,
-                            const std::optional<double>& answer_limit);
-
 /// Runs the session; returns the exit status (0, 130 after Ctrl-C, kProcessStuckStatus).
 int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
                  const std::string& team_preload, ExternalFigures* figures = nullptr);

@@ -29,13 +29,15 @@ struct Session::StateRequests {
 };
 
 Session::Session(Scenario scenario, SessionOptions options)
-    : scenario_(std::move(scenario)),
-      options_(std::move(options)),
+    : Session(plan_run(std::move(scenario), std::move(options))) {}
+
+Session::Session(RunPlan plan)
+    : plan_(std::move(plan)),
+      scenario_(plan_.scenario),
+      options_(plan_.options),
       goals_(scenario_.world),
       state_requests_(std::make_unique<StateRequests>()) {
-  complete(scenario_);
   coach_ = scenario_.coach;
-  if (!options_.messages) throw SetupError("a run needs a message set");
   world_ = std::make_unique<physics::World>(scenario_.world);
   if (options_.initial_state) {
     try {
@@ -62,22 +64,13 @@ Session::Session(Scenario scenario, SessionOptions options)
                                                             scenario_.seed + r, options_.ftt.bit_rate);
   }
   if (options_.vision_on) {
-    const bool realtime = options_.realtime || options_.external;
-    for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
-      Team& team = scenario_.teams[t];
-      if (team.laptop) team.laptop = resolve_laptop(*team.laptop, team.robots, realtime);
-    }
-    const bool replicate_given = scenario_.laptop.replicate.has_value();
-    scenario_.laptop =
-        resolve_laptop(scenario_.laptop, scenario_.teams.size() == 1 ? n : scenario_.teams[0].robots, realtime);
     for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
       const Team& team = scenario_.teams[t];
-      LaptopSide side = scenario_.laptop_of(t);
-      if (!team.laptop && t > 0 && !replicate_given) side.replicate = team.robots > 1;
       const auto first = scenario_.agents.begin() + static_cast<std::ptrdiff_t>(team.first_robot);
       const std::vector<int> agents(first, first + static_cast<std::ptrdiff_t>(team.robots));
       team_coaches_.push_back(team_coach(t));
-      laptops_.push_back(std::make_unique<LaptopLink>(side, agents, team_coaches_.back(), static_cast<int>(t)));
+      laptops_.push_back(
+          std::make_unique<LaptopLink>(plan_.laptops.at(t), agents, team_coaches_.back(), static_cast<int>(t)));
     }
     std::vector<vision_emu::Vision> vision;
     vision_emu::VisionParams params = options_.vision;

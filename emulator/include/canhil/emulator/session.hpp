@@ -38,6 +38,7 @@
 #include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
 #include "canhil/emulator/referee_desk.hpp"
+#include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/shared_robot_io.hpp"
 #include "canhil/emulator/world_log.hpp"
@@ -47,23 +48,6 @@
 namespace canhil::emulator {
 
 class LaptopLink;
-
-/// What a run needs beyond its scenario: chosen by the command, not the file.
-struct SessionOptions {
-  std::shared_ptr<const frames::MessageSet> messages;
-  can_nodes::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
-  vision_emu::VisionParams vision;
-  bool vision_on = true;  ///< off: no vision and no RTDB (canhil nodes)
-  /// The run follows the wall clock, so processes outside it can take part
-  /// (the laptop side's defaults: PMan masters only then, see resolve_laptop).
-  bool realtime = false;
-  /// Processes outside take part in virtual time (ExternalDriver): the
-  /// laptop side's defaults are those of a real-time run.
-  bool external = false;
-  Nanos world_log_period{0};  ///< 0: no world log
-  /// A saved world (physics::load_state) to start from instead of the placements.
-  std::optional<physics::WorldState> initial_state;
-};
 
 /// One robot's part of a run.
 struct Rig {
@@ -143,15 +127,18 @@ using Change = std::variant<MoveRobot, MoveBall, MoveObstacle, InjectFault, SetC
 
 class Session {
  public:
-  /// Completes and checks the scenario (SetupError), builds the world (from
-  /// the saved state if given: SetupError when it does not fit), the fault
-  /// injectors, the vision and the goal watcher; attaches to the RTDB when
-  /// vision is on. No nodes yet: a driver builds them.
+  /// Builds the world of the plan (from the saved state if given:
+  /// SetupError when it does not fit), the fault injectors, the vision and
+  /// the goal watcher; attaches to the RTDB when vision is on. No nodes yet:
+  /// a driver builds them. The plan is never changed.
+  explicit Session(RunPlan plan);
+  /// The same for plan_run(scenario, options) (tests, matches, benchmarks).
   Session(Scenario scenario, SessionOptions options);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
 
+  const RunPlan& plan() const noexcept { return plan_; }
   const Scenario& scenario() const noexcept { return scenario_; }
   const SessionOptions& options() const noexcept { return options_; }
   std::size_t robot_count() const noexcept { return rigs_.size(); }
@@ -262,8 +249,9 @@ class Session {
   void apply_world_changes();
   void serve_state_requests();
 
-  Scenario scenario_;
-  SessionOptions options_;
+  const RunPlan plan_;
+  const Scenario& scenario_;       // plan_'s
+  const SessionOptions& options_;  // plan_'s
   std::unique_ptr<physics::World> world_;
   Nanos step_period_{0};
   can_nodes::NodeParams node_params_;  // the nodes keep a reference: it lives as long as they do

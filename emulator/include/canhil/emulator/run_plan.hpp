@@ -1,0 +1,81 @@
+// canhil/emulator/run_plan.hpp — a run resolved once, before anything starts:
+// the scenario with every default filled in (complete()), every override of
+// the command line applied, every team's laptop side resolved, the run's
+// length and where it came from. A Session is built from a plan and never
+// changes it; what a run prints first and the world log's header come from
+// it. (The model/data split of physics engines, applied to a whole run: the
+// plan is the model, the Session the data.)
+//
+//   scenario file ──┐
+//   command line ───┴─ plan_run() ─> RunPlan (const) ─> Session ─> a driver
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/scenario.hpp"
+#include "canhil/emulator/session_options.hpp"
+
+namespace canhil::emulator {
+
+/// How a run moves through time.
+enum class RunMode : std::uint8_t {
+  kVirtual,   ///< virtual time, everything in one process (VirtualDriver)
+  kRealtime,  ///< the wall clock, on SocketCAN beside the team's processes (RealtimeDriver)
+  kExternal,  ///< virtual time with the team's processes in lockstep (ExternalDriver)
+};
+
+/// What a command line may say over a scenario file; unset: the file's
+/// value, else canhil's default.
+struct RunOverrides {
+  RunMode mode = RunMode::kVirtual;
+  // The first team's laptop side ([laptop]).
+  std::optional<std::string> rtdb_lib, rtdb_items, rtdb_ini, layout;
+  std::optional<std::string> pman;  ///< a library path, "builtin" or "none"
+  std::optional<std::uint64_t> seed;
+  std::optional<int> kick_power;
+  std::optional<double> duration_s;      ///< 0: until stopped (real time only)
+  std::vector<std::string> faults;       ///< more fault rules, as `--fault` takes them
+  std::vector<std::string> processes;    ///< [external] processes (every team's that gives none)
+  std::optional<double> answer_limit_s;  ///< every team's [external] answer limit
+};
+
+/// A value of the command line that cannot be used: what() names the option
+/// and what it takes (the command reports it as a usage error).
+class OverrideError : public SetupError {
+ public:
+  using SetupError::SetupError;
+};
+
+struct RunPlan {
+  std::filesystem::path source;  ///< the scenario file as given; empty for a scenario built in code
+  RunMode mode = RunMode::kVirtual;
+  Scenario scenario;                ///< complete, the overrides applied, laptops resolved (with vision)
+  std::vector<LaptopSide> laptops;  ///< per team, as its LaptopLink opens it (none without vision)
+  SessionOptions options;
+  RunLength length;
+};
+
+/// The plan of a scenario built in code (tests, matches, benchmarks):
+/// complete(), then, with vision, every team's laptop resolved (the
+/// defaults of a real-time run when options.realtime or options.external).
+/// SetupError saying what to change.
+RunPlan plan_run(Scenario scenario, SessionOptions options);
+
+/// `--process` and `--answer-limit` over a scenario's [external] sides (the
+/// limit is every team's). OverrideError for a limit outside 0.01..3600 s.
+void apply_external_overrides(Scenario& scenario, const std::vector<std::string>& processes,
+                              const std::optional<double>& answer_limit_s);
+
+/// The plan of a scenario file (nullopt: the shipped one-robot scenario) and
+/// a command line's overrides; options.realtime and options.external follow
+/// the mode. SetupError naming the file, line and field for the scenario;
+/// OverrideError for an override that cannot be used.
+RunPlan plan_run(const std::optional<std::filesystem::path>& file, const RunOverrides& overrides,
+                 SessionOptions options);
+
+}  // namespace canhil::emulator

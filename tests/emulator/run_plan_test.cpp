@@ -1,0 +1,164 @@
+// A run's plan: the scenario file's values where the command line says
+// nothing, each override where it does (one test per field), every default
+// filled in and every team's laptop side resolved once, and the mistakes of
+// each named (the file's by file and line, an override's by its option).
+#include "canhil/emulator/run_plan.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+
+#include "canhil/frames/messages.hpp"
+#include "support/error_of.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::emulator {
+namespace {
+
+class RunPlanTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::ofstream(file_) << "[run]\nduration_s = 7\nseed = 5\nkick_power = 30\nfaults = [\"drop:M4_1:0.5\"]\n"
+                            "[external]\nprocesses = [\"agent {agent}\"]\nanswer_limit_s = 2\n"
+                            "[laptop]\nlayout = \"canhil\"\n";
+  }
+  void TearDown() override { std::filesystem::remove(file_); }
+  RunPlan plan(const RunOverrides& o = {}) {
+    SessionOptions options;
+    options.messages = frames::MessageSet::load(test::shipped_dbc());
+    return plan_run(file_, o, options);
+  }
+  std::filesystem::path file_ =
+      std::filesystem::temp_directory_path() / ("canhil-plan-" + std::to_string(getpid()) + ".toml");
+};
+
+TEST_F(RunPlanTest, WithoutOverridesTheFilesValuesAndCanhilsDefaults) {
+  const RunPlan p = plan();
+  EXPECT_EQ(p.source, file_);
+  EXPECT_EQ(p.mode, RunMode::kVirtual);
+  EXPECT_FALSE(p.options.realtime);
+  EXPECT_FALSE(p.options.external);
+  EXPECT_EQ(p.scenario.seed, 5u);
+  EXPECT_EQ(p.scenario.kick_power, 30);
+  EXPECT_EQ(p.scenario.faults.size(), 1u);
+  EXPECT_DOUBLE_EQ(p.length.seconds, 7.0);
+  EXPECT_EQ(p.length.source, "the scenario's duration_s");
+  EXPECT_EQ(p.scenario.external.answer_limit_s, 2.0);
+  ASSERT_EQ(p.scenario.interfaces.size(), 1u) << "complete: one robot, placed by default";
+  EXPECT_EQ(p.scenario.interfaces[0], "vcan0");
+  ASSERT_EQ(p.laptops.size(), 1u);
+  EXPECT_EQ(p.laptops[0].rtdb_lib, "builtin") << "resolved";
+  EXPECT_EQ(p.laptops[0].layout, "canhil");
+  EXPECT_EQ(p.laptops[0].pman, "none") << "virtual time: no PMan unless asked";
+  EXPECT_EQ(p.scenario.laptop.rtdb_lib, "builtin") << "the scenario read later says what the run uses";
+}
+
+TEST_F(RunPlanTest, TheModeSetsTheOptionsAndTheLaptopsDefaults) {
+  RunOverrides o;
+  o.mode = RunMode::kRealtime;
+  RunPlan p = plan(o);
+  EXPECT_TRUE(p.options.realtime);
+  EXPECT_EQ(p.laptops[0].pman, "builtin") << "real time: canhil's PMan";
+  o.mode = RunMode::kExternal;
+  p = plan(o);
+  EXPECT_TRUE(p.options.external);
+  EXPECT_FALSE(p.options.realtime);
+  EXPECT_EQ(p.laptops[0].pman, "builtin");
+}
+
+TEST_F(RunPlanTest, Seed) {
+  RunOverrides o;
+  o.seed = 42;
+  EXPECT_EQ(plan(o).scenario.seed, 42u);
+}
+
+TEST_F(RunPlanTest, KickPower) {
+  RunOverrides o;
+  o.kick_power = 77;
+  EXPECT_EQ(plan(o).scenario.kick_power, 77);
+}
+
+TEST_F(RunPlanTest, Duration) {
+  RunOverrides o;
+  o.duration_s = 3;
+  const RunPlan p = plan(o);
+  EXPECT_DOUBLE_EQ(p.length.seconds, 3.0);
+  EXPECT_EQ(p.length.source, "--duration");
+  o.duration_s = 0;
+  EXPECT_EQ(test::error_of([&] { plan(o); }), "--duration takes seconds above 0") << "in virtual time";
+  o.mode = RunMode::kRealtime;
+  EXPECT_EQ(plan(o).length.seconds, 0.0) << "in real time 0 is until stopped";
+}
+
+TEST_F(RunPlanTest, FaultsAddToTheFiles) {
+  RunOverrides o;
+  o.faults = {"silence:Motor2:6"};
+  EXPECT_EQ(plan(o).scenario.faults.size(), 2u);
+  o.faults = {"nonsense"};
+  try {
+    plan(o);
+    ADD_FAILURE() << "a fault that does not read";
+  } catch (const OverrideError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--fault: ", 0), 0u) << e.what();
+  }
+}
+
+TEST_F(RunPlanTest, ProcessesReplaceTheFiles) {
+  RunOverrides o;
+  o.processes = {"handler {iface}", "agent {agent}"};
+  EXPECT_EQ(plan(o).scenario.external.processes, o.processes);
+}
+
+TEST_F(RunPlanTest, AnswerLimitIsEveryTeams) {
+  RunOverrides o;
+  o.answer_limit_s = 0.5;
+  EXPECT_EQ(plan(o).scenario.external.answer_limit_s, 0.5);
+  o.answer_limit_s = 0.001;
+  EXPECT_EQ(test::error_of([&] { plan(o); }), "--answer-limit takes 0.01..3600 s");
+}
+
+TEST_F(RunPlanTest, Layout) {
+  RunOverrides o;
+  o.layout = "cambada";
+  EXPECT_EQ(plan(o).laptops[0].layout, "cambada");
+}
+
+TEST_F(RunPlanTest, Pman) {
+  RunOverrides o;
+  o.pman = "builtin";
+  EXPECT_EQ(plan(o).laptops[0].pman, "builtin");
+}
+
+TEST_F(RunPlanTest, RtdbLibItemsAndIniAreResolvedTogetherAndTheFileIsNamed) {
+  RunOverrides o;
+  o.rtdb_lib = "/opt/team/librtdb.so";
+  const std::string e = test::error_of([&] { plan(o); });
+  EXPECT_EQ(e.rfind(file_.string() + ": the team RTDB library /opt/team/librtdb.so needs its item table", 0), 0u) << e;
+  o.rtdb_lib.reset();
+  o.rtdb_items = "rtdb_user.h";
+  EXPECT_NE(test::error_of([&] { plan(o); }).find("give that library too"), std::string::npos);
+  o.rtdb_items.reset();
+  o.rtdb_ini = "rtdb.ini";
+  EXPECT_NE(test::error_of([&] { plan(o); }).find("give that library too"), std::string::npos);
+}
+
+TEST_F(RunPlanTest, AMistakeInTheFileIsNamedByFileAndLine) {
+  std::ofstream(file_) << "[run]\nseed = \"five\"\n";
+  const std::string e = test::error_of([&] { plan(); });
+  EXPECT_NE(e.find(file_.string()), std::string::npos) << e;
+  EXPECT_NE(e.find("seed"), std::string::npos) << e;
+}
+
+TEST_F(RunPlanTest, APlanBuiltInCodeIsCompletedAndNeedsAMessageSet) {
+  SessionOptions options;
+  EXPECT_EQ(test::error_of([&] { plan_run(Scenario{}, options); }), "a run needs a message set");
+  options.messages = frames::MessageSet::load(test::shipped_dbc());
+  const RunPlan p = plan_run(Scenario{}, options);
+  EXPECT_TRUE(p.source.empty());
+  EXPECT_EQ(p.scenario.robot_count(), 1u);
+  EXPECT_EQ(p.length.source, "the default: no duration_s in the scenario");
+}
+
+}  // namespace
+}  // namespace canhil::emulator
