@@ -7,6 +7,7 @@
 #include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/physics/config.hpp"
+#include "canhil/physics/config_toml.hpp"
 #include "table_reader.hpp"
 
 namespace canhil::emulator {
@@ -193,10 +194,10 @@ bool is_game_state(std::string_view name) noexcept {
 
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
-  s.world = physics::parse_world_params(toml_text, file_name,
-                                        {"run", "coach", "laptop", "external", "teams", "referee", "vision"});
-  const toml::table root = toml::parse(toml_text, file_name);  // valid: parse_world_params read it
-  const bool teams = detail::read_teams(root, file_name, s);   // places the teams' robots
+  const toml::table root = physics::parse_toml(toml_text, file_name);  // parsed once, for the world and the run
+  s.world =
+      physics::read_world_params(root, file_name, {"run", "coach", "laptop", "external", "teams", "referee", "vision"});
+  const bool teams = detail::read_teams(root, file_name, s);  // places the teams' robots
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
   if (const toml::table* run = root["run"].as_table()) {

@@ -1,4 +1,5 @@
 #include "canhil/physics/config.hpp"
+#include "canhil/physics/config_toml.hpp"
 
 #include <toml++/toml.h>
 #include <algorithm>
@@ -326,15 +327,17 @@ void read_all(Reader& root, WorldParams& w) {
 ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& message)
     : SetupError(format(file, line, field, message)), file_(std::move(file)), line_(line), field_(std::move(field)) {}
 
-WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name,
-                               const std::vector<std::string>& other_tables) {
-  toml::table root;
+toml::table parse_toml(std::string_view toml_text, const std::string& file_name) {
   try {
-    root = toml::parse(toml_text, file_name);
+    return toml::parse(toml_text, file_name);
   } catch (const toml::parse_error& e) {
     throw ConfigError(file_name, static_cast<int>(e.source().begin.line), "",
                       std::string("not valid TOML: ") + std::string(e.description()));
   }
+}
+
+WorldParams read_world_params(const toml::table& root, const std::string& file_name,
+                              const std::vector<std::string>& other_tables) {
   WorldParams w;
   Reader reader(root, "", file_name);
   read_all(reader, w);
@@ -348,6 +351,11 @@ WorldParams parse_world_params(std::string_view toml_text, const std::string& fi
   }
   reader.finish();
   return w;
+}
+
+WorldParams parse_world_params(std::string_view toml_text, const std::string& file_name,
+                               const std::vector<std::string>& other_tables) {
+  return read_world_params(parse_toml(toml_text, file_name), file_name, other_tables);
 }
 
 std::string read_config_file(const std::filesystem::path& path) {
