@@ -43,7 +43,7 @@ std::int64_t virtual_now(void* clock) { return static_cast<const can_nodes::Simu
 
 }  // namespace
 
-struct VirtualDriver::Laptop {
+struct VirtualDriver::ReferenceStack {
   std::unique_ptr<HandlerParticipant> handler;
   std::unique_ptr<AgentParticipant> agent;
   std::uint32_t placements = 0;  // the referee's, answered so far
@@ -91,35 +91,35 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   const Nanos ec = session_.options().ftt.elementary_cycle;
   for (std::size_t r = 0; r < n; ++r) {
     const Rig& rig = session_.rig(r);
-    auto laptop = std::make_unique<Laptop>();
+    auto stack = std::make_unique<ReferenceStack>();
     if (options_.reference_laptop) {
       // A fresh database: every item of the agent zeroed, the handler asked
       // to put the odometry where the robot stands.
       LaptopLink& link = *session_.laptop(rig.team);
       link.clear_items(rig.in_team);
       link.place(rig.in_team, session_.world().robot(r).pose());
-      laptop->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
-                                                             link.layout(), rig.agent);
+      stack->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
+                                                            link.layout(), rig.agent);
       const double goal_x = session_.scenario().world.field.length_m / 2;
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
-      laptop->agent = std::make_unique<AgentParticipant>(link.memory_space(rig.in_team), agent_cfg);
+      stack->agent = std::make_unique<AgentParticipant>(link.memory_space(rig.in_team), agent_cfg);
     }
     if (options_.count_frames || options_.record_trace || options_.check_timing) {
       // Every frame as the bus carries it, error frames included (they belong in the trace).
       listening_ = true;
       buses_[r]->set_tap([this, r](const frames::TimedFrame& f) { watch_.add(r, f); });
     }
-    laptops_.push_back(std::move(laptop));
+    stacks_.push_back(std::move(stack));
   }
   // Ticked in this order at every instant: robot by robot, its nodes, then its handler and agent.
   for (std::size_t r = 0; r < n; ++r) {
     for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) lockstep_.add(*node);
-    if (laptops_[r]->handler) lockstep_.add(*laptops_[r]->handler);
-    if (laptops_[r]->agent) lockstep_.add(*laptops_[r]->agent);
+    if (stacks_[r]->handler) lockstep_.add(*stacks_[r]->handler);
+    if (stacks_[r]->agent) lockstep_.add(*stacks_[r]->agent);
   }
   session_.on_detail([this](WorldSnapshot& s) { fill_detail(s); });
   session_.on_vision_frame([this](std::size_t r, Nanos now) {
-    if (laptops_[r]->agent) laptops_[r]->agent->frame_ready(now);
+    if (stacks_[r]->agent) stacks_[r]->agent->frame_ready(now);
   });
   lockstep_.set_step(session_.step_period(), [this](Nanos now) {
     session_.step(now);
@@ -131,8 +131,8 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
 // referee carried is told its new place, as at the start (a team's own agent
 // localises itself from what its camera sees).
 void VirtualDriver::set_pose_of_carried_robots() {
-  for (std::size_t r = 0; r < laptops_.size(); ++r) {
-    Laptop& l = *laptops_[r];
+  for (std::size_t r = 0; r < stacks_.size(); ++r) {
+    ReferenceStack& l = *stacks_[r];
     const std::uint32_t placed = session_.referee_placements(r);
     if (placed == l.placements || !l.handler) continue;
     l.placements = placed;
@@ -167,7 +167,7 @@ void VirtualDriver::fill_detail(WorldSnapshot& s) {
 }
 
 const laptop::HwComm* VirtualDriver::handler(std::size_t robot) const {
-  const auto& h = laptops_.at(robot)->handler;
+  const auto& h = stacks_.at(robot)->handler;
   return h ? &h->hw() : nullptr;
 }
 
@@ -177,7 +177,7 @@ std::vector<RobotOutcome> VirtualDriver::outcomes() const {
   for (std::size_t r = 0; r < session_.robot_count(); ++r) {
     RobotOutcome o;
     o.pose = world.robot(r).pose();
-    o.kicks = laptops_[r]->agent ? laptops_[r]->agent->kicks() : 0;
+    o.kicks = stacks_[r]->agent ? stacks_[r]->agent->kicks() : 0;
     o.frames = watch_.frames(r);
     o.bad_frames = session_.rig(r).nodes->bad_frames();
     o.battery = world.robot(r).battery();

@@ -79,7 +79,7 @@ class VirtualDriver {
   /// Every bus as a candump log, one interface name per robot, in time order (record_trace).
   std::string trace() const;
 
-  struct Laptop;  // the reference handler and agent of one robot
+  struct ReferenceStack;  // the reference handler and agent of one robot (canhil's laptop software)
 
  private:
   void set_pose_of_carried_robots();
@@ -91,7 +91,7 @@ class VirtualDriver {
   std::vector<std::unique_ptr<can_nodes::MemoryBus>> buses_;
   bool listening_ = false;  // the buses' taps count, check or record their frames
   BusWatch watch_;
-  std::vector<std::unique_ptr<Laptop>> laptops_;
+  std::vector<std::unique_ptr<ReferenceStack>> stacks_;
   can_nodes::Lockstep lockstep_;
   bool rtdb_clock_set_ = false;  // the RTDB stamps and ages items in this run's virtual time
 };
