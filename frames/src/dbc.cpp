@@ -25,14 +25,6 @@ constexpr std::uint32_t kDbcExtendedFlag = 0x8000'0000u;
 // Vector tools park signals that belong to no message in this pseudo-message.
 constexpr std::uint32_t kIndependentSignalsId = 0xC000'0000u;
 
-std::string format_error(const std::string& file, int line, const std::string& message) {
-  std::ostringstream os;
-  os << file;
-  if (line > 0) os << ':' << line;
-  os << ": " << message;
-  return os.str();
-}
-
 bool is_ident_start(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; }
 bool is_ident_char(char c) { return is_ident_start(c) || (c >= '0' && c <= '9'); }
 
@@ -760,9 +752,6 @@ void Parser::check_database() {
 }
 
 }  // namespace
-
-DbcError::DbcError(std::string file, int line, const std::string& message)
-    : SetupError(format_error(file, line, message)), file_(std::move(file)), line_(line) {}
 
 const SignalDef* MessageDef::find_signal(std::string_view signal_name) const noexcept {
   for (const auto& s : signals) {

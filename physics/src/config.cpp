@@ -15,16 +15,6 @@
 namespace canhil::physics {
 namespace {
 
-std::string format(const std::string& file, int line, const std::string& field, const std::string& message) {
-  std::ostringstream os;
-  os << file;
-  if (line > 0) os << ':' << line;
-  os << ": ";
-  if (!field.empty()) os << field << ": ";
-  os << message;
-  return os.str();
-}
-
 int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
 
 struct Range {
@@ -323,9 +313,6 @@ void read_all(Reader& root, WorldParams& w) {
 }
 
 }  // namespace
-
-ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& message)
-    : SetupError(format(file, line, field, message)), file_(std::move(file)), line_(line), field_(std::move(field)) {}
 
 toml::table parse_toml(std::string_view toml_text, const std::string& file_name) {
   try {

@@ -10,8 +10,6 @@
 namespace canhil::rtdb {
 namespace {
 
-std::string where(const std::string& file, int line) { return file + ":" + std::to_string(line) + ": "; }
-
 struct Token {
   std::string text;
   int line;
@@ -232,9 +230,6 @@ class Parser {
 };
 
 }  // namespace
-
-RtdbConfigError::RtdbConfigError(const std::string& file, int line, const std::string& message)
-    : SetupError(where(file, line) + message), line_(line) {}
 
 RtdbConfig parse_rtdb_config(const std::string& text, const std::string& file) {
   return Parser(tokenize(text, file), file).parse();

@@ -10,7 +10,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
-#include <sstream>
 
 #include "canhil/base/assets.hpp"
 #include "canhil/base/demand.hpp"
@@ -20,16 +19,6 @@ static_assert(std::endian::native == std::endian::little, "layouts describe litt
 
 namespace canhil::rtdb {
 namespace {
-
-std::string format(const std::string& file, int line, const std::string& where, const std::string& message) {
-  std::ostringstream os;
-  os << file;
-  if (line > 0) os << ':' << line;
-  os << ": ";
-  if (!where.empty()) os << where << ": ";
-  os << message;
-  return os.str();
-}
 
 constexpr std::array<std::string_view, 2> kShipped{"cambada", "canhil"};
 
@@ -165,9 +154,6 @@ std::size_t at_byte(const FieldLayout& f, std::size_t e, std::size_t component) 
 }
 
 }  // namespace
-
-LayoutError::LayoutError(std::string file, int line, std::string where, const std::string& message)
-    : SetupError(format(file, line, where, message)), file_(std::move(file)), line_(line), where_(std::move(where)) {}
 
 std::size_t size_of(ScalarType type) noexcept {
   switch (type) {

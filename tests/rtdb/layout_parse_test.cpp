@@ -85,7 +85,7 @@ TEST_P(BadLayout, NamesTheFileLineAndField) {
     EXPECT_EQ(what.rfind(prefix, 0), 0u) << what;
     EXPECT_NE(what.find(b.says), std::string::npos) << what;
     EXPECT_EQ(e.line(), b.line);
-    EXPECT_EQ(e.where(), b.where);
+    EXPECT_EQ(e.field(), b.where);
   }
 }
 

@@ -18,23 +18,18 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
-#include "canhil/base/setup_error.hpp"
+#include "canhil/base/located_error.hpp"
 
 namespace canhil::frames {
 
-class DbcError : public SetupError {
+/// A mistake in a DBC file: `FILE:LINE: what is wrong; what to do` (no field).
+class DbcError : public LocatedError {
  public:
-  DbcError(std::string file, int line, const std::string& message);
-  const std::string& file() const noexcept { return file_; }
-  /// 1-based line of the mistake; 0 when it concerns the file as a whole.
-  int line() const noexcept { return line_; }
-
- private:
-  std::string file_;
-  int line_;
+  DbcError(std::string file, int line, const std::string& message) : LocatedError(std::move(file), line, "", message) {}
 };
 
 enum class ByteOrder : std::uint8_t { kIntel, kMotorola };

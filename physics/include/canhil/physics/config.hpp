@@ -13,24 +13,19 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
-#include "canhil/base/setup_error.hpp"
+#include "canhil/base/located_error.hpp"
 #include "canhil/physics/params.hpp"
 
 namespace canhil::physics {
 
-class ConfigError : public SetupError {
+/// A mistake in a world (or scenario) file: `FILE:LINE: FIELD: what is wrong`.
+class ConfigError : public LocatedError {
  public:
-  ConfigError(std::string file, int line, std::string field, const std::string& message);
-  const std::string& file() const noexcept { return file_; }
-  int line() const noexcept { return line_; }
-  const std::string& field() const noexcept { return field_; }
-
- private:
-  std::string file_;
-  int line_;
-  std::string field_;
+  ConfigError(std::string file, int line, std::string field, const std::string& message)
+      : LocatedError(std::move(file), line, std::move(field), message) {}
 };
 
 /// `other_tables`: top-level tables another layer reads from the same file

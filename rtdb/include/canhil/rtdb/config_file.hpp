@@ -6,19 +6,19 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "canhil/base/setup_error.hpp"
+#include "canhil/base/located_error.hpp"
 
 namespace canhil::rtdb {
 
-class RtdbConfigError : public SetupError {
+/// A mistake in the RTDB configuration: `FILE:LINE: what is wrong; what to do`
+/// (no field; `FILE: ...` when it concerns the file as a whole).
+class RtdbConfigError : public LocatedError {
  public:
-  RtdbConfigError(const std::string& file, int line, const std::string& message);
-  int line() const noexcept { return line_; }
-
- private:
-  int line_;
+  RtdbConfigError(std::string file, int line, const std::string& message)
+      : LocatedError(std::move(file), line, "", message) {}
 };
 
 struct ItemDecl {

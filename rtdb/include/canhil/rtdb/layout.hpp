@@ -36,27 +36,21 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
-#include "canhil/base/setup_error.hpp"
+#include "canhil/base/located_error.hpp"
 #include "canhil/rtdb/byte_range.hpp"
 
 namespace canhil::rtdb {
 
 /// A mistake in a layout description, or a layout that lacks what a user of
 /// it requires. what(): `FILE:LINE: ITEM.FIELD: what is wrong; what to do`
-/// (LINE and ITEM.FIELD when known).
-class LayoutError : public SetupError {
+/// (LINE and ITEM.FIELD when known: field() is "ITEM.FIELD", "ITEM" or "").
+class LayoutError : public LocatedError {
  public:
-  LayoutError(std::string file, int line, std::string where, const std::string& message);
-  const std::string& file() const noexcept { return file_; }
-  int line() const noexcept { return line_; }                   ///< 0 when not tied to a line
-  const std::string& where() const noexcept { return where_; }  ///< "ITEM.FIELD", "ITEM" or ""
-
- private:
-  std::string file_;
-  int line_;
-  std::string where_;
+  LayoutError(std::string file, int line, std::string field, const std::string& message)
+      : LocatedError(std::move(file), line, std::move(field), message) {}
 };
 
 /// The C type of a stored value. Integers and floats little-endian; bool is
