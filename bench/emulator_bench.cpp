@@ -27,7 +27,7 @@ class Laptop final : public can_nodes::Participant {
       ++n;
       frames::Tm tm;
       const std::uint32_t m6 = 1u << set_->ftt(set_->m6_1.message()).index;
-      if (f->frame.id == set_->tm.message().id() && set_->tm.decode(f->frame, tm).ok()) {
+      if (frames::is_message(f->frame, set_->tm.message()) && set_->tm.decode(f->frame, tm).ok()) {
         if (const auto start = sync_.on_tm(tm, f->time, 10ms, m6)) slot_ = *start;
       }
     }

@@ -7,7 +7,7 @@ namespace canhil::can_nodes {
 Node::Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet> set)
     : bus_(bus),
       tm_length_(static_cast<std::uint8_t>(set->tm.message().def().length)),
-      tm_id_(set->tm.message().id()),
+      tm_(&set->tm.message()),
       set_(std::move(set)),
       name_(std::move(name)) {
   wakes_.reserve(kWakesInside);  // in wake_space_: more grow into the heap
@@ -24,7 +24,7 @@ std::size_t Node::poll(std::size_t max_frames) {
     if (!enabled_) continue;  // switched off: hears nothing
     ++counters_.received;
     const frames::CanFrame& frame = f->frame;
-    if (frame.kind == frames::FrameKind::kData && frame.id == tm_id_ && !frame.extended && frame.len == tm_length_) {
+    if (frames::is_message(frame, *tm_) && frame.len == tm_length_) {
       ++counters_.triggers;
     }
     on_frame(*f);

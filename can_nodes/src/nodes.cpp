@@ -9,6 +9,7 @@ namespace canhil::can_nodes {
 namespace {
 
 using frames::CanFrame;
+using frames::is_message;
 using frames::TimedFrame;
 
 std::vector<Filter> filters_for(const frames::MessageSet& set, std::initializer_list<const char*> names) {
@@ -18,8 +19,6 @@ std::vector<Filter> filters_for(const frames::MessageSet& set, std::initializer_
   }
   return f;
 }
-
-bool is(const CanFrame& f, const frames::MessageCodec& m) { return !f.extended && f.id == m.id(); }
 
 Nanos tm_wire_time(const NodeParams& p) {
   return frames::bits_to_time(frames::worst_case_frame_bits(8), p.ftt.bit_rate);
@@ -79,7 +78,7 @@ bool PicBase::watchdog_tripped(Nanos now) const noexcept { return now - last_m6_
 void PicBase::on_frame(const TimedFrame& tf) {
   const CanFrame& f = tf.frame;
   const frames::MessageSet& s = messages();
-  if (is(f, s.tm.message())) {
+  if (is_message(f, s.tm.message())) {
     frames::Tm tm;
     if (!decode(s.tm, f, tm)) return;
     const std::uint32_t mine = (1u << s.ftt(s.m1.message()).index) | (1u << s.ftt(s.m9.message()).index);
@@ -89,11 +88,11 @@ void PicBase::on_frame(const TimedFrame& tf) {
       async_at_ = at;
       wake_at(at);
     }
-  } else if (is(f, s.m6_1.message())) {
+  } else if (is_message(f, s.m6_1.message())) {
     if (decode(s.m6_1, f, m6_1_)) last_m6_ = tf.time;
-  } else if (is(f, s.m6_2.message())) {
+  } else if (is_message(f, s.m6_2.message())) {
     if (decode(s.m6_2, f, m6_2_)) last_m6_ = tf.time;
-  } else if (is(f, s.m7.message())) {
+  } else if (is_message(f, s.m7.message())) {
     frames::M7 m7;
     if (!decode(s.m7, f, m7)) return;
     if (m7.power() > 0 && robot_.kick(m7.low_kick(), m7.power()) == KickOutcome::kFired) last_kick_ = tf.time;
@@ -170,12 +169,12 @@ void MotorNode::on_frame(const TimedFrame& tf) {
   const CanFrame& f = tf.frame;
   const frames::MessageSet& s = messages();
   const auto w = static_cast<std::size_t>(wheel_);
-  if (is(f, s.tm.message())) {
+  if (is_message(f, s.tm.message())) {
     frames::Tm tm;
     if (!decode(s.tm, f, tm)) return;
     const std::uint32_t mine = 1u << s.ftt(s.m3[w].message()).index;
     if (const auto start = slot_.on_tm(tm, tf.time, params_.ftt.elementary_cycle, mine)) wake_at(*start);
-  } else if (is(f, s.m1.message())) {
+  } else if (is_message(f, s.m1.message())) {
     frames::M1 m1;
     if (!decode(s.m1, f, m1)) return;
     setpoint_ = wheel_ == 0 ? m1.setpoint_1 : wheel_ == 1 ? m1.setpoint_2 : m1.setpoint_3;
@@ -238,7 +237,7 @@ void PicOdom::integrate() {
 void PicOdom::on_frame(const TimedFrame& tf) {
   const CanFrame& f = tf.frame;
   const frames::MessageSet& s = messages();
-  if (is(f, s.tm.message())) {
+  if (is_message(f, s.tm.message())) {
     frames::Tm tm;
     if (!decode(s.tm, f, tm)) return;
     const std::uint32_t mine = (1u << s.ftt(s.m4_1.message()).index) | (1u << s.ftt(s.m4_2.message()).index);
@@ -246,7 +245,7 @@ void PicOdom::on_frame(const TimedFrame& tf) {
     return;
   }
   for (std::size_t n = 0; n < 3; ++n) {
-    if (is(f, s.m3[n].message())) {
+    if (is_message(f, s.m3[n].message())) {
       frames::M3 m3;
       if (!decode(s.m3[n], f, m3)) return;
       encoder_[n] = m3.encoder;
@@ -255,10 +254,10 @@ void PicOdom::on_frame(const TimedFrame& tf) {
       return;
     }
   }
-  if (is(f, s.m5_1.message())) {
+  if (is_message(f, s.m5_1.message())) {
     frames::M5_1 m5;
     if (decode(s.m5_1, f, m5)) m5_1_ = m5;
-  } else if (is(f, s.m5_2.message())) {
+  } else if (is_message(f, s.m5_2.message())) {
     frames::M5_2 m5;
     if (!decode(s.m5_2, f, m5)) return;
     if (m5.command == frames::M5_2::kReset) {
@@ -296,7 +295,7 @@ CompassNode::CompassNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set
 void CompassNode::on_frame(const TimedFrame& tf) {
   const frames::MessageSet& s = messages();
   frames::Tm tm;
-  if (!is(tf.frame, s.tm.message()) || !decode(s.tm, tf.frame, tm)) return;
+  if (!is_message(tf.frame, s.tm.message()) || !decode(s.tm, tf.frame, tm)) return;
   if (const auto start = slot_.on_tm(tm, tf.time, params_.ftt.elementary_cycle, 1u << s.ftt(s.m8.message()).index)) {
     wake_at(*start);
   }
@@ -375,7 +374,7 @@ void SystemMonitor::observe(const TimedFrame& tf) {
 void SystemMonitor::on_frame(const TimedFrame& tf) {
   const CanFrame& f = tf.frame;
   if (watch_ == nullptr) observe(tf);
-  if (is(f, messages().tm.message())) {
+  if (is_message(f, messages().tm.message())) {
     const Nanos at = async_slot(messages(), messages().m10.message(), params_, tf.time, last_m10_);
     if (at != kNever) {
       async_at_ = at;

@@ -11,10 +11,6 @@
 namespace canhil::laptop {
 namespace {
 
-bool is(const frames::CanFrame& f, const frames::MessageCodec& m) {
-  return f.kind == frames::FrameKind::kData && !f.extended && f.id == m.id();
-}
-
 // One item of the handler: its id in the team's table, its bytes in the team's layout.
 struct Item {
   int id = -1;
@@ -163,17 +159,17 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
   }
   ++stats_.received[index_of(*m)];
   const frames::MessageSet& s = *set_;
-  if (is(f, s.tm.message())) {
+  if (frames::is_message(f, s.tm.message())) {
     frames::Tm tm;
     if (usable(s.tm, f, tm, stats_)) on_tm(tm, rx);
-  } else if (is(f, s.m4_1.message())) {
+  } else if (frames::is_message(f, s.m4_1.message())) {
     have_m4_1_ = usable(s.m4_1, f, m4_1_, stats_);
-  } else if (is(f, s.m4_2.message())) {
+  } else if (frames::is_message(f, s.m4_2.message())) {
     frames::M4_2 m4;
     if (!usable(s.m4_2, f, m4, stats_) || !have_m4_1_) return;
     on_pose(m4);
     latency(rx);
-  } else if (is(f, s.m2.message())) {
+  } else if (frames::is_message(f, s.m2.message())) {
     frames::M2 m2;
     if (!usable(s.m2, f, m2, stats_)) return;
     Items& i = *items_;
@@ -183,7 +179,7 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
     i.info.buf->set(i.v_power24, m2.v_power24);
     i.put(i.info);
     latency(rx);
-  } else if (is(f, s.m9.message())) {
+  } else if (frames::is_message(f, s.m9.message())) {
     frames::M9 m9;
     if (!usable(s.m9, f, m9, stats_)) return;
     Items& i = *items_;
@@ -196,7 +192,7 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
     i.grabber_info.buf->set(i.grabber_state, m9.grabber / 100.0);  // M9 carries 0..100
     i.put(i.grabber_info);
     latency(rx);
-  } else if (is(f, s.m8.message())) {
+  } else if (frames::is_message(f, s.m8.message())) {
     frames::M8 m8;
     if (!usable(s.m8, f, m8, stats_)) return;
     Items& i = *items_;
@@ -205,7 +201,7 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
     i.imu.buf->set(i.compass_raw, m8.raw);
     i.put(i.imu);
     latency(rx);
-  } else if (is(f, s.m10.message())) {
+  } else if (frames::is_message(f, s.m10.message())) {
     if (usable(s.m10, f, m10_, stats_)) {
       write_hwerrors();
       latency(rx);

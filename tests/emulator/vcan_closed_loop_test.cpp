@@ -47,13 +47,13 @@ class Laptop {
       while (auto f = bus_->receive()) {
         frames::Tm tm;
         frames::M4_1 m4;
-        if (f->frame.id == set_->tm.message().id() && set_->tm.decode(f->frame, tm).ok()) {
+        if (frames::is_message(f->frame, set_->tm.message()) && set_->tm.decode(f->frame, tm).ok()) {
           ++tms;
           if (drive && (tm.sync_bitmap & (1u << 6)) != 0) {
             bus_->send(set_->m6_1.encode(*drive));
             bus_->send(set_->m6_2.encode(frames::M6_2{}));
           }
-        } else if (f->frame.id == set_->m4_1.message().id() && set_->m4_1.decode(f->frame, m4).ok()) {
+        } else if (frames::is_message(f->frame, set_->m4_1.message()) && set_->m4_1.decode(f->frame, m4).ok()) {
           last_m4 = m4;
           ++m4_count;
         }

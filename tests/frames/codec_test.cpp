@@ -204,6 +204,32 @@ TEST_F(ShippedCodec, FindsByIdInConstantTimeTable) {
   EXPECT_EQ(codec_->find(0x12345678), nullptr);
 }
 
+// is_message, the one "is this frame that message" rule of every receiver:
+// a data frame with the message's id, standard or extended as declared; any
+// length (a wrong one is the message, counted as bad when decoded).
+struct IsRow {
+  const char* name;
+  const char* message;
+  const char* frame;
+  bool is;
+};
+
+TEST_F(ShippedCodec, IsMessageIsADataFrameWithTheIdOfTheDeclaredKind) {
+  const IsRow rows[] = {
+      {"the trigger message", "TM", "010#0100FF030000DC05", true},
+      {"of the wrong length: still the message", "TM", "010#01", true},
+      {"of no bytes", "M6_1", "131#", true},
+      {"a remote frame with its id", "TM", "010#R", false},
+      {"an extended frame with the same number", "TM", "00000010#0100FF030000DC05", false},
+      {"another message's id", "TM", "131#F401000000000000", false},
+      {"an error frame", "TM", "20000004#0000000000000000", false},
+  };
+  for (const IsRow& r : rows) {
+    SCOPED_TRACE(r.name);
+    EXPECT_EQ(is_message(frame_of(r.frame), *codec_->find(r.message)), r.is) << r.frame;
+  }
+}
+
 // A database with Motorola, float and offset signals, checked against bytes
 // worked out by hand (Vector's sawtooth bit numbering).
 constexpr const char* kMixedDbc = R"(VERSION ""
@@ -245,6 +271,9 @@ TEST(MixedCodec, MotorolaFloatAndOffsetMatchHandWorkedBytes) {
   EXPECT_EQ(format_compact(f), "00000400#C000000000000000");
   ASSERT_EQ(e->decode(f, out).status, DecodeStatus::kOk);
   EXPECT_EQ(out[0], -2.0);
+  EXPECT_TRUE(is_message(f, *e)) << "an extended message is its extended frame";
+  f.extended = false;
+  EXPECT_FALSE(is_message(f, *e)) << "not the standard frame of the same number";
 }
 
 // Integer messages: Intel and Motorola, signed and unsigned, a declared range

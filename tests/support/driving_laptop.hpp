@@ -45,7 +45,7 @@ class DrivingLaptop {
       if (!bus_->wait_readable(20ms)) continue;
       while (auto f = bus_->receive()) {
         frames::Tm tm;
-        if (f->frame.id == set_.tm.message().id() && set_.tm.decode(f->frame, tm).ok()) {
+        if (frames::is_message(f->frame, set_.tm.message()) && set_.tm.decode(f->frame, tm).ok()) {
           ++tms_;
           if ((tm.sync_bitmap & (1U << set_.ftt(set_.m6_1.message()).index)) != 0) {
             bus_->send(set_.m6_1.encode(frames::M6_1{0, 0.5}));

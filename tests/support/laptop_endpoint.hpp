@@ -29,7 +29,7 @@ class LaptopEndpoint final : public can_nodes::Participant {
       ++n;
       frames_.push_back(*f);
       frames::Tm tm;
-      if (f->frame.id == set_->tm.message().id() && set_->tm.decode(f->frame, tm).ok()) {
+      if (frames::is_message(f->frame, set_->tm.message()) && set_->tm.decode(f->frame, tm).ok()) {
         const std::uint32_t mine =
             (1u << set_->ftt(set_->m6_1.message()).index) | (1u << set_->ftt(set_->m6_2.message()).index);
         if (const auto start = sync_.on_tm(tm, f->time, ec_, mine); start && m6_1) slot_ = *start;

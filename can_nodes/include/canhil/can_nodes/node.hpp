@@ -140,8 +140,8 @@ class Node {
   Bus& bus_;
   bool enabled_ = true;
   std::uint8_t tm_length_;
-  std::uint32_t tm_id_;
-  Nanos next_ = kNever;  // the earlier of wakes_'s first and delayed_'s first
+  const frames::MessageCodec* tm_;  // the trigger message, in set_
+  Nanos next_ = kNever;             // the earlier of wakes_'s first and delayed_'s first
   FaultHook* hook_ = nullptr;
   NodeCounters counters_;
   // Requested wake-ups, ascending. A node has a few at a time (its slot, its

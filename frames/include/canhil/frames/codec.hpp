@@ -108,6 +108,16 @@ class MessageCodec {
   std::vector<std::int64_t> initial_integers_;
 };
 
+/// Whether a received frame is `message`: a data frame with its identifier,
+/// standard or extended as the DBC declares it. The one rule every receiver
+/// (the nodes, canhil-hwcomm) asks. Its length is not asked: a frame of the
+/// message with the wrong length is still that message, a bad one
+/// (decode() says kWrongLength, and the receiver counts it); a remote frame
+/// with the message's id is not the message.
+inline bool is_message(const CanFrame& frame, const MessageCodec& message) noexcept {
+  return frame.kind == FrameKind::kData && frame.id == message.id() && frame.extended == message.def().extended;
+}
+
 /// The codec for a whole database; owns the Database it was built from.
 /// Non-copyable; moving keeps every MessageCodec pointer valid.
 class Codec {
