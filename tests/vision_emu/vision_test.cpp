@@ -2,11 +2,6 @@
 #include "canhil/vision_emu/vision.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <cstdlib>
-#include <memory>
-#include <string>
 
 #include <algorithm>
 #include <cmath>
@@ -15,10 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "canhil/rtdb/cambada_types.h"
-#include "canhil/rtdb/rtdb.h"
 #include "canhil/vision_emu/runner.hpp"
-#include "rtdb_user.h"
 
 namespace canhil::vision_emu {
 namespace {
@@ -270,33 +262,32 @@ TEST(VisionRunner, LatencyDeliversTheOlderWorld) {
   EXPECT_NEAR(static_cast<double>(runner.frames()), 60 * 0.01 * 30, 2) << "about 30 frames per second";
 }
 
-TEST(VisionRunner, WritesVisionInfoThenWakesTheAgent) {
-  setenv("RTDB_KEY", std::to_string(0x5F000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
-  setenv("AGENT", "1", 1);
-  ASSERT_EQ(DB_init_all(0), 0);
-  ASSERT_EQ(DB_init(), 0);
+// Writing the frames into VISION_INFO and waking the agent is the laptop
+// link's (tests/emulator/laptop_link_test.cpp); here, each robot's own frame.
+TEST(VisionRunner, HandsEachRobotItsOwnFrame) {
   physics::WorldParams wp;
   wp.robots = {physics::Placement{-3, 0, -90}, physics::Placement{1, 2, 0}};  // 4.5 m apart
   wp.ball_start = {-1, 0.5, 0.11};
   physics::World world(wp);
-  VisionRunner runner({Vision({}, world.markings()), Vision({}, world.markings())}, rtdb_sink({CAMBADA_1, CAMBADA_2}));
-  EXPECT_EQ(DB_wait_frame(10), 1);
+  std::vector<std::size_t> robots;
+  std::vector<VisionFrame> frames;
+  VisionRunner runner({Vision({}, world.markings()), Vision({}, world.markings())},
+                      [&](std::size_t robot, const VisionFrame& f, double) {
+                        robots.push_back(robot);
+                        frames.push_back(f);
+                      });
   world.step();
   runner.on_step(world);
-  EXPECT_EQ(DB_wait_frame(1000), 0) << "woken after the frame";
-  auto info = std::make_unique<VisionInfo>();
-  ASSERT_GE(DB_get(CAMBADA_1, VISION_INFO, info.get()), 0);
-  ASSERT_EQ(info->nBalls, 1);
-  // Robot 1 faces world +x: the ball, 2 m ahead and 0.5 m to the left, is at (-0.5, 2) in its frame.
-  EXPECT_NEAR(info->ball[0].x, -0.5, 1e-4);
-  EXPECT_NEAR(info->ball[0].y, 2.0, 1e-4);
-  EXPECT_GT(info->linePoints.nPoints, 20);
-  EXPECT_GT(info->obstacles.nPoints, 0) << "the other robot";
-  auto other = std::make_unique<VisionInfo>();
-  ASSERT_GE(DB_get_from(CAMBADA_2, CAMBADA_2, VISION_INFO, other.get()), 0);
-  EXPECT_NE(other->linePoints.nPoints, 0) << "robot 2's frame in robot 2's database";
-  DB_free_all(0);
-  DB_free();
+  ASSERT_EQ(robots, (std::vector<std::size_t>{0, 1})) << "one frame each, the first step";
+  const VisionFrame& first = frames[0];
+  ASSERT_EQ(first.balls.size(), 1u);
+  // Robot 0 faces world +x: the ball, 2 m ahead and 0.5 m to the left, is at (-0.5, 2) in its frame.
+  EXPECT_NEAR(first.balls[0].x(), -0.5, 1e-4);
+  EXPECT_NEAR(first.balls[0].y(), 2.0, 1e-4);
+  EXPECT_GT(first.lines.size(), 20u);
+  EXPECT_FALSE(first.obstacles.empty()) << "the other robot";
+  EXPECT_FALSE(frames[1].lines.empty()) << "robot 1's own frame";
+  EXPECT_EQ(runner.frames(), 2u);
 }
 
 }  // namespace

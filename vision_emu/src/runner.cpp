@@ -2,11 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
-
-#include "canhil/rtdb/cambada_types.h"
-#include "canhil/rtdb/rtdb.h"
-#include "rtdb_user.h"
 
 namespace canhil::vision_emu {
 
@@ -67,33 +62,6 @@ void VisionRunner::on_step(const physics::World& world) {
     sink_(r, frame_[r], scene->time_s);
     ++frames_;
   }
-}
-
-void write_vision_info(int agent, const VisionFrame& f) {
-  auto info = std::make_unique<VisionInfo>();
-  auto fill = [](PointList& list, const std::vector<Eigen::Vector2d>& pts) {
-    list.nPoints = static_cast<int>(std::min<std::size_t>(pts.size(), MAX_POINTS));
-    for (int i = 0; i < list.nPoints; ++i) {
-      list.point[i] = {static_cast<float>(pts[static_cast<std::size_t>(i)].x()),
-                       static_cast<float>(pts[static_cast<std::size_t>(i)].y())};
-    }
-  };
-  fill(info->obstacles, f.obstacles);
-  fill(info->linePoints, f.lines);
-  info->nBalls = static_cast<int>(std::min<std::size_t>(f.balls.size(), MAX_BALLS));
-  for (int i = 0; i < info->nBalls; ++i) {
-    info->ball[i] = {static_cast<float>(f.balls[static_cast<std::size_t>(i)].x()),
-                     static_cast<float>(f.balls[static_cast<std::size_t>(i)].y())};
-  }
-  DB_put_in(agent, agent, VISION_INFO, info.get(), 0);
-}
-
-VisionRunner::Sink rtdb_sink(std::vector<int> agent_of_robot) {
-  return [agents = std::move(agent_of_robot)](std::size_t robot, const VisionFrame& f, double) {
-    if (robot >= agents.size()) return;
-    write_vision_info(agents[robot], f);
-    DB_signal_frame(agents[robot]);
-  };
 }
 
 }  // namespace canhil::vision_emu

@@ -1,6 +1,7 @@
 // canhil/vision_emu/runner.hpp — vision for several robots at its frame rate:
 // keeps a short history of world snapshots (for the latency), makes each
-// robot's frame and hands it to a sink (the RTDB writer, a test, an SVG).
+// robot's frame and hands it to a sink (the session's, which writes it into
+// the robot's VISION_INFO through emulator/LaptopLink; a test's).
 #pragma once
 
 #include <functional>
@@ -37,12 +38,5 @@ class VisionRunner {
   std::vector<VisionFrame> frame_;  // reused per robot
   std::uint64_t frames_ = 0;
 };
-
-/// Writes a frame into agent `agent`'s VISION_INFO (DB_init_all first).
-void write_vision_info(int agent, const VisionFrame& frame);
-
-/// Writes a robot's frame into its RTDB (DB_init_all first): VISION_INFO, then
-/// DB_signal_frame to wake its agent. `agent_of_robot[i]` is robot i's agent.
-VisionRunner::Sink rtdb_sink(std::vector<int> agent_of_robot);
 
 }  // namespace canhil::vision_emu
