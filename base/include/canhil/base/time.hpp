@@ -24,8 +24,6 @@ inline constexpr Nanos kLongAgo = -std::chrono::duration_cast<Nanos>(std::chrono
 constexpr double to_seconds(Nanos t) noexcept { return std::chrono::duration<double>(t).count(); }
 /// Milliseconds as a double (reports).
 constexpr double to_ms(Nanos t) noexcept { return std::chrono::duration<double, std::milli>(t).count(); }
-/// Microseconds as a double (reports).
-constexpr double to_us(Nanos t) noexcept { return std::chrono::duration<double, std::micro>(t).count(); }
 /// A number of seconds as Nanos, rounded toward zero (as duration_cast does).
 constexpr Nanos from_seconds(double s) noexcept {
   return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
@@ -33,10 +31,6 @@ constexpr Nanos from_seconds(double s) noexcept {
 /// A number of milliseconds as Nanos, rounded toward zero.
 constexpr Nanos from_ms(double ms) noexcept {
   return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::milli>(ms));
-}
-/// A number of microseconds as Nanos, rounded toward zero.
-constexpr Nanos from_us(double us) noexcept {
-  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::micro>(us));
 }
 
 }  // namespace canhil
