@@ -57,8 +57,6 @@ bool names_node(std::string_view target, std::string_view node) {
   return true;
 }
 
-Nanos seconds(double s) { return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s)); }
-
 }  // namespace
 
 std::string fault_node_name(std::string_view node) {
@@ -74,7 +72,7 @@ FaultRule parse_fault(std::string_view text) {
   if (const auto at = body.find('@'); at != std::string_view::npos) {
     const double from = number(text, body.substr(at + 1), "the start time after @");
     if (from < 0) bad(text, "the start time must be 0 or more");
-    rule.from = seconds(from);
+    rule.from = from_seconds(from);
     body = body.substr(0, at);
   }
   const auto parts = split(body, ':');
@@ -92,7 +90,7 @@ FaultRule parse_fault(std::string_view text) {
     if (args < 1 || args > 2) bad(text, "delay takes milliseconds and optionally a probability");
     const double ms = number(text, arg(0), "the delay");
     if (ms <= 0 || ms > 10'000) bad(text, "the delay must be above 0 and at most 10000 ms");
-    rule.delay = seconds(ms / 1000);
+    rule.delay = from_seconds(ms / 1000);
     if (args == 2) rule.probability = probability(text, arg(1));
   } else if (kind == "corrupt") {
     rule.kind = FaultKind::kCorrupt;
@@ -115,7 +113,7 @@ FaultRule parse_fault(std::string_view text) {
     if (args != 1) bad(text, "silence takes the time in seconds it starts");
     const double from = number(text, arg(0), "the time");
     if (from < 0) bad(text, "the time must be 0 or more");
-    rule.from = std::max(rule.from, seconds(from));
+    rule.from = std::max(rule.from, from_seconds(from));
   } else if (kind == "error") {
     rule.kind = FaultKind::kErrorFrame;
     if (args > 1) bad(text, "error takes at most a probability");
@@ -146,7 +144,7 @@ FaultCount& FaultCount::operator+=(const FaultCount& other) {
 std::string describe(const FaultCount& c) {
   char line[96];
   if (c.kind == FaultKind::kBattery) {
-    std::snprintf(line, sizeof line, "drained for %.1f s", std::chrono::duration<double>(c.active).count());
+    std::snprintf(line, sizeof line, "drained for %.1f s", to_seconds(c.active));
   } else {
     std::snprintf(line, sizeof line, "matched %8llu frames, applied to %8llu",
                   static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
@@ -262,7 +260,7 @@ std::array<double, 3> FaultInjector::battery_drain_until(Nanos now) {
     const Nanos from = std::max(since, start_ + rule.from);
     if (now <= from) continue;
     counts_[k].active += now - from;
-    const double amount = rule.drain_per_s * std::chrono::duration<double>(now - from).count();
+    const double amount = rule.drain_per_s * to_seconds(now - from);
     for (std::size_t pack = 0; pack < drain.size(); ++pack) {
       if (rule.target == "*" || rule.target == kBatteryPacks[pack]) drain[pack] += amount;
     }

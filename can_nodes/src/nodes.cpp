@@ -24,8 +24,6 @@ Nanos tm_wire_time(const NodeParams& p) {
   return frames::bits_to_time(frames::worst_case_frame_bits(8), p.ftt.bit_rate);
 }
 
-double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
-
 // Asynchronous messages go right after the TM (the asynchronous window opens
 // when the TM leaves the wire), no faster than their minimum gap.
 Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, const NodeParams& p, Nanos tm_time,
@@ -108,7 +106,7 @@ void PicBase::send_m1(Nanos now) {
     const kinematics::WheelSpeeds w = kinematics_.inverse({m6_1_.vx, m6_1_.vy, m6_2_.va});
     for (std::size_t n = 0; n < 3; ++n) target[n] = params_.encoder.counts_per_tick(w[n]);
   }
-  const double dt = last_m1_ == kLongAgo ? 0.0 : seconds(now - last_m1_);
+  const double dt = last_m1_ == kLongAgo ? 0.0 : to_seconds(now - last_m1_);
   const double accel = m6_2_.small_adjustment != 0 ? params_.fine_wheel_accel_radps2 : params_.max_wheel_accel_radps2;
   const double max_step = params_.encoder.counts_per_tick(accel) * dt;
   const auto limit = static_cast<double>(params_.max_setpoint);
@@ -184,7 +182,7 @@ void MotorNode::on_frame(const TimedFrame& tf) {
 }
 
 void MotorNode::step(Nanos now) {
-  const Nanos tick = std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(params_.encoder.motor_tick_s));
+  const Nanos tick = from_seconds(params_.encoder.motor_tick_s);
   if (now >= next_tick_) {
     // The motor tick: the speed loop's target, braked without a fresh M1.
     const bool active = enable_ && now - last_m1_ <= params_.motor_watchdog;
