@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/emulator/robot_rig.hpp"
 #include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"

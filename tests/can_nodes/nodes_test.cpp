@@ -7,8 +7,8 @@
 #include <bit>
 #include <map>
 
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "support/counter_watch.hpp"
 #include "support/node_rig.hpp"
 #include "support/test_paths.hpp"
@@ -37,7 +37,7 @@ class NodesTest : public test::WatchedTest {
   FakeRobot& robot_ = rig_.robot;
   RobotNodes& nodes_ = rig_.nodes;
   test::LaptopEndpoint& laptop_ = rig_.laptop;
-  Lockstep& run_ = rig_.run;
+  VirtualTime& run_ = rig_.run;
   const SimulatedClock& clock_ = rig_.clock;
 };
 

@@ -24,7 +24,7 @@ class RobotNodesTest : public test::WatchedTest {
   const std::shared_ptr<const frames::MessageSet>& set_ = rig_.set;
   RobotNodes& nodes_ = rig_.nodes;
   test::LaptopEndpoint& laptop_ = rig_.laptop;
-  Lockstep& run_ = rig_.run;
+  VirtualTime& run_ = rig_.run;
 };
 
 TEST_F(RobotNodesTest, OneEndpointPerNodeNamedFromTheTableAndOneToWatchTheBus) {

@@ -7,8 +7,8 @@
 #include <optional>
 #include <vector>
 
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"
 

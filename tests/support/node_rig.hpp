@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "support/fake_robot.hpp"
 #include "support/laptop_endpoint.hpp"
 #include "support/test_paths.hpp"
@@ -44,7 +44,7 @@ struct NodeRig {
   std::vector<std::string> endpoints_asked;  ///< the names the node set asked endpoints for, in order
   can_nodes::RobotNodes nodes;
   LaptopEndpoint laptop;
-  can_nodes::Lockstep run;
+  can_nodes::VirtualTime run;
 };
 
 }  // namespace canhil::test

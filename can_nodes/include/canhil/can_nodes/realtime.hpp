@@ -1,5 +1,5 @@
 // canhil/can_nodes/realtime.hpp — hardware in the loop: the same participants
-// as Lockstep, paced by the wall clock.
+// as VirtualTime, paced by the wall clock.
 //
 // The loop never reads the wall clock itself: its owner passes the clock and
 // a `wait(deadline)` that returns at the absolute deadline or earlier when a
@@ -15,7 +15,7 @@
 #include <atomic>
 #include <functional>
 
-#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 
 namespace canhil::can_nodes {
 

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "canhil/can_nodes/delivery_fence.hpp"
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/emulator/bus_watch.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/lockstep/conductor.hpp"
@@ -104,7 +104,7 @@ class ExternalDriver {
   std::vector<bool> woken_;   // robots whose agents PMan activated at this instant
   std::vector<bool> cycled_;  // robots whose agents have ended a first activation
   std::unique_ptr<Processes> processes_;
-  can_nodes::Lockstep lockstep_;
+  can_nodes::VirtualTime lockstep_;
 };
 
 }  // namespace canhil::emulator

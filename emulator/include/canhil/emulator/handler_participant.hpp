@@ -6,8 +6,8 @@
 #include <memory>
 #include <vector>
 
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/laptop/hwcomm.hpp"
 
 namespace canhil::emulator {

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "canhil/can_nodes/lockstep.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/emulator/bus_watch.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/laptop/hwcomm.hpp"
@@ -92,7 +92,7 @@ class VirtualDriver {
   bool listening_ = false;  // the buses' taps count, check or record their frames
   BusWatch watch_;
   std::vector<std::unique_ptr<ReferenceStack>> stacks_;
-  can_nodes::Lockstep lockstep_;
+  can_nodes::VirtualTime lockstep_;
   bool rtdb_clock_set_ = false;  // the RTDB stamps and ages items in this run's virtual time
 };
 

@@ -1,4 +1,4 @@
-// canhil/can_nodes/lockstep.hpp — virtual time: nodes and any other
+// canhil/can_nodes/virtual_time.hpp — virtual time: nodes and any other
 // participants (a handler, a test playing the laptop) advanced together on a
 // simulated clock, as fast as the CPU allows, deterministically; optionally a
 // periodic step (the physics world's) on the same clock.
@@ -121,10 +121,12 @@ class Participants {
       std::make_shared<Doorbell>();  // rung: may have frames (those that cannot ring stay rung)
 };
 
-class Lockstep {
+/// The virtual-time runner (the wall-clock one is Realtime, realtime.hpp). Not
+/// lockstep::Conductor, which keeps other processes in step with this clock.
+class VirtualTime {
  public:
   /// `clock` must outlive the runner; it starts at the clock's time.
-  explicit Lockstep(SimulatedClock& clock) : clock_(clock) {}
+  explicit VirtualTime(SimulatedClock& clock) : clock_(clock) {}
   /// A step every `period` from the clock's time on (the first at now +
   /// period), before the participants due at the same instant.
   void set_step(Nanos period, std::function<void(Nanos now)> step);

@@ -1,4 +1,4 @@
-#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 
 #include <algorithm>
 
@@ -80,13 +80,13 @@ void Participants::refresh() {
   for (std::size_t i = 0; i < list_.size(); ++i) keep(i);
 }
 
-void Lockstep::set_step(Nanos period, std::function<void(Nanos now)> step) {
+void VirtualTime::set_step(Nanos period, std::function<void(Nanos now)> step) {
   period_ = period;
   step_ = std::move(step);
   next_step_ = clock_.now() + period_;
 }
 
-void Lockstep::run_until(Nanos end) {
+void VirtualTime::run_until(Nanos end) {
   participants_.refresh();  // the caller may have moved wake-ups between runs
   while (true) {
     const Nanos next = std::min(next_step_, participants_.next_wakeup());

@@ -1,7 +1,7 @@
 // Virtual time: participants woken exactly when they ask, frames delivered in
 // the instant they are sent, the periodic step before the participants of its
 // instant, and both ends of run_until.
-#include "canhil/can_nodes/lockstep.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 
 #include <gtest/gtest.h>
 
@@ -46,13 +46,13 @@ class Scripted final : public Participant {
   const Clock& clock_;
 };
 
-TEST(Lockstep, WakesEachParticipantExactlyWhenAskedAndDeliversInTheSameInstant) {
+TEST(VirtualTime, WakesEachParticipantExactlyWhenAskedAndDeliversInTheSameInstant) {
   SimulatedClock clock;
   MemoryBus bus(clock);
   std::vector<std::string> log;
   Scripted a("a", bus, {Nanos{5}, Nanos{20}}, log, clock);
   Scripted b("b", bus, {Nanos{20}}, log, clock);
-  Lockstep run(clock);
+  VirtualTime run(clock);
   run.add(a);
   run.add(b);
   run.run_until(Nanos{19});
@@ -64,12 +64,12 @@ TEST(Lockstep, WakesEachParticipantExactlyWhenAskedAndDeliversInTheSameInstant) 
       << "ticked in the order added, then delivered";
 }
 
-TEST(Lockstep, TheStepComesEveryPeriodBeforeTheParticipantsOfItsInstant) {
+TEST(VirtualTime, TheStepComesEveryPeriodBeforeTheParticipantsOfItsInstant) {
   SimulatedClock clock;
   MemoryBus bus(clock);
   std::vector<std::string> log;
   Scripted a("a", bus, {10ms, 15ms}, log, clock);
-  Lockstep run(clock);
+  VirtualTime run(clock);
   run.set_step(10ms, [&](Nanos now) { log.push_back("step " + std::to_string(now.count())); });
   run.add(a);
   run.run_until(30ms - 1ns);  // both sides of a step's boundary
@@ -79,12 +79,12 @@ TEST(Lockstep, TheStepComesEveryPeriodBeforeTheParticipantsOfItsInstant) {
   EXPECT_EQ(run.steps(), 3u);
 }
 
-TEST(Lockstep, AParticipantMayAskToBeWokenAgainAtOnce) {
+TEST(VirtualTime, AParticipantMayAskToBeWokenAgainAtOnce) {
   SimulatedClock clock;
   MemoryBus bus(clock);
   std::vector<std::string> log;
   Scripted a("a", bus, {Nanos{7}, Nanos{7}, Nanos{7}}, log, clock);
-  Lockstep run(clock);
+  VirtualTime run(clock);
   run.add(a);
   run.run_until(Nanos{100});
   EXPECT_EQ(log, (std::vector<std::string>{"a tick 7", "a tick 7", "a tick 7"}));
@@ -111,13 +111,13 @@ class Counted final : public Participant {
   std::unique_ptr<MemoryEndpoint> ep_;
 };
 
-TEST(Lockstep, ADeliveryRoundPassesByWhoeverHasNothingToRead) {
+TEST(VirtualTime, ADeliveryRoundPassesByWhoeverHasNothingToRead) {
   SimulatedClock clock;
   MemoryBus bus(clock);
   std::vector<std::string> log;
   Scripted a("a", bus, {Nanos{5}, Nanos{9}}, log, clock);
   Counted quiet(bus);
-  Lockstep run(clock);
+  VirtualTime run(clock);
   run.add(a);
   run.add(quiet);
   run.run_until(Nanos{100});
@@ -169,7 +169,7 @@ std::vector<std::string> echo_run(bool rings, std::size_t* asked, std::size_t* e
   Echo first("first", bus, 40, rings, log);
   Scripted talker("talker", bus, {Nanos{5}, Nanos{9}, Nanos{30}}, log, clock);
   Echo last("last", bus, 40, rings, log);
-  Lockstep run(clock);
+  VirtualTime run(clock);
   run.add(first);
   run.add(talker);
   run.add(last);
@@ -179,7 +179,7 @@ std::vector<std::string> echo_run(bool rings, std::size_t* asked, std::size_t* e
   return log;
 }
 
-TEST(Lockstep, RingingParticipantsGetTheSameFramesInTheSameOrderWithoutBeingAsked) {
+TEST(VirtualTime, RingingParticipantsGetTheSameFramesInTheSameOrderWithoutBeingAsked) {
   std::size_t asked_when_ringing = 0;
   std::size_t asked_when_asking = 0;
   std::size_t empty = 0;
@@ -213,7 +213,7 @@ class Kept final : public Participant {
   mutable std::size_t reads = 0;
 };
 
-TEST(Lockstep, AKeptWakeUpIsReadAfterItsOwnTicksTheStepAndEachRunNotAtEveryInstant) {
+TEST(VirtualTime, AKeptWakeUpIsReadAfterItsOwnTicksTheStepAndEachRunNotAtEveryInstant) {
   SimulatedClock clock;
   MemoryBus bus(clock);
   std::vector<std::string> log;
@@ -223,7 +223,7 @@ TEST(Lockstep, AKeptWakeUpIsReadAfterItsOwnTicksTheStepAndEachRunNotAtEveryInsta
   Kept kept;
   kept.wake = Nanos{50};
   kept.period = Nanos{100};
-  Lockstep run(clock);
+  VirtualTime run(clock);
   run.set_step(Nanos{120}, [&](Nanos now) { kept.wake = now + Nanos{3}; });  // as a vision frame wakes an agent
   run.add(other);
   run.add(kept);
