@@ -7,9 +7,9 @@
 
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/can_nodes/virtual_time.hpp"
-#include "canhil/emulator/robot_rig.hpp"
 #include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/messages.hpp"
+#include "support/one_robot_session.hpp"
 
 namespace {
 
@@ -54,12 +54,12 @@ void BM_OneRobotVirtualTime(benchmark::State& state) {
   physics::WorldParams wp;
   wp.robots = {physics::Placement{0, 0, 0}};
   wp.ball_start = {2, 2, wp.ball.radius_m};
-  emulator::RobotRig rig(frames::MessageSet::load(CANHIL_BENCH_DBC), wp);
-  Laptop laptop(rig.bus(), rig.messages());
-  rig.add(laptop);
+  test::OneRobotSession session(frames::MessageSet::load(CANHIL_BENCH_DBC), wp);
+  Laptop laptop(session.bus(), session.messages());
+  session.add(laptop);
   std::int64_t simulated_s = 0;
   for (auto _ : state) {
-    rig.run_for(1s);
+    session.run_for(1s);
     ++simulated_s;
   }
   state.counters["realtime_factor"] = benchmark::Counter(static_cast<double>(simulated_s), benchmark::Counter::kIsRate);

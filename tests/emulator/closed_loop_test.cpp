@@ -4,9 +4,9 @@
 
 #include "canhil/frames/candump.hpp"
 
-#include "canhil/emulator/robot_rig.hpp"
 #include "support/counter_watch.hpp"
 #include "support/laptop_endpoint.hpp"
+#include "support/one_robot_session.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
@@ -15,18 +15,18 @@ namespace {
 using namespace std::chrono_literals;
 
 // A robot and a laptop endpoint; its nodes' error counters are watched and
-// checked when the rig goes (a test says what it provokes).
-struct Rig : RobotRig {
-  explicit Rig(test::CounterWatch& watch, physics::WorldParams wp = default_world())
-      : RobotRig(frames::MessageSet::load(test::shipped_dbc()), std::move(wp)),
+// checked when it goes (a test says what it provokes).
+struct RobotAndLaptop : test::OneRobotSession {
+  explicit RobotAndLaptop(test::CounterWatch& watch, physics::WorldParams wp = default_world())
+      : test::OneRobotSession(frames::MessageSet::load(test::shipped_dbc()), std::move(wp)),
         laptop(bus(), messages(), params().ftt.elementary_cycle),
         watch_(watch) {
     add(laptop);
     watch_.watch_nodes(nodes());
   }
-  ~Rig() { watch_.finish(); }
-  Rig(const Rig&) = delete;
-  Rig& operator=(const Rig&) = delete;
+  ~RobotAndLaptop() { watch_.finish(); }
+  RobotAndLaptop(const RobotAndLaptop&) = delete;
+  RobotAndLaptop& operator=(const RobotAndLaptop&) = delete;
   static physics::WorldParams default_world() {
     physics::WorldParams p;
     p.robots = {physics::Placement{0, 0, 0}};  // front along world +y
@@ -46,7 +46,7 @@ struct Rig : RobotRig {
 class ClosedLoop : public test::WatchedTest {};
 
 TEST_F(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {
-  Rig r(counters);
+  RobotAndLaptop r(counters);
   r.laptop.m6_1 = frames::M6_1{0, 0.5};
   r.run_until(2s);
   r.laptop.m6_1.reset();
@@ -62,7 +62,7 @@ TEST_F(ClosedLoop, DrivingForwardTwoSecondsMovesOdometryAboutOneMetre) {
 }
 
 TEST_F(ClosedLoop, M5ResetBringsOdometryToZeroAndM5SetsAPose) {
-  Rig r(counters);
+  RobotAndLaptop r(counters);
   r.laptop.m6_1 = frames::M6_1{0.3, 0.3};
   r.run_until(1s);
   r.laptop.m6_1.reset();
@@ -83,14 +83,14 @@ TEST_F(ClosedLoop, M5ResetBringsOdometryToZeroAndM5SetsAPose) {
 }
 
 physics::WorldParams ball_in_front(double distance) {
-  physics::WorldParams p = Rig::default_world();
+  physics::WorldParams p = RobotAndLaptop::default_world();
   p.ball_start = {0, distance, p.ball.radius_m};
   return p;
 }
 
 TEST_F(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
   {
-    Rig r(counters, ball_in_front(1.5));  // out of reach
+    RobotAndLaptop r(counters, ball_in_front(1.5));  // out of reach
     r.run_until(100ms);
     frames::M7 m7;
     m7.kick = frames::M7::make_kick(true, 40);
@@ -101,7 +101,7 @@ TEST_F(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
   }
   {
     const physics::RobotParams robot;
-    Rig r(counters, ball_in_front(robot.body_radius_m - robot.mouth_depth_m + 0.11));
+    RobotAndLaptop r(counters, ball_in_front(robot.body_radius_m - robot.mouth_depth_m + 0.11));
     frames::M7 grab;
     grab.grabber_mode = 100;
     r.laptop.send(r.messages()->m7.encode(grab));
@@ -120,7 +120,7 @@ TEST_F(ClosedLoop, M7KicksOnlyWhenTheBallIsEngaged) {
 }
 
 TEST_F(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
-  Rig r(counters);
+  RobotAndLaptop r(counters);
   r.laptop.m6_1 = frames::M6_1{0, 1.0};
   r.run_until(1s);
   ASSERT_GT(r.world().robot(0).twist().vy_mps, 0.9);
@@ -134,7 +134,7 @@ TEST_F(ClosedLoop, SilenceOnM6BrakesWithinTheWatchdogTime) {
 }
 
 TEST_F(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) {
-  Rig r(counters);
+  RobotAndLaptop r(counters);
   r.run_until(100ms);
   // 6 000 frames in one instant: more than the system monitor's queue holds (4 096).
   auto junk = r.bus().attach("junk");
@@ -164,7 +164,7 @@ TEST_F(ClosedLoop, ABurstOfJunkIsCountedAndEveryNodeHandlesEveryTriggerMessage) 
 
 TEST_F(ClosedLoop, VirtualTimeRunsAreDeterministic) {
   auto trace = [this] {
-    Rig r(counters);
+    RobotAndLaptop r(counters);
     r.laptop.m6_1 = frames::M6_1{0.2, 0.6};
     r.laptop.m6_2.va = 0.5;
     r.run_until(1500ms);

@@ -9,11 +9,11 @@
 
 #include <cstdlib>
 
-#include "canhil/emulator/robot_rig.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
 #include "support/counter_watch.hpp"
+#include "support/one_robot_session.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
@@ -34,12 +34,12 @@ class HwCommTest : public test::WatchedTest {
     physics::WorldParams wp;
     wp.robots = {physics::Placement{0, 0, 0}};
     wp.ball_start = {0, 0.26, wp.ball.radius_m};  // in the mouth
-    rig_ = std::make_unique<RobotRig>(set_, wp);
+    robot_ = std::make_unique<test::OneRobotSession>(set_, wp);
     db_ = rtdb::open_builtin(rtdb::Scope::kOneAgent);
-    laptop_ =
-        std::make_unique<HandlerParticipant>(rig_->bus(), set_, 10ms, rig_->clock(), *db_, layout_, CAMBADA_1, true);
-    rig_->add(*laptop_);
-    counters.watch_nodes(rig_->nodes());
+    laptop_ = std::make_unique<HandlerParticipant>(robot_->bus(), set_, 10ms, robot_->clock(), *db_, layout_, CAMBADA_1,
+                                                   true);
+    robot_->add(*laptop_);
+    counters.watch_nodes(robot_->nodes());
     const laptop::HwCommStats& hw = laptop_->hw().stats();
     counters.watch("handler.wrong_length", [&hw] { return hw.wrong_length; });
     counters.watch("handler.out_of_range", [&hw] { return hw.out_of_range; });
@@ -59,7 +59,7 @@ class HwCommTest : public test::WatchedTest {
   }
 
   std::shared_ptr<const frames::MessageSet> set_;
-  std::unique_ptr<RobotRig> rig_;
+  std::unique_ptr<test::OneRobotSession> robot_;
   std::unique_ptr<rtdb::Database> db_;
   const rtdb::Layout layout_ = rtdb::Layout::shipped("canhil");
   std::unique_ptr<HandlerParticipant> laptop_;
@@ -68,10 +68,10 @@ class HwCommTest : public test::WatchedTest {
 TEST_F(HwCommTest, CmdVelMovesCmdPos) {
   CMD_Vel v{0, 0.5f, 0, false};
   DB_put(CMD_VEL, &v);
-  rig_->run_until(2s);
+  robot_->run_until(2s);
   CMD_Vel stop{0, 0, 0, false};
   DB_put(CMD_VEL, &stop);
-  rig_->run_for(600ms);
+  robot_->run_for(600ms);
   CMD_Pos p{};
   const int age = DB_get(CAMBADA_1, CMD_POS, &p);
   EXPECT_GE(age, 0);
@@ -79,13 +79,13 @@ TEST_F(HwCommTest, CmdVelMovesCmdPos) {
   EXPECT_NEAR(p.px, 0.0, 0.02);
   EXPECT_EQ(count_sent(0x131), count_sent(0x132));
   EXPECT_GE(count_sent(0x131), 85) << "M6 in every third EC: about 87 in 2.6 s";
-  EXPECT_EQ(rig_->nodes().bad_frames(), 0u);
+  EXPECT_EQ(robot_->nodes().bad_frames(), 0u);
 }
 
 TEST_F(HwCommTest, KickerCommandIsSentExactlyOnceAndReset) {
   CMD_Grabber g{100};
   DB_put(CMD_GRABBER, &g);
-  rig_->run_until(1200ms);  // the grabber M7 went out; its minimum gap has passed
+  robot_->run_until(1200ms);  // the grabber M7 went out; its minimum gap has passed
   const int m7_before = count_sent(0x0B0);
   EXPECT_EQ(m7_before, 1) << "one M7 for the grabber change";
   CMD_Grabber_Info gi{};
@@ -93,26 +93,26 @@ TEST_F(HwCommTest, KickerCommandIsSentExactlyOnceAndReset) {
   ASSERT_EQ(gi.ballEngaged, 1);
   CMD_Kicker k{static_cast<unsigned char>(0x80 | 40), 0, 0};
   DB_put(CMD_KICKER, &k);
-  rig_->run_for(3s);
+  robot_->run_for(3s);
   EXPECT_EQ(count_sent(0x0B0), m7_before + 1) << "exactly one M7 for the kick";
   EXPECT_EQ(laptop_->hw().stats().kicks_sent, 1u);
   CMD_Kicker after{};
   DB_get(CAMBADA_1, CMD_KICKER, &after);
   EXPECT_EQ(after.power, 0) << "power reset once sent";
-  EXPECT_GT(rig_->world().ball_position().y(), 2.0) << "the ball was kicked";
+  EXPECT_GT(robot_->world().ball_position().y(), 2.0) << "the ball was kicked";
 }
 
 TEST_F(HwCommTest, BusToRtdbItemsAreWritten) {
   CMD_Vel v{0, 0.3f, 0.2f, false};
   DB_put(CMD_VEL, &v);
-  rig_->run_until(1500ms);
+  robot_->run_until(1500ms);
   CMD_Info info{};
   EXPECT_GE(DB_get(CAMBADA_1, CMD_INFO, &info), 0);
   EXPECT_NEAR(info.Voltage_power24 / 100.0, 25.0, 1.0);
   EXPECT_NEAR(info.Kicker_voltage / 100.0, 180.0, 1.0);
   CMD_Imu imu{};
   DB_get(CAMBADA_1, CMD_IMU, &imu);
-  const double heading = rig_->world().robot(0).compass_heading_deg();
+  const double heading = robot_->world().robot(0).compass_heading_deg();
   EXPECT_NEAR(imu.yaw / 100.0, heading, 2.0);
   CMD_HWerrors e{};
   DB_get(CAMBADA_1, CMD_HWERRORS, &e);
@@ -124,7 +124,7 @@ TEST_F(HwCommTest, BusToRtdbItemsAreWritten) {
 TEST_F(HwCommTest, SetPoseAndResetThroughM5) {
   CMD_SetPose sp{1.5f, -2.0f, 0.75f, 0, 1};
   DB_put(CMD_SETPOSE, &sp);
-  rig_->run_until(300ms);
+  robot_->run_until(300ms);
   CMD_Pos p{};
   DB_get(CAMBADA_1, CMD_POS, &p);
   EXPECT_NEAR(p.px, 1.5, 1e-3);

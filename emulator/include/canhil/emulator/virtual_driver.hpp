@@ -6,7 +6,7 @@
 // the process's RTDB stamps and ages items in the run's virtual time while the
 // driver lives (DB_set_clock). Every bus can be recorded
 // as a candump log (one interface name per robot). `canhil run --virtual-time`,
-// `canhil bench`, RobotRig and the tests are built on this.
+// `canhil bench` and the tests (tests/support/one_robot_session.hpp) are built on this.
 //
 // Not thread-safe: one thread drives it (the session's snapshot() and apply()
 // may be used from others).
