@@ -6,7 +6,6 @@
 // a non-blocking check of the real call, then a wait for canhil's next change
 // until the call's virtual timeout. Writes to CAN sockets are counted, so
 // canhil knows which frames are still in flight.
-#include <dlfcn.h>
 #include <fcntl.h>
 #include <poll.h>
 #include <pthread.h>
@@ -38,7 +37,6 @@ using shim::kSecond;
 using shim::next_symbol;
 using shim::ns_of;
 using shim::timespec_of;
-#define CANHIL_REAL(fn) static const auto real_##fn = next_symbol<decltype(&::fn)>(#fn)
 
 bool valid(const timespec& ts) noexcept { return ts.tv_sec >= 0 && ts.tv_nsec >= 0 && ts.tv_nsec < kSecond; }
 
@@ -518,8 +516,8 @@ int pthread_join(pthread_t thread, void** result) {
 }
 
 int pthread_cond_wait(pthread_cond_t* condition, pthread_mutex_t* mutex) {
-  static const auto real_wait = reinterpret_cast<int (*)(pthread_cond_t*, pthread_mutex_t*)>(
-      dlvsym(RTLD_NEXT, "pthread_cond_wait", "GLIBC_2.3.2"));
+  static const auto real_wait =
+      next_symbol<int (*)(pthread_cond_t*, pthread_mutex_t*)>("pthread_cond_wait", "GLIBC_2.3.2");
   return in_signal_wait("pthread_cond_wait", [&] { return real_wait(condition, mutex); });
 }
 

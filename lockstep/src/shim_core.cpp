@@ -2,7 +2,6 @@
 // blocking primitive and the emulated timerfds (shim_core.hpp).
 #include "shim_core.hpp"
 
-#include <dlfcn.h>
 #include <fcntl.h>
 #include <linux/futex.h>
 #include <poll.h>
@@ -20,8 +19,6 @@
 #include <atomic>
 #include <cerrno>
 #include <climits>
-#include <cstdarg>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -43,15 +40,6 @@ std::int64_t wall_ns() noexcept {
 
 long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const timespec* timeout) noexcept {
   return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
-}
-
-void say(const char* format, ...) noexcept {
-  char line[512];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(line, sizeof line, format, args);
-  va_end(args);
-  std::fprintf(stderr, "canhil-timeshim[%d]: %s\n", static_cast<int>(getpid()), line);
 }
 
 void announce_change() noexcept {
@@ -92,7 +80,7 @@ Slot* claim(std::int32_t tid) noexcept {
     fill(s, tid);
     return &s;
   }
-  say("all %zu slots of the board are taken: thread %d runs unseen by canhil's clock", kMaxSlots, tid);
+  preload::say(kWho, "all %zu slots of the board are taken: thread %d runs unseen by canhil's clock", kMaxSlots, tid);
   return nullptr;
 }
 
@@ -102,7 +90,7 @@ void thread_ended(void* slot) noexcept { release(static_cast<Slot*>(slot)); }
 // said nothing) or died without doing so (said on stderr).
 void detach() noexcept {
   if (!g_detached.exchange(true) && g_board->released.load(std::memory_order_acquire) == 0) {
-    say("canhil (pid %d) is gone: this process goes on in real time", g_board->conductor_pid);
+    preload::say(kWho, "canhil (pid %d) is gone: this process goes on in real time", g_board->conductor_pid);
   }
 }
 
@@ -161,18 +149,19 @@ __attribute__((constructor)) void attach() {
   if (name == nullptr || *name == '\0') return;
   const int fd = shm_open(name, O_RDWR | O_CLOEXEC, 0);
   if (fd < 0) {
-    say("cannot open canhil's board %s (%s): running in real time", name, std::strerror(errno));
+    preload::say(kWho, "cannot open canhil's board %s (%s): running in real time", name, std::strerror(errno));
     return;
   }
   void* mapped = mmap(nullptr, sizeof(Board), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
   close(fd);
   if (mapped == MAP_FAILED) {
-    say("cannot map canhil's board %s (%s): running in real time", name, std::strerror(errno));
+    preload::say(kWho, "cannot map canhil's board %s (%s): running in real time", name, std::strerror(errno));
     return;
   }
   auto* board = static_cast<Board*>(mapped);
   if (board->magic != kMagic || board->version != kVersion) {
-    say("%s is not a canhil lockstep board of version %u (this shim's): running in real time", name, kVersion);
+    preload::say(kWho, "%s is not a canhil lockstep board of version %u (this shim's): running in real time", name,
+                 kVersion);
     munmap(mapped, sizeof(Board));
     return;
   }
@@ -395,7 +384,7 @@ int new_timer(clockid_t clock, int flags) noexcept {
   Timer* t = find_timer(-1);
   if (t == nullptr) {
     close(fd);
-    say("more than %zu timerfds: refused", g_timers.size());
+    preload::say(kWho, "more than %zu timerfds: refused", g_timers.size());
     errno = EMFILE;
     return -1;
   }

@@ -2,10 +2,11 @@
 // processes): the board, this thread's slot, the virtual clock, the one
 // blocking primitive every intercepted call is built on, and the emulated
 // timerfds. Internal to the shim; see canhil/lockstep/board.hpp for the
-// protocol and docs/lockstep.md for what is intercepted and why.
+// protocol and docs/lockstep.md for what is intercepted and why. The plumbing
+// any preload needs (libc's calls, the spin lock, messages) is
+// canhil/base/preload.hpp's.
 #pragma once
 
-#include <dlfcn.h>
 #include <pthread.h>
 #include <signal.h>
 #include <time.h>
@@ -13,36 +14,20 @@
 #include <atomic>
 #include <cstdint>
 
+#include "canhil/base/preload.hpp"
 #include "canhil/lockstep/board.hpp"
 
 namespace canhil::lockstep::shim {
 
 inline constexpr std::int64_t kSecond = 1'000'000'000;
 
-/// The next definition of `name` after the shim's: libc's own call.
-template <class F>
-F next_symbol(const char* name) noexcept {
-  return reinterpret_cast<F>(dlsym(RTLD_NEXT, name));
-}
+using preload::next_symbol;
+using preload::SpinLocked;
+/// Who the shim's lines on stderr are from (preload::say).
+inline constexpr const char* kWho = "canhil-timeshim";
 
 inline std::int64_t ns_of(const timespec& ts) noexcept { return ts.tv_sec * kSecond + ts.tv_nsec; }
 inline timespec timespec_of(std::int64_t ns) noexcept { return timespec{ns / kSecond, ns % kSecond}; }
-
-/// Holds a spin lock for its scope (the shim's small tables; no pthread
-/// mutex, which a preloaded library may meet before libc is ready).
-class SpinLocked {
- public:
-  explicit SpinLocked(std::atomic_flag& flag) noexcept : flag_(flag) {
-    while (flag_.test_and_set(std::memory_order_acquire)) {
-    }
-  }
-  ~SpinLocked() { flag_.clear(std::memory_order_release); }
-  SpinLocked(const SpinLocked&) = delete;
-  SpinLocked& operator=(const SpinLocked&) = delete;
-
- private:
-  std::atomic_flag& flag_;
-};
 
 /// The board, or nullptr when the process runs in real time (no
 /// CANHIL_LOCKSTEP, or the conductor is gone): every call is passed through.
