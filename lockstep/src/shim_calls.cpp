@@ -4,8 +4,8 @@
 //
 // Clocks: the virtual ones read the board. Waiting calls become shim::block:
 // a non-blocking check of the real call, then a wait for canhil's next change
-// until the call's virtual timeout. Writes to CAN sockets are counted, so
-// canhil knows which frames are still in flight.
+// until the call's virtual timeout. (Writes to the kernel's CAN sockets are
+// counted in shim_can.cpp.)
 #include <fcntl.h>
 #include <poll.h>
 #include <pthread.h>
@@ -388,42 +388,6 @@ ssize_t recvmsg(int fd, msghdr* message, int flags) {
   if (!wait_readable("recvmsg", fd, flags)) return -1;
   const ssize_t r = real_recvmsg(fd, message, flags);
   if (r >= 0) virtual_stamps(*message);
-  return r;
-}
-
-// Writing: frames written to a CAN socket are counted (in flight until canhil sees them).
-ssize_t write(int fd, const void* buffer, size_t size) {
-  CANHIL_REAL(write);
-  const ssize_t r = real_write(fd, buffer, size);
-  if (r > 0) shim::count_sent(fd, 1);
-  return r;
-}
-
-ssize_t send(int fd, const void* buffer, size_t size, int flags) {
-  CANHIL_REAL(send);
-  const ssize_t r = real_send(fd, buffer, size, flags);
-  if (r > 0) shim::count_sent(fd, 1);
-  return r;
-}
-
-ssize_t sendto(int fd, const void* buffer, size_t size, int flags, const sockaddr* to, socklen_t to_size) {
-  CANHIL_REAL(sendto);
-  const ssize_t r = real_sendto(fd, buffer, size, flags, to, to_size);
-  if (r > 0) shim::count_sent(fd, 1);
-  return r;
-}
-
-ssize_t sendmsg(int fd, const msghdr* message, int flags) {
-  CANHIL_REAL(sendmsg);
-  const ssize_t r = real_sendmsg(fd, message, flags);
-  if (r > 0) shim::count_sent(fd, 1);
-  return r;
-}
-
-int sendmmsg(int fd, mmsghdr* messages, unsigned int count, int flags) {
-  CANHIL_REAL(sendmmsg);
-  const int r = real_sendmmsg(fd, messages, count, flags);
-  if (r > 0) shim::count_sent(fd, r);
   return r;
 }
 

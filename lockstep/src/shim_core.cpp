@@ -10,7 +10,6 @@
 #include <sys/eventfd.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
-#include <sys/socket.h>
 #include <sys/syscall.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
@@ -21,6 +20,8 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
+
+#include "canhil/lockstep/shim_hook.h"
 
 namespace canhil::lockstep::shim {
 namespace {
@@ -363,15 +364,6 @@ void end_signal_wait() noexcept {
   mark_running(*slot);
 }
 
-void count_sent(int fd, std::int64_t frames) noexcept {
-  if (frames <= 0 || board() == nullptr) return;
-  int domain = 0;
-  socklen_t size = sizeof domain;
-  if (getsockopt(fd, SOL_SOCKET, SO_DOMAIN, &domain, &size) != 0 || domain != AF_CAN) return;
-  if (Slot* slot = my_slot())
-    slot->frames_sent.fetch_add(static_cast<std::uint64_t>(frames), std::memory_order_release);
-}
-
 bool is_timer(int fd) noexcept {
   const SpinLocked locked(g_timers_lock);
   return find_timer(fd) != nullptr;
@@ -459,6 +451,24 @@ std::int64_t next_timer() noexcept {
 }
 
 }  // namespace canhil::lockstep::shim
+
+// The hooks another preload calls (canhil/lockstep/shim_hook.h).
+
+extern "C" __attribute__((visibility("default"))) void canhil_shim_frames_sent(long long frames) {
+  using namespace canhil::lockstep::shim;
+  if (frames <= 0 || board() == nullptr) return;
+  if (canhil::lockstep::Slot* slot = my_slot())
+    slot->frames_sent.fetch_add(static_cast<std::uint64_t>(frames), std::memory_order_release);
+}
+
+extern "C" __attribute__((visibility("default"))) void canhil_shim_descriptor_readable(int /*fd*/) {
+  using namespace canhil::lockstep::shim;
+  canhil::lockstep::Board* b = board();
+  if (b == nullptr) return;
+  // As the conductor's nudge: a new epoch, and every waiter checks again.
+  b->epoch.fetch_add(1, std::memory_order_acq_rel);
+  futex(&b->epoch, FUTEX_WAKE, INT_MAX, nullptr);
+}
 
 /// Called by canhil's Conductor, through dlsym, when the shim is preloaded into
 /// canhil itself: from then on this process's clocks read `board` (a team's

@@ -68,9 +68,6 @@ Wait block(const char* what, std::int64_t wake_at_ns, Ready&& ready);
 void begin_signal_wait(const char* what) noexcept;
 void end_signal_wait() noexcept;
 
-/// Counts one CAN frame written by this thread, if `fd` is a CAN socket.
-void count_sent(int fd, std::int64_t frames) noexcept;
-
 // Emulated timerfds: an eventfd whose counter the shim raises when virtual
 // time passes the timer's expiry.
 bool is_timer(int fd) noexcept;

@@ -123,6 +123,22 @@ TEST(Conductor, APollWaitsInVirtualTimeAndWakesWhenDataComes) {
   std::remove(fifo.c_str());
 }
 
+// A second preload tells the shim what it cannot see (canhil/lockstep/
+// shim_hook.h): a descriptor made readable in user space wakes a thread that
+// waits for it, in the instant it happened; frames it sent are counted.
+TEST(Conductor, APreloadsHookWakesAWaitForItsDescriptorAndCountsItsFrames) {
+  Conductor conductor;
+  ChildProcess client(command(conductor, "hook"), "/tmp/canhil_lockstep_hook.log");
+  ASSERT_GE(conductor.wait_attached(1, 10s), 1u) << "(its second thread may be there already)";
+  ASSERT_EQ(drive(conductor, 1s), "") << client.output();
+  const auto lines = said(client.output());
+  EXPECT_EQ(at(lines, "written"), 100'000'000) << client.output();
+  EXPECT_EQ(at(lines, "readable"), 100'000'000) << "woken by the hook, not by the clock's next move (600 ms)\n"
+                                                << client.output();
+  EXPECT_EQ(at(lines, "joined"), 600'000'000) << client.output();
+  EXPECT_EQ(conductor.frames_sent(), 2u) << "the two frames told, and no write to a pipe";
+}
+
 TEST(Conductor, ATimerfdTicksOnTheVirtualClock) {
   Conductor conductor;
   ChildProcess client(command(conductor, "timerfd"), "/tmp/canhil_lockstep_timerfd.log");

@@ -1,6 +1,7 @@
 // A program that plays a team's external process under the time shim: it
-// reads the clocks, sleeps, polls, reads a timerfd, starts a thread, or
-// spins without ever waiting, and prints what its clocks said at each point
+// reads the clocks, sleeps, polls, reads a timerfd, starts a thread, spins
+// without ever waiting, or plays a second preload through the shim's hooks,
+// and prints what its clocks said at each point
 // (lines "<what> <CLOCK_MONOTONIC in ns>"). tests/lockstep/conductor_test.cpp
 // moves the virtual clock and checks the lines.
 #include <fcntl.h>
@@ -20,6 +21,9 @@
 #include <cstring>
 #include <string>
 #include <thread>
+
+#include "canhil/base/preload.hpp"
+#include "canhil/lockstep/shim_hook.h"
 
 namespace {
 
@@ -149,6 +153,44 @@ int blocked() {
   return 0;
 }
 
+// What a second preload (a bus in user space) does, played by the program
+// itself: it puts a byte in a pipe with the system call (the shim sees no
+// write, and the kernel wakes nobody the shim could see: a virtual wait looks
+// again only when told) and tells the shim through its hooks, found as that
+// preload finds them, with two frames sent. A second thread waits for the
+// pipe in a poll with no timeout.
+int hook() {
+  const auto readable =
+      canhil::preload::any_symbol<canhil_shim_descriptor_readable_fn>("canhil_shim_descriptor_readable");
+  const auto sent = canhil::preload::any_symbol<canhil_shim_frames_sent_fn>("canhil_shim_frames_sent");
+  if (readable == nullptr || sent == nullptr) {
+    say("no-hooks");
+    return 2;
+  }
+  int fds[2];
+  if (pipe(fds) != 0) return 2;
+  std::thread reader([fd = fds[0]] {
+    pollfd p{fd, POLLIN, 0};
+    say(poll(&p, 1, -1) == 1 ? "readable" : "poll-wrong");
+  });
+  const timespec tenth{0, 100'000'000};
+  nanosleep(&tenth, nullptr);
+  // Woken at 100 ms, as the reader was: 20 ms of CPU first, so that the reader
+  // has looked again and waits (without the hook, until the clock next moves).
+  volatile unsigned long n = 0;
+  while (cpu_seconds() < 0.020) n = n + 1;
+  const char byte = 'x';
+  if (syscall(SYS_write, fds[1], &byte, 1) != 1) return 2;
+  sent(2);
+  readable(fds[0]);
+  say("written");
+  const timespec half{0, 500'000'000};
+  nanosleep(&half, nullptr);
+  reader.join();
+  say("joined");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,6 +203,7 @@ int main(int argc, char** argv) {
   if (mode == "compute" && argc > 2) return compute(std::strtod(argv[2], nullptr));
   if (mode == "blocked") return blocked();
   if (mode == "patient") return patient();
-  std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient\n");
+  if (mode == "hook") return hook();
+  std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient|hook\n");
   return 2;
 }
