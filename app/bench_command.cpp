@@ -33,10 +33,10 @@
 #include "bench_realtime.hpp"
 #include "bench_view.hpp"
 #include "canhil/base/setup_error.hpp"
-#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/frames/ftt.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "run_external.hpp"
@@ -83,7 +83,7 @@ bool bench_virtual(const std::optional<std::string>& config, double seconds,
 // TM release jitter of canhil run against a bare loop on the same period: true when p99 <= 1.2x.
 bool bench_jitter(const std::string& iface, double seconds, int priority,
                   const std::shared_ptr<const frames::MessageSet>& messages) {
-  const Nanos ec = can_nodes::FttConfig{}.elementary_cycle;  // canhil run's
+  const Nanos ec = frames::FttConfig{}.elementary_cycle;  // canhil run's
   std::printf(
       "canhil bench: real time on %s, %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then both\n",
       iface.c_str(), seconds, priority);

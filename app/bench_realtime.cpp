@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "canhil/base/setup_error.hpp"
-#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/fifo_scheduling.hpp"
+#include "canhil/frames/ftt.hpp"
 #include "run_realtime.hpp"
 
 namespace canhil::app {
@@ -192,7 +192,7 @@ JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator
     previous = tm.ec_counter;
     releases.emplace_back(k, f.time);
   }
-  return jitter_of(std::move(releases), can_nodes::FttConfig{}.elementary_cycle);
+  return jitter_of(std::move(releases), frames::FttConfig{}.elementary_cycle);
 }
 
 RateFigures canhil_rate(const std::string& iface, std::uint64_t frames) {

@@ -37,7 +37,7 @@ Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, c
 
 // --- FttMaster -----------------------------------------------------------------
 
-FttMaster::FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const FttSchedule& schedule,
+FttMaster::FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
                      Nanos first_ec)
     : Node(node_name(NodeId::kMaster), bus, std::move(set)), schedule_(schedule), first_ec_(first_ec) {
   bus.set_filters({});  // hears nothing

@@ -2,7 +2,7 @@
 
 namespace canhil::emulator {
 
-can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const can_nodes::FttConfig& ftt) {
+can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const frames::FttConfig& ftt) {
   can_nodes::NodeParams p;
   p.ftt = ftt;
   p.geometry = robot.geometry;

@@ -13,21 +13,24 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <functional>
 #include <optional>
 
-#include "canhil/can_nodes/ftt.hpp"
 #include "canhil/can_nodes/node.hpp"
 #include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/can_nodes/robot_io.hpp"
+#include "canhil/frames/ftt.hpp"
 #include "canhil/frames/ftt_slot.hpp"
 #include "canhil/kinematics/omni.hpp"
 
 namespace canhil::can_nodes {
 
+using namespace std::chrono_literals;
+
 /// Firmware parameters; defaults as on the robot where known (docs/nodes.md).
 struct NodeParams {
-  FttConfig ftt;
+  frames::FttConfig ftt;
   kinematics::OmniGeometry geometry;  ///< must match the robot's
   kinematics::EncoderSpec encoder;
   Nanos watchdog = 150ms;                 ///< Pic_base: no M6 for longer -> brake
@@ -42,7 +45,8 @@ struct NodeParams {
 class FttMaster final : public Node {
  public:
   /// Sends the TM of EC k at first_ec + k * EC.
-  FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const FttSchedule& schedule, Nanos first_ec);
+  FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
+            Nanos first_ec);
   std::uint64_t ec_count() const noexcept { return ec_; }
 
  protected:
@@ -50,7 +54,7 @@ class FttMaster final : public Node {
   void step(Nanos now) override;
 
  private:
-  const FttSchedule& schedule_;
+  const frames::FttSchedule& schedule_;
   Nanos first_ec_;
   std::uint64_t ec_ = 0;
 };

@@ -61,7 +61,7 @@ class RobotNodes {
   const Node& node(NodeId id) const;
   /// The emulated nodes, in NodeId order.
   std::vector<Node*> nodes();
-  const FttSchedule& schedule() const noexcept { return schedule_; }
+  const frames::FttSchedule& schedule() const noexcept { return schedule_; }
   /// The time the set started at (its first EC).
   Nanos start() const noexcept { return start_; }
   PicBase& pic_base() { return static_cast<PicBase&>(node(NodeId::kPicBase)); }
@@ -73,7 +73,7 @@ class RobotNodes {
   void set_fault_hook(FaultHook* hook);
 
  private:
-  FttSchedule schedule_;
+  frames::FttSchedule schedule_;
   Nanos start_;
   NodeSet emulated_;
   std::array<std::unique_ptr<Bus>, kNodeCount> buses_;

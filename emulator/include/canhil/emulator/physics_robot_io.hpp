@@ -27,6 +27,6 @@ class PhysicsRobotIo final : public can_nodes::RobotIo {
 };
 
 /// Node parameters that match a physical robot (its wheels and encoders).
-can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const can_nodes::FttConfig& ftt = {});
+can_nodes::NodeParams node_params_for(const physics::RobotParams& robot, const frames::FttConfig& ftt = {});
 
 }  // namespace canhil::emulator

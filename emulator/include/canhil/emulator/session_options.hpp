@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "canhil/base/time.hpp"
-#include "canhil/can_nodes/ftt.hpp"
+#include "canhil/frames/ftt.hpp"
 #include "canhil/frames/messages.hpp"
 #include "canhil/physics/world.hpp"
 #include "canhil/vision_emu/runner.hpp"
@@ -16,7 +16,7 @@ namespace canhil::emulator {
 /// What a run needs beyond its scenario: chosen by the command, not the file.
 struct SessionOptions {
   std::shared_ptr<const frames::MessageSet> messages;
-  can_nodes::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
+  frames::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
   vision_emu::VisionParams vision;
   bool vision_on = true;  ///< off: no vision and no RTDB (canhil nodes)
   /// The run follows the wall clock, so processes outside it can take part

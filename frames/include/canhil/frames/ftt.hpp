@@ -1,4 +1,6 @@
-// canhil/can_nodes/ftt.hpp — the FTT-CAN schedule.
+// canhil/frames/ftt.hpp — the FTT-CAN configuration and schedule: the
+// master's rules, which the master node (can_nodes/) follows and the timing
+// analysis (timing/) can judge a capture by. A slave's side is ftt_slot.hpp.
 //
 // The elementary cycle (EC) is laid out as: trigger message (TM) at its start,
 // then the asynchronous window, then the synchronous window at its end, whose
@@ -15,10 +17,10 @@
 #include <vector>
 
 #include "canhil/base/setup_error.hpp"
-#include "canhil/can_nodes/clock.hpp"
+#include "canhil/base/time.hpp"
 #include "canhil/frames/messages.hpp"
 
-namespace canhil::can_nodes {
+namespace canhil::frames {
 
 using namespace std::chrono_literals;
 
@@ -32,7 +34,7 @@ class FttSchedule {
  public:
   /// Throws SetupError when a period is not a whole number of ECs or the
   /// busiest EC does not fit (TM + one asynchronous frame + its window).
-  FttSchedule(const frames::MessageSet& set, const FttConfig& config);
+  FttSchedule(const MessageSet& set, const FttConfig& config);
 
   const FttConfig& config() const noexcept { return config_; }
   /// Synchronous messages due in EC `ec_index`, as sync_bitmap bits.
@@ -54,4 +56,4 @@ class FttSchedule {
   std::vector<std::uint32_t> cycle_bitmaps_;  // bitmap() of each EC of the cycle, the schedule repeating after it
 };
 
-}  // namespace canhil::can_nodes
+}  // namespace canhil::frames

@@ -1,4 +1,4 @@
-#include "canhil/can_nodes/ftt.hpp"
+#include "canhil/frames/ftt.hpp"
 
 #include <bit>
 #include <numeric>
@@ -6,9 +6,9 @@
 
 #include "canhil/frames/wire.hpp"
 
-namespace canhil::can_nodes {
+namespace canhil::frames {
 
-FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config) : config_(config) {
+FttSchedule::FttSchedule(const MessageSet& set, const FttConfig& config) : config_(config) {
   const Nanos ec = config.elementary_cycle;
   if (ec <= Nanos{0}) throw SetupError("the elementary cycle must be positive");
   if (config.bit_rate == 0) throw SetupError("the bit rate must be positive");
@@ -16,18 +16,17 @@ FttSchedule::FttSchedule(const frames::MessageSet& set, const FttConfig& config)
   Nanos longest_async{0};
   Nanos tm_time{0};         // the TM's worst-case wire time
   std::uint32_t cycle = 1;  // ECs after which the schedule repeats
-  for (const frames::MessageCodec& m : set.codec().messages()) {
-    const frames::FttInfo& info = set.ftt(m);
-    const Nanos wire =
-        frames::bits_to_time(frames::worst_case_frame_bits(m.def().length, m.def().extended), config.bit_rate);
-    if (info.kind == frames::FttKind::kTrigger) {
+  for (const MessageCodec& m : set.codec().messages()) {
+    const FttInfo& info = set.ftt(m);
+    const Nanos wire = bits_to_time(worst_case_frame_bits(m.def().length, m.def().extended), config.bit_rate);
+    if (info.kind == FttKind::kTrigger) {
       tm_time = wire;
       if (info.period != ec) {
         throw SetupError("the trigger message " + m.def().name + " has period " + us(info.period) +
                          " us but the elementary cycle is " + us(ec) +
                          " us; make them equal (GenMsgCycleTime in the DBC, or the EC setting)");
       }
-    } else if (info.kind == frames::FttKind::kAsync) {
+    } else if (info.kind == FttKind::kAsync) {
       longest_async = std::max(longest_async, wire);
     } else {
       if (info.period.count() % ec.count() != 0) {
@@ -83,4 +82,4 @@ Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
   return w == Nanos{0} ? w : w + config_.sync_window_guard;
 }
 
-}  // namespace canhil::can_nodes
+}  // namespace canhil::frames

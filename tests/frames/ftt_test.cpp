@@ -1,6 +1,6 @@
 // The FTT schedule from the shipped DBC: which synchronous messages each EC
 // carries, how long their window is, and the schedules it refuses.
-#include "canhil/can_nodes/ftt.hpp"
+#include "canhil/frames/ftt.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 #include "canhil/frames/wire.hpp"
 #include "support/test_paths.hpp"
 
-namespace canhil::can_nodes {
+namespace canhil::frames {
 namespace {
 
 using namespace std::chrono_literals;
@@ -105,4 +105,4 @@ TEST_F(Ftt, AnEcOtherThanTheTriggerPeriodIsRefusedSayingBoth) {
 }
 
 }  // namespace
-}  // namespace canhil::can_nodes
+}  // namespace canhil::frames
