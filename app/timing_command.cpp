@@ -42,9 +42,9 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
   const bool allow_empty = args.flag("--allow-empty");
   const auto svg = args.option("--svg");
   timing::TimingConfig cfg;
-  cfg.elementary_cycle = std::chrono::duration_cast<Nanos>(
+  cfg.ftt.elementary_cycle = std::chrono::duration_cast<Nanos>(
       std::chrono::duration<double, std::milli>(number(args.option("--ec-ms"), "--ec-ms", 10)));
-  cfg.bit_rate = static_cast<std::uint32_t>(number(args.option("--bit-rate"), "--bit-rate", 1'000'000));
+  cfg.ftt.bit_rate = static_cast<std::uint32_t>(number(args.option("--bit-rate"), "--bit-rate", 1'000'000));
   cfg.window_slack = std::chrono::duration_cast<Nanos>(
       std::chrono::duration<double, std::micro>(number(args.option("--slack-us"), "--slack-us", 0)));
   const double seconds = number(args.option("--seconds"), "--seconds", 10);

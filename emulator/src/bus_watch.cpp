@@ -8,8 +8,7 @@ namespace canhil::emulator {
 
 timing::TimingAnalyzer ftt_checker(const SessionOptions& options) {
   timing::TimingConfig config;
-  config.elementary_cycle = options.ftt.elementary_cycle;
-  config.bit_rate = options.ftt.bit_rate;
+  config.ftt = options.ftt;
   config.violations_only = true;
   return {options.messages, config};
 }

@@ -69,7 +69,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
     return;
   }
   PerMessage& m = messages_[static_cast<std::size_t>(codec - set_->codec().messages().data())];
-  const Nanos ec = config_.elementary_cycle;
+  const Nanos ec = config_.ftt.elementary_cycle;
   char detail[160];
   // Intervals: missing and late frames against the period (or the minimum gap).
   if (m.count > 0) {
@@ -133,7 +133,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
 TimingReport TimingAnalyzer::finish() const {
   TimingReport r = report_;
   const double seconds = std::chrono::duration<double>(r.end - r.start).count();
-  r.bus_load = seconds > 0 ? static_cast<double>(r.bits) / (seconds * config_.bit_rate) : 0.0;
+  r.bus_load = seconds > 0 ? static_cast<double>(r.bits) / (seconds * config_.ftt.bit_rate) : 0.0;
   for (const PerMessage& m : messages_) {
     MessageTiming out;
     out.name = std::string(m.codec->name());

@@ -14,13 +14,16 @@
 #include <string>
 #include <vector>
 
+#include "canhil/frames/ftt.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace canhil::timing {
 
 struct TimingConfig {
-  Nanos elementary_cycle = std::chrono::milliseconds(10);
-  std::uint32_t bit_rate = 1'000'000;
+  /// The bus's FTT configuration, the master's own (frames/ftt.hpp): its
+  /// elementary cycle places the synchronous window, its bit rate gives the
+  /// load. (The TMs carry each EC's window; the guard is not judged.)
+  frames::FttConfig ftt;
   double late_fraction = 0.10;  ///< late: an interval longer than the period by this fraction ...
   Nanos late_minimum = std::chrono::microseconds(1500);  ///< ... or by this, whichever is larger
   Nanos window_slack{0};                                 ///< tolerance on the windows' edges (real buses: a few us)
