@@ -24,13 +24,10 @@ Nanos tm_wire_time(const NodeParams& p) {
   return frames::bits_to_time(frames::worst_case_frame_bits(8), p.ftt.bit_rate);
 }
 
-// Asynchronous messages go right after the TM (the asynchronous window opens
-// when the TM leaves the wire), no faster than their minimum gap.
+// Asynchronous message `m`'s slot in the EC the TM at `tm_time` opens (frames::async_slot).
 Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, const NodeParams& p, Nanos tm_time,
                  Nanos last_sent) {
-  const Nanos gap = set.ftt(m).min_gap;
-  if (tm_time - last_sent < gap) return kNever;
-  return tm_time + tm_wire_time(p);
+  return frames::async_slot(tm_time, tm_wire_time(p), last_sent, set.ftt(m).min_gap);
 }
 
 }  // namespace

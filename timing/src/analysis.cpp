@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "canhil/frames/describe.hpp"
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/wire.hpp"
 
 namespace canhil::timing {
@@ -76,7 +77,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
     const Nanos interval = t - m.last;
     if (!config_.violations_only) m.intervals.push_back(interval);
     if (m.ftt.kind == frames::FttKind::kAsync) {
-      if (interval + config_.window_slack < m.ftt.min_gap) {
+      if (!frames::keeps_min_gap(t + config_.window_slack, m.last, m.ftt.min_gap)) {
         std::snprintf(detail, sizeof detail, "%.3f ms after the previous, minimum gap %.0f ms", ms(interval),
                       ms(m.ftt.min_gap));
         violate(m, t, ViolationKind::kTooSoon, detail);
@@ -103,18 +104,17 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
     if (set_->tm.decode(f, tm).ok()) {
       have_tm_ = true;
       tm_time_ = t;
-      bitmap_ = tm.sync_bitmap;
-      window_ = std::chrono::microseconds(tm.sync_window_us);
+      tm_ = tm;
       ++ec_index_;
     }
     return;
   }
   if (!have_tm_) return;  // nothing to judge against yet
   const Nanos in_ec = t - tm_time_;
-  const Nanos window_start = ec - window_;
+  const Nanos window_start = frames::sync_window_start(tm_, tm_time_, ec) - tm_time_;  // into the EC
   if (m.ftt.kind == frames::FttKind::kSync) {
-    if (((bitmap_ >> m.ftt.index) & 1u) == 0) {
-      std::snprintf(detail, sizeof detail, "in an EC whose TM (bitmap 0x%X) does not schedule it", bitmap_);
+    if (((tm_.sync_bitmap >> m.ftt.index) & 1u) == 0) {
+      std::snprintf(detail, sizeof detail, "in an EC whose TM (bitmap 0x%X) does not schedule it", tm_.sync_bitmap);
       violate(m, t, ViolationKind::kUnscheduled, detail);
     } else if (in_ec + config_.window_slack < window_start || in_ec >= ec + config_.window_slack) {
       std::snprintf(detail, sizeof detail, "%.1f us into the EC; the synchronous window is %.1f to %.1f us", us(in_ec),
@@ -123,7 +123,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
     }
     if (m.last_ec == ec_index_) violate(m, t, ViolationKind::kDuplicate, "twice in one EC");
     m.last_ec = ec_index_;
-  } else if (in_ec + config_.window_slack >= window_start && window_ != Nanos{0}) {
+  } else if (t + config_.window_slack >= frames::async_window_end(tm_, tm_time_, ec)) {
     std::snprintf(detail, sizeof detail, "%.1f us into the EC, inside the synchronous window (from %.1f us)", us(in_ec),
                   us(window_start));
     violate(m, t, ViolationKind::kOutsideWindow, detail);

@@ -1,9 +1,14 @@
-// canhil/frames/ftt_slot.hpp — an FTT-CAN slave's synchronous slot: from the
-// trigger messages it hears, when its synchronous messages are due. The
-// synchronous window sits at the end of the elementary cycle (EC) and the TM
-// carries its length, so a producer sends at TM time + EC - window. The one
-// rule for every slave: the emulated nodes, the reference handler and the
-// tests' laptop endpoint. Pure; one per producer, not thread-safe.
+// canhil/frames/ftt_slot.hpp — an FTT-CAN slave's slots: from the trigger
+// messages it hears, when its synchronous messages are due and when its
+// asynchronous (sporadic) ones may go. The synchronous window sits at the end
+// of the elementary cycle (EC) and the TM carries its length, so a producer
+// sends at TM time + EC - window. The asynchronous window lies between: it
+// opens when the TM has left the wire and closes where the synchronous window
+// starts; a sporadic message goes in it no sooner than its minimum gap after
+// the previous one. The one copy of these rules, for every slave (the
+// emulated nodes, the reference handler, the tests' laptop endpoint) and for
+// the timing analysis that judges them. Pure; SyncSlot is one per producer,
+// not thread-safe. The master's side (the schedule) is ftt.hpp.
 #pragma once
 
 #include <cstdint>
@@ -17,6 +22,24 @@ namespace canhil::frames {
 /// The start of the synchronous window of the EC a TM received at `tm_time` opens.
 constexpr Nanos sync_window_start(const Tm& tm, Nanos tm_time, Nanos ec) noexcept {
   return tm_time + ec - std::chrono::microseconds(tm.sync_window_us);
+}
+
+/// Whether a sporadic message at `at` keeps its minimum gap after the
+/// previous one at `last`.
+constexpr bool keeps_min_gap(Nanos at, Nanos last, Nanos min_gap) noexcept { return at - last >= min_gap; }
+
+/// A sporadic message's slot in the EC a TM sent at `tm_time` opens: when the
+/// TM has left the wire (`tm_wire_time` later), if by the TM its minimum gap
+/// has passed since it last went (`last_sent`); else kNever (a later EC).
+constexpr Nanos async_slot(Nanos tm_time, Nanos tm_wire_time, Nanos last_sent, Nanos min_gap) noexcept {
+  return keeps_min_gap(tm_time, last_sent, min_gap) ? tm_time + tm_wire_time : kNever;
+}
+
+/// Where the asynchronous window of the EC a TM received at `tm_time` opens
+/// ends: at the synchronous window's start; never (kNever) when the TM
+/// schedules no synchronous window, the whole EC being asynchronous.
+constexpr Nanos async_window_end(const Tm& tm, Nanos tm_time, Nanos ec) noexcept {
+  return tm.sync_window_us == 0 ? kNever : sync_window_start(tm, tm_time, ec);
 }
 
 class SyncSlot {

@@ -120,8 +120,7 @@ class TimingAnalyzer {
   TimingReport report_;
   bool have_tm_ = false;
   Nanos tm_time_{0};
-  std::uint32_t bitmap_ = 0;
-  Nanos window_{0};
+  frames::Tm tm_;  // the last TM
   std::uint64_t ec_index_ = 0;
 };
 
