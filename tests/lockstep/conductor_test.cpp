@@ -40,7 +40,7 @@ std::string command(const Conductor& conductor, const std::string& arguments) {
 // they are quiet, then jump to the earliest wake-up, up to `end`.
 std::string drive(Conductor& conductor, Nanos end) {
   for (;;) {
-    const std::string stuck = conductor.wait_quiet({}, "t = " + std::to_string(conductor.now().count()) + " ns");
+    std::string stuck = conductor.wait_quiet({}, "t = " + std::to_string(conductor.now().count()) + " ns");
     if (!stuck.empty()) return stuck;
     const Nanos next = conductor.next_wakeup();
     if (next > end) {
