@@ -6,6 +6,7 @@
 
 #include "canhil/frames/wire.hpp"
 
+#include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::can_nodes {
@@ -15,7 +16,7 @@ using namespace std::chrono_literals;
 
 const std::vector<std::string> kNodes = {"FTT master", "Pic_base", "Motor1", "Motor2", "Pic_odom"};
 
-class FaultTest : public ::testing::Test {
+class FaultTest : public test::WatchedTest {
  protected:
   std::shared_ptr<const frames::MessageSet> set = frames::MessageSet::load(test::shipped_dbc());
   FaultInjector injector(std::vector<std::string> texts, std::uint64_t seed = 1) {

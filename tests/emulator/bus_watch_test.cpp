@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "canhil/frames/messages.hpp"
+#include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
@@ -14,7 +15,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class BusWatchTest : public ::testing::Test {
+class BusWatchTest : public test::WatchedTest {
  protected:
   BusWatchTest() {
     setenv("RTDB_KEY", std::to_string(0x5C000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);

@@ -13,6 +13,7 @@
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/physics/config.hpp"
+#include "support/counter_watch.hpp"
 #include "support/error_of.hpp"
 #include "support/fake_robot.hpp"
 #include "support/rtdb_ipc.hpp"
@@ -41,7 +42,10 @@ std::string bench_error_of(const std::string& text) {
   return test::error_of<physics::ConfigError>([&] { parse_scenario(text, "bench.toml"); });
 }
 
-TEST(Emulate, AScenarioListsTheNodesCanhilPlaysForEveryRobotOrPerRobot) {
+// Every test here fails on a node counter that moved unexpectedly.
+class Emulate : public test::WatchedTest {};
+
+TEST_F(Emulate, AScenarioListsTheNodesCanhilPlaysForEveryRobotOrPerRobot) {
   const NodeSet slaves =
       set_of({NodeId::kMotor1, NodeId::kMotor2, NodeId::kMotor3, NodeId::kPicOdom, NodeId::kCompass, NodeId::kSysMon});
   const Scenario one = parse_scenario(kBench, "bench.toml");
@@ -90,7 +94,7 @@ x_m = 2
   EXPECT_EQ(parse_scenario(scenario_toml(one, session.snapshot()), "saved.toml").emulate, one.emulate);
 }
 
-TEST(Emulate, MistakesInTheListsAreNamedWithTheirLine) {
+TEST_F(Emulate, MistakesInTheListsAreNamedWithTheirLine) {
   EXPECT_NE(bench_error_of("[run]\nemulate = [\"Motor4\"]\n")
                 .find("bench.toml:2: run.emulate: not a node's name; the nodes "
                       "are FTT_master, Pic_base"),
@@ -112,7 +116,7 @@ TEST(Emulate, MistakesInTheListsAreNamedWithTheirLine) {
   EXPECT_NE(test::error_of([&] { complete(none); }).find("robot 1 emulates no node"), std::string::npos);
 }
 
-TEST(Emulate, CanhilsNodesFollowARealMasterAndARealPicBaseClosesTheLoop) {
+TEST_F(Emulate, CanhilsNodesFollowARealMasterAndARealPicBaseClosesTheLoop) {
   test::RtdbKeys keys;
   const Scenario s = parse_scenario(kBench, "bench.toml");
   SessionOptions o;
@@ -134,6 +138,7 @@ TEST(Emulate, CanhilsNodesFollowARealMasterAndARealPicBaseClosesTheLoop) {
       [&](const std::string& name) { return std::unique_ptr<can_nodes::Bus>(driver.bus(0).attach(name)); }, Nanos{0},
       set_of({NodeId::kMaster, NodeId::kPicBase}));
   for (can_nodes::Node* n : boards.nodes()) driver.add(*n);
+  const auto watching = counters.watch_session(session);
 
   const physics::Placement start = s.world.robots[0];
   driver.run_for(6s - 1ns);  // ECs 0..599

@@ -19,6 +19,7 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/rtdb/rtdb.h"
+#include "support/counter_watch.hpp"
 #include "support/team_rtdb.hpp"
 #include "support/test_paths.hpp"
 
@@ -27,7 +28,7 @@ namespace {
 
 std::string cambada_like(const char* file) { return test::source_dir() + "/tests/support/cambada_like/" + file; }
 
-class LaptopLinkTest : public ::testing::Test {
+class LaptopLinkTest : public test::WatchedTest {
  protected:
   void SetUp() override {
     ASSERT_EQ(unshare(CLONE_NEWIPC), 0) << "a private IPC namespace needs root (CAP_SYS_ADMIN): " << strerror(errno);

@@ -12,6 +12,7 @@
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/frames/messages.hpp"
+#include "support/counter_watch.hpp"
 #include "support/error_of.hpp"
 #include "support/rtdb_ipc.hpp"
 #include "support/test_paths.hpp"
@@ -21,7 +22,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class MatchTest : public ::testing::Test {
+class MatchTest : public test::WatchedTest {
  protected:
   SessionOptions options() const {
     SessionOptions o;
@@ -62,6 +63,7 @@ TEST_F(MatchTest, AGoalInTheSecondHalfCountsForTheTeamNowAttackingThatGoal) {
   Scenario s = half_scenario(load_scenario(shipped_scenario("two_teams.toml")), 1);
   Session session(s, options());
   VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
   const double goal_x = s.world.field.length_m / 2 + 0.3;
   session.apply(MoveBall{{goal_x, 0.0, s.world.ball.radius_m}, Eigen::Vector3d::Zero()});
   driver.run_for(100ms);

@@ -7,13 +7,14 @@
 #include <gtest/gtest.h>
 
 #include "canhil/physics/world.hpp"
+#include "support/counter_watch.hpp"
 
 namespace canhil::emulator {
 namespace {
 
 using namespace std::chrono_literals;
 
-class RefereeDeskTest : public ::testing::Test {
+class RefereeDeskTest : public test::WatchedTest {
  protected:
   // The shipped two-team scenario, every robot parked far from (0, 3) but robot 0,
   // which stands `from_spot` metres below the touch line's centre.

@@ -8,12 +8,14 @@
 
 #include <vector>
 
+#include "support/counter_watch.hpp"
+
 namespace canhil::emulator {
 namespace {
 
 using namespace std::chrono_literals;
 
-class RefereeTest : public ::testing::Test {
+class RefereeTest : public test::WatchedTest {
  protected:
   static std::vector<RefereeTeam> two_teams() { return {{"new", true, 0, 1}, {"old", false, 1, 1}}; }
   // Robot 0 (team new) and robot 1 (team old) where the test puts them; the ball at (x, y) rolling at v.

@@ -10,13 +10,14 @@
 #include <fstream>
 
 #include "canhil/frames/messages.hpp"
+#include "support/counter_watch.hpp"
 #include "support/error_of.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
 namespace {
 
-class RunPlanTest : public ::testing::Test {
+class RunPlanTest : public test::WatchedTest {
  protected:
   void SetUp() override {
     std::ofstream(file_) << "[run]\nduration_s = 7\nseed = 5\nkick_power = 30\nfaults = [\"drop:M4_1:0.5\"]\n"

@@ -17,6 +17,7 @@
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
+#include "support/counter_watch.hpp"
 #include "support/error_of.hpp"
 #include "support/rtdb_ipc.hpp"
 #include "support/test_paths.hpp"
@@ -26,7 +27,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class TwoTeams : public ::testing::Test {
+class TwoTeams : public test::WatchedTest {
  protected:
   SessionOptions options() const {
     SessionOptions o;
@@ -43,6 +44,7 @@ TEST_F(TwoTeams, BothTeamsLoopsCloseOnTheirOwnRtdbSets) {
   EXPECT_EQ(s.agents, (std::vector<int>{1, 2, 3, 4, 5, 1, 2, 3, 4, 5})) << "each team numbers its own";
   Session session(s, options());
   VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
   driver.run_for(2s);
   for (std::size_t r = 0; r < 10; ++r) {  // every agent acts: drives to the ball, or turns to find it
     const auto& start = s.world.robots[r];
@@ -101,6 +103,7 @@ heading_deg = 90.0
   EXPECT_FALSE(s.teams[1].attacks_positive_x);
   Session session(s, options());
   VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
   driver.run_for(8s);
   ASSERT_FALSE(session.goals().empty()) << "ball at " << session.world().ball_position().transpose();
   EXPECT_FALSE(session.goals().front().positive_x) << "in the -x goal, the one the second team attacks";
@@ -122,6 +125,7 @@ TEST_F(TwoTeams, ABallKickedOutComesBackOnTheLineForTheOtherTeamTheSameTwice) {
     std::vector<std::string> states;
     session.on_coach_change([&](const CoachState& c) { states.push_back(c.state_of(0) + "/" + c.state_of(1)); });
     VirtualDriver driver(session, {});
+    const auto watching = counters.watch_session(session);
     driver.run_for(4s);
     EXPECT_NE(session.referee(), nullptr);
     const auto& calls = session.referee()->calls();
@@ -167,6 +171,7 @@ TEST_F(TwoTeams, ARestartSendsRobotsOffTheSpotNeverIntoEachOtherAndIntoTheWorldL
     }
   });
   VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
   driver.run_for(1s);
   ASSERT_FALSE(at_call.empty()) << "the ball went out";
   const double radius = s.world.robot.body_radius_m;
@@ -187,6 +192,7 @@ TEST_F(TwoTeams, AfterAKickOffEveryReferenceAgentsOdometryKnowsWhereTheRefereePu
   const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
   Session session(s, options());
   VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
   driver.run_for(3s);  // the robots drive off their places
   ASSERT_EQ(session.referee_placements(0), 0u);
   // A goal for the first team: the ball rolled into the goal it attacks.

@@ -8,6 +8,7 @@
 
 #include <fstream>
 
+#include "support/counter_watch.hpp"
 #include "support/error_of.hpp"
 
 namespace canhil::emulator {
@@ -15,7 +16,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class WorldLogTest : public ::testing::Test {
+class WorldLogTest : public test::WatchedTest {
  protected:
   std::filesystem::path write(const std::string& text) {
     std::ofstream(path_) << text;

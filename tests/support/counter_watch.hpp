@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -29,11 +30,12 @@ class CounterWatch {
     const std::uint64_t start = get();
     counters_[name] = Counter{std::move(get), start, std::nullopt, false};
   }
-  /// Every error counter of a robot's nodes (bad frames by kind, send
+  /// Every error counter of a robot's emulated nodes (bad frames by kind, send
   /// failures, fault drops, error frames) and of their bus endpoints
   /// (receive overflow, send drops), as `prefix`NODE.COUNTER.
   void watch_nodes(const can_nodes::RobotNodes& nodes, const std::string& prefix = "") {
     for (std::size_t i = 0; i < can_nodes::kNodeCount; ++i) {
+      if (!nodes.emulates(static_cast<can_nodes::NodeId>(i))) continue;  // a real board's
       const can_nodes::Node& n = nodes.node(static_cast<can_nodes::NodeId>(i));
       const std::string p = prefix + n.name() + ".";
       watch(p + "wrong_length", [&n] { return n.counters().wrong_length; });
@@ -45,6 +47,26 @@ class CounterWatch {
       watch(p + "rx_overflow", [&n] { return n.bus().stats().rx_overflow; });
       watch(p + "send_dropped", [&n] { return n.bus().stats().send_dropped; });
     }
+  }
+  /// Every robot's node counters of a session whose driver has built its
+  /// nodes, as INTERFACE.NODE.COUNTER, until the returned guard goes (declare
+  /// it after the driver: it checks and forgets them while the nodes still
+  /// exist, however the test ends). A template, so that node tests need not
+  /// link the emulator.
+  template <class Session>
+  [[nodiscard]] auto watch_session(const Session& session) {
+    for (std::size_t r = 0; r < session.robot_count(); ++r) {
+      const auto& rig = session.rig(r);
+      if (rig.nodes) watch_nodes(*rig.nodes, rig.interface + ".");
+    }
+    struct Guard {
+      explicit Guard(CounterWatch* w) : watch(w) {}
+      CounterWatch* watch;
+      Guard(const Guard&) = delete;
+      Guard& operator=(const Guard&) = delete;
+      ~Guard() { watch->finish(); }
+    };
+    return Guard(this);
   }
   /// The test provokes exactly `n` on this counter (by the end).
   void expect(const std::string& name, std::uint64_t n) { find(name).expected = n; }
