@@ -3,6 +3,7 @@
 
 #include <vector>
 
+#include "canhil/base/time.hpp"
 #include "canhil/physics/world.hpp"
 
 namespace canhil::emulator {
