@@ -244,8 +244,6 @@ void LaptopLink::step(Nanos now, const CoachState& coach) {
   }
 }
 
-int LaptopLink::memory_space(std::size_t robot) const { return db_->memory_space(robots_.at(robot)->agent); }
-
 void LaptopLink::clear_items(std::size_t robot) {
   const int agent = robots_.at(robot)->agent;
   const rtdb::ItemTable& table = db_->items();

@@ -13,7 +13,8 @@ namespace {
 // The reference agent, woken after each of its vision frames.
 class AgentParticipant final : public can_nodes::Participant {
  public:
-  AgentParticipant(int space, const laptop::AgentConfig& config) : io_(space), logic_(config) {}
+  AgentParticipant(LaptopLink& link, int agent, const laptop::AgentConfig& config)
+      : io_(link.database(), link.layout(), agent), logic_(config) {}
   void frame_ready(Nanos now) { wake_ = now; }
   std::size_t poll() override { return 0; }
   bool may_have_frames() const override { return false; }
@@ -57,16 +58,6 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   if (options_.reference_laptop && !session_.options().vision_on) {
     throw SetupError("the reference laptop stack needs the vision and the RTDB (SessionOptions::vision_on)");
   }
-  for (std::size_t t = 0; options_.reference_laptop && t < session_.scenario().teams.size(); ++t) {
-    const LaptopSide& side = session_.scenario().laptop_of(t);
-    if (side.rtdb_lib != "builtin" || side.layout != "canhil") {
-      throw SetupError(
-          "the in-process reference laptop (canhil's handler and agent) works on canhil's linked RTDB in canhil's "
-          "layout, not on " +
-          side.rtdb_lib + " in layout " + side.layout +
-          "; run the team's own software against a real-time run (canhil run without --virtual-time)");
-    }
-  }
   if (session_.scenario().mixes_real_boards() && !options_.caller_plays_real_boards) {
     throw SetupError(
         "emulate = [...] leaves nodes to real boards, and a virtual-time run has no real bus: run that "
@@ -97,12 +88,18 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       // to put the odometry where the robot stands.
       LaptopLink& link = *session_.laptop(rig.team);
       link.clear_items(rig.in_team);
-      link.place(rig.in_team, session_.world().robot(r).pose());
+      try {
+        link.place(rig.in_team, session_.world().robot(r).pose());
+      } catch (const SetupError& e) {
+        throw SetupError(std::string("the in-process reference laptop tells its handler where the robot starts "
+                                     "(CMD_SETPOSE): ") +
+                         e.what());
+      }
       stack->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
                                                             link.layout(), rig.agent);
       const double goal_x = session_.scenario().world.field.length_m / 2;
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
-      stack->agent = std::make_unique<AgentParticipant>(link.memory_space(rig.in_team), agent_cfg);
+      stack->agent = std::make_unique<AgentParticipant>(link, rig.agent, agent_cfg);
     }
     if (options_.count_frames || options_.record_trace || options_.check_timing) {
       // Every frame as the bus carries it, error frames included (they belong in the trace).

@@ -1,61 +1,113 @@
 #include "canhil/laptop/agent_io.hpp"
 
-#include <cstddef>
+#include <string>
 
-#include "canhil/rtdb/rtdb.h"
-#include "rtdb_user.h"
+#include "canhil/base/setup_error.hpp"
+#include "rtdb_item.hpp"
 
 namespace canhil::laptop {
-namespace {
 
-// VisionInfo's last two fields, as they lie in it.
-struct VisionBalls {
-  canhil_vec2 ball[MAX_BALLS];
-  int count;
+struct AgentIo::Items {
+  Items(rtdb::Database& database, int a) : db(database), agent(a) {}
+  rtdb::Database& db;
+  int agent;
+  Item vision, pos, grabber_info, coach, vel, grabber, kicker;
+  int coach_owner = 0;  // the base station's shared copy, else the agent's own
+  rtdb::Quantity balls, ball_count, x, y, heading, ball_engaged, game_state;
+  rtdb::Quantity vx, vy, va, small, grab, kick, eng_high, eng_low;
+
+  // The item as the database holds it (a never-written one reads as zeros).
+  void get(Item& i, int owner) {
+    if (!db.get(agent, owner, i.id, i.buf->bytes())) i.buf->clear();
+  }
+  void put(const Item& i) { db.put(agent, agent, i.id, i.buf->bytes(), 0); }
 };
-static_assert(offsetof(VisionInfo, nBalls) - offsetof(VisionInfo, ball) == offsetof(VisionBalls, count) &&
-                  sizeof(VisionInfo) - offsetof(VisionInfo, ball) == sizeof(VisionBalls),
-              "VisionInfo ends with ball[] and nBalls");
 
-}  // namespace
+AgentIo::AgentIo(rtdb::Database& db, const rtdb::Layout& layout, int agent)
+    : items_(std::make_unique<Items>(db, agent)) {
+  Items& i = *items_;
+  i.vision = resolve(db, layout, agent, "VISION_INFO", {"balls", "balls.count"}, true);
+  i.balls = i.vision.q("balls");
+  i.ball_count = i.vision.q("balls.count");
+  i.pos = resolve(db, layout, agent, "CMD_POS", {"x", "y", "heading"}, true);
+  i.x = i.pos.q("x");
+  i.y = i.pos.q("y");
+  i.heading = i.pos.q("heading");
+  i.grabber_info = resolve(db, layout, agent, "CMD_GRABBER_INFO", {"ball_engaged"}, true);
+  i.ball_engaged = i.grabber_info.q("ball_engaged");
+  const rtdb::ItemLayout& coach = rtdb::require(layout, "COACH_INFO", {"game_state"});
+  const rtdb::ItemTable& table = db.items();
+  const auto coach_id = table.id("COACH_INFO");
+  if (coach_id && table.kind(0, *coach_id) == rtdb::ItemKind::kShared) {
+    // The base station's copy in this agent's database.
+    if (table.size(*coach_id) != coach.size_bytes()) {
+      throw SetupError("COACH_INFO: the team's table (" + table.source() + ") gives it " +
+                       std::to_string(table.size(*coach_id).value_or(0)) + " bytes, the layout " + layout.file() + " " +
+                       std::to_string(coach.size_bytes()) + "; make them agree");
+    }
+    i.coach_owner = 0;
+    i.coach.id = *coach_id;
+  } else {
+    i.coach_owner = agent;
+    i.coach.id = db.require("COACH_INFO", coach.size_bytes(), agent);
+  }
+  i.coach.buf = std::make_unique<rtdb::ItemBuffer>(coach);
+  i.game_state = i.coach.q("game_state");
+  i.vel = resolve(db, layout, agent, "CMD_VEL", {"vx", "vy", "va"}, true);
+  i.vx = i.vel.q("vx");
+  i.vy = i.vel.q("vy");
+  i.va = i.vel.q("va");
+  i.small = i.vel.q("small_adjustment");
+  i.grabber = resolve(db, layout, agent, "CMD_GRABBER", {"grabber"}, true);
+  i.grab = i.grabber.q("grabber");
+  i.kicker = resolve(db, layout, agent, "CMD_KICKER", {"kick"}, true);
+  i.kick = i.kicker.q("kick");
+  i.eng_high = i.kicker.q("eng_level_high");
+  i.eng_low = i.kicker.q("eng_level_low");
+}
+
+AgentIo::~AgentIo() = default;
 
 AgentInput AgentIo::read(double dt_s) {
+  Items& i = *items_;
   AgentInput in;
   in.dt_s = dt_s;
-  // Of VISION_INFO (4.8 kB) it needs the balls only, at the item's end.
-  VisionBalls balls{};
-  DB_get_part(space_, SELF, VISION_INFO, offsetof(VisionInfo, ball), sizeof balls, &balls);
-  in.ball_seen = balls.count > 0;
+  i.get(i.vision, i.agent);
+  in.ball_seen = i.vision.buf->get(i.ball_count) > 0;
   if (in.ball_seen) {
-    in.ball_x_m = balls.ball[0].x;
-    in.ball_y_m = balls.ball[0].y;
+    const auto b = i.vision.buf->get_point(i.balls, 0);
+    in.ball_x_m = b[0];
+    in.ball_y_m = b[1];
   }
-  CMD_Pos pos;
-  DB_get_from(space_, SELF, CMD_POS, &pos);
-  in.x_m = pos.px;
-  in.y_m = pos.py;
-  in.heading_rad = pos.pa;
-  CMD_Grabber_Info gi;
-  DB_get_from(space_, SELF, CMD_GRABBER_INFO, &gi);
-  in.ball_engaged = gi.ballEngaged != 0;
-  // The base station's orders, as the coach writes them into this robot's
-  // database (canhil's layout: stop 1, halt 2, start 3, ...; 0 none yet).
-  CoachInfo coach{};
-  DB_get_from(space_, BASE_STATION, COACH_INFO, &coach);
-  constexpr int kNoCoachYet = 0;
-  constexpr int kStart = 3;
-  in.play = coach.gameState == kNoCoachYet || coach.gameState == kStart;
+  i.get(i.pos, i.agent);
+  in.x_m = i.pos.buf->get(i.x);
+  in.y_m = i.pos.buf->get(i.y);
+  in.heading_rad = i.pos.buf->get(i.heading);
+  i.get(i.grabber_info, i.agent);
+  in.ball_engaged = i.grabber_info.buf->get(i.ball_engaged) != 0;
+  // The base station's orders: it plays before any order comes (no state yet) and in "start".
+  i.get(i.coach, i.coach_owner);
+  const std::string_view state = i.coach.buf->get_enum(i.game_state);
+  in.play = i.coach.buf->get(i.game_state) == 0 || state == "start";
   return in;
 }
 
 void AgentIo::write(const AgentOutput& out) {
-  CMD_Vel vel{static_cast<float>(out.vx_mps), static_cast<float>(out.vy_mps), static_cast<float>(out.va_radps), false};
-  DB_put_in(space_, SELF, CMD_VEL, &vel, 0);
-  CMD_Grabber grab{static_cast<unsigned char>(out.grabber)};
-  DB_put_in(space_, SELF, CMD_GRABBER, &grab, 0);
+  Items& i = *items_;
+  rtdb::ItemBuffer& vel = *i.vel.buf;
+  vel.set(i.vx, out.vx_mps);
+  vel.set(i.vy, out.vy_mps);
+  vel.set(i.va, out.va_radps);
+  vel.set(i.small, 0.0);
+  i.put(i.vel);
+  i.grabber.buf->set(i.grab, out.grabber / 100.0);  // the agent's 0..100, the layout's fraction
+  i.put(i.grabber);
   if (out.kick != 0) {
-    CMD_Kicker kick{out.kick, 0, 0};
-    DB_put_in(space_, SELF, CMD_KICKER, &kick, 0);
+    rtdb::ItemBuffer& k = *i.kicker.buf;
+    k.set(i.kick, out.kick);
+    k.set(i.eng_high, 0.0);
+    k.set(i.eng_low, 0.0);
+    i.put(i.kicker);
   }
 }
 

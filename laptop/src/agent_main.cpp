@@ -91,7 +91,10 @@ int main(int argc, char** argv) {
               config.goal_x_m);
   std::fflush(stdout);
   canhil::laptop::Agent agent(config);
-  canhil::laptop::AgentIo io(DB_space());
+  // Its items through canhil's RTDB (this process's agent, its team's set) in canhil's layout.
+  const auto db = canhil::rtdb::open_builtin(canhil::rtdb::Scope::kOneAgent);
+  const canhil::rtdb::Layout layout = canhil::rtdb::Layout::shipped("canhil");
+  canhil::laptop::AgentIo io(*db, layout, Whoami());
   const double start = monotonic_s();
   double last = start;
   long frames = 0;

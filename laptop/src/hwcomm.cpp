@@ -7,29 +7,9 @@
 #include <sstream>
 
 #include "canhil/base/setup_error.hpp"
+#include "rtdb_item.hpp"
 
 namespace canhil::laptop {
-namespace {
-
-// One item of the handler: its id in the team's table, its bytes in the team's layout.
-struct Item {
-  int id = -1;
-  std::unique_ptr<rtdb::ItemBuffer> buf;
-  explicit operator bool() const noexcept { return buf != nullptr; }
-  rtdb::Quantity q(std::string_view name) const { return buf->quantity(name); }
-};
-
-Item resolve(rtdb::Database& db, const rtdb::Layout& layout, int space, std::string_view name,
-             std::initializer_list<std::string_view> quantities, bool required) {
-  if (!required && layout.item(name) == nullptr) return {};
-  const rtdb::ItemLayout& item = rtdb::require(layout, name, quantities);
-  Item out;
-  out.id = db.require(name, item.size_bytes(), space);
-  out.buf = std::make_unique<rtdb::ItemBuffer>(item);
-  return out;
-}
-
-}  // namespace
 
 struct HwComm::Items {
   Items(rtdb::Database& database, int agent) : db(database), space(agent) {}

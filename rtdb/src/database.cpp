@@ -133,7 +133,6 @@ class CApiDatabase final : public Database {
   void signal_frame(int agent) override {
     if (api_.signal_frame != nullptr) api_.signal_frame(first_space_ + agent);
   }
-  int memory_space(int agent) const noexcept override { return first_space_ + agent; }
   bool set_clock(std::int64_t (*now)(void* context), void* context) override {
     if (api_.set_clock == nullptr) return false;
     api_.set_clock(now, context);

@@ -140,7 +140,7 @@ TEST_F(LaptopLinkTest, CanhilsOwnRtdbInCanhilsLayoutAndThePoseReadBack) {
 }
 
 TEST_F(LaptopLinkTest, ARobotPlacedAsksItsHandlerThroughTheLayoutAndAClearedDatabaseHoldsZeros) {
-  // The second team's set, so that the agent's memory space in canhil's C API is N + agent.
+  // The second team's set: the link finds the agent's database in it.
   setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
   LaptopLink link(resolve_laptop({}, 2, false), {1, 2}, coach(2), 1);
   rtdb::Database& db = link.database();
@@ -158,8 +158,6 @@ TEST_F(LaptopLinkTest, ARobotPlacedAsksItsHandlerThroughTheLayoutAndAClearedData
   link.clear_items(1);
   ASSERT_TRUE(db.get(2, 2, setpose, b));
   EXPECT_EQ(static_cast<int>(b[13]), 0) << "cleared";
-  EXPECT_EQ(link.memory_space(1), DB_agent_count() + 2) << "the second set's agent 2";
-  EXPECT_EQ(LaptopLink(resolve_laptop({}, 1, false), {1}, coach(1)).memory_space(0), 1);
 }
 
 TEST_F(LaptopLinkTest, FramesPutInPartsLeaveVisionInfoAsWholeWritesWould) {

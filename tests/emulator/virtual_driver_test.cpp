@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -161,6 +163,43 @@ TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
   ASSERT_EQ(run.goals().size(), 1u) << "the reference agent scores from this start";
   EXPECT_TRUE(run.goals()[0].positive_x);
   EXPECT_LT(std::fabs(ball.y()), 3.0);
+}
+
+TEST_F(VirtualRunTest, TheReferenceLaptopWorksInTheTeamsLayout) {
+  // canhil's RTDB described by another layout: CMD_VEL's velocities as whole
+  // mm/s in 32-bit integers. The reference handler and agent both go through the layout, so the loop
+  // still closes and the robot still scores; the bytes say which layout wrote them.
+  std::ifstream in(test::source_dir() + "/rtdb/layouts/canhil.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string layout = text.str();
+  const auto replace = [&layout](const std::string& from, const std::string& to) {
+    const auto at = layout.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    layout.replace(at, from.size(), to);
+  };
+  replace(R"(vx = { type = "f32", offset = 0, from = "vx", unit = "m/s" })",
+          R"(vx = { type = "i32", offset = 0, from = "vx", unit = "mm/s" })");
+  replace(R"(vy = { type = "f32", offset = 4, from = "vy", unit = "m/s" })",
+          R"(vy = { type = "i32", offset = 4, from = "vy", unit = "mm/s" })");
+  replace(R"(name = "canhil")", R"(name = "integers")");
+  const std::string file = "/tmp/canhil-integers-layout-" + std::to_string(getpid()) + ".toml";
+  std::ofstream(file) << layout;
+  Config c = one_robot();
+  c.scenario.laptop.layout = file;
+  Loop run(c, &counters);
+  run.run_for(1s);  // on its way to the ball
+  ASSERT_EQ(DB_init_all(0), 0);
+  std::int32_t vel[4] = {};
+  ASSERT_GE(DB_get_from(CAMBADA_1, CAMBADA_1, CMD_VEL, vel), 0);
+  DB_free_all(0);
+  const double speed_mm_s = std::hypot(vel[0], vel[1]);
+  EXPECT_GT(speed_mm_s, 50) << "whole mm/s: the agent wrote through the team's layout";
+  EXPECT_LT(speed_mm_s, 5000);
+  run.run_for(9s);
+  std::filesystem::remove(file);
+  ASSERT_EQ(run.goals().size(), 1u) << "the reference laptop plays in the team's layout";
+  EXPECT_TRUE(run.goals()[0].positive_x);
 }
 
 TEST_F(VirtualRunTest, TheReferenceAgentWaitsForTheCoachsStart) {

@@ -273,7 +273,6 @@ TEST_F(BuiltinDatabase, EveryAgent) {
   CMD_Vel back{};
   EXPECT_GE(db->get(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_writable_bytes(std::span(&back, 1))), 0);
   EXPECT_EQ(std::memcmp(&back, &v, sizeof v), 0);
-  EXPECT_EQ(db->memory_space(CAMBADA_2), CAMBADA_2) << "the first set: the agent's own number";
   // Its clock, through the database: an item put at 5 s is 2000 ms old at 7 s.
   std::int64_t now_ns = 5'000'000'000;
   ASSERT_TRUE(db->set_clock([](void* t) { return *static_cast<std::int64_t*>(t); }, &now_ns));
@@ -281,11 +280,6 @@ TEST_F(BuiltinDatabase, EveryAgent) {
   now_ns = 7'000'000'000;
   EXPECT_EQ(db->get(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_writable_bytes(std::span(&back, 1))), 2000);
   EXPECT_TRUE(db->set_clock(nullptr, nullptr));
-}
-
-TEST_F(BuiltinDatabase, TheSecondSetsMemorySpacesFollowTheFirstSets) {
-  auto db = open_builtin(Scope::kAllAgents, 1);
-  EXPECT_EQ(db->memory_space(CAMBADA_2), N_AGENTS + CAMBADA_2);
 }
 
 TEST_F(BuiltinDatabase, OneAgentAndSeveralAtOnce) {

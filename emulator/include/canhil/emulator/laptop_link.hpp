@@ -97,9 +97,6 @@ class LaptopLink {
   /// team's layout: x, y, heading, command 0, pending). SetupError when the
   /// layout or the team's table lacks it.
   void place(std::size_t robot, const kinematics::Pose& at);
-  /// Robot r's agent's memory space in canhil's C API (the second team's set
-  /// is N + agent), for the in-process reference agent, which uses that API.
-  int memory_space(std::size_t robot) const;
   /// The RTDB's clock (rtdb::Database::set_clock); false where the library keeps the wall clock.
   bool set_clock(std::int64_t (*now)(void* context), void* context) { return db_->set_clock(now, context); }
   /// Robot r's pose as its handler reported it (CMD_POS), when the layout carries it.

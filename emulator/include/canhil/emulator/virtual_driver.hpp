@@ -1,10 +1,11 @@
 // canhil/emulator/virtual_driver.hpp — a session in virtual time, in one
 // process, deterministically: per robot its emulated nodes on its own
 // in-memory bus and, optionally, the reference handler (laptop::HwComm) on
-// that bus and the reference agent on its RTDB, woken after each vision frame;
-// everything advanced in lockstep with the physics. With the reference laptop
-// the process's RTDB stamps and ages items in the run's virtual time while the
-// driver lives (DB_set_clock). Every bus can be recorded
+// that bus and the reference agent on its RTDB, woken after each vision frame,
+// both through the team's laptop link (its RTDB, in its layout); everything
+// advanced in lockstep with the physics. With the reference laptop canhil's
+// RTDB stamps and ages items in the run's virtual time while the driver lives
+// (LaptopLink::set_clock; a team's library keeps the wall clock). Every bus can be recorded
 // as a candump log (one interface name per robot). `canhil run --virtual-time`,
 // `canhil bench` and the tests (tests/support/one_robot_session.hpp) are built on this.
 //

@@ -76,10 +76,6 @@ class Database {
   /// memory space in this database's set; DB_wait_frame returns). A team's
   /// library has no such signal (its agents are woken through PMan): nothing.
   virtual void signal_frame(int agent) { (void)agent; }
-  /// Agent `agent`'s memory space in the library's own calls (the second
-  /// team's set is N + agent): for code that uses canhil's C API directly
-  /// on this database, such as the in-process reference agent.
-  virtual int memory_space(int agent) const noexcept { return agent; }
   /// Items stamped and aged by `now` (nanoseconds; nullptr: the wall clock
   /// again) instead of the wall clock: canhil's RTDB only, whose clock is
   /// one per process, for every set (false: the library keeps the wall

@@ -1,0 +1,35 @@
+// laptop/src/rtdb_item.hpp — one RTDB item as the reference handler and
+// agent use it: its id in the team's table and a buffer in the team's layout,
+// checked once against both (private to laptop/).
+#pragma once
+
+#include <initializer_list>
+#include <memory>
+#include <string_view>
+
+#include "canhil/rtdb/database.hpp"
+#include "canhil/rtdb/layout.hpp"
+
+namespace canhil::laptop {
+
+struct Item {
+  int id = -1;
+  std::unique_ptr<rtdb::ItemBuffer> buf;
+  explicit operator bool() const noexcept { return buf != nullptr; }
+  rtdb::Quantity q(std::string_view name) const { return buf->quantity(name); }
+};
+
+/// Item `name` of agent `space`'s database, carrying every one of
+/// `quantities` in `layout`; LayoutError or SetupError naming what is
+/// missing, or an empty Item when not `required` and the layout lacks it.
+inline Item resolve(rtdb::Database& db, const rtdb::Layout& layout, int space, std::string_view name,
+                    std::initializer_list<std::string_view> quantities, bool required) {
+  if (!required && layout.item(name) == nullptr) return {};
+  const rtdb::ItemLayout& item = rtdb::require(layout, name, quantities);
+  Item out;
+  out.id = db.require(name, item.size_bytes(), space);
+  out.buf = std::make_unique<rtdb::ItemBuffer>(item);
+  return out;
+}
+
+}  // namespace canhil::laptop
