@@ -32,7 +32,6 @@ std::vector<LaptopSide> resolve_laptops(Scenario& s, bool realtime) {
 RunPlan plan_run(Scenario scenario, SessionOptions options) {
   if (!options.messages) throw SetupError("a run needs a message set");
   RunPlan plan;
-  plan.mode = options.external ? RunMode::kExternal : options.realtime ? RunMode::kRealtime : RunMode::kVirtual;
   complete(scenario);
   if (options.vision_on) plan.laptops = resolve_laptops(scenario, options.realtime || options.external);
   plan.length = scenario.run_length(std::nullopt, options.realtime);

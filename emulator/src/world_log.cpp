@@ -7,7 +7,7 @@
 #include <fstream>
 #include <optional>
 
-#include "canhil/base/setup_error.hpp"
+#include "canhil/base/located_error.hpp"
 
 namespace canhil::emulator {
 namespace {
@@ -24,8 +24,9 @@ std::vector<std::string> split(const std::string& line) {
   return out;
 }
 
-std::string where(const std::filesystem::path& file, std::size_t line) {
-  return file.string() + ":" + std::to_string(line) + ": ";
+// A mistake at line `line` of the log.
+[[noreturn]] void refuse(const std::filesystem::path& file, std::size_t line, const std::string& what) {
+  throw LocatedError(file.string(), static_cast<int>(line), "", what);
 }
 
 // Whole numbers only: "3" reads, "3x", "-1" and "" do not.
@@ -121,9 +122,9 @@ WorldLog read_world_log(const std::filesystem::path& path) {
   log.columns = split(line);
   const std::vector<std::string> first = {"time_s", "ball_x_m", "ball_y_m", "ball_z_m"};
   if (log.columns.size() < first.size() || !std::equal(first.begin(), first.end(), log.columns.begin())) {
-    throw SetupError(where(path, 1) +
-                     "not a world log: its header starts time_s,ball_x_m,ball_y_m,ball_z_m (write one with canhil run "
-                     "--virtual-time --world-log FILE)");
+    refuse(path, 1,
+           "not a world log: its header starts time_s,ball_x_m,ball_y_m,ball_z_m (write one with canhil run "
+           "--virtual-time --world-log FILE)");
   }
   std::size_t& robots = log.robots;
   while (robots < 1000 && std::find(log.columns.begin(), log.columns.end(),
@@ -131,8 +132,9 @@ WorldLog read_world_log(const std::filesystem::path& path) {
     ++robots;
   }
   if (log.columns.size() != first.size() + 6 * robots) {
-    throw SetupError(where(path, 1) + "expected 4 columns and 6 per robot, got " + std::to_string(log.columns.size()) +
-                     " for " + std::to_string(robots) + " robot(s)");
+    refuse(path, 1,
+           "expected 4 columns and 6 per robot, got " + std::to_string(log.columns.size()) + " for " +
+               std::to_string(robots) + " robot(s)");
   }
   for (std::size_t r = 0; r < robots; ++r)
     log.robot_info.push_back({0, static_cast<int>(r + 1), "robot " + std::to_string(r)});
@@ -146,8 +148,8 @@ WorldLog read_world_log(const std::filesystem::path& path) {
     }
     const auto cells = split(line);
     if (cells.size() != log.columns.size()) {
-      throw SetupError(where(path, number) + std::to_string(cells.size()) + " values where the header has " +
-                       std::to_string(log.columns.size()));
+      refuse(path, number,
+             std::to_string(cells.size()) + " values where the header has " + std::to_string(log.columns.size()));
     }
     std::vector<double> row;
     row.reserve(cells.size());
@@ -155,16 +157,16 @@ WorldLog read_world_log(const std::filesystem::path& path) {
       char* end = nullptr;
       const double v = std::strtod(c.c_str(), &end);
       if (c.empty() || end != c.c_str() + c.size() || !std::isfinite(v)) {
-        throw SetupError(where(path, number) + "'" + c + "' is not a number");
+        refuse(path, number, "'" + c + "' is not a number");
       }
       row.push_back(v);
     }
     if (!log.rows.empty() && row[0] < log.rows.back()[0]) {
-      throw SetupError(where(path, number) + "time goes back; a world log is in time order");
+      refuse(path, number, "time goes back; a world log is in time order");
     }
     log.rows.push_back(std::move(row));
   }
-  if (log.rows.empty()) throw SetupError(path.string() + ": the world log has no rows");
+  if (log.rows.empty()) refuse(path, 0, "the world log has no rows");
   // A robot of a team the log does not name is of no team it knows: the first.
   for (WorldLogRobot& r : log.robot_info) {
     if (r.team >= std::max<std::size_t>(1, log.teams.size())) r.team = 0;

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <type_traits>
 
 #include "canhil/frames/dbc.hpp"
 
@@ -124,23 +125,15 @@ class Parser {
     }
     return v;
   }
-  std::uint64_t unsigned_number(const char* what) {
-    const int line = line_;
-    const std::string_view t = number_text();
-    std::uint64_t v = 0;
-    const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-    if (t.empty() || ec != std::errc() || p != t.data() + t.size()) {
-      error(std::string("expected a whole number for ") + what +
-                (t.empty() ? describe_here() : ", found \"" + std::string(t) + "\""),
-            line);
-    }
-    return v;
-  }
-  std::int64_t integer(const char* what) {
+  std::uint64_t unsigned_number(const char* what) { return whole_number<std::uint64_t>(what); }
+  std::int64_t integer(const char* what) { return whole_number<std::int64_t>(what); }
+  // A whole number of type T (a signed one may carry a '+').
+  template <class T>
+  T whole_number(const char* what) {
     const int line = line_;
     std::string_view t = number_text();
-    if (!t.empty() && t.front() == '+') t.remove_prefix(1);
-    std::int64_t v = 0;
+    if (std::is_signed_v<T> && !t.empty() && t.front() == '+') t.remove_prefix(1);
+    T v = 0;
     const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (t.empty() || ec != std::errc() || p != t.data() + t.size()) {
       error(std::string("expected a whole number for ") + what +

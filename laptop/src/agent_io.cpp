@@ -1,8 +1,5 @@
 #include "canhil/laptop/agent_io.hpp"
 
-#include <string>
-
-#include "canhil/base/setup_error.hpp"
 #include "rtdb_item.hpp"
 
 namespace canhil::laptop {
@@ -15,12 +12,8 @@ struct AgentIo::Items {
   int coach_owner = 0;  // the base station's shared copy, else the agent's own
   rtdb::Quantity balls, ball_count, x, y, heading, ball_engaged, game_state;
   rtdb::Quantity vx, vy, va, small, grab, kick, eng_high, eng_low;
-
-  // The item as the database holds it (a never-written one reads as zeros).
-  void get(Item& i, int owner) {
-    if (!db.get(agent, owner, i.id, i.buf->bytes())) i.buf->clear();
-  }
-  void put(const Item& i) { db.put(agent, agent, i.id, i.buf->bytes(), 0); }
+  void get(Item& i, int owner) { read_item(db, agent, owner, i); }
+  void put(const Item& i) { write_item(db, agent, i); }
 };
 
 AgentIo::AgentIo(rtdb::Database& db, const rtdb::Layout& layout, int agent)
@@ -36,21 +29,10 @@ AgentIo::AgentIo(rtdb::Database& db, const rtdb::Layout& layout, int agent)
   i.grabber_info = resolve(db, layout, agent, "CMD_GRABBER_INFO", {"ball_engaged"}, true);
   i.ball_engaged = i.grabber_info.q("ball_engaged");
   const rtdb::ItemLayout& coach = rtdb::require(layout, "COACH_INFO", {"game_state"});
-  const rtdb::ItemTable& table = db.items();
-  const auto coach_id = table.id("COACH_INFO");
-  if (coach_id && table.kind(0, *coach_id) == rtdb::ItemKind::kShared) {
-    // The base station's copy in this agent's database.
-    if (table.size(*coach_id) != coach.size_bytes()) {
-      throw SetupError("COACH_INFO: the team's table (" + table.source() + ") gives it " +
-                       std::to_string(table.size(*coach_id).value_or(0)) + " bytes, the layout " + layout.file() + " " +
-                       std::to_string(coach.size_bytes()) + "; make them agree");
-    }
-    i.coach_owner = 0;
-    i.coach.id = *coach_id;
-  } else {
-    i.coach_owner = agent;
-    i.coach.id = db.require("COACH_INFO", coach.size_bytes(), agent);
-  }
+  // The base station's copy in this agent's database where the table shares it, else the agent's own.
+  const auto coach_id = db.items().id("COACH_INFO");
+  i.coach_owner = coach_id && db.items().kind(0, *coach_id) == rtdb::ItemKind::kShared ? 0 : agent;
+  i.coach.id = db.require("COACH_INFO", coach.size_bytes(), agent, i.coach_owner);
   i.coach.buf = std::make_unique<rtdb::ItemBuffer>(coach);
   i.game_state = i.coach.q("game_state");
   i.vel = resolve(db, layout, agent, "CMD_VEL", {"vx", "vy", "va"}, true);

@@ -24,11 +24,9 @@ struct HwComm::Items {
   rtdb::Quantity kick, eng_high, eng_low, grab;
   rtdb::Quantity set_x, set_y, set_heading, set_command, set_pending;
 
-  // Reads the item as the agent last wrote it (a never-written item reads as zeros).
-  void get(Item& i) {
-    if (!db.get(space, space, i.id, i.buf->bytes())) i.buf->clear();
-  }
-  void put(const Item& i) { db.put(space, space, i.id, i.buf->bytes(), 0); }
+  // Reads the item as the agent last wrote it.
+  void get(Item& i) { read_item(db, space, space, i); }
+  void put(const Item& i) { write_item(db, space, i); }
 };
 
 HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, rtdb::Database& db,

@@ -32,4 +32,11 @@ inline Item resolve(rtdb::Database& db, const rtdb::Layout& layout, int space, s
   return out;
 }
 
+/// Owner `owner`'s item as agent `space`'s database holds it (a never-written one reads as zeros).
+inline void read_item(rtdb::Database& db, int space, int owner, Item& i) {
+  if (!db.get(space, owner, i.id, i.buf->bytes())) i.buf->clear();
+}
+/// Agent `space`'s own item, written fresh (age 0).
+inline void write_item(rtdb::Database& db, int space, const Item& i) { db.put(space, space, i.id, i.buf->bytes(), 0); }
+
 }  // namespace canhil::laptop

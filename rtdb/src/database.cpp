@@ -314,8 +314,12 @@ void Database::broken_slot(int space, int owner, int id, std::size_t size) const
 }
 
 int Database::require(std::string_view item, std::size_t size, int space) const {
+  return require(item, size, space, space);
+}
+
+int Database::require(std::string_view item, std::size_t size, int space, int owner) const {
   const std::string name(item);
-  const std::string agent = "agent " + std::to_string(space) + " (" + items_.agent_name(space) + ")";
+  const std::string agent = "agent " + std::to_string(owner) + " (" + items_.agent_name(owner) + ")";
   if (!serves(space)) {
     throw SetupError("RTDB item " + name + " of agent " + std::to_string(space) + " asked for, but " + library_ +
                      " is open for " + (spaces_.size() == 1 ? "agent " + std::to_string(spaces_[0]) : "other agents") +
@@ -333,9 +337,15 @@ int Database::require(std::string_view item, std::size_t size, int space) const 
                      "): the two files come from different configurations, or no schema uses the item; add it to " +
                      agent + "'s schema and regenerate both");
   }
-  if (items_.kind(space, *id) == ItemKind::kNone) {
+  if (items_.kind(owner, *id) == ItemKind::kNone) {
     throw SetupError(agent + " has no RTDB item " + name + " in " + items_.source() +
                      "; add it to that agent's schema (shared or local) and regenerate");
+  }
+  if (owner != space && items_.kind(owner, *id) != ItemKind::kShared) {
+    throw SetupError(agent + "'s RTDB item " + name + " is local in " + items_.source() + ", so agent " +
+                     std::to_string(space) +
+                     "'s database has no copy of it; share it in that agent's schema and "
+                     "regenerate");
   }
   if (*items_.size(*id) != size) {
     throw SetupError("RTDB item " + name + " is " + std::to_string(*items_.size(*id)) + " bytes in " + items_.source() +

@@ -37,7 +37,7 @@ class RunPlanTest : public test::WatchedTest {
 TEST_F(RunPlanTest, WithoutOverridesTheFilesValuesAndCanhilsDefaults) {
   const RunPlan p = plan();
   EXPECT_EQ(p.source, file_);
-  EXPECT_EQ(p.mode, RunMode::kVirtual);
+  EXPECT_EQ(p.mode(), RunMode::kVirtual);
   EXPECT_FALSE(p.options.realtime);
   EXPECT_FALSE(p.options.external);
   EXPECT_EQ(p.scenario.seed, 5u);
@@ -59,10 +59,12 @@ TEST_F(RunPlanTest, TheModeSetsTheOptionsAndTheLaptopsDefaults) {
   RunOverrides o;
   o.mode = RunMode::kRealtime;
   RunPlan p = plan(o);
+  EXPECT_EQ(p.mode(), RunMode::kRealtime);
   EXPECT_TRUE(p.options.realtime);
   EXPECT_EQ(p.laptops[0].pman, "builtin") << "real time: canhil's PMan";
   o.mode = RunMode::kExternal;
   p = plan(o);
+  EXPECT_EQ(p.mode(), RunMode::kExternal);
   EXPECT_TRUE(p.options.external);
   EXPECT_FALSE(p.options.realtime);
   EXPECT_EQ(p.laptops[0].pman, "builtin");

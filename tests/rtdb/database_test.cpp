@@ -265,6 +265,11 @@ TEST_F(BuiltinDatabase, EveryAgent) {
   EXPECT_NE(db->library().find("canhil's linked RTDB"), std::string::npos);
   EXPECT_TRUE(db->puts_ranges()) << "canhil's DB_put_ranges";
   EXPECT_EQ(db->require("CMD_VEL", sizeof(CMD_Vel), CAMBADA_2), CMD_VEL);
+  EXPECT_EQ(db->require("COACH_INFO", sizeof(CoachInfo), CAMBADA_2, BASE_STATION), COACH_INFO)
+      << "the base station's shared item, as agent 2's database holds it";
+  EXPECT_NE(error_of([&] { db->require("CMD_VEL", sizeof(CMD_Vel), CAMBADA_2, CAMBADA_1); }).find("is local"),
+            std::string::npos)
+      << "another agent's local item has no copy";
   const CMD_Vel v{1.5f, 0.5f, 0.25f, true};
   db->put(CAMBADA_2, CAMBADA_2, CMD_VEL, std::as_bytes(std::span(&v, 1)));
   CMD_Vel seen{};

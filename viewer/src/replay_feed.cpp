@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "canhil/base/located_error.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
 #include "canhil/emulator/world_log.hpp"
@@ -16,10 +17,6 @@ namespace canhil::viewer {
 namespace {
 
 using nlohmann::json;
-
-std::string where(const std::filesystem::path& file, std::size_t line) {
-  return file.string() + ":" + std::to_string(line) + ": ";
-}
 
 // A trace whose clock is the wall's (a capture) starts at its first frame; a virtual-time trace at 0.
 constexpr double kWallClockTrace = 1e6;
@@ -54,7 +51,8 @@ ReplayFeed::ReplayFeed(const std::filesystem::path& world_log, std::optional<std
       frames::LogEntry e;
       std::string why;
       if (!frames::parse_log_line(line, e, &why)) {
-        throw SetupError(where(*trace, number) + why + " (a candump -l log, as canhil run --trace writes)");
+        throw LocatedError(trace->string(), static_cast<int>(number), "",
+                           why + " (a candump -l log, as canhil run --trace writes)");
       }
       trace_.push_back(std::move(e));
     }

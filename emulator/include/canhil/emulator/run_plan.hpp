@@ -52,12 +52,15 @@ class OverrideError : public SetupError {
 };
 
 struct RunPlan {
-  std::filesystem::path source;  ///< the scenario file as given; empty for a scenario built in code
-  RunMode mode = RunMode::kVirtual;
+  std::filesystem::path source;     ///< the scenario file as given; empty for a scenario built in code
   Scenario scenario;                ///< complete, the overrides applied, laptops resolved (with vision)
   std::vector<LaptopSide> laptops;  ///< per team, as its LaptopLink opens it (none without vision)
   SessionOptions options;
   RunLength length;
+  /// The mode, as the options say it (external, real time, else virtual).
+  RunMode mode() const noexcept {
+    return options.external ? RunMode::kExternal : options.realtime ? RunMode::kRealtime : RunMode::kVirtual;
+  }
 };
 
 /// The plan of a scenario built in code (tests, matches, benchmarks):

@@ -95,6 +95,9 @@ class Database {
   /// table's size and the size asked, and what to do; also for a space this
   /// Database does not serve.
   int require(std::string_view item, std::size_t size, int space) const;
+  /// The same for agent `owner`'s item as agent `space`'s database holds it:
+  /// its own (owner == space) or a copy of owner's shared item.
+  int require(std::string_view item, std::size_t size, int space, int owner) const;
 
  protected:
   Database(ItemTable items, Scope scope, std::vector<int> spaces, std::string library);
