@@ -19,7 +19,30 @@ class UsageError : public SetupError {
 
 class Args {
  public:
-  Args(std::vector<std::string> words) : words_(std::move(words)) {}
+  /// The words of the command line; those after a lone "--" are kept apart,
+  /// untouched (a command to run: `canhil bus exec -- candump -l vcan0`).
+  Args(std::vector<std::string> words) : words_(std::move(words)) {
+    for (std::size_t i = 0; i < words_.size(); ++i) {
+      if (words_[i] == "--") {
+        after_dashes_.assign(words_.begin() + static_cast<long>(i) + 1, words_.end());
+        words_.resize(i);
+        has_dashes_ = true;
+        break;
+      }
+    }
+  }
+
+  /// The word after `word` (a subcommand: "up" of `canhil bus up`), or "".
+  std::string word_after(const std::string& word) const {
+    for (std::size_t i = 0; i + 1 < words_.size(); ++i) {
+      if (words_[i] == word) return words_[i + 1];
+    }
+    return "";
+  }
+
+  /// The words after "--", and whether there was one.
+  const std::vector<std::string>& after_dashes() const { return after_dashes_; }
+  bool has_dashes() const { return has_dashes_; }
 
   /// Removes `--name VALUE` (or `--name=VALUE`) and returns VALUE.
   std::optional<std::string> option(const std::string& name) {
@@ -65,6 +88,8 @@ class Args {
 
  private:
   std::vector<std::string> words_;
+  std::vector<std::string> after_dashes_;
+  bool has_dashes_ = false;
 };
 
 /// Removes `--name VALUE` and returns VALUE as a number; nothing when absent.

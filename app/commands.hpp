@@ -32,5 +32,7 @@ int run_view(Args& args, const std::optional<std::string>& dbc);
 int run_play(Args& args, const std::optional<std::string>& dbc);
 /// `canhil pman list`: every robot's PMan table, its processes and their activations.
 int run_pman(Args& args);
+/// `canhil bus up|exec|list|down|link|preload`: the user-space CAN bus.
+int run_bus(Args& args, const std::optional<std::string>& dbc);
 
 }  // namespace canhil::app

@@ -3,6 +3,7 @@
 // Each command has its own usage text: a mistake prints the error, that
 // command's usage and a pointer to `canhil help`; `canhil COMMAND --help` and
 // `canhil help COMMAND` print one command's usage, `canhil help` all of them.
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -158,6 +159,19 @@ const Command kCommands[] = {
                                               without attaching (canhil run's, or the team's master's)
 )",
      run_pman},
+    {"bus", "a user-space CAN bus for machines whose kernel has no CAN",
+     R"(  canhil bus up [IFACE...] [--grace-ms 10]     start the bus (if none runs) with interfaces (default vcan0)
+  canhil bus exec [--ifaces vcan0,...] -- COMMAND...
+                                              run COMMAND and everything it starts on the bus (preloading
+                                              libcanhil-bus.so), creating the interfaces it names; a bus
+                                              this starts ends with COMMAND
+  canhil bus list                             interfaces and sockets, with processes, filters, counters
+  canhil bus down [IFACE...]                  remove interfaces, or stop the whole bus
+  canhil bus link IFACE up|down               bring an interface up or down (ip link set)
+  canhil bus preload                          print the path of libcanhil-bus.so (for LD_PRELOAD)
+                                              (docs/vcan.md: the bus, its limits, how to choose)
+)",
+     canhil::app::run_bus},
     {"experiment", "physics calibration experiments and a vision frame",
      R"(  canhil experiment NAME [--json] [--svg FILE] [--config WORLD.toml] [options]
                                               physics calibration: ball-drop [--height M],
@@ -230,6 +244,8 @@ int usage_error(const char* what, const Command* command) {
 int main(int argc, char** argv) {
   std::vector<std::string> words(argv + 1, argv + argc);
   Args args(words);
+  words.resize(
+      std::min(words.size(), static_cast<std::size_t>(std::find(words.begin(), words.end(), "--") - words.begin())));
   const Command* command = nullptr;
   try {
     if (words.empty()) return usage_error("no command given", nullptr);

@@ -1,0 +1,202 @@
+// `canhil bus`: the user-space CAN bus (userbus/) from the command line.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "canhil/base/assets.hpp"
+#include "canhil/userbus/bus.hpp"
+#include "commands.hpp"
+
+namespace canhil::app {
+namespace {
+
+namespace fs = std::filesystem;
+namespace ub = canhil::userbus;
+
+std::vector<std::string> split_names(const std::string& list) {
+  std::vector<std::string> names;
+  std::size_t at = 0;
+  while (at <= list.size()) {
+    const std::size_t comma = list.find(',', at);
+    const std::string one = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+    if (!one.empty()) names.push_back(one);
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  return names;
+}
+
+/// libcanhil-bus.so: $CANHIL_BUS_PRELOAD, else installed beside the program, else the build tree's.
+std::string find_preload() {
+  if (const auto given = path_from_environment("CANHIL_BUS_PRELOAD")) {
+    if (!fs::exists(*given)) throw SetupError("CANHIL_BUS_PRELOAD=" + given->string() + ": no such file");
+    return fs::absolute(*given).string();
+  }
+  const fs::path p =
+      installed_or_built({fs::path("..") / CANHIL_INSTALL_LIBDIR / "libcanhil-bus.so"}, CANHIL_BUILD_BUS_PRELOAD);
+  std::error_code ec;
+  if (!fs::exists(p, ec)) {
+    throw SetupError("the bus's preload libcanhil-bus.so is not at " + p.string() +
+                     ": build it (target canhil_bus_preload) or set CANHIL_BUS_PRELOAD=/path/to/libcanhil-bus.so");
+  }
+  return p.string();
+}
+
+std::uint32_t grace_us(Args& args) {
+  const auto ms = optional_number(args, "--grace-ms");
+  if (!ms) return ub::BrokerOptions{}.grace_us;
+  if (*ms < 0 || *ms > 10000) throw UsageError("--grace-ms takes 0 to 10000 milliseconds, got " + std::to_string(*ms));
+  return static_cast<std::uint32_t>(*ms * 1000.0);
+}
+
+/// Starts a broker when none runs; true when this call started it.
+bool ensure_bus(const ub::BusPaths& paths, ub::BrokerOptions options, bool detached) {
+  if (ub::broker_alive(paths)) return false;
+  if (detached) {
+    // `bus up`: the broker outlives this command; it must not hold the caller's terminal or pipes.
+    const pid_t middle = fork();
+    if (middle < 0) throw ub::BusError("cannot start the bus's broker");
+    if (middle == 0) {
+      std::fflush(nullptr);
+      if (std::freopen("/dev/null", "r", stdin) == nullptr || std::freopen("/dev/null", "w", stdout) == nullptr ||
+          std::freopen("/dev/null", "w", stderr) == nullptr) {
+        _exit(1);
+      }
+      try {
+        ub::start_broker(paths, options);
+      } catch (const ub::BusError&) {
+        _exit(1);
+      }
+      _exit(0);
+    }
+    int status = 0;
+    waitpid(middle, &status, 0);
+    for (int k = 0; k < 400 && !ub::broker_alive(paths); ++k) usleep(5000);
+    if (!ub::broker_alive(paths)) {
+      // Once more in this process, for its message.
+      ub::start_broker(paths, options);
+    }
+    return true;
+  }
+  ub::start_broker(paths, options);
+  return true;
+}
+
+int bus_up(Args& args, const ub::BusPaths& paths) {
+  ub::BrokerOptions options;
+  options.grace_us = grace_us(args);
+  std::vector<std::string> names = args.positionals();
+  names.erase(names.begin(), names.begin() + 2);  // "bus up"
+  if (names.empty()) names.push_back("vcan0");
+  for (const std::string& n : names) ub::check_interface_name(n);
+  const bool started = ensure_bus(paths, options, true);
+  ub::add_interfaces(paths, names);
+  std::printf("canhil bus: %s at %s\n", started ? "started" : "running", paths.folder.c_str());
+  std::fputs(ub::describe(paths).c_str(), stdout);
+  std::printf("programs reach it with LD_PRELOAD=%s, or: canhil bus exec -- COMMAND\n", find_preload().c_str());
+  return 0;
+}
+
+int bus_exec(Args& args, const ub::BusPaths& paths) {
+  ub::BrokerOptions options;
+  options.grace_us = grace_us(args);
+  const auto ifaces = args.option("--ifaces");
+  std::vector<std::string> rest = args.positionals();
+  if (rest.size() > 2) throw UsageError("`canhil bus exec` takes the command after --, not \"" + rest[2] + "\"");
+  const std::vector<std::string>& command = args.after_dashes();
+  if (command.empty()) throw UsageError("`canhil bus exec` needs a command after --: canhil bus exec -- candump vcan0");
+  const std::vector<std::string> names = split_names(ifaces.value_or("vcan0"));
+  for (const std::string& n : names) ub::check_interface_name(n);
+  const std::string preload = find_preload();
+
+  options.owner = getpid();
+  const bool started = ensure_bus(paths, options, false);
+  const std::vector<std::string> created = ub::add_interfaces(paths, names);
+
+  std::string ld = preload;
+  if (const char* before = std::getenv("LD_PRELOAD"); before != nullptr && *before != '\0') {
+    if (std::string(before).find(preload) == std::string::npos) ld += ":" + std::string(before);
+  }
+  const pid_t child = fork();
+  if (child < 0) throw ub::BusError("cannot start " + command.front());
+  if (child == 0) {
+    setenv("LD_PRELOAD", ld.c_str(), 1);
+    setenv("CANHIL_BUS_DIR", paths.folder.c_str(), 1);
+    std::vector<char*> argv;
+    argv.reserve(command.size() + 1);
+    for (const std::string& w : command) argv.push_back(const_cast<char*>(w.c_str()));
+    argv.push_back(nullptr);
+    execvp(argv[0], argv.data());
+    std::fprintf(stderr, "canhil bus exec: cannot run %s: %s\n", argv[0], std::strerror(errno));
+    _exit(127);
+  }
+  // The command's signals are its own; this process waits for it.
+  signal(SIGINT, SIG_IGN);
+  signal(SIGTERM, SIG_IGN);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (started) {
+    ub::stop_broker(paths);
+  } else if (!created.empty()) {
+    ub::remove_interfaces(paths, created);
+  }
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+}
+
+}  // namespace
+
+int run_bus(Args& args, const std::optional<std::string>& /*dbc*/) {
+  try {
+    const ub::BusPaths paths = ub::BusPaths::current();
+    const std::string what = args.word_after("bus");
+    if (what == "up") return bus_up(args, paths);
+    if (what == "exec") return bus_exec(args, paths);
+    std::vector<std::string> words = args.positionals();
+    if (what == "preload") {
+      std::puts(find_preload().c_str());
+      return 0;
+    }
+    if (what == "list") {
+      if (!ub::broker_alive(paths)) {
+        std::printf("no user-space CAN bus runs at %s (start one: canhil bus up vcan0)\n", paths.folder.c_str());
+        return 0;
+      }
+      std::fputs(ub::describe(paths).c_str(), stdout);
+      return 0;
+    }
+    if (what == "down") {
+      words.erase(words.begin(), words.begin() + 2);
+      if (words.empty()) {
+        const bool was = ub::broker_alive(paths);
+        ub::stop_broker(paths);
+        std::printf("canhil bus: %s\n", was ? "stopped" : "no bus was running");
+      } else {
+        ub::remove_interfaces(paths, words);
+      }
+      return 0;
+    }
+    if (what == "link") {
+      if (words.size() != 4 || (words[3] != "up" && words[3] != "down"))
+        throw UsageError("canhil bus link IFACE up|down");
+      ub::set_interface_up(paths, words[2], words[3] == "up");
+      return 0;
+    }
+    throw UsageError(what.empty() ? "canhil bus takes up, exec, list, down, link or preload"
+                                  : "canhil bus: no subcommand \"" + what + "\" (up, exec, list, down, link, preload)");
+  } catch (const ub::BusError& e) {
+    throw SetupError(e.what());
+  }
+}
+
+}  // namespace canhil::app

@@ -1,0 +1,93 @@
+// canhil/userbus/bus.hpp — the user-space CAN bus from canhil's side: its
+// folder, its broker (started, found, stopped), its interfaces (added, brought
+// up or down, removed) and a listing of its sockets. `canhil bus` is built on
+// it; the programs on the bus reach it through the preload, libcanhil-bus.so.
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace canhil::userbus {
+
+struct State;
+
+/// A bus that cannot be set up or reached, with what to do.
+class BusError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Where the bus lives: the folder ($CANHIL_BUS_DIR, else /tmp/canhil-bus-<uid>),
+/// the broker's socket and the shared state file.
+struct BusPaths {
+  std::string folder;
+  std::string socket;
+  std::string state;
+  static BusPaths current();
+};
+
+struct BrokerOptions {
+  /// How long the broker waits for a receiver whose buffer is full before it
+  /// drops frames for it (the kernel drops at once: 0). A receiver that let
+  /// the wait pass has frames dropped at once until it reads again.
+  std::uint32_t grace_us = 10000;
+  /// A process the broker lives no longer than (0: until `stop`).
+  pid_t owner = 0;
+};
+
+/// The bus's state file, mapped; unmapped when destroyed.
+class MappedState {
+ public:
+  /// The state of the bus at `paths`, or nullptr when there is none.
+  static std::unique_ptr<MappedState> open(const BusPaths& paths);
+  ~MappedState();
+  MappedState(const MappedState&) = delete;
+  MappedState& operator=(const MappedState&) = delete;
+  State& state() { return *state_; }
+
+ private:
+  explicit MappedState(State* s) : state_(s) {}
+  State* state_;
+};
+
+/// Whether a broker answers at the bus's socket.
+bool broker_alive(const BusPaths& paths);
+
+/// Starts a broker for the bus at `paths`, reclaiming the files of one that
+/// died; the broker is a child of the calling process, in its own session.
+/// Throws BusError when one already runs or the folder cannot be used.
+pid_t start_broker(const BusPaths& paths, const BrokerOptions& options);
+
+/// Creates the interfaces `names` (or brings them up when they exist).
+/// Returns the names it created.
+std::vector<std::string> add_interfaces(const BusPaths& paths, const std::vector<std::string>& names);
+
+/// Brings interface `name` up or down, as `ip link set dev NAME up|down`.
+void set_interface_up(const BusPaths& paths, const std::string& name, bool up);
+
+/// Removes the interfaces `names` (their bound sockets get ENODEV, as when a
+/// kernel interface is deleted).
+void remove_interfaces(const BusPaths& paths, const std::vector<std::string>& names);
+
+/// Stops the broker (every socket on the bus is closed under its programs)
+/// and removes the bus's files. Nothing when no broker runs.
+void stop_broker(const BusPaths& paths);
+
+/// One line per interface and per socket: name, index, state, counters; each
+/// socket's process, binding, filters and counters.
+std::string describe(const BusPaths& paths);
+
+/// A valid interface name (1 to 15 characters, no '/', ':' or white space), or
+/// BusError naming what is wrong.
+void check_interface_name(const std::string& name);
+
+/// Runs the broker's loop in this process until it is stopped or its owner
+/// ends (what start_broker's child runs). listen_fd: the bound listening socket.
+void run_broker(int listen_fd, State& state, const BrokerOptions& options);
+
+}  // namespace canhil::userbus

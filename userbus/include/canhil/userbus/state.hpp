@@ -1,0 +1,193 @@
+// canhil/userbus/state.hpp — what the user-space CAN bus's processes share: the
+// bus folder, the state file every process maps (the interfaces and every
+// socket's options, so a process that reads or writes a socket needs no round
+// trip to the broker), and the records on a socket's connection to the broker.
+//
+// Header-only and libc only (the preload, libcanhil-bus.so, uses it inside
+// programs canhil did not build: no exceptions, no heap). docs/vcan.md says
+// how the parts fit.
+//
+//   <bus folder>/bus.sock   the broker's listening socket (SOCK_SEQPACKET)
+//   <bus folder>/state      the shared state below (0600, the folder 0700)
+//
+// One CAN_RAW socket of a program is one connection to the broker: the
+// program's descriptor is the connection's own end, a real socket, so read,
+// poll, select, epoll, O_NONBLOCK, dup, fork and exec work on it as on the
+// kernel's. The broker routes each frame a connection sends to every other
+// connection whose options (in the state file) want it.
+#pragma once
+
+#include <linux/can.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace canhil::userbus {
+
+inline constexpr std::uint32_t kMagic = 0x43414e42;  // "CANB"
+inline constexpr std::uint32_t kVersion = 1;
+inline constexpr int kMaxInterfaces = 32;
+inline constexpr int kMaxSockets = 1024;
+inline constexpr int kMaxFilters = 512;  // CAN_RAW_FILTER_MAX, as the kernel
+/// The bus's interface indices start here, far above what a machine's kernel
+/// numbers its own interfaces, so that one never stands for the other.
+inline constexpr int kFirstIndex = 1 << 20;
+/// An interface's MTU when created: a vcan's default (CAN FD frames pass;
+/// SIOCSIFMTU sets CAN_MTU, classic frames only, as `ip link set mtu 16`).
+inline constexpr std::uint32_t kInterfaceMtu = CANFD_MTU;
+
+/// The bus's folder: $CANHIL_BUS_DIR, else /tmp/canhil-bus-<uid>. Written to
+/// `out` (of `size` bytes); false when it does not fit.
+inline bool bus_folder(char* out, std::size_t size) noexcept {
+  const char* given = std::getenv("CANHIL_BUS_DIR");
+  const int n = (given != nullptr && *given != '\0') ? std::snprintf(out, size, "%s", given)
+                                                     : std::snprintf(out, size, "/tmp/canhil-bus-%u", getuid());
+  return n > 0 && static_cast<std::size_t>(n) < size;
+}
+
+/// `folder`/`name` into `out`; false when it does not fit (a socket's path
+/// has at most 107 characters).
+inline bool bus_path(char* out, std::size_t size, const char* folder, const char* name) noexcept {
+  const int n = std::snprintf(out, size, "%s/%s", folder, name);
+  return n > 0 && static_cast<std::size_t>(n) < size;
+}
+
+/// A small lock of the state file, shared between processes (a spin lock: it
+/// is held for a few stores, never across a call).
+struct SharedLock {
+  std::atomic<std::uint32_t> word{0};
+  void lock() noexcept {
+    std::uint32_t expected = 0;
+    while (!word.compare_exchange_weak(expected, 1, std::memory_order_acquire)) {
+      expected = 0;
+    }
+  }
+  void unlock() noexcept { word.store(0, std::memory_order_release); }
+};
+
+struct Interface {
+  std::atomic<std::uint32_t> in_use;
+  std::atomic<std::uint32_t> up;  ///< IFF_UP
+  std::int32_t index;
+  std::atomic<std::uint32_t> mtu;
+  char name[16];                       // IFNAMSIZ, NUL-terminated
+  std::atomic<std::uint64_t> frames;   ///< frames sent on it
+  std::atomic<std::uint64_t> dropped;  ///< copies dropped at a full receiver
+};
+
+/// Option flags of a socket (Socket::flags).
+enum SocketFlag : std::uint32_t {
+  kLoopback = 1U << 0,      ///< CAN_RAW_LOOPBACK (default on)
+  kRecvOwn = 1U << 1,       ///< CAN_RAW_RECV_OWN_MSGS
+  kFdFrames = 1U << 2,      ///< CAN_RAW_FD_FRAMES
+  kJoinFilters = 1U << 3,   ///< CAN_RAW_JOIN_FILTERS
+  kTimestamp = 1U << 4,     ///< SO_TIMESTAMP or SO_TIMESTAMPNS
+  kTimestampNs = 1U << 5,   ///< SO_TIMESTAMPNS (nanoseconds win, as in the kernel)
+  kRxqOverflow = 1U << 6,   ///< SO_RXQ_OVFL
+  kTimestampNew = 1U << 7,  ///< set with SO_TIMESTAMP(NS)_NEW: 64-bit time in the control message's type
+  kStampKept = 1U << 8,     ///< SOCK_TIMESTAMP: a read keeps its frame's time for SIOCGSTAMP
+};
+
+/// One CAN_RAW socket's options, written by the processes that hold it (under
+/// `lock`, `seq` bumped so the broker sees a change) and read by the broker
+/// when it routes a frame.
+struct Socket {
+  std::atomic<std::uint32_t> in_use;
+  std::atomic<std::uint32_t> seq;  ///< bumped by every change of the options below
+  SharedLock lock;
+  std::int32_t pid;      ///< the process that opened it
+  std::int32_t ifindex;  ///< bound interface, 0 for all
+  std::uint32_t bound;
+  std::uint32_t flags;     ///< SocketFlag
+  std::uint32_t err_mask;  ///< CAN_RAW_ERR_FILTER
+  std::int32_t rcvbuf;     ///< SO_RCVBUF as getsockopt answers (the kernel's doubled value)
+  std::int32_t sndbuf;     ///< SO_SNDBUF likewise
+  std::uint32_t filter_count;
+  can_filter filters[kMaxFilters];
+  char peer[16];                            ///< the connection's autobound name ("\0" and five hex digits)
+  std::atomic<std::int32_t> pending_error;  ///< an errno a read or write reports once (SO_ERROR)
+  std::atomic<std::int64_t> last_stamp_ns;  ///< the last frame read's time (SIOCGSTAMP), -1 before any
+  std::atomic<std::uint32_t> drops;         ///< copies dropped at this socket (SO_RXQ_OVFL)
+  std::atomic<std::uint64_t> received;
+  std::atomic<std::uint64_t> sent;
+};
+
+struct State {
+  std::uint32_t magic;
+  std::uint32_t version;
+  std::int32_t broker_pid;
+  std::uint32_t grace_us;  ///< how long the broker waits for a full receiver before it drops
+  SharedLock lock;         ///< held to add or remove an interface
+  std::atomic<std::uint32_t> interfaces_seq;
+  Interface interfaces[kMaxInterfaces];
+  Socket sockets[kMaxSockets];
+};
+
+/// The interface called `name`, or nullptr.
+inline Interface* find_interface(State& s, const char* name) noexcept {
+  for (Interface& i : s.interfaces) {
+    if (i.in_use.load(std::memory_order_acquire) != 0 && std::strncmp(i.name, name, sizeof i.name) == 0) return &i;
+  }
+  return nullptr;
+}
+
+/// The interface of index `index`, or nullptr.
+inline Interface* find_interface(State& s, int index) noexcept {
+  const int k = index - kFirstIndex;
+  if (k < 0 || k >= kMaxInterfaces) return nullptr;
+  Interface& i = s.interfaces[k];
+  return i.in_use.load(std::memory_order_acquire) != 0 ? &i : nullptr;
+}
+
+// ---- Records on a socket's connection ----------------------------------
+
+/// The first record a process sends on a new connection.
+struct Hello {
+  std::uint32_t kind;  ///< kHelloSocket or kHelloControl
+  std::int32_t pid;
+};
+inline constexpr std::uint32_t kHelloSocket = 1;
+inline constexpr std::uint32_t kHelloControl = 2;
+
+/// The broker's answer to a socket's hello: its slot in State::sockets, or
+/// -errno when it has none left.
+struct Welcome {
+  std::int32_t slot;
+};
+
+/// A frame a process sends: the interface (the socket's bound one, or the
+/// one sendto named) and the frame as the program wrote it.
+struct TxRecord {
+  std::int32_t ifindex;
+  std::uint32_t size;  ///< CAN_MTU or CANFD_MTU
+  unsigned char frame[CANFD_MTU];
+};
+inline constexpr std::size_t kTxHeader = offsetof(TxRecord, frame);
+
+/// A frame (or an error) the broker delivers to a socket.
+struct RxRecord {
+  std::int64_t stamp_ns;    ///< CLOCK_REALTIME when the bus delivered it
+  std::int32_t ifindex;     ///< the interface it arrived on
+  std::uint32_t msg_flags;  ///< MSG_DONTROUTE, MSG_CONFIRM
+  std::uint32_t drops;      ///< the socket's drops so far (SO_RXQ_OVFL)
+  std::int32_t error;       ///< an errno to report instead of a frame (ENETDOWN, ENODEV), else 0
+  std::uint32_t size;
+  std::uint32_t pad;
+  unsigned char frame[CANFD_MTU];
+};
+inline constexpr std::size_t kRxHeader = offsetof(RxRecord, frame);
+
+/// What a control connection asks (one request, one answer: an int, 0 or -errno).
+struct ControlRequest {
+  std::uint32_t op;  ///< kControlInterfacesChanged or kControlStop
+};
+inline constexpr std::uint32_t kControlInterfacesChanged = 1;
+inline constexpr std::uint32_t kControlStop = 2;
+
+}  // namespace canhil::userbus

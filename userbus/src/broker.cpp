@@ -1,0 +1,405 @@
+// The broker: one process per bus that routes every frame a socket sends to
+// every socket whose binding and filters want it, with the kernel's CAN_RAW
+// rules (net/can/af_can.c's filter lists, net/can/raw.c's loopback, own
+// messages and joined filters). One thread, one epoll; each socket a
+// SOCK_SEQPACKET connection.
+#include <linux/can/error.h>
+#include <poll.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/syscall.h>
+#include <sys/un.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+#include "canhil/userbus/bus.hpp"
+#include "canhil/userbus/state.hpp"
+
+namespace canhil::userbus {
+namespace {
+
+/// A filter as the kernel registers it (af_can.c, can_rcv_list_find): the
+/// mask reduced, the id masked, and its list (error, inverted or plain).
+struct Registered {
+  canid_t id;
+  canid_t mask;
+  bool error;
+  bool inverted;
+};
+
+Registered register_filter(canid_t id, canid_t mask) {
+  const bool inverted = (id & CAN_INV_FILTER) != 0;
+  if ((mask & CAN_ERR_FLAG) != 0) return {id, mask & CAN_ERR_MASK, true, false};
+  if ((mask & CAN_EFF_FLAG) != 0 && (id & CAN_EFF_FLAG) == 0) mask &= (CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG);
+  return {id & mask, mask, false, inverted};
+}
+
+bool matches(const Registered& r, canid_t can_id) {
+  if ((can_id & CAN_ERR_FLAG) != 0) return r.error && (can_id & r.mask) != 0;
+  if (r.error) return false;
+  const bool equal = (can_id & r.mask) == r.id;
+  return r.inverted ? !equal : equal;
+}
+
+/// What the broker keeps of a socket's options, refreshed when its seq moves.
+struct Options {
+  std::uint32_t seq = ~0U;
+  std::int32_t ifindex = 0;
+  bool bound = false;
+  std::uint32_t flags = 0;
+  std::int32_t rcvbuf = 0;
+  std::uint32_t count = 0;          // the user's filters (joined filters must all match)
+  std::vector<Registered> filters;  // the user's, then the error filter if any
+};
+
+struct Connection {
+  int fd = -1;
+  int slot = -1;  // -1 until its hello, and for a control connection
+  bool control = false;
+  bool hello = false;
+  bool overrun = false;  // its buffer was full past the grace: drop at once until it reads
+  std::int32_t applied_rcvbuf = 0;
+  Options options;
+};
+
+std::int64_t now_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_REALTIME, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
+}
+
+class Broker {
+ public:
+  Broker(int listen_fd, State& state, const BrokerOptions& options)
+      : listen_fd_(listen_fd), state_(state), options_(options) {
+    epoll_ = epoll_create1(EPOLL_CLOEXEC);
+    watch(listen_fd_);
+    if (options_.owner > 0) {
+      owner_fd_ = static_cast<int>(syscall(SYS_pidfd_open, options_.owner, 0));
+      if (owner_fd_ >= 0) watch(owner_fd_);
+    }
+    for (int k = 0; k < kMaxInterfaces; ++k)
+      up_[k] = state_.interfaces[k].up.load() != 0 && state_.interfaces[k].in_use.load() != 0;
+  }
+
+  ~Broker() {
+    for (Connection& c : connections_) {
+      if (c.fd >= 0) close(c.fd);
+    }
+    if (owner_fd_ >= 0) close(owner_fd_);
+    close(epoll_);
+  }
+  Broker(const Broker&) = delete;
+  Broker& operator=(const Broker&) = delete;
+
+  void run() {
+    epoll_event events[64];
+    while (!stop_) {
+      const int n = epoll_wait(epoll_, events, 64, -1);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        return;
+      }
+      for (int i = 0; i < n && !stop_; ++i) {
+        const int fd = events[i].data.fd;
+        if (fd == listen_fd_) {
+          accept_all();
+        } else if (fd == owner_fd_) {
+          stop_ = true;
+        } else {
+          serve(fd, events[i].events);
+        }
+      }
+    }
+  }
+
+ private:
+  void watch(int fd) {
+    epoll_event e{};
+    e.events = EPOLLIN;
+    e.data.fd = fd;
+    epoll_ctl(epoll_, EPOLL_CTL_ADD, fd, &e);
+  }
+
+  Connection& connection(int fd) {
+    if (static_cast<std::size_t>(fd) >= connections_.size()) connections_.resize(static_cast<std::size_t>(fd) + 1);
+    return connections_[static_cast<std::size_t>(fd)];
+  }
+
+  void accept_all() {
+    for (;;) {
+      const int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd < 0) return;
+      ucred peer{};
+      socklen_t len = sizeof peer;
+      if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &peer, &len) != 0 || peer.uid != getuid()) {
+        close(fd);  // another user's process: the bus is its creator's only
+        continue;
+      }
+      Connection& c = connection(fd);
+      c = Connection{};
+      c.fd = fd;
+      watch(fd);
+    }
+  }
+
+  void drop(Connection& c) {
+    epoll_ctl(epoll_, EPOLL_CTL_DEL, c.fd, nullptr);
+    close(c.fd);
+    if (c.slot >= 0) {
+      Socket& s = state_.sockets[c.slot];
+      s.in_use.store(0, std::memory_order_release);
+    }
+    c = Connection{};
+  }
+
+  void serve(int fd, std::uint32_t events) {
+    Connection& c = connection(fd);
+    if (c.fd < 0) return;
+    if (!c.hello) {
+      hello(c);
+      return;
+    }
+    if (c.control) {
+      control(c);
+      return;
+    }
+    // Up to a batch of frames, then the other connections get their turn.
+    TxRecord record{};
+    for (int k = 0; k < 64; ++k) {
+      const ssize_t n = recv(c.fd, &record, sizeof record, MSG_DONTWAIT);
+      if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
+        drop(c);
+        return;
+      }
+      if (n < 0) break;
+      if (static_cast<std::size_t>(n) == kTxHeader + record.size &&
+          (record.size == CAN_MTU || record.size == CANFD_MTU)) {
+        route(c, record);
+      }
+    }
+    (void)events;  // a hang-up is read as the end of the connection, once its frames are routed
+  }
+
+  void hello(Connection& c) {
+    Hello h{};
+    const ssize_t n = recv(c.fd, &h, sizeof h, MSG_DONTWAIT);
+    if (n != static_cast<ssize_t>(sizeof h)) {
+      if (n < 0 && errno == EAGAIN) return;
+      drop(c);
+      return;
+    }
+    c.hello = true;
+    if (h.kind == kHelloControl) {
+      c.control = true;
+      return;
+    }
+    Welcome w{-ENOBUFS};
+    for (int k = 0; k < kMaxSockets; ++k) {
+      Socket& s = state_.sockets[k];
+      if (s.in_use.load(std::memory_order_acquire) != 0) continue;
+      s.lock.lock();
+      s.pid = h.pid;
+      s.ifindex = 0;
+      s.bound = 0;
+      s.flags = kLoopback;
+      s.err_mask = 0;
+      s.rcvbuf = 0;
+      s.sndbuf = 0;
+      s.filter_count = 1;  // raw_init: one filter that takes every frame
+      s.filters[0] = can_filter{0, 0};
+      sockaddr_un peer{};
+      socklen_t len = sizeof peer;
+      std::memset(s.peer, 0, sizeof s.peer);
+      if (getpeername(c.fd, reinterpret_cast<sockaddr*>(&peer), &len) == 0 && len > sizeof(sa_family_t)) {
+        std::memcpy(s.peer, peer.sun_path, std::min<std::size_t>(len - sizeof(sa_family_t), sizeof s.peer));
+      }
+      s.pending_error.store(0);
+      s.last_stamp_ns.store(-1);
+      s.drops.store(0);
+      s.received.store(0);
+      s.sent.store(0);
+      s.seq.fetch_add(2, std::memory_order_release);
+      s.lock.unlock();
+      s.in_use.store(1, std::memory_order_release);
+      c.slot = k;
+      w.slot = k;
+      break;
+    }
+    if (send(c.fd, &w, sizeof w, MSG_NOSIGNAL) != static_cast<ssize_t>(sizeof w) || w.slot < 0) drop(c);
+  }
+
+  void control(Connection& c) {
+    ControlRequest r{};
+    const ssize_t n = recv(c.fd, &r, sizeof r, MSG_DONTWAIT);
+    if (n < 0 && errno == EAGAIN) return;
+    int answer = -EINVAL;
+    if (n == static_cast<ssize_t>(sizeof r)) {
+      if (r.op == kControlInterfacesChanged) {
+        interfaces_changed();
+        answer = 0;
+      } else if (r.op == kControlStop) {
+        stop_ = true;
+        answer = 0;
+      }
+    }
+    if (n > 0) send(c.fd, &answer, sizeof answer, MSG_NOSIGNAL | MSG_DONTWAIT);
+    drop(c);
+  }
+
+  /// An interface went down or away: every socket bound to it is told, as
+  /// raw.c's notifier tells it (ENETDOWN; ENODEV and unbound when removed).
+  void interfaces_changed() {
+    for (int k = 0; k < kMaxInterfaces; ++k) {
+      const Interface& i = state_.interfaces[k];
+      const bool exists = i.in_use.load() != 0;
+      const bool up = exists && i.up.load() != 0;
+      const bool removed = !exists && known_[k];
+      const bool went_down = exists && !up && up_[k];
+      known_[k] = exists;
+      up_[k] = up;
+      if (!removed && !went_down) continue;
+      const int index = kFirstIndex + k;
+      for (Connection& c : connections_) {
+        if (c.fd < 0 || c.slot < 0) continue;
+        Socket& s = state_.sockets[c.slot];
+        if (s.bound == 0 || s.ifindex != index) continue;
+        if (removed) {
+          s.lock.lock();
+          s.seq.fetch_add(1, std::memory_order_release);
+          s.ifindex = 0;
+          s.bound = 0;
+          s.filter_count = 0;
+          s.seq.fetch_add(1, std::memory_order_release);
+          s.lock.unlock();
+        }
+        RxRecord r{};
+        r.error = removed ? ENODEV : ENETDOWN;
+        send(c.fd, &r, kRxHeader, MSG_DONTWAIT | MSG_NOSIGNAL);
+      }
+    }
+  }
+
+ public:
+  void note_interfaces() {
+    for (int k = 0; k < kMaxInterfaces; ++k) known_[k] = state_.interfaces[k].in_use.load() != 0;
+  }
+
+ private:
+  /// c's options as the processes last wrote them (a seqlock read).
+  const Options& options(Connection& c) {
+    Socket& s = state_.sockets[c.slot];
+    const std::uint32_t seq = s.seq.load(std::memory_order_acquire);
+    if (seq == c.options.seq) return c.options;
+    for (;;) {
+      const std::uint32_t before = s.seq.load(std::memory_order_acquire);
+      if ((before & 1U) != 0) continue;
+      Options o;
+      o.seq = before;
+      o.ifindex = s.ifindex;
+      o.bound = s.bound != 0;
+      o.flags = s.flags;
+      o.rcvbuf = s.rcvbuf;
+      o.count = std::min<std::uint32_t>(s.filter_count, kMaxFilters);
+      o.filters.reserve(o.count + 1);
+      for (std::uint32_t f = 0; f < o.count; ++f)
+        o.filters.push_back(register_filter(s.filters[f].can_id, s.filters[f].can_mask));
+      if ((s.err_mask & CAN_ERR_MASK) != 0)
+        o.filters.push_back(register_filter(0, (s.err_mask & CAN_ERR_MASK) | CAN_ERR_FLAG));
+      std::atomic_thread_fence(std::memory_order_acquire);
+      if (s.seq.load(std::memory_order_relaxed) != before) continue;
+      c.options = std::move(o);
+      break;
+    }
+    if (c.options.rcvbuf != c.applied_rcvbuf && c.options.rcvbuf > 0) {
+      // What the program asked of its receive buffer is the broker's send buffer towards it.
+      const int size = c.options.rcvbuf / 2;
+      setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &size, sizeof size);
+      c.applied_rcvbuf = c.options.rcvbuf;
+    }
+    return c.options;
+  }
+
+  /// Whether socket options `o` take a frame of `can_id` (raw_rcv's rules:
+  /// any filter, or every filter when they are joined).
+  static bool wants(const Options& o, canid_t can_id) {
+    std::uint32_t hits = 0;
+    for (const Registered& r : o.filters) hits += matches(r, can_id) ? 1U : 0U;
+    if (hits == 0) return false;
+    return (o.flags & kJoinFilters) == 0 || o.count <= 1 || hits >= o.count;
+  }
+
+  void route(Connection& sender, const TxRecord& record) {
+    Interface* iface = find_interface(state_, record.ifindex);
+    if (iface == nullptr || iface->up.load(std::memory_order_relaxed) == 0) return;
+    iface->frames.fetch_add(1, std::memory_order_relaxed);
+    state_.sockets[sender.slot].sent.fetch_add(1, std::memory_order_relaxed);
+    // A virtual interface has no wire: with loopback off nobody hears the frame.
+    if ((options(sender).flags & kLoopback) == 0) return;
+    canid_t can_id = 0;
+    std::memcpy(&can_id, record.frame, sizeof can_id);
+    RxRecord out{};
+    out.stamp_ns = now_ns();
+    out.ifindex = record.ifindex;
+    out.size = record.size;
+    std::memcpy(out.frame, record.frame, record.size);
+    for (Connection& c : connections_) {
+      if (c.fd < 0 || c.slot < 0) continue;
+      const Options& o = options(c);
+      if (!o.bound || (o.ifindex != 0 && o.ifindex != record.ifindex)) continue;
+      const bool own = &c == &sender;
+      if (own && (o.flags & kRecvOwn) == 0) continue;
+      if (record.size != CAN_MTU && (o.flags & kFdFrames) == 0) continue;
+      if (!wants(o, can_id)) continue;
+      out.msg_flags = static_cast<std::uint32_t>(MSG_DONTROUTE) | (own ? static_cast<std::uint32_t>(MSG_CONFIRM) : 0U);
+      deliver(c, out, *iface);
+    }
+  }
+
+  void deliver(Connection& c, RxRecord& r, Interface& iface) {
+    Socket& s = state_.sockets[c.slot];
+    r.drops = s.drops.load(std::memory_order_relaxed);
+    const std::size_t size = kRxHeader + r.size;
+    ssize_t n = send(c.fd, &r, size, MSG_DONTWAIT | MSG_NOSIGNAL);
+    if (n < 0 && errno == EAGAIN && !c.overrun && options_.grace_us > 0) {
+      pollfd p{c.fd, POLLOUT, 0};
+      if (poll(&p, 1, static_cast<int>((options_.grace_us + 999) / 1000)) > 0)
+        n = send(c.fd, &r, size, MSG_DONTWAIT | MSG_NOSIGNAL);
+    }
+    if (n >= 0) {
+      c.overrun = false;
+      s.received.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    if (errno == EAGAIN) {
+      c.overrun = true;
+      s.drops.fetch_add(1, std::memory_order_relaxed);
+      iface.dropped.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+
+  int listen_fd_;
+  State& state_;
+  BrokerOptions options_;
+  int epoll_ = -1;
+  int owner_fd_ = -1;
+  bool stop_ = false;
+  bool up_[kMaxInterfaces] = {};
+  bool known_[kMaxInterfaces] = {};
+  std::vector<Connection> connections_;
+};
+
+}  // namespace
+
+void run_broker(int listen_fd, State& state, const BrokerOptions& options) {
+  Broker broker(listen_fd, state, options);
+  broker.note_interfaces();
+  broker.run();
+}
+
+}  // namespace canhil::userbus

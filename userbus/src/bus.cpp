@@ -1,0 +1,313 @@
+// The bus's folder, files and interfaces from canhil's side (bus.hpp).
+#include "canhil/userbus/bus.hpp"
+
+#include <fcntl.h>
+#include <linux/can/raw.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <sstream>
+
+#include "canhil/userbus/state.hpp"
+
+namespace canhil::userbus {
+namespace {
+
+std::string errno_text(int e) { return std::strerror(e); }
+
+int connect_to(const BusPaths& paths) {
+  const int fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::snprintf(a.sun_path, sizeof a.sun_path, "%s", paths.socket.c_str());
+  if (connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+/// One control request to the running broker; its answer (0 or -errno).
+int ask_broker(const BusPaths& paths, std::uint32_t op) {
+  const int fd = connect_to(paths);
+  if (fd < 0) return -errno;
+  const Hello h{kHelloControl, getpid()};
+  const ControlRequest r{op};
+  int answer = -EIO;
+  if (send(fd, &h, sizeof h, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof h) &&
+      send(fd, &r, sizeof r, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof r)) {
+    if (recv(fd, &answer, sizeof answer, 0) != static_cast<ssize_t>(sizeof answer)) answer = -EIO;
+  }
+  close(fd);
+  return answer;
+}
+
+std::unique_ptr<MappedState> require_state(const BusPaths& paths) {
+  if (!broker_alive(paths)) {
+    throw BusError("no user-space CAN bus runs at " + paths.folder + ": start one with `canhil bus up vcan0`");
+  }
+  auto mapped = MappedState::open(paths);
+  if (!mapped)
+    throw BusError("the bus at " + paths.folder + " has no state file: stop it (`canhil bus down`) and start it again");
+  return mapped;
+}
+
+std::string filter_text(const Socket& s) {
+  if (s.filter_count == 0) return "no filter (receives nothing)";
+  std::ostringstream out;
+  for (std::uint32_t f = 0; f < s.filter_count && f < 4; ++f) {
+    char one[48];
+    const bool inv = (s.filters[f].can_id & CAN_INV_FILTER) != 0;
+    std::snprintf(one, sizeof one, "%s%03X%s%X", f > 0 ? "," : "", s.filters[f].can_id & ~CAN_INV_FILTER,
+                  inv ? "~" : ":", s.filters[f].can_mask);
+    out << one;
+  }
+  if (s.filter_count > 4) out << ",... (" << s.filter_count << ")";
+  return out.str();
+}
+
+}  // namespace
+
+BusPaths BusPaths::current() {
+  char folder[256];
+  if (!bus_folder(folder, sizeof folder)) throw BusError("CANHIL_BUS_DIR is longer than 255 characters");
+  BusPaths p;
+  p.folder = folder;
+  p.socket = p.folder + "/bus.sock";
+  p.state = p.folder + "/state";
+  if (p.socket.size() >= sizeof(sockaddr_un{}.sun_path)) {
+    throw BusError("the bus folder " + p.folder +
+                   " is too long for a socket's path (at most 98 characters): set CANHIL_BUS_DIR to a shorter one");
+  }
+  return p;
+}
+
+std::unique_ptr<MappedState> MappedState::open(const BusPaths& paths) {
+  const int fd = ::open(paths.state.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) return nullptr;
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || static_cast<std::size_t>(st.st_size) < sizeof(State)) {
+    close(fd);
+    return nullptr;
+  }
+  void* p = mmap(nullptr, sizeof(State), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  close(fd);
+  if (p == MAP_FAILED) return nullptr;
+  auto* s = static_cast<State*>(p);
+  if (s->magic != kMagic || s->version != kVersion) {
+    munmap(p, sizeof(State));
+    return nullptr;
+  }
+  return std::unique_ptr<MappedState>(new MappedState(s));
+}
+
+MappedState::~MappedState() { munmap(state_, sizeof(State)); }
+
+bool broker_alive(const BusPaths& paths) {
+  const int fd = connect_to(paths);
+  if (fd < 0) return false;
+  close(fd);
+  return true;
+}
+
+void check_interface_name(const std::string& name) {
+  if (name.empty() || name.size() > 15) {
+    throw BusError("interface name '" + name + "': give 1 to 15 characters, as the kernel's (vcan0)");
+  }
+  for (const char ch : name) {
+    if (ch == '/' || ch == ':' || ch <= ' ' || ch == 127) {
+      throw BusError("interface name '" + name + "': no '/', ':' or white space, as the kernel's");
+    }
+  }
+}
+
+pid_t start_broker(const BusPaths& paths, const BrokerOptions& options) {
+  if (mkdir(paths.folder.c_str(), 0700) != 0 && errno != EEXIST) {
+    throw BusError("cannot create the bus folder " + paths.folder + ": " + errno_text(errno));
+  }
+  struct stat st {};
+  if (lstat(paths.folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode) || st.st_uid != getuid() ||
+      (st.st_mode & 077) != 0) {
+    throw BusError(
+        "the bus folder " + paths.folder +
+        " is not a folder of yours that only you can open (mode 0700): remove it, or set CANHIL_BUS_DIR to another");
+  }
+  if (broker_alive(paths)) throw BusError("a user-space CAN bus already runs at " + paths.folder);
+  // The files of a broker that died (a crashed run) are reclaimed.
+  unlink(paths.socket.c_str());
+  unlink(paths.state.c_str());
+
+  const int fd = ::open(paths.state.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) throw BusError("cannot create " + paths.state + ": " + errno_text(errno));
+  if (ftruncate(fd, sizeof(State)) != 0) {
+    const int e = errno;
+    close(fd);
+    throw BusError("cannot size " + paths.state + ": " + errno_text(e));
+  }
+  void* p = mmap(nullptr, sizeof(State), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  close(fd);
+  if (p == MAP_FAILED) throw BusError("cannot map " + paths.state + ": " + errno_text(errno));
+  auto* state = static_cast<State*>(p);
+  state->version = kVersion;
+  state->grace_us = options.grace_us;
+
+  const int listen_fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::snprintf(a.sun_path, sizeof a.sun_path, "%s", paths.socket.c_str());
+  const mode_t old = umask(077);
+  const bool bound = bind(listen_fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 && listen(listen_fd, 128) == 0;
+  umask(old);
+  if (!bound) {
+    const int e = errno;
+    close(listen_fd);
+    munmap(p, sizeof(State));
+    throw BusError("cannot listen at " + paths.socket + ": " + errno_text(e));
+  }
+  const pid_t child = fork();
+  if (child < 0) throw BusError(std::string("cannot start the bus's broker: ") + errno_text(errno));
+  if (child == 0) {
+    setsid();
+    signal(SIGINT, SIG_IGN);
+    signal(SIGPIPE, SIG_IGN);
+    state->broker_pid = getpid();
+    std::atomic_thread_fence(std::memory_order_release);
+    state->magic = kMagic;
+    run_broker(listen_fd, *state, options);
+    unlink(paths.socket.c_str());
+    unlink(paths.state.c_str());
+    _exit(0);
+  }
+  close(listen_fd);
+  // The broker is ready to accept once listen() returned; its state is ready once it wrote its pid.
+  for (int k = 0; k < 2000 && reinterpret_cast<volatile std::uint32_t&>(state->magic) != kMagic; ++k) usleep(500);
+  munmap(p, sizeof(State));
+  return child;
+}
+
+std::vector<std::string> add_interfaces(const BusPaths& paths, const std::vector<std::string>& names) {
+  for (const std::string& n : names) check_interface_name(n);
+  auto mapped = require_state(paths);
+  State& s = mapped->state();
+  std::vector<std::string> created;
+  s.lock.lock();
+  for (const std::string& n : names) {
+    if (Interface* i = find_interface(s, n.c_str())) {
+      i->up.store(1);
+      continue;
+    }
+    Interface* free = nullptr;
+    for (int k = 0; k < kMaxInterfaces && free == nullptr; ++k) {
+      if (s.interfaces[k].in_use.load() == 0) {
+        free = &s.interfaces[k];
+        free->index = kFirstIndex + k;
+      }
+    }
+    if (free == nullptr) {
+      s.lock.unlock();
+      throw BusError("the bus has " + std::to_string(kMaxInterfaces) +
+                     " interfaces already: remove one (`canhil bus down NAME`)");
+    }
+    std::memset(free->name, 0, sizeof free->name);
+    std::memcpy(free->name, n.data(), n.size());
+    free->mtu.store(kInterfaceMtu);
+    free->frames.store(0);
+    free->dropped.store(0);
+    free->up.store(1);
+    free->in_use.store(1, std::memory_order_release);
+    created.push_back(n);
+  }
+  s.interfaces_seq.fetch_add(1);
+  s.lock.unlock();
+  ask_broker(paths, kControlInterfacesChanged);
+  return created;
+}
+
+void set_interface_up(const BusPaths& paths, const std::string& name, bool up) {
+  auto mapped = require_state(paths);
+  Interface* i = find_interface(mapped->state(), name.c_str());
+  if (i == nullptr) throw BusError("the bus has no interface " + name + " (`canhil bus list` lists them)");
+  i->up.store(up ? 1 : 0);
+  mapped->state().interfaces_seq.fetch_add(1);
+  ask_broker(paths, kControlInterfacesChanged);
+}
+
+void remove_interfaces(const BusPaths& paths, const std::vector<std::string>& names) {
+  auto mapped = require_state(paths);
+  State& s = mapped->state();
+  std::string missing;
+  s.lock.lock();
+  for (const std::string& n : names) {
+    Interface* i = find_interface(s, n.c_str());
+    if (i == nullptr) {
+      missing += (missing.empty() ? "" : ", ") + n;
+      continue;
+    }
+    i->up.store(0);
+    i->in_use.store(0, std::memory_order_release);
+  }
+  s.interfaces_seq.fetch_add(1);
+  s.lock.unlock();
+  ask_broker(paths, kControlInterfacesChanged);
+  if (!missing.empty()) throw BusError("the bus has no interface " + missing + " (`canhil bus list` lists them)");
+}
+
+void stop_broker(const BusPaths& paths) {
+  if (!broker_alive(paths)) return;
+  pid_t pid = 0;
+  if (auto mapped = MappedState::open(paths)) pid = mapped->state().broker_pid;
+  ask_broker(paths, kControlStop);
+  // Wait for it to go (its own child: reap it; another's: watch its socket).
+  for (int k = 0; k < 400; ++k) {
+    if (pid > 0 && waitpid(pid, nullptr, WNOHANG) == pid) break;
+    if (!broker_alive(paths) && (pid <= 0 || kill(pid, 0) != 0)) break;
+    usleep(5000);
+  }
+}
+
+std::string describe(const BusPaths& paths) {
+  auto mapped = require_state(paths);
+  State& s = mapped->state();
+  std::ostringstream out;
+  out << "bus " << paths.folder << " (broker pid " << s.broker_pid << ", grace " << s.grace_us / 1000.0 << " ms)\n";
+  bool any = false;
+  for (const Interface& i : s.interfaces) {
+    if (i.in_use.load() == 0) continue;
+    any = true;
+    out << "  " << i.name << "  index " << i.index << "  " << (i.up.load() != 0 ? "up" : "down") << "  mtu "
+        << i.mtu.load() << "  frames " << i.frames.load() << "  dropped " << i.dropped.load() << '\n';
+  }
+  if (!any) out << "  no interfaces (add one: canhil bus up vcan0)\n";
+  for (int k = 0; k < kMaxSockets; ++k) {
+    const Socket& sk = s.sockets[k];
+    if (sk.in_use.load() == 0) continue;
+    std::string where = "unbound";
+    if (sk.bound != 0) {
+      where = "any";
+      if (sk.ifindex != 0) {
+        const Interface* i = find_interface(s, sk.ifindex);
+        where = i != nullptr ? i->name : "index " + std::to_string(sk.ifindex);
+      }
+    }
+    char comm[64] = "?";
+    const std::string comm_path = "/proc/" + std::to_string(sk.pid) + "/comm";
+    if (FILE* f = std::fopen(comm_path.c_str(), "r")) {
+      if (std::fgets(comm, sizeof comm, f) != nullptr) comm[std::strcspn(comm, "\n")] = '\0';
+      std::fclose(f);
+    }
+    out << "  socket " << k << "  pid " << sk.pid << " (" << comm << ")  " << where << "  filters " << filter_text(sk)
+        << "  sent " << sk.sent.load() << "  received " << sk.received.load() << "  dropped " << sk.drops.load()
+        << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace canhil::userbus
