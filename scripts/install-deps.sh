@@ -27,7 +27,7 @@ if [[ "$set_of" == all ]]; then
     # the sanitized flavours and the lint step
     clang libclang-rt-14-dev clang-format clang-tidy
     # independent DBC decoder for the cross-check tests
-    python3 python3-canmatrix
+    python3 python3-canmatrix python3-can
     # the viewer's browser tests (headless, driven by puppeteer-core from npm)
     chromium
   )

@@ -15,6 +15,10 @@ std::string source_dir();
 std::string build_dir();
 /// The `canhil` program of this build.
 std::string canhil_binary();
+/// The user-space bus's preload, libcanhil-bus.so, of this build.
+std::string bus_preload();
+/// The lockstep time shim, libcanhil-timeshim.so, of this build.
+std::string time_shim();
 /// frames/canhil.dbc in the checkout.
 inline std::string shipped_dbc() { return source_dir() + "/frames/canhil.dbc"; }
 }  // namespace canhil::test

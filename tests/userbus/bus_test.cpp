@@ -1,0 +1,220 @@
+// The user-space bus from canhil's side (userbus/bus.hpp) and with real,
+// unchanged programs on it: can-utils, python-can, a process killed in the
+// middle of its writes, the time shim beside the bus's preload. Each test
+// starts its own bus in a folder of its own, owned by this process.
+#include "canhil/userbus/bus.hpp"
+
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support/test_paths.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace ub = canhil::userbus;
+
+/// A bus of this test's own: started in a fresh folder, stopped at the end.
+class OwnBus : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = fs::temp_directory_path() / ("canhil-bus-ut-" + std::to_string(getpid()));
+    fs::remove_all(folder_);
+    setenv("CANHIL_BUS_DIR", folder_.c_str(), 1);
+    paths_ = ub::BusPaths::current();
+  }
+  void TearDown() override {
+    ub::stop_broker(paths_);
+    fs::remove_all(folder_);
+    unsetenv("CANHIL_BUS_DIR");
+  }
+  void start(const std::vector<std::string>& names = {"vcan0", "vcan1"}) {
+    ub::BrokerOptions o;
+    o.owner = getpid();
+    broker_ = ub::start_broker(paths_, o);
+    ub::add_interfaces(paths_, names);
+  }
+  /// `command` run by sh on the bus (the preload and the bus's folder in its environment); its output.
+  std::string on_bus(const std::string& command, int* status = nullptr) const {
+    const std::string line = "cd '" + folder_.string() + "' && LD_PRELOAD=" + canhil::test::bus_preload() +
+                             " TIMESHIM=" + canhil::test::time_shim() + " CANHIL_BUS_DIR='" + folder_.string() +
+                             "' sh -c '" + command + "' 2>&1";
+    std::string out;
+    FILE* p = popen(line.c_str(), "r");
+    if (p == nullptr) return out;
+    char buffer[4096];
+    std::size_t n = 0;
+    while ((n = std::fread(buffer, 1, sizeof buffer, p)) > 0) out.append(buffer, n);
+    const int s = pclose(p);
+    if (status != nullptr) *status = WIFEXITED(s) ? WEXITSTATUS(s) : 128 + WTERMSIG(s);
+    return out;
+  }
+  fs::path folder_;
+  ub::BusPaths paths_;
+  pid_t broker_ = 0;
+};
+
+TEST_F(OwnBus, StartsListsAndStops) {
+  EXPECT_FALSE(ub::broker_alive(paths_));
+  start();
+  EXPECT_TRUE(ub::broker_alive(paths_));
+  struct stat st {};
+  ASSERT_EQ(stat(folder_.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0700U);
+  ASSERT_EQ(stat(paths_.state.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600U);
+  const std::string listed = ub::describe(paths_);
+  EXPECT_NE(listed.find("vcan0  index 1048576  up  mtu 72"), std::string::npos) << listed;
+  EXPECT_NE(listed.find("vcan1"), std::string::npos) << listed;
+  ub::set_interface_up(paths_, "vcan1", false);
+  EXPECT_NE(ub::describe(paths_).find("vcan1  index 1048577  down"), std::string::npos);
+  ub::remove_interfaces(paths_, {"vcan1"});
+  EXPECT_EQ(ub::describe(paths_).find("vcan1"), std::string::npos);
+  EXPECT_THROW(ub::remove_interfaces(paths_, {"vcan9"}), ub::BusError);
+  EXPECT_THROW(ub::start_broker(paths_, {}), ub::BusError);  // one bus per folder
+  ub::stop_broker(paths_);
+  EXPECT_FALSE(ub::broker_alive(paths_));
+  EXPECT_FALSE(fs::exists(paths_.state));
+}
+
+TEST_F(OwnBus, RefusesBadNamesAndAFolderOthersCanOpen) {
+  EXPECT_THROW(ub::check_interface_name(""), ub::BusError);
+  EXPECT_THROW(ub::check_interface_name("a_name_of_16_chr"), ub::BusError);
+  EXPECT_THROW(ub::check_interface_name("vcan 0"), ub::BusError);
+  EXPECT_THROW(ub::check_interface_name("vcan/0"), ub::BusError);
+  fs::create_directories(folder_);
+  fs::permissions(folder_, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec);
+  try {
+    ub::start_broker(paths_, {});
+    FAIL() << "a folder others can open was used";
+  } catch (const ub::BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("0700"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(OwnBus, ReclaimsTheFilesOfABrokerThatDied) {
+  start();
+  ASSERT_EQ(kill(broker_, SIGKILL), 0);
+  waitpid(broker_, nullptr, 0);
+  EXPECT_TRUE(fs::exists(paths_.socket));  // left behind
+  EXPECT_FALSE(ub::broker_alive(paths_));
+  start({"vcan0"});
+  EXPECT_TRUE(ub::broker_alive(paths_));
+  EXPECT_NE(ub::describe(paths_).find("vcan0"), std::string::npos);
+}
+
+TEST_F(OwnBus, EndsWithItsOwner) {
+  const pid_t owner = fork();
+  if (owner == 0) {
+    usleep(300000);
+    _exit(0);
+  }
+  ub::BrokerOptions o;
+  o.owner = owner;
+  broker_ = ub::start_broker(paths_, o);
+  EXPECT_TRUE(ub::broker_alive(paths_));
+  waitpid(owner, nullptr, 0);
+  int status = 0;
+  EXPECT_EQ(waitpid(broker_, &status, 0), broker_);  // it ended by itself
+  EXPECT_FALSE(ub::broker_alive(paths_));
+  EXPECT_FALSE(fs::exists(paths_.socket));
+}
+
+TEST_F(OwnBus, CangenIntoCandumpLosesNothing) {
+  start({"vcan0"});
+  int status = -1;
+  const std::string out = on_bus(
+      "candump -l vcan0 & p=$!; sleep 0.3; cangen vcan0 -g 0 -n 100000 -I i -L 8 -D i; sleep 0.5; kill -INT $p; wait "
+      "$p; "
+      "cat candump-*.log",
+      &status);
+  EXPECT_EQ(status, 0) << out.substr(0, 500);
+  std::istringstream lines(out);
+  std::string line;
+  std::size_t frames = 0;
+  bool in_order = true;
+  while (std::getline(lines, line)) {
+    const auto hash = line.find('#');
+    if (line.empty() || line[0] != '(' || hash == std::string::npos) continue;
+    // -I i: the ids count up modulo 0x800, in order
+    const unsigned id = static_cast<unsigned>(std::stoul(line.substr(hash - 3, 3), nullptr, 16));
+    in_order = in_order && id == (frames & 0x7FF);
+    ++frames;
+  }
+  EXPECT_EQ(frames, 100000U);
+  EXPECT_TRUE(in_order);
+}
+
+TEST_F(OwnBus, CansendSeenByCandumpOnEveryInterfaceAndCanbusloadMeasures) {
+  start();
+  const std::string out = on_bus(
+      "candump -n 2 any > any.txt & p=$!; sleep 0.3; cansend vcan0 123#11; cansend vcan1 1ABCDEF0#2233; wait $p; cat "
+      "any.txt");
+  EXPECT_NE(out.find("vcan0  123   [1]  11"), std::string::npos) << out;
+  EXPECT_NE(out.find("vcan1  1ABCDEF0   [2]  22 33"), std::string::npos) << out;
+  const std::string load = on_bus(
+      "canbusload vcan0@500000 > load.txt & p=$!; sleep 0.3; cangen vcan0 -g 1 -n 200; sleep 1.2; kill -INT $p; wait "
+      "$p; cat load.txt");
+  EXPECT_NE(load.find("vcan0@500000"), std::string::npos) << load;
+}
+
+TEST_F(OwnBus, PythonCanSendsAndReceivesWithFilters) {
+  start({"vcan0"});
+  int status = -1;
+  const std::string out =
+      on_bus("/usr/bin/python3 " + canhil::test::source_dir() + "/tests/userbus/python_can_check.py", &status);
+  EXPECT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("python-can: 1 of 5 frames through the filter, 0x123 [3, 1, 2] on vcan0"), std::string::npos)
+      << out;
+}
+
+TEST_F(OwnBus, AProcessKilledMidWriteLeavesTheBusUsable) {
+  start({"vcan0"});
+  // cangen writes as fast as it can; SIGKILL lands in the middle of its writes.
+  const std::string killed = on_bus("cangen vcan0 -g 0 & p=$!; sleep 0.3; kill -KILL $p; wait $p; echo killed");
+  EXPECT_NE(killed.find("killed"), std::string::npos);
+  // its socket is gone from the bus (the broker saw its connection close)
+  for (int k = 0; k < 100 && ub::describe(paths_).find("cangen") != std::string::npos; ++k) usleep(10000);
+  EXPECT_EQ(ub::describe(paths_).find("cangen"), std::string::npos) << ub::describe(paths_);
+  const std::string out = on_bus("candump -n 1 vcan0 & p=$!; sleep 0.3; cansend vcan0 321#AA; wait $p");
+  EXPECT_NE(out.find("vcan0  321   [1]  AA"), std::string::npos) << out;
+}
+
+TEST_F(OwnBus, BesideTheTimeShimInOneProcess) {
+  start({"vcan0"});
+  const std::string out =
+      on_bus("candump -n 1 vcan0 & p=$!; sleep 0.3; LD_PRELOAD=$LD_PRELOAD:$TIMESHIM cansend vcan0 456#BEEF; wait $p");
+  EXPECT_NE(out.find("vcan0  456   [2]  BE EF"), std::string::npos) << out;
+}
+
+TEST_F(OwnBus, WithoutABusTheKernelAnswers) {
+  // No bus runs: the preload steps aside, and the program gets the kernel's own answer.
+  int with = -1;
+  int without = -1;
+  const std::string preloaded = on_bus("cansend nobus7 123#11", &with);
+  FILE* p = popen("cansend nobus7 123#11 2>&1", "r");
+  ASSERT_NE(p, nullptr);
+  char buffer[512] = {};
+  const std::size_t n = std::fread(buffer, 1, sizeof buffer - 1, p);
+  const int s = pclose(p);
+  without = WIFEXITED(s) ? WEXITSTATUS(s) : -1;
+  EXPECT_NE(with, 0);
+  EXPECT_EQ(with, without);
+  EXPECT_EQ(preloaded, std::string(buffer, n));
+}
+
+}  // namespace
