@@ -203,6 +203,7 @@ TEST_F(OwnBus, BesideTheTimeShimInOneProcess) {
 
 TEST_F(OwnBus, WithoutABusTheKernelAnswers) {
   // No bus runs: the preload steps aside, and the program gets the kernel's own answer.
+  fs::create_directories(folder_);
   int with = -1;
   int without = -1;
   const std::string preloaded = on_bus("cansend nobus7 123#11", &with);
