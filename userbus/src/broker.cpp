@@ -65,6 +65,7 @@ struct Connection {
   bool overrun = false;  // its buffer was full past the grace: drop at once until it reads
   std::int32_t applied_rcvbuf = 0;
   Options options;
+  std::vector<RxRecord> queued;  // routed in this round, sent together at its end
 };
 
 std::int64_t now_ns() {
@@ -169,20 +170,34 @@ class Broker {
       control(c);
       return;
     }
-    // Up to a batch of frames, then the other connections get their turn.
-    TxRecord record{};
-    for (int k = 0; k < 64; ++k) {
-      const ssize_t n = recv(c.fd, &record, sizeof record, MSG_DONTWAIT);
-      if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
-        drop(c);
-        return;
+    // Up to a batch of frames in one call, then the other connections get their turn.
+    constexpr unsigned kBatch = 64;
+    mmsghdr in[kBatch] = {};
+    iovec parts[kBatch];
+    for (unsigned k = 0; k < kBatch; ++k) {
+      parts[k] = {&batch_[k], sizeof(TxRecord)};
+      in[k].msg_hdr.msg_iov = &parts[k];
+      in[k].msg_hdr.msg_iovlen = 1;
+    }
+    const int n = recvmmsg(c.fd, in, kBatch, MSG_DONTWAIT, nullptr);
+    if (n < 0) {
+      if (errno != EAGAIN && errno != EINTR) drop(c);
+      return;
+    }
+    bool ended = n == 0;
+    for (int k = 0; k < n; ++k) {
+      const TxRecord& record = batch_[k];
+      if (in[k].msg_len == 0) {  // the program closed its socket
+        ended = true;
+        break;
       }
-      if (n < 0) break;
-      if (static_cast<std::size_t>(n) == kTxHeader + record.size &&
-          (record.size == CAN_MTU || record.size == CANFD_MTU)) {
+      if (in[k].msg_len == kTxHeader + record.size && (record.size == CAN_MTU || record.size == CANFD_MTU) &&
+          record.frame[offsetof(can_frame, len)] <= (record.size == CAN_MTU ? CAN_MAX_DLEN : CANFD_MAX_DLEN)) {
         route(c, record);
       }
     }
+    flush();
+    if (ended) drop(c);
     (void)events;  // a hang-up is read as the end of the connection, once its frames are routed
   }
 
@@ -357,30 +372,59 @@ class Broker {
       if (record.size != CAN_MTU && (o.flags & kFdFrames) == 0) continue;
       if (!wants(o, can_id)) continue;
       out.msg_flags = static_cast<std::uint32_t>(MSG_DONTROUTE) | (own ? static_cast<std::uint32_t>(MSG_CONFIRM) : 0U);
-      deliver(c, out, *iface);
+      deliver(c, out);
     }
   }
 
-  void deliver(Connection& c, RxRecord& r, Interface& iface) {
-    Socket& s = state_.sockets[c.slot];
-    r.drops = s.drops.load(std::memory_order_relaxed);
-    const std::size_t size = kRxHeader + r.size;
-    ssize_t n = send(c.fd, &r, size, MSG_DONTWAIT | MSG_NOSIGNAL);
-    if (n < 0 && errno == EAGAIN && !c.overrun && options_.grace_us > 0) {
-      pollfd p{c.fd, POLLOUT, 0};
-      if (poll(&p, 1, static_cast<int>((options_.grace_us + 999) / 1000)) > 0)
-        n = send(c.fd, &r, size, MSG_DONTWAIT | MSG_NOSIGNAL);
+  /// Queues `r` for `c`, with the count of c's drops so far (SO_RXQ_OVFL).
+  void deliver(Connection& c, RxRecord& r) {
+    r.drops = state_.sockets[c.slot].drops.load(std::memory_order_relaxed);
+    if (c.queued.empty()) dirty_.push_back(c.fd);
+    c.queued.push_back(r);
+  }
+
+  /// Sends every connection what this round routed to it, in one call each;
+  /// a receiver whose buffer is full gets the grace once, then drops.
+  void flush() {
+    for (const int fd : dirty_) {
+      Connection& c = connections_[static_cast<std::size_t>(fd)];
+      if (c.fd < 0 || c.slot < 0) continue;
+      Socket& s = state_.sockets[c.slot];
+      std::size_t done = 0;
+      bool waited = false;
+      while (done < c.queued.size()) {
+        const std::size_t count = std::min<std::size_t>(c.queued.size() - done, 64);
+        mmsghdr out[64] = {};
+        iovec parts[64];
+        for (std::size_t k = 0; k < count; ++k) {
+          RxRecord& r = c.queued[done + k];
+          parts[k] = {&r, kRxHeader + r.size};
+          out[k].msg_hdr.msg_iov = &parts[k];
+          out[k].msg_hdr.msg_iovlen = 1;
+        }
+        const int sent = sendmmsg(c.fd, out, static_cast<unsigned>(count), MSG_DONTWAIT | MSG_NOSIGNAL);
+        if (sent > 0) {
+          done += static_cast<std::size_t>(sent);
+          c.overrun = false;
+          s.received.fetch_add(static_cast<std::uint64_t>(sent), std::memory_order_relaxed);
+          continue;
+        }
+        if (sent < 0 && errno != EAGAIN) break;  // the program is going: its end is read next
+        if (!c.overrun && !waited && options_.grace_us > 0) {
+          waited = true;
+          pollfd p{c.fd, POLLOUT, 0};
+          if (poll(&p, 1, static_cast<int>((options_.grace_us + 999) / 1000)) > 0) continue;
+        }
+        c.overrun = true;
+        const auto lost = static_cast<std::uint32_t>(c.queued.size() - done);
+        s.drops.fetch_add(lost, std::memory_order_relaxed);
+        if (Interface* i = find_interface(state_, c.queued[done].ifindex))
+          i->dropped.fetch_add(lost, std::memory_order_relaxed);
+        break;
+      }
+      c.queued.clear();
     }
-    if (n >= 0) {
-      c.overrun = false;
-      s.received.fetch_add(1, std::memory_order_relaxed);
-      return;
-    }
-    if (errno == EAGAIN) {
-      c.overrun = true;
-      s.drops.fetch_add(1, std::memory_order_relaxed);
-      iface.dropped.fetch_add(1, std::memory_order_relaxed);
-    }
+    dirty_.clear();
   }
 
   int listen_fd_;
@@ -392,6 +436,8 @@ class Broker {
   bool up_[kMaxInterfaces] = {};
   bool known_[kMaxInterfaces] = {};
   std::vector<Connection> connections_;
+  std::vector<int> dirty_;  // connections with frames queued this round
+  TxRecord batch_[64];
 };
 
 }  // namespace

@@ -42,16 +42,30 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
   TxRecord r{};
   r.ifindex = ifindex;
   r.size = static_cast<std::uint32_t>(size);
-  std::size_t at = 0;
-  for (std::size_t k = 0; k < iovcnt; ++k) {
-    if (!copy_in(r.frame + at, iov[k].iov_base, iov[k].iov_len)) return errno = EFAULT, -1;
-    at += iov[k].iov_len;
+  const unsigned max_length = size == CAN_MTU ? CAN_MAX_DLEN : CANFD_MAX_DLEN;
+  // The record: its header here, the frame from the program's own buffers,
+  // copied by the kernel in the one sendmsg (a bad buffer is its EFAULT).
+  iovec parts[9];
+  msghdr m{};
+  m.msg_iov = parts;
+  if (iovcnt <= 8 && iface->up.load(std::memory_order_relaxed) != 0) {
+    parts[0] = {&r, kTxHeader};
+    for (std::size_t k = 0; k < iovcnt; ++k) parts[k + 1] = iov[k];
+    m.msg_iovlen = iovcnt + 1;
+  } else {
+    // Copied here first: a downed interface answers a bad length first (can_send's order).
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < iovcnt; ++k) {
+      if (!copy_in(r.frame + at, iov[k].iov_base, iov[k].iov_len)) return errno = EFAULT, -1;
+      at += iov[k].iov_len;
+    }
+    if (r.frame[offsetof(can_frame, len)] > max_length) return errno = EINVAL, -1;
+    if (iface->up.load(std::memory_order_relaxed) == 0) return errno = ENETDOWN, -1;
+    parts[0] = {&r, kTxHeader + size};
+    m.msg_iovlen = 1;
   }
-  const unsigned length = r.frame[offsetof(can_frame, len)];
-  if (length > (size == CAN_MTU ? CAN_MAX_DLEN : CANFD_MAX_DLEN)) return errno = EINVAL, -1;
-  if (iface->up.load(std::memory_order_relaxed) == 0) return errno = ENETDOWN, -1;
-  CANHIL_REAL(send);
-  ssize_t n = real_send(fd, &r, kTxHeader + size, MSG_NOSIGNAL | (flags & MSG_DONTWAIT));
+  CANHIL_REAL(sendmsg);
+  ssize_t n = real_sendmsg(fd, &m, MSG_NOSIGNAL | (flags & MSG_DONTWAIT));
   if (n < 0 && errno == EAGAIN) {
     // A non-blocking socket whose frames the broker has not taken yet. The
     // kernel's write delivers a vcan frame to every receiver before it
@@ -60,14 +74,24 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     // does not take the frame within a second.
     pollfd p{fd, POLLOUT, 0};
     const timespec limit{1, 0};
-    if (syscall(SYS_ppoll, &p, 1, &limit, nullptr, 8) > 0) {
-      n = real_send(fd, &r, kTxHeader + size, MSG_NOSIGNAL | MSG_DONTWAIT);
-    }
+    if (syscall(SYS_ppoll, &p, 1, &limit, nullptr, 8) > 0) n = real_sendmsg(fd, &m, MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n < 0 && errno == EAGAIN) errno = ENOBUFS;
   }
   if (n < 0) {
     if (errno == EPIPE || errno == ECONNRESET || errno == ENOTCONN) errno = ENXIO;  // the bus is gone
     return -1;
+  }
+  if (m.msg_iovlen > 1) {
+    // The kernel read the frame, so its length byte is readable; the broker
+    // drops a frame of a bad length too.
+    std::size_t at = offsetof(can_frame, len);
+    for (std::size_t k = 0; k < iovcnt; ++k) {
+      if (at < iov[k].iov_len) {
+        if (static_cast<const unsigned char*>(iov[k].iov_base)[at] > max_length) return errno = EINVAL, -1;
+        break;
+      }
+      at -= iov[k].iov_len;
+    }
   }
   count_sent(1);
   return static_cast<ssize_t>(size);
@@ -94,26 +118,42 @@ void put_cmsg(msghdr* m, cmsghdr*& at, int level, int type, const void* data, st
 ssize_t receive_frame(int fd, Socket& s, msghdr* m, int flags) {
   if ((flags & MSG_ERRQUEUE) != 0) return errno = EAGAIN, -1;  // nothing is ever on it (no transmit stamps)
   if (const int e = s.pending_error.exchange(0)) return errno = e, -1;
+  // The record's header here, its frame straight into the program's buffers
+  // (the kernel's copy: a bad buffer is its EFAULT, a short one MSG_TRUNC).
   RxRecord r{};
-  CANHIL_REAL(recv);
-  const ssize_t n = real_recv(fd, &r, sizeof r, flags & (MSG_DONTWAIT | MSG_PEEK));
+  iovec parts[9];
+  msghdr in{};
+  in.msg_iov = parts;
+  const bool direct = m->msg_iovlen <= 8;
+  if (direct) {
+    parts[0] = {&r, kRxHeader};
+    for (std::size_t k = 0; k < static_cast<std::size_t>(m->msg_iovlen); ++k) parts[k + 1] = m->msg_iov[k];
+    in.msg_iovlen = m->msg_iovlen + 1;
+  } else {
+    parts[0] = {&r, sizeof r};
+    in.msg_iovlen = 1;
+  }
+  CANHIL_REAL(recvmsg);
+  const ssize_t n = real_recvmsg(fd, &in, flags & (MSG_DONTWAIT | MSG_PEEK));
   if (n < 0) return -1;
   if (n == 0) return errno = ENODEV, -1;  // the broker went away with the bus
   if (static_cast<std::size_t>(n) < kRxHeader) return errno = EIO, -1;
   if (r.error != 0) return errno = r.error, -1;
-  std::size_t size = r.size;
-  std::size_t room = 0;
-  for (std::size_t k = 0; k < static_cast<std::size_t>(m->msg_iovlen); ++k) room += m->msg_iov[k].iov_len;
-  m->msg_flags = 0;
-  if (room < size) {
-    m->msg_flags |= MSG_TRUNC;
-    size = room;
-  }
-  std::size_t at = 0;
-  for (std::size_t k = 0; k < static_cast<std::size_t>(m->msg_iovlen) && at < size; ++k) {
-    const std::size_t part = std::min(m->msg_iov[k].iov_len, size - at);
-    if (!copy_out(m->msg_iov[k].iov_base, r.frame + at, part)) return errno = EFAULT, -1;
-    at += part;
+  std::size_t size = static_cast<std::size_t>(n) - kRxHeader;
+  m->msg_flags = (in.msg_flags & MSG_TRUNC) != 0 ? MSG_TRUNC : 0;
+  if (!direct) {
+    std::size_t room = 0;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(m->msg_iovlen); ++k) room += m->msg_iov[k].iov_len;
+    if (room < size) {
+      m->msg_flags |= MSG_TRUNC;
+      size = room;
+    }
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(m->msg_iovlen) && at < size; ++k) {
+      const std::size_t part = std::min(m->msg_iov[k].iov_len, size - at);
+      if (!copy_out(m->msg_iov[k].iov_base, r.frame + at, part)) return errno = EFAULT, -1;
+      at += part;
+    }
   }
   const std::uint32_t options = s.flags;
   // sock_recv_timestamp: a frame's time goes in a control message, or is kept
