@@ -127,6 +127,16 @@ double rate(const Pair& p, int frames) {
   return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? frames / seconds : 0.0;
 }
 
+int whole(const char* text) {
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || v <= 0 || v > 100000000) {
+    std::fprintf(stderr, "bus_latency: %s is not a positive whole number\n", text);
+    std::exit(2);
+  }
+  return static_cast<int>(v);
+}
+
 double at(const std::vector<double>& sorted, double q) {
   return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))];
 }
@@ -142,9 +152,9 @@ int main(int argc, char** argv) {
     if (o == "--iface")
       iface = argv[k + 1];
     else if (o == "--round-trips")
-      rounds = std::atoi(argv[k + 1]);
+      rounds = whole(argv[k + 1]);
     else if (o == "--frames")
-      frames = std::atoi(argv[k + 1]);
+      frames = whole(argv[k + 1]);
     else {
       std::fprintf(stderr, "usage: bus_latency [--iface vcan0] [--round-trips 20000] [--frames 200000]\n");
       return 2;

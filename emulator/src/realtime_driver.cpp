@@ -1,7 +1,9 @@
 #include "canhil/emulator/realtime_driver.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include "canhil/emulator/fifo_scheduling.hpp"
 #include "canhil/emulator/laptop_link.hpp"
@@ -128,6 +130,10 @@ void RealtimeDriver::stop() {
   masters_stop_ = true;
   if (masters_thread_.joinable()) masters_thread_.join();
   physics_.stop();  // the world is this thread's again
+  // A real controller, and the user-space bus (userbus/), deliver a frame
+  // after its write returned; the kernel's vcan before. So the masters' last
+  // trigger message may still be on its way: it is given a moment to arrive.
+  std::this_thread::sleep_for(std::chrono::milliseconds(10));
   // What is still queued is read and counted, so the summary covers every frame
   // that reached the emulator (bounded: a flood may still be going on).
   for (std::size_t r = 0; r < session_.robot_count(); ++r) {

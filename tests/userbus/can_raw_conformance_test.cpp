@@ -28,6 +28,7 @@
 
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
@@ -38,6 +39,9 @@
 namespace {
 
 int index_of(const char* name) { return static_cast<int>(if_nametoindex(name)); }
+
+/// `name` into an interface request.
+void name_into(ifreq& r, const char* name) { std::snprintf(r.ifr_name, IFNAMSIZ, "%s", name); }
 
 class Sock {
  public:
@@ -123,7 +127,7 @@ ssize_t send_frame(int fd, const can_frame& f) { return write(fd, &f, sizeof f);
 /// An address no program may read or write (the first page), as the compiler cannot see it.
 void* bad_address() {
   static volatile std::uintptr_t at = 8;
-  return reinterpret_cast<void*>(at);
+  return reinterpret_cast<void*>(at);  // NOLINT(performance-no-int-to-ptr): an address that is no object's, on purpose
 }
 
 std::int64_t now_ns() {
@@ -165,7 +169,7 @@ TEST_F(CanRaw, InterfaceNamesAndIndices) {
   EXPECT_STREQ(name, "vcan0");
   Sock s;
   ifreq r{};
-  std::strcpy(r.ifr_name, "vcan1");
+  name_into(r, "vcan1");
   ASSERT_EQ(ioctl(s.fd(), SIOCGIFINDEX, &r), 0);
   EXPECT_EQ(r.ifr_ifindex, vcan1);
   ifreq back{};
@@ -178,7 +182,7 @@ TEST_F(CanRaw, InterfaceNamesAndIndices) {
   EXPECT_NE(r.ifr_flags & IFF_UP, 0);
   EXPECT_EQ(if_nametoindex("nosuchcan7"), 0U);
   ifreq none{};
-  std::strcpy(none.ifr_name, "nosuchcan7");
+  name_into(none, "nosuchcan7");
   EXPECT_EQ(ioctl(s.fd(), SIOCGIFINDEX, &none), -1);
   EXPECT_EQ(errno, ENODEV);
   EXPECT_EQ(ioctl(s.fd(), SIOCGIFINDEX, bad_address()), -1);
@@ -450,7 +454,7 @@ TEST_F(CanRaw, BadAddressesAndFramesAreRefused) {
 /// Sets interface `name`'s MTU (down, SIOCSIFMTU, up again).
 void set_mtu(int fd, const char* name, int mtu) {
   ifreq r{};
-  std::strcpy(r.ifr_name, name);
+  name_into(r, name);
   ASSERT_EQ(ioctl(fd, SIOCGIFFLAGS, &r), 0);
   const short up = r.ifr_flags;
   r.ifr_flags = static_cast<short>(up & ~IFF_UP);
@@ -487,7 +491,7 @@ TEST_F(CanRaw, FdFramesAndTheInterfacesMtu) {
   // an interface of MTU 16 takes classic frames only
   Sock ctl, on1;
   ifreq busy{};
-  std::strcpy(busy.ifr_name, "vcan1");
+  name_into(busy, "vcan1");
   busy.ifr_mtu = CAN_MTU;
   EXPECT_EQ(ioctl(ctl.fd(), SIOCSIFMTU, &busy), -1);  // not while it is up
   EXPECT_EQ(errno, EBUSY);
@@ -709,7 +713,7 @@ TEST_F(CanRaw, DownedInterfaceAnswersEnetdown) {
   ASSERT_EQ(tx.bind_to(vcan1), 0);
   ASSERT_EQ(rx.bind_to(vcan1), 0);
   ifreq r{};
-  std::strcpy(r.ifr_name, "vcan1");
+  name_into(r, "vcan1");
   ASSERT_EQ(ioctl(ctl.fd(), SIOCGIFFLAGS, &r), 0);
   r.ifr_flags = static_cast<short>(r.ifr_flags & ~IFF_UP);
   ASSERT_EQ(ioctl(ctl.fd(), SIOCSIFFLAGS, &r), 0) << std::strerror(errno);
@@ -761,7 +765,8 @@ int exec_child(int fd) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (const char* fd = std::getenv("CANHIL_CONFORMANCE_EXEC_FD")) return exec_child(std::atoi(fd));
+  if (const char* fd = std::getenv("CANHIL_CONFORMANCE_EXEC_FD"))
+    return exec_child(static_cast<int>(std::strtol(fd, nullptr, 10)));
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }

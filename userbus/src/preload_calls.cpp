@@ -4,6 +4,7 @@
 // and the interface names (if_nametoindex, if_indextoname), each with the
 // kernel's answers (net/can/raw.c, net/core/sock.c). Other descriptors and
 // other interfaces go on to libc unchanged.
+#include <fcntl.h>
 #include <linux/can/raw.h>
 #include <linux/capability.h>
 #include <linux/sockios.h>
@@ -16,7 +17,7 @@
 
 #include <cerrno>
 #include <cstdarg>
-#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "canhil/base/preload.hpp"
@@ -34,9 +35,9 @@ int sysctl_int(const char* path, int fallback) {
   char text[32] = {};
   const long n = syscall(SYS_read, fd, text, sizeof text - 1);
   syscall(SYS_close, fd);
-  int value = fallback;
-  if (n > 0 && std::sscanf(text, "%d", &value) != 1) value = fallback;
-  return value;
+  char* end = nullptr;
+  const long value = n > 0 ? std::strtol(text, &end, 10) : 0;
+  return (n > 0 && end != text && value > 0 && value < (1L << 30)) ? static_cast<int>(value) : fallback;
 }
 
 int rmem_default() {

@@ -278,6 +278,7 @@ ssize_t read(int fd, void* buffer, size_t size) {
   return real_read(fd, buffer, size);
 }
 
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's fortified call, taken over as the plain one
 ssize_t __read_chk(int fd, void* buffer, size_t size, size_t buffer_size) {
   if (auto* s = bus::socket_of(fd))
     return bus::receive_into(fd, *s, buffer, size < buffer_size ? size : buffer_size, 0, nullptr, nullptr);
@@ -291,6 +292,7 @@ ssize_t recv(int fd, void* buffer, size_t size, int flags) {
   return real_recv(fd, buffer, size, flags);
 }
 
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's fortified call, taken over as the plain one
 ssize_t __recv_chk(int fd, void* buffer, size_t size, size_t buffer_size, int flags) {
   if (auto* s = bus::socket_of(fd))
     return bus::receive_into(fd, *s, buffer, size < buffer_size ? size : buffer_size, flags, nullptr, nullptr);
@@ -304,6 +306,7 @@ ssize_t recvfrom(int fd, void* buffer, size_t size, int flags, sockaddr* from, s
   return real_recvfrom(fd, buffer, size, flags, from, from_size);
 }
 
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's fortified call, taken over as the plain one
 ssize_t __recvfrom_chk(int fd, void* buffer, size_t size, size_t buffer_size, int flags, sockaddr* from,
                        socklen_t* from_size) {
   if (auto* s = bus::socket_of(fd)) {
