@@ -172,6 +172,22 @@ TEST_F(OwnBus, CansendSeenByCandumpOnEveryInterfaceAndCanbusloadMeasures) {
   EXPECT_NE(load.find("vcan0@500000"), std::string::npos) << load;
 }
 
+TEST_F(OwnBus, CanplayerReplaysALogAndCansnifferWatches) {
+  start();
+  // canplayer sends each frame to the interface its log line names (sendto on a socket bound to all)
+  const std::string played = on_bus(
+      "printf \"(1.000000) vcan0 101#01\\n(1.010000) vcan1 202#0202\\n(1.020000) vcan0 303#030303\\n\" > play.log; "
+      "candump -n 3 any > seen.txt & p=$!; sleep 0.3; canplayer -I play.log; wait $p; cat seen.txt");
+  EXPECT_NE(played.find("vcan0  101   [1]  01"), std::string::npos) << played;
+  EXPECT_NE(played.find("vcan1  202   [2]  02 02"), std::string::npos) << played;
+  EXPECT_NE(played.find("vcan0  303   [3]  03 03 03"), std::string::npos) << played;
+  // cansniffer reads the bus and draws its table of ids
+  const std::string sniffed = on_bus(
+      "cansniffer -c vcan0 > sniff.txt & p=$!; sleep 0.3; cangen vcan0 -g 10 -n 40 -I 5A5; sleep 1.2; kill -INT $p; "
+      "wait $p; cat sniff.txt");
+  EXPECT_NE(sniffed.find("5A5"), std::string::npos) << sniffed.substr(0, 400);
+}
+
 TEST_F(OwnBus, PythonCanSendsAndReceivesWithFilters) {
   start({"vcan0"});
   int status = -1;

@@ -12,6 +12,7 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
+#include <linux/sock_diag.h>
 #include <linux/sockios.h>
 #include <net/if.h>
 #include <poll.h>
@@ -604,6 +605,12 @@ TEST_F(CanRaw, ReceiveBufferOverflowIsCountedAndReported) {
   const auto drops = drops_of(*last);
   ASSERT_TRUE(drops);
   EXPECT_EQ(static_cast<int>(*drops) + received, kSent);
+  // SO_MEMINFO counts the same drops
+  std::uint32_t info[SK_MEMINFO_VARS] = {};
+  socklen_t info_size = sizeof info;
+  ASSERT_EQ(getsockopt(rx.fd(), SOL_SOCKET, SO_MEMINFO, info, &info_size), 0);
+  EXPECT_EQ(info[SK_MEMINFO_DROPS], *drops);
+  EXPECT_EQ(info[SK_MEMINFO_RCVBUF], 8192U);
 }
 
 TEST_F(CanRaw, ManyFramesAtOnceWithSendmmsgAndRecvmmsg) {

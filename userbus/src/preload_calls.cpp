@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <linux/can/raw.h>
 #include <linux/capability.h>
+#include <linux/sock_diag.h>
 #include <linux/sockios.h>
 #include <net/if.h>
 #include <sys/ioctl.h>
@@ -305,6 +306,15 @@ int get_socket_option(Socket& s, int name, void* value, socklen_t* size) {
     case SO_RXQ_OVFL:
       v = (s.flags & kRxqOverflow) != 0;
       break;
+    case SO_MEMINFO: {
+      // sk_meminfo: what the bus knows of the socket (its buffer sizes, its
+      // drops); the queue's memory is the connection's.
+      std::uint32_t info[SK_MEMINFO_VARS] = {};
+      info[SK_MEMINFO_RCVBUF] = static_cast<std::uint32_t>(s.rcvbuf > 0 ? s.rcvbuf : rmem_default());
+      info[SK_MEMINFO_SNDBUF] = static_cast<std::uint32_t>(s.sndbuf > 0 ? s.sndbuf : wmem_default());
+      info[SK_MEMINFO_DROPS] = s.drops.load(std::memory_order_relaxed);
+      return give_option(value, size, info, sizeof info);
+    }
     default:
       return 1;
   }
