@@ -54,6 +54,7 @@ struct Options {
   std::uint32_t flags = 0;
   std::int32_t rcvbuf = 0;
   std::uint32_t count = 0;          // the user's filters (joined filters must all match)
+  bool single_ids = false;          // every filter takes one standard or extended id (the kernel serves those last)
   std::vector<Registered> filters;  // the user's, then the error filter if any
 };
 
@@ -66,6 +67,7 @@ struct Connection {
   std::int32_t applied_rcvbuf = 0;
   Options options;
   std::vector<RxRecord> queued;  // routed in this round, sent together at its end
+  std::uint64_t opened = 0;      // the order connections were opened in
 };
 
 std::int64_t now_ns() {
@@ -145,6 +147,7 @@ class Broker {
       Connection& c = connection(fd);
       c = Connection{};
       c.fd = fd;
+      c.opened = ++opened_;
       watch(fd);
     }
   }
@@ -324,6 +327,16 @@ class Broker {
       o.filters.reserve(o.count + 1);
       for (std::uint32_t f = 0; f < o.count; ++f)
         o.filters.push_back(register_filter(s.filters[f].can_id, s.filters[f].can_mask));
+      o.single_ids = o.count > 0;
+      for (std::uint32_t f = 0; f < o.count; ++f) {
+        const canid_t id = s.filters[f].can_id;
+        const canid_t mask = s.filters[f].can_mask;
+        const canid_t flags = CAN_EFF_FLAG | CAN_RTR_FLAG;
+        const bool one =
+            (id & (CAN_INV_FILTER | CAN_RTR_FLAG)) == 0 &&
+            (mask == (CAN_SFF_MASK | flags) || ((id & CAN_EFF_FLAG) != 0 && mask == (CAN_EFF_MASK | flags)));
+        o.single_ids = o.single_ids && one;
+      }
       if ((s.err_mask & CAN_ERR_MASK) != 0)
         o.filters.push_back(register_filter(0, (s.err_mask & CAN_ERR_MASK) | CAN_ERR_FLAG));
       std::atomic_thread_fence(std::memory_order_acquire);
@@ -386,6 +399,17 @@ class Broker {
   /// Sends every connection what this round routed to it, in one call each;
   /// a receiver whose buffer is full gets the grace once, then drops.
   void flush() {
+    // In the kernel's order of serving (af_can.c, can_rcv_filter): sockets
+    // with no filter, mask or inverted filters first, those whose filters all
+    // take a single id last; within each, the latest opened first. A socket
+    // served last (canhil's delivery fence) that has a frame tells that every
+    // socket has it, on this bus as on a vcan.
+    std::sort(dirty_.begin(), dirty_.end(), [this](int a, int b) {
+      const Connection& x = connections_[static_cast<std::size_t>(a)];
+      const Connection& y = connections_[static_cast<std::size_t>(b)];
+      if (x.options.single_ids != y.options.single_ids) return !x.options.single_ids;
+      return x.opened > y.opened;
+    });
     for (const int fd : dirty_) {
       Connection& c = connections_[static_cast<std::size_t>(fd)];
       if (c.fd < 0 || c.slot < 0) continue;
@@ -437,6 +461,7 @@ class Broker {
   bool known_[kMaxInterfaces] = {};
   std::vector<Connection> connections_;
   std::vector<int> dirty_;  // connections with frames queued this round
+  std::uint64_t opened_ = 0;
   TxRecord batch_[64];
 };
 
