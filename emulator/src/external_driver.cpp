@@ -1,5 +1,8 @@
 #include "canhil/emulator/external_driver.hpp"
 
+#include <sys/epoll.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <optional>
 
@@ -60,6 +63,17 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
     }
   }
+  // canhil waits for frames in flight on these, not on a timer.
+  arrivals_ = ::epoll_create1(EPOLL_CLOEXEC);
+  if (arrivals_ < 0) throw SetupError("cannot create an epoll instance for the lockstep's waits");
+  auto watch_fd = [this](int fd) {
+    epoll_event e{};
+    e.events = EPOLLIN;
+    e.data.fd = fd;
+    ::epoll_ctl(arrivals_, EPOLL_CTL_ADD, fd, &e);
+  };
+  watch_fd(fence_.descriptor());
+  for (const auto& o : observers_) watch_fd(o->fd());
   // The nodes' sockets read only when the observer saw a frame they take.
   can_nodes::SocketCanOptions node_options = socket_options;
   node_options.told_when_readable = true;
@@ -88,6 +102,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
 }
 
 ExternalDriver::~ExternalDriver() {
+  if (arrivals_ >= 0) ::close(arrivals_);
   session_.on_vision_frame(nullptr);
   session_.for_each_laptop([](LaptopLink& laptop) {
     laptop.defer_activation(false);
@@ -180,7 +195,7 @@ std::size_t ExternalDriver::settle() {
           }
           return {};
         },
-        "what canhil did at " + at_time(clock_.now()), limit);
+        "what canhil did at " + at_time(clock_.now()), limit, arrivals_);
     if (!stuck.empty()) {
       observe();  // what reached the bus up to the stop belongs in the trace
       throw ProcessStuck(stuck);

@@ -39,6 +39,8 @@ class DeliveryFence {
   /// Fenced frames that had reached every socket on interface `index` at the
   /// last drain(), since add().
   std::uint64_t delivered(std::size_t index) const { return interfaces_.at(index).delivered; }
+  /// A descriptor readable while a frame waits at the fence (for poll).
+  int descriptor() const noexcept { return epoll_; }
   /// Whether the fence can tell about `frame` (a standard-id data frame).
   static bool counts(const frames::CanFrame& frame) noexcept;
 

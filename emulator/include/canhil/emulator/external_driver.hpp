@@ -93,6 +93,7 @@ class ExternalDriver {
   can_nodes::DeliveryFence fence_;                                   // opened before any other socket
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
+  int arrivals_ = -1;  // epoll: readable when a frame reaches an observer or the fence (wait_quiet's ready_fd)
   BusWatch watch_;
   std::uint64_t observed_ = 0;
   std::uint64_t observed_at_settle_ = 0;

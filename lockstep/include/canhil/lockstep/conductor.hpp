@@ -105,8 +105,13 @@ class Conductor {
   /// take longer than an instant). Past the limit the processes' CPU time is
   /// watched for up to 200 ms more: while it grows, the wait goes on, up to
   /// busy_limit from its start (an instant that answers in time reads none).
+  /// `ready_fd`, when given, is a descriptor that becomes readable when
+  /// `also()`'s answer may change (canhil's own sockets, where the frames in
+  /// flight arrive): while the processes are quiet and `also()` is not
+  /// satisfied, the wait is on it, not on the board, so canhil wakes as a
+  /// frame arrives instead of at the next millisecond.
   std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
-                         std::optional<Nanos> limit = std::nullopt);
+                         std::optional<Nanos> limit = std::nullopt, int ready_fd = -1);
 
   /// CAN frames the processes wrote (counted by the shim), over the run.
   std::uint64_t frames_sent() const noexcept;
