@@ -85,8 +85,9 @@ bool bench_jitter(const std::string& iface, double seconds, int priority,
                   const std::shared_ptr<const frames::MessageSet>& messages) {
   const Nanos ec = frames::FttConfig{}.elementary_cycle;  // canhil run's
   std::printf(
-      "canhil bench: real time on %s, %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then both\n",
-      iface.c_str(), seconds, priority);
+      "canhil bench: real time on %s (%s), %g s each, SCHED_FIFO %d: a bare clock_nanosleep loop, canhil run, then "
+      "both\n",
+      iface.c_str(), can_nodes::bus_of(iface), seconds, priority);
   emulator::SessionOptions session;
   session.messages = messages;
   emulator::RealtimeOptions opt;
@@ -123,8 +124,8 @@ bool bench_jitter(const std::string& iface, double seconds, int priority,
 
 // The highest lossless frame rate through the interface against cangen -g 0: true when at least 0.8x.
 bool bench_vcan(const std::string& iface, std::uint64_t frames) {
-  std::printf("canhil bench: frame rate through %s, %llu frames at full speed, one listening socket\n", iface.c_str(),
-              static_cast<unsigned long long>(frames));
+  std::printf("canhil bench: frame rate through %s (%s), %llu frames at full speed, one listening socket\n",
+              iface.c_str(), can_nodes::bus_of(iface), static_cast<unsigned long long>(frames));
   const RateFigures ours = canhil_rate(iface, frames);
   const RateFigures reference = cangen_rate(iface, frames);
   const auto line = [](const char* what, const RateFigures& r) {

@@ -57,8 +57,8 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
                length, output.length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
-    std::fprintf(out, "  robot %zu on %s for agent %d (start your handler and agent with AGENT=%d)\n", r,
-                 rig.interface.c_str(), rig.agent, rig.agent);
+    std::fprintf(out, "  robot %zu on %s (%s) for agent %d (start your handler and agent with AGENT=%d)\n", r,
+                 rig.interface.c_str(), can_nodes::bus_of(rig.interface), rig.agent, rig.agent);
     if (const can_nodes::NodeSet e = sc.emulate.at(r); !e.is_all()) {
       std::fprintf(out, "    canhil emulates %s; the other nodes are real boards on %s\n",
                    can_nodes::describe(e).c_str(), rig.interface.c_str());

@@ -6,7 +6,8 @@
 # listens to the bus meanwhile and prints its report at the end.
 #
 # Needs vcan0: run it through vcan_setup/with-vcan.sh (scripts/main.sh does),
-# which uses this machine's vcan or, where the kernel has no CAN, the VM runner.
+# which uses this machine's vcan or, where the kernel has no CAN, canhil's
+# user-space bus natively (the VM runner only when neither works).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-20}"
@@ -43,5 +44,10 @@ echo "== the handler's summary (canhil-hwcomm)"
 tail -n 5 "$log/hwcomm.txt"
 echo "== timing of the live bus (canhil timing vcan0; exit status $timing_status)"
 sed -n '1,/^FTT compliance/p' "$log/timing.txt"
-echo "(the violations one by one: $log/timing.txt. Real time here may run inside an emulated VM, whose"
-echo " timer and wake-up emulation makes frames late or missing; the virtual-time run above is the exact reference)"
+if [[ -n "${CANHIL_IN_VM:-}" ]]; then
+  where="inside the VM runner, whose timer and wake-up emulation makes frames late or missing"
+else
+  where="on $("$bin/app/canhil" bus list >/dev/null 2>&1 && [[ -n "${LD_PRELOAD:-}" ]] && echo "canhil's user-space bus" || echo "this machine's vcan"), natively; a loaded 2-core machine still makes some frames late"
+fi
+echo "(the violations one by one: $log/timing.txt. Measured $where;"
+echo " the virtual-time run above is the exact reference)"

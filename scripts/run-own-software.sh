@@ -70,7 +70,7 @@ for _ in $(seq 100); do
 done
 # The scenario decides the run's interfaces and agent numbers: the handler and
 # the agent must be started on the ones it uses.
-if [[ -z "$started" ]] || ! grep -q "on $iface for agent $agent " "$logs/run.log"; then
+if [[ -z "$started" ]] || ! grep -qE "on $iface( \([^)]*\))? for agent $agent " "$logs/run.log"; then
   kill -INT "$run_pid" 2>/dev/null || true
   wait "$run_pid" 2>/dev/null || true
   grep "robot [0-9]* on " "$logs/run.log" >&2 || cat "$logs/run.log" >&2

@@ -1,6 +1,7 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "errno_text.hpp"
 
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
@@ -65,6 +66,13 @@ bool kernel_has_can() {
   if (fd < 0) return false;
   ::close(fd);
   return true;
+}
+
+const char* bus_of(const std::string& iface) {
+  // The bus's preload says so itself; canhil does not link it.
+  using Has = int (*)(const char*);
+  const auto has = reinterpret_cast<Has>(dlsym(RTLD_DEFAULT, "canhil_userbus_interface"));
+  return has != nullptr && has(iface.c_str()) != 0 ? "canhil's user-space bus" : "the kernel's SocketCAN";
 }
 
 std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const SocketCanOptions& options) {

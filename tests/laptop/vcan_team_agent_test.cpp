@@ -211,7 +211,9 @@ TEST(VcanTeamAgent, TheRunScriptRefusesAnInterfaceTheScenarioDoesNotUse) {
       << script.output();
   const int status = script.stop();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << script.output();
-  EXPECT_TRUE(has(script.output(), "robot 0 on vcan0 for agent 1")) << "what the run does use\n" << script.output();
+  EXPECT_TRUE(has(script.output(), "robot 0 on vcan0 (") && has(script.output(), ") for agent 1"))
+      << "what the run does use\n"
+      << script.output();
   EXPECT_FALSE(has(script.output(), "== the agent")) << "nothing else was started\n" << script.output();
 }
 

@@ -584,6 +584,12 @@ unsigned int if_nametoindex(const char* name) {
   return real_if_nametoindex(name);
 }
 
+/// Whether interface `name` is on the user-space bus this process runs on
+/// (canhil's reports ask, through dlsym: can_nodes::bus_of).
+int canhil_userbus_interface(const char* name) {
+  return name != nullptr && bus::bus_state(false) != nullptr && bus::interface_named(name) != nullptr ? 1 : 0;
+}
+
 char* if_indextoname(unsigned int index, char* name) {
   if (bus::bus_state(false) != nullptr) {
     if (const auto* i = bus::interface_at(static_cast<int>(index))) {

@@ -43,8 +43,14 @@ struct SocketCanOptions {
   bool told_when_readable = false;
 };
 
-/// True when this kernel can open a CAN_RAW socket at all.
+/// True when this process can open a CAN_RAW socket at all (the kernel's,
+/// or canhil's user-space bus when this process runs on it).
 bool kernel_has_can();
+
+/// Which bus interface `iface` is on, for the reports: "canhil's user-space
+/// bus" when this process runs on it (libcanhil-bus.so preloaded, a bus up
+/// with that interface), else "the kernel's SocketCAN".
+const char* bus_of(const std::string& iface);
 
 class SocketCanBus final : public Bus {
  public:
