@@ -7,19 +7,16 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "args.hpp"
-#include "canhil/base/assets.hpp"
 #include "canhil/userbus/bus.hpp"
 #include "commands.hpp"
 
 namespace canhil::app {
 namespace {
 
-namespace fs = std::filesystem;
 namespace ub = canhil::userbus;
 
 std::vector<std::string> split_names(const std::string& list) {
@@ -35,21 +32,7 @@ std::vector<std::string> split_names(const std::string& list) {
   return names;
 }
 
-/// libcanhil-bus.so: $CANHIL_BUS_PRELOAD, else installed beside the program, else the build tree's.
-std::string find_preload() {
-  if (const auto given = path_from_environment("CANHIL_BUS_PRELOAD")) {
-    if (!fs::exists(*given)) throw SetupError("CANHIL_BUS_PRELOAD=" + given->string() + ": no such file");
-    return fs::absolute(*given).string();
-  }
-  const fs::path p =
-      installed_or_built({fs::path("..") / CANHIL_INSTALL_LIBDIR / "libcanhil-bus.so"}, CANHIL_BUILD_BUS_PRELOAD);
-  std::error_code ec;
-  if (!fs::exists(p, ec)) {
-    throw SetupError("the bus's preload libcanhil-bus.so is not at " + p.string() +
-                     ": build it (target canhil_bus_preload) or set CANHIL_BUS_PRELOAD=/path/to/libcanhil-bus.so");
-  }
-  return p.string();
-}
+std::string find_preload() { return ub::find_preload(CANHIL_INSTALL_LIBDIR, CANHIL_BUILD_BUS_PRELOAD); }
 
 std::uint32_t grace_us(Args& args) {
   const auto ms = optional_number(args, "--grace-ms");
@@ -155,6 +138,14 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
 }
 
 }  // namespace
+
+void join_bus_if_needed(char** argv) {
+  try {
+    ub::join_bus_if_needed(find_preload(), argv);
+  } catch (const ub::BusError&) {
+    // No preload built or installed: the kernel answers, as without a bus.
+  }
+}
 
 int run_bus(Args& args, const std::optional<std::string>& /*dbc*/) {
   try {

@@ -268,6 +268,10 @@ int main(int argc, char** argv) {
     }
     if (name.empty()) return usage_error("no command given", nullptr);
     if (command == nullptr) return usage_error(("unknown command \"" + name + "\"").c_str(), nullptr);
+    // The commands that open SocketCAN interfaces find the user-space bus by themselves.
+    for (const char* can : {"run", "nodes", "dump", "timing", "play", "bench", "match"}) {
+      if (name == can) canhil::app::join_bus_if_needed(argv);
+    }
     return command->run(args, dbc);
   } catch (const canhil::app::UsageError& e) {
     return usage_error(e.what(), command);

@@ -30,6 +30,7 @@
 #include "canhil/laptop/raw_can.hpp"
 #include "canhil/rtdb/database.hpp"
 #include "canhil/rtdb/layout.hpp"
+#include "canhil/userbus/bus.hpp"
 #include "cli_numbers.hpp"
 
 namespace {
@@ -56,6 +57,13 @@ int usage(const char* why) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Where the kernel has no CAN and canhil's user-space bus runs: start again on it.
+  try {
+    canhil::userbus::join_bus_if_needed(canhil::userbus::find_preload(CANHIL_INSTALL_LIBDIR, CANHIL_BUILD_BUS_PRELOAD),
+                                        argv);
+  } catch (const canhil::userbus::BusError&) {
+    // no preload: the kernel answers
+  }
   std::string iface;
   std::string dbc = canhil::frames::default_dbc_path().string();
   double ec_ms = 10;

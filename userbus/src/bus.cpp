@@ -1,7 +1,9 @@
 // The bus's folder, files and interfaces from canhil's side (bus.hpp).
 #include "canhil/userbus/bus.hpp"
 
+#include <dlfcn.h>
 #include <fcntl.h>
+#include <linux/can.h>
 #include <linux/can/raw.h>
 #include <signal.h>
 #include <sys/mman.h>
@@ -12,6 +14,8 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <sstream>
 
@@ -308,6 +312,45 @@ std::string describe(const BusPaths& paths) {
         << '\n';
   }
   return out.str();
+}
+
+std::string find_preload(const std::string& libdir, const std::string& built) {
+  if (const char* given = std::getenv("CANHIL_BUS_PRELOAD"); given != nullptr && *given != '\0') {
+    if (access(given, R_OK) != 0) throw BusError(std::string("CANHIL_BUS_PRELOAD=") + given + ": no such file");
+    return given;
+  }
+  char exe[4096] = {};
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n > 0) {
+    std::string folder(exe, static_cast<std::size_t>(n));
+    folder = folder.substr(0, folder.rfind('/'));
+    const std::string installed = folder + "/../" + libdir + "/libcanhil-bus.so";
+    if (access(installed.c_str(), R_OK) == 0) return installed;
+  }
+  if (access(built.c_str(), R_OK) == 0) return built;
+  throw BusError("the bus's preload libcanhil-bus.so is not at " + built +
+                 ": build it (target canhil_bus_preload) or set CANHIL_BUS_PRELOAD=/path/to/libcanhil-bus.so");
+}
+
+void join_bus_if_needed(const std::string& preload, char** argv) {
+  if (dlsym(RTLD_DEFAULT, "canhil_userbus_interface") != nullptr) return;  // on it already
+  if (std::getenv("CANHIL_BUS_JOINED") != nullptr) return;                 // tried once: the kernel answers
+  const int probe = socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
+  if (probe >= 0) {
+    close(probe);
+    return;  // the kernel has CAN: its interfaces are the ones
+  }
+  const BusPaths paths = BusPaths::current();
+  if (!broker_alive(paths)) return;
+  const char* before = std::getenv("LD_PRELOAD");
+  const std::string ld = before != nullptr && *before != '\0' ? preload + ":" + before : preload;
+  setenv("LD_PRELOAD", ld.c_str(), 1);
+  setenv("CANHIL_BUS_JOINED", "1", 1);
+  setenv("CANHIL_BUS_DIR", paths.folder.c_str(), 1);
+  std::fprintf(stderr, "%s: this kernel has no CAN; running on canhil's user-space bus at %s\n", argv[0],
+               paths.folder.c_str());
+  execv("/proc/self/exe", argv);
+  unsetenv("CANHIL_BUS_JOINED");  // it could not start again: go on without the bus
 }
 
 }  // namespace canhil::userbus

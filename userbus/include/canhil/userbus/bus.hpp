@@ -86,6 +86,19 @@ std::string describe(const BusPaths& paths);
 /// BusError naming what is wrong.
 void check_interface_name(const std::string& name);
 
+/// libcanhil-bus.so: $CANHIL_BUS_PRELOAD, else installed in `libdir` beside
+/// the running program's folder (../lib/...), else `built`. BusError when
+/// none exists.
+std::string find_preload(const std::string& libdir, const std::string& built);
+
+/// For canhil's own programs, so that a user types nothing more than on a
+/// kernel with vcan: when this process cannot open a CAN socket (the kernel
+/// has no CAN), is not on the user-space bus already and a bus runs, it is
+/// started again (execv of /proc/self/exe with `argv`) with `preload` in
+/// LD_PRELOAD, and says so on stderr. Returns when there is nothing to do;
+/// does not return when it started itself again.
+void join_bus_if_needed(const std::string& preload, char** argv);
+
 /// Runs the broker's loop in this process until it is stopped or its owner
 /// ends (what start_broker's child runs). listen_fd: the bound listening socket.
 void run_broker(int listen_fd, State& state, const BrokerOptions& options);
