@@ -4,7 +4,9 @@
 // starts its own bus in a folder of its own, owned by this process.
 #include "canhil/userbus/bus.hpp"
 
+#include <linux/can.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -215,6 +217,30 @@ TEST_F(OwnBus, BesideTheTimeShimInOneProcess) {
   const std::string out =
       on_bus("candump -n 1 vcan0 & p=$!; sleep 0.3; LD_PRELOAD=$LD_PRELOAD:$TIMESHIM cansend vcan0 456#BEEF; wait $p");
   EXPECT_NE(out.find("vcan0  456   [2]  BE EF"), std::string::npos) << out;
+}
+
+TEST_F(OwnBus, CanhilFindsTheBusByItself) {
+  start({"vcan0"});
+  // canhil dump started with no preload: where the kernel has no CAN it starts again on the bus.
+  const std::string command = "cd '" + folder_.string() + "' && CANHIL_BUS_DIR='" + folder_.string() + "' " +
+                              canhil::test::canhil_binary() +
+                              " dump vcan0 --count 1 2>&1 & sleep 1; LD_PRELOAD=" + canhil::test::bus_preload() +
+                              " CANHIL_BUS_DIR='" + folder_.string() + "' cansend vcan0 2A5#0102; wait";
+  std::string out;
+  FILE* p = popen(command.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, p)) > 0) out.append(buffer, n);
+  pclose(p);
+  const int probe = socket(PF_CAN, SOCK_RAW, CAN_RAW);
+  if (probe >= 0) {
+    close(probe);  // a kernel with CAN: its interfaces are the ones, canhil does not join the bus
+    EXPECT_EQ(out.find("running on canhil's user-space bus"), std::string::npos) << out;
+  } else {
+    EXPECT_NE(out.find("this kernel has no CAN; running on canhil's user-space bus"), std::string::npos) << out;
+    EXPECT_NE(out.find("vcan0 2A5#0102"), std::string::npos) << out;
+  }
 }
 
 TEST_F(OwnBus, WithoutABusTheKernelAnswers) {
