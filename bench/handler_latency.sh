@@ -5,8 +5,9 @@
 # handler with SCHED_FIFO:
 #   quiet: only the handler, fed 200 M8 frames/s by can-utils' cangen
 #   busy:  the handler next to the full emulator (canhil nodes, with physics)
-# Where the kernel has no CAN this runs inside the VM runner, whose software
-# CPU emulation makes the figures far worse than real hardware's.
+# Where the kernel has no CAN this runs natively on canhil's user-space bus
+# (with-vcan.sh says which bus on its first line); there the receive timestamp
+# is the bus's delivery time, the broker's hop before it not counted.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-20}"
