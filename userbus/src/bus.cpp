@@ -324,7 +324,7 @@ std::string find_preload(const std::string& libdir, const std::string& built) {
   if (n > 0) {
     std::string folder(exe, static_cast<std::size_t>(n));
     folder = folder.substr(0, folder.rfind('/'));
-    const std::string installed = folder + "/../" + libdir + "/libcanhil-bus.so";
+    std::string installed = folder + "/../" + libdir + "/libcanhil-bus.so";
     if (access(installed.c_str(), R_OK) == 0) return installed;
   }
   if (access(built.c_str(), R_OK) == 0) return built;
