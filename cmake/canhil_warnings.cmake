@@ -28,3 +28,21 @@ function(canhil_target_defaults target)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
   endif()
 endfunction()
+
+# canhil_preload_library(<target> <output name> SOURCES ... [INCLUDES ...]): a
+# library preloaded (LD_PRELOAD) into programs canhil did not build (the time
+# shim, the user-space bus): no sanitizer (a sanitizer runtime must come first
+# in a process, and the team's programs have none), nothing of canhil's but
+# base's header-only preload plumbing (libc only), C++ without exceptions,
+# only its intercepting calls visible; installed in LIBDIR.
+function(canhil_preload_library target output)
+  cmake_parse_arguments(P "" "" "SOURCES;INCLUDES" ${ARGN})
+  add_library(${target} SHARED ${P_SOURCES})
+  target_include_directories(${target} PRIVATE ${P_INCLUDES})
+  target_compile_options(${target} PRIVATE ${CANHIL_WARNINGS} ${CANHIL_CXX_WARNINGS} -fno-exceptions)
+  target_link_libraries(${target} PRIVATE canhil::base ${CMAKE_DL_LIBS})
+  set_target_properties(${target} PROPERTIES OUTPUT_NAME ${output} CXX_VISIBILITY_PRESET hidden
+                                             VISIBILITY_INLINES_HIDDEN ON)
+  include(GNUInstallDirs)
+  install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+endfunction()

@@ -30,6 +30,19 @@ namespace {
 namespace fs = std::filesystem;
 namespace ub = canhil::userbus;
 
+/// `line` run by /bin/sh, its standard output and error; its exit status in `status`.
+std::string shell(const std::string& line, int* status = nullptr) {
+  std::string out;
+  FILE* p = popen((line + " 2>&1").c_str(), "r");
+  if (p == nullptr) return out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, p)) > 0) out.append(buffer, n);
+  const int s = pclose(p);
+  if (status != nullptr) *status = WIFEXITED(s) ? WEXITSTATUS(s) : 128 + WTERMSIG(s);
+  return out;
+}
+
 /// A bus of this test's own: started in a fresh folder, stopped at the end.
 class OwnBus : public ::testing::Test {
  protected:
@@ -52,18 +65,9 @@ class OwnBus : public ::testing::Test {
   }
   /// `command` run by sh on the bus (the preload and the bus's folder in its environment); its output.
   std::string on_bus(const std::string& command, int* status = nullptr) const {
-    const std::string line = "cd '" + folder_.string() + "' && LD_PRELOAD=" + canhil::test::bus_preload() +
-                             " TIMESHIM=" + canhil::test::time_shim() + " CANHIL_BUS_DIR='" + folder_.string() +
-                             "' sh -c '" + command + "' 2>&1";
-    std::string out;
-    FILE* p = popen(line.c_str(), "r");
-    if (p == nullptr) return out;
-    char buffer[4096];
-    std::size_t n = 0;
-    while ((n = std::fread(buffer, 1, sizeof buffer, p)) > 0) out.append(buffer, n);
-    const int s = pclose(p);
-    if (status != nullptr) *status = WIFEXITED(s) ? WEXITSTATUS(s) : 128 + WTERMSIG(s);
-    return out;
+    return shell("cd '" + folder_.string() + "' && LD_PRELOAD=" + canhil::test::bus_preload() + " TIMESHIM=" +
+                     canhil::test::time_shim() + " CANHIL_BUS_DIR='" + folder_.string() + "' sh -c '" + command + "'",
+                 status);
   }
   fs::path folder_;
   ub::BusPaths paths_;
@@ -226,13 +230,7 @@ TEST_F(OwnBus, CanhilFindsTheBusByItself) {
                               canhil::test::canhil_binary() +
                               " dump vcan0 --count 1 2>&1 & sleep 1; LD_PRELOAD=" + canhil::test::bus_preload() +
                               " CANHIL_BUS_DIR='" + folder_.string() + "' cansend vcan0 2A5#0102; wait";
-  std::string out;
-  FILE* p = popen(command.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, p)) > 0) out.append(buffer, n);
-  pclose(p);
+  const std::string out = shell(command);
   const int probe = socket(PF_CAN, SOCK_RAW, CAN_RAW);
   if (probe >= 0) {
     close(probe);  // a kernel with CAN: its interfaces are the ones, canhil does not join the bus
@@ -249,15 +247,10 @@ TEST_F(OwnBus, WithoutABusTheKernelAnswers) {
   int with = -1;
   int without = -1;
   const std::string preloaded = on_bus("cansend nobus7 123#11", &with);
-  FILE* p = popen("cansend nobus7 123#11 2>&1", "r");
-  ASSERT_NE(p, nullptr);
-  char buffer[512] = {};
-  const std::size_t n = std::fread(buffer, 1, sizeof buffer - 1, p);
-  const int s = pclose(p);
-  without = WIFEXITED(s) ? WEXITSTATUS(s) : -1;
+  const std::string plain = shell("cansend nobus7 123#11", &without);
   EXPECT_NE(with, 0);
   EXPECT_EQ(with, without);
-  EXPECT_EQ(preloaded, std::string(buffer, n));
+  EXPECT_EQ(preloaded, plain);
 }
 
 }  // namespace

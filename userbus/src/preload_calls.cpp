@@ -18,6 +18,7 @@
 
 #include <cerrno>
 #include <cstdarg>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -30,31 +31,35 @@ namespace {
 constexpr int kMinRcvbuf = 2304;  // SOCK_MIN_RCVBUF
 constexpr int kMinSndbuf = 4608;  // SOCK_MIN_SNDBUF
 
-int sysctl_int(const char* path, int fallback) {
+/// /proc/sys/net/core/`name` (rmem_default, wmem_max, ...), read once per
+/// name by its caller; the kernel's usual 212992 when it cannot be read.
+int net_core(const char* name) {
+  char path[64];
+  std::snprintf(path, sizeof path, "/proc/sys/net/core/%s", name);
   const int fd = static_cast<int>(syscall(SYS_openat, -100, path, 0));
-  if (fd < 0) return fallback;
+  if (fd < 0) return 212992;
   char text[32] = {};
   const long n = syscall(SYS_read, fd, text, sizeof text - 1);
   syscall(SYS_close, fd);
   char* end = nullptr;
   const long value = n > 0 ? std::strtol(text, &end, 10) : 0;
-  return (n > 0 && end != text && value > 0 && value < (1L << 30)) ? static_cast<int>(value) : fallback;
+  return (n > 0 && end != text && value > 0 && value < (1L << 30)) ? static_cast<int>(value) : 212992;
 }
 
 int rmem_default() {
-  static const int v = sysctl_int("/proc/sys/net/core/rmem_default", 212992);
+  static const int v = net_core("rmem_default");
   return v;
 }
 int wmem_default() {
-  static const int v = sysctl_int("/proc/sys/net/core/wmem_default", 212992);
+  static const int v = net_core("wmem_default");
   return v;
 }
 int rmem_max() {
-  static const int v = sysctl_int("/proc/sys/net/core/rmem_max", 212992);
+  static const int v = net_core("rmem_max");
   return v;
 }
 int wmem_max() {
-  static const int v = sysctl_int("/proc/sys/net/core/wmem_max", 212992);
+  static const int v = net_core("wmem_max");
   return v;
 }
 
@@ -406,23 +411,15 @@ extern "C" {
 
 int socket(int domain, int type, int protocol) {
   CANHIL_REAL(socket);
-  if (domain == PF_CAN && bus::bus_state(false) != nullptr) {
-    const int base = type & 0xf;
-    if (protocol == CAN_RAW && base == SOCK_RAW) {
-      const int fd = bus::open_socket(type & (SOCK_NONBLOCK | SOCK_CLOEXEC));
-      if (fd != -2) return fd;
-    } else if (protocol == CAN_RAW) {
-      return bus::fail(EPROTOTYPE);  // can_create: the protocol's type is SOCK_RAW
-    } else if (protocol < 0 || protocol >= CAN_NPROTO) {
-      return bus::fail(EINVAL);
-    } else {
-      return bus::fail(EPROTONOSUPPORT);  // BCM, ISO-TP, J1939: not on the user-space bus
-    }
-  } else if (domain == PF_CAN && protocol == CAN_RAW && (type & 0xf) == SOCK_RAW) {
-    const int fd = bus::open_socket(type & (SOCK_NONBLOCK | SOCK_CLOEXEC));
-    if (fd != -2) return fd;
+  if (domain != PF_CAN) return real_socket(domain, type, protocol);
+  if (protocol == CAN_RAW && (type & 0xf) == SOCK_RAW) {
+    const int fd = bus::open_socket(type & (SOCK_NONBLOCK | SOCK_CLOEXEC));  // -2: no bus runs
+    return fd != -2 ? fd : real_socket(domain, type, protocol);
   }
-  return real_socket(domain, type, protocol);
+  if (bus::bus_state(false) == nullptr) return real_socket(domain, type, protocol);
+  if (protocol == CAN_RAW) return bus::fail(EPROTOTYPE);  // can_create: the protocol's type is SOCK_RAW
+  if (protocol < 0 || protocol >= CAN_NPROTO) return bus::fail(EINVAL);
+  return bus::fail(EPROTONOSUPPORT);  // BCM, ISO-TP, J1939: not on the user-space bus
 }
 
 int close(int fd) {
