@@ -76,7 +76,10 @@ CPP
   done
   echo ']'
 } > "$work/db/compile_commands.json"
+# Its own cache, and the settings of lint.sh as a plain run has them (a developer
+# may have turned the cache or the batches off in the environment).
 export XDG_CACHE_HOME="$work/cache"
+unset CANHIL_TIDY_CACHE CANHIL_TIDY_BATCH
 lint() { bash "$src/scripts/lint.sh" --db "$work/db" --no-format --files "$1" > "$work/out.txt" 2>&1; }
 fail() { echo "FAIL: $*"; cat "$work/out.txt"; exit 1; }
 
