@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/external_driver.hpp"
 #include "canhil/emulator/match.hpp"
 #include "canhil/emulator/run_plan.hpp"
@@ -185,6 +186,15 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
                 repeat, match.halves, match.half_s / 60, static_cast<unsigned long long>(first_seed),
                 static_cast<unsigned long long>(first_seed + static_cast<std::uint64_t>(repeat) - 1), names[0].c_str(),
                 names[1].c_str());
+    if (external) {
+      // Which bus the teams' processes share with canhil's nodes (the user-space
+      // bus, where the kernel has none): one line, every interface on it.
+      std::string on;
+      for (const std::string& iface : scenario.interfaces) on += (on.empty() ? "" : ", ") + iface;
+      if (!scenario.interfaces.empty()) {
+        std::printf("  the teams' processes on %s (%s)\n", on.c_str(), can_nodes::bus_of(scenario.interfaces[0]));
+      }
+    }
     if (!scenario.vision.any_noise()) {
       std::printf(
           "  note: the scenario's camera is exact (its [vision] gives no noise), so every seed plays the same "

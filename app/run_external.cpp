@@ -17,6 +17,7 @@
 #include "args.hpp"
 #include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/external_driver.hpp"
 #include "canhil/emulator/referee.hpp"
 #include "canhil/lockstep/conductor.hpp"
@@ -144,6 +145,11 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s (%s), seed %llu\n", robots,
               run.length.seconds, run.length.source.c_str(), static_cast<unsigned long long>(session.scenario().seed));
+  for (std::size_t r = 0; r < robots; ++r) {
+    const emulator::Rig& rig = session.rig(r);
+    std::printf("  robot %zu on %s (%s) for agent %d\n", r, rig.interface.c_str(), can_nodes::bus_of(rig.interface),
+                rig.agent);
+  }
   std::size_t expected = 0;
   const std::vector<std::string> environment =
       conductor.environment(shim, team_preload.empty() ? nullptr : team_preload.c_str());

@@ -16,6 +16,7 @@
 #include <string>
 #include <utility>
 
+#include "canhil/can_nodes/socketcan_bus.hpp"
 #include "support/test_paths.hpp"
 
 namespace {
@@ -95,6 +96,9 @@ TEST(VcanExternal, TheReferenceHandlerAndAgentGiveTheSameTraceTwiceAndScoreAsInP
   EXPECT_TRUE(world_a == read_file(trace_path("world_b"))) << "and is the same too";
   EXPECT_NE(a.output.find("canhil-hwcomm"), std::string::npos) << "the summary names each process\n" << a.output;
   EXPECT_NE(a.output.find("x real time)"), std::string::npos) << a.output;
+  // The bus this test runs on (the kernel's vcan or canhil's own), as canhil names it.
+  const std::string bus_line = std::string("robot 0 on vcan0 (") + canhil::can_nodes::bus_of("vcan0") + ") for agent 1";
+  EXPECT_NE(a.output.find(bus_line), std::string::npos) << "says which bus\n" << a.output;
   const Finished in_process = canhil(kRun + " --virtual-time --duration 6", "in_process");
   const double goal_external = opponent_goal_at(a.output);
   const double goal_in_process = opponent_goal_at(in_process.output);
