@@ -282,8 +282,10 @@ def main():
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, o.jobs)) as pool:
         keys = dict(zip((source_of(e) for e in chosen),
                         pool.map(lambda e: text_key(e, root), chosen))) if o.cache else {}
-        # The batches first: they are the longest runs.
-        ordered = sorted(runs, key=lambda r: r.unit is None)
+        # The longest runs first, so that no long one is left for the end with the
+        # other worker idle: the batches, then the files by size (the static
+        # analyser's time grows with the file's own code).
+        ordered = sorted(runs, key=lambda r: (r.unit is None, -sum(os.path.getsize(source_of(e)) for e in r.entries)))
         results = pool.map(lambda r: lint_one(r, o.build_dir, unit_dir, keys, root, salt, o.cache),
                            ordered)
         failed, reused = 0, 0

@@ -40,7 +40,7 @@
 
 namespace canhil::control {
 
-inline constexpr std::size_t kMaxRequestBytes = 64 * 1024;
+inline constexpr std::size_t kMaxRequestBytes = std::size_t{64} * 1024;
 
 class Commands {
  public:
