@@ -32,8 +32,6 @@ std::vector<std::string> split_names(const std::string& list) {
   return names;
 }
 
-std::string find_preload() { return ub::find_preload(CANHIL_INSTALL_LIBDIR, CANHIL_BUILD_BUS_PRELOAD); }
-
 std::uint32_t grace_us(Args& args) {
   const auto ms = optional_number(args, "--grace-ms");
   if (!ms) return ub::BrokerOptions{}.grace_us;
@@ -85,7 +83,7 @@ int bus_up(Args& args, const ub::BusPaths& paths) {
   ub::add_interfaces(paths, names);
   std::printf("canhil bus: %s at %s\n", started ? "started" : "running", paths.folder.c_str());
   std::fputs(ub::describe(paths).c_str(), stdout);
-  std::printf("programs reach it with LD_PRELOAD=%s, or: canhil bus exec -- COMMAND\n", find_preload().c_str());
+  std::printf("programs reach it with LD_PRELOAD=%s, or: canhil bus exec -- COMMAND\n", ub::find_preload().c_str());
   return 0;
 }
 
@@ -99,7 +97,7 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   if (command.empty()) throw UsageError("`canhil bus exec` needs a command after --: canhil bus exec -- candump vcan0");
   const std::vector<std::string> names = split_names(ifaces.value_or("vcan0"));
   for (const std::string& n : names) ub::check_interface_name(n);
-  const std::string preload = find_preload();
+  const std::string preload = ub::find_preload();
 
   options.owner = getpid();
   const bool started = ensure_bus(paths, options, false);
@@ -139,14 +137,6 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
 
 }  // namespace
 
-void join_bus_if_needed(char** argv) {
-  try {
-    ub::join_bus_if_needed(find_preload(), argv);
-  } catch (const ub::BusError&) {
-    // No preload built or installed: the kernel answers, as without a bus.
-  }
-}
-
 int run_bus(Args& args, const std::optional<std::string>& /*dbc*/) {
   try {
     const ub::BusPaths paths = ub::BusPaths::current();
@@ -155,7 +145,7 @@ int run_bus(Args& args, const std::optional<std::string>& /*dbc*/) {
     if (what == "exec") return bus_exec(args, paths);
     std::vector<std::string> words = args.positionals();
     if (what == "preload") {
-      std::puts(find_preload().c_str());
+      std::puts(ub::find_preload().c_str());
       return 0;
     }
     if (what == "list") {

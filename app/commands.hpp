@@ -34,8 +34,5 @@ int run_play(Args& args, const std::optional<std::string>& dbc);
 int run_pman(Args& args);
 /// `canhil bus up|exec|list|down|link|preload`: the user-space CAN bus.
 int run_bus(Args& args, const std::optional<std::string>& dbc);
-/// Where the kernel has no CAN and canhil's user-space bus runs, starts canhil
-/// again on it (userbus::join_bus_if_needed); returns when nothing is to do.
-void join_bus_if_needed(char** argv);
 
 }  // namespace canhil::app

@@ -12,6 +12,7 @@
 #include "args.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/physics/solver_health.hpp"
+#include "canhil/userbus/bus.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -270,7 +271,7 @@ int main(int argc, char** argv) {
     if (command == nullptr) return usage_error(("unknown command \"" + name + "\"").c_str(), nullptr);
     // The commands that open SocketCAN interfaces find the user-space bus by themselves.
     for (const char* can : {"run", "nodes", "dump", "timing", "play", "bench", "match"}) {
-      if (name == can) canhil::app::join_bus_if_needed(argv);
+      if (name == can) canhil::userbus::join_bus_if_needed(argv);
     }
     return command->run(args, dbc);
   } catch (const canhil::app::UsageError& e) {

@@ -58,12 +58,7 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   // Where the kernel has no CAN and canhil's user-space bus runs: start again on it.
-  try {
-    canhil::userbus::join_bus_if_needed(canhil::userbus::find_preload(CANHIL_INSTALL_LIBDIR, CANHIL_BUILD_BUS_PRELOAD),
-                                        argv);
-  } catch (const canhil::userbus::BusError&) {
-    // no preload: the kernel answers
-  }
+  canhil::userbus::join_bus_if_needed(argv);
   std::string iface;
   std::string dbc = canhil::frames::default_dbc_path().string();
   double ec_ms = 10;

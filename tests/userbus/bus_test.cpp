@@ -43,6 +43,15 @@ std::string shell(const std::string& line, int* status = nullptr) {
   return out;
 }
 
+/// A shell line: `listener` started in the background and given 0.3 s to bind
+/// its socket, then `actions`; the listener then stopped with SIGINT when
+/// `interrupt`, else waited for as it ends by itself; then `after`.
+std::string beside(const std::string& listener, const std::string& actions, bool interrupt,
+                   const std::string& after = "") {
+  return listener + " & p=$!; sleep 0.3; " + actions + "; " + (interrupt ? "kill -INT $p; " : "") + "wait $p" +
+         (after.empty() ? "" : "; " + after);
+}
+
 /// A bus of this test's own: started in a fresh folder, stopped at the end.
 class OwnBus : public ::testing::Test {
  protected:
@@ -144,9 +153,7 @@ TEST_F(OwnBus, CangenIntoCandumpLosesNothing) {
   start({"vcan0"});
   int status = -1;
   const std::string out = on_bus(
-      "candump -l vcan0 & p=$!; sleep 0.3; cangen vcan0 -g 0 -n 100000 -I i -L 8 -D i; sleep 0.5; kill -INT $p; wait "
-      "$p; "
-      "cat candump-*.log",
+      beside("candump -l vcan0", "cangen vcan0 -g 0 -n 100000 -I i -L 8 -D i; sleep 0.5", true, "cat candump-*.log"),
       &status);
   EXPECT_EQ(status, 0) << out.substr(0, 500);
   std::istringstream lines(out);
@@ -168,13 +175,11 @@ TEST_F(OwnBus, CangenIntoCandumpLosesNothing) {
 TEST_F(OwnBus, CansendSeenByCandumpOnEveryInterfaceAndCanbusloadMeasures) {
   start();
   const std::string out = on_bus(
-      "candump -n 2 any > any.txt & p=$!; sleep 0.3; cansend vcan0 123#11; cansend vcan1 1ABCDEF0#2233; wait $p; cat "
-      "any.txt");
+      beside("candump -n 2 any > any.txt", "cansend vcan0 123#11; cansend vcan1 1ABCDEF0#2233", false, "cat any.txt"));
   EXPECT_NE(out.find("vcan0  123   [1]  11"), std::string::npos) << out;
   EXPECT_NE(out.find("vcan1  1ABCDEF0   [2]  22 33"), std::string::npos) << out;
-  const std::string load = on_bus(
-      "canbusload vcan0@500000 > load.txt & p=$!; sleep 0.3; cangen vcan0 -g 1 -n 200; sleep 1.2; kill -INT $p; wait "
-      "$p; cat load.txt");
+  const std::string load =
+      on_bus(beside("canbusload vcan0@500000 > load.txt", "cangen vcan0 -g 1 -n 200; sleep 1.2", true, "cat load.txt"));
   EXPECT_NE(load.find("vcan0@500000"), std::string::npos) << load;
 }
 
@@ -182,15 +187,15 @@ TEST_F(OwnBus, CanplayerReplaysALogAndCansnifferWatches) {
   start();
   // canplayer sends each frame to the interface its log line names (sendto on a socket bound to all)
   const std::string played = on_bus(
-      "printf \"(1.000000) vcan0 101#01\\n(1.010000) vcan1 202#0202\\n(1.020000) vcan0 303#030303\\n\" > play.log; "
-      "candump -n 3 any > seen.txt & p=$!; sleep 0.3; canplayer -I play.log; wait $p; cat seen.txt");
+      std::string("printf \"(1.000000) vcan0 101#01\\n(1.010000) vcan1 202#0202\\n(1.020000) vcan0 303#030303\\n\" > "
+                  "play.log; ") +
+      beside("candump -n 3 any > seen.txt", "canplayer -I play.log", false, "cat seen.txt"));
   EXPECT_NE(played.find("vcan0  101   [1]  01"), std::string::npos) << played;
   EXPECT_NE(played.find("vcan1  202   [2]  02 02"), std::string::npos) << played;
   EXPECT_NE(played.find("vcan0  303   [3]  03 03 03"), std::string::npos) << played;
   // cansniffer reads the bus and draws its table of ids
   const std::string sniffed = on_bus(
-      "cansniffer -c vcan0 > sniff.txt & p=$!; sleep 0.3; cangen vcan0 -g 10 -n 40 -I 5A5; sleep 1.2; kill -INT $p; "
-      "wait $p; cat sniff.txt");
+      beside("cansniffer -c vcan0 > sniff.txt", "cangen vcan0 -g 10 -n 40 -I 5A5; sleep 1.2", true, "cat sniff.txt"));
   EXPECT_NE(sniffed.find("5A5"), std::string::npos) << sniffed.substr(0, 400);
 }
 
@@ -212,14 +217,14 @@ TEST_F(OwnBus, AProcessKilledMidWriteLeavesTheBusUsable) {
   // its socket is gone from the bus (the broker saw its connection close)
   for (int k = 0; k < 100 && ub::describe(paths_).find("cangen") != std::string::npos; ++k) usleep(10000);
   EXPECT_EQ(ub::describe(paths_).find("cangen"), std::string::npos) << ub::describe(paths_);
-  const std::string out = on_bus("candump -n 1 vcan0 & p=$!; sleep 0.3; cansend vcan0 321#AA; wait $p");
+  const std::string out = on_bus(beside("candump -n 1 vcan0", "cansend vcan0 321#AA", false));
   EXPECT_NE(out.find("vcan0  321   [1]  AA"), std::string::npos) << out;
 }
 
 TEST_F(OwnBus, BesideTheTimeShimInOneProcess) {
   start({"vcan0"});
   const std::string out =
-      on_bus("candump -n 1 vcan0 & p=$!; sleep 0.3; LD_PRELOAD=$LD_PRELOAD:$TIMESHIM cansend vcan0 456#BEEF; wait $p");
+      on_bus(beside("candump -n 1 vcan0", "LD_PRELOAD=$LD_PRELOAD:$TIMESHIM cansend vcan0 456#BEEF", false));
   EXPECT_NE(out.find("vcan0  456   [2]  BE EF"), std::string::npos) << out;
 }
 

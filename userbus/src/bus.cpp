@@ -314,7 +314,8 @@ std::string describe(const BusPaths& paths) {
   return out.str();
 }
 
-std::string find_preload(const std::string& libdir, const std::string& built) {
+std::string find_preload() {
+  std::string built = CANHIL_BUILD_BUS_PRELOAD;
   if (const char* given = std::getenv("CANHIL_BUS_PRELOAD"); given != nullptr && *given != '\0') {
     if (access(given, R_OK) != 0) throw BusError(std::string("CANHIL_BUS_PRELOAD=") + given + ": no such file");
     return given;
@@ -324,7 +325,7 @@ std::string find_preload(const std::string& libdir, const std::string& built) {
   if (n > 0) {
     std::string folder(exe, static_cast<std::size_t>(n));
     folder = folder.substr(0, folder.rfind('/'));
-    std::string installed = folder + "/../" + libdir + "/libcanhil-bus.so";
+    std::string installed = folder + "/../" CANHIL_INSTALL_LIBDIR "/libcanhil-bus.so";
     if (access(installed.c_str(), R_OK) == 0) return installed;
   }
   if (access(built.c_str(), R_OK) == 0) return built;
@@ -332,7 +333,7 @@ std::string find_preload(const std::string& libdir, const std::string& built) {
                  ": build it (target canhil_bus_preload) or set CANHIL_BUS_PRELOAD=/path/to/libcanhil-bus.so");
 }
 
-void join_bus_if_needed(const std::string& preload, char** argv) {
+void join_bus_if_needed(char** argv) {
   if (dlsym(RTLD_DEFAULT, "canhil_userbus_interface") != nullptr) return;  // on it already
   if (std::getenv("CANHIL_BUS_JOINED") != nullptr) return;                 // tried once: the kernel answers
   const int probe = socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
@@ -342,6 +343,12 @@ void join_bus_if_needed(const std::string& preload, char** argv) {
   }
   const BusPaths paths = BusPaths::current();
   if (!broker_alive(paths)) return;
+  std::string preload;
+  try {
+    preload = find_preload();
+  } catch (const BusError&) {
+    return;  // no preload built or installed: the kernel answers, as without a bus
+  }
   const char* before = std::getenv("LD_PRELOAD");
   const std::string ld = before != nullptr && *before != '\0' ? preload + ":" + before : preload;
   setenv("LD_PRELOAD", ld.c_str(), 1);

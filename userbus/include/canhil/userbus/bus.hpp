@@ -86,18 +86,19 @@ std::string describe(const BusPaths& paths);
 /// BusError naming what is wrong.
 void check_interface_name(const std::string& name);
 
-/// libcanhil-bus.so: $CANHIL_BUS_PRELOAD, else installed in `libdir` beside
-/// the running program's folder (../lib/...), else `built`. BusError when
-/// none exists.
-std::string find_preload(const std::string& libdir, const std::string& built);
+/// libcanhil-bus.so: $CANHIL_BUS_PRELOAD, else installed in the library
+/// folder beside the running program's (../lib/...), else the build tree's.
+/// BusError when none exists.
+std::string find_preload();
 
 /// For canhil's own programs, so that a user types nothing more than on a
 /// kernel with vcan: when this process cannot open a CAN socket (the kernel
 /// has no CAN), is not on the user-space bus already and a bus runs, it is
-/// started again (execv of /proc/self/exe with `argv`) with `preload` in
-/// LD_PRELOAD, and says so on stderr. Returns when there is nothing to do;
-/// does not return when it started itself again.
-void join_bus_if_needed(const std::string& preload, char** argv);
+/// started again (execv of /proc/self/exe with `argv`) with the preload
+/// (find_preload) in LD_PRELOAD, and says so on stderr. Returns when there is
+/// nothing to do or no preload to start with (the kernel then answers); does
+/// not return when it started itself again.
+void join_bus_if_needed(char** argv);
 
 /// Runs the broker's loop in this process until it is stopped or its owner
 /// ends (what start_broker's child runs). listen_fd: the bound listening socket.
