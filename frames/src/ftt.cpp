@@ -1,5 +1,6 @@
 #include "canhil/frames/ftt.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <numeric>
 #include <sstream>
@@ -8,64 +9,86 @@
 
 namespace canhil::frames {
 
-FttSchedule::FttSchedule(const MessageSet& set, const FttConfig& config) : config_(config) {
+namespace {
+
+std::string us(Nanos t) { return std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(t).count()); }
+
+}  // namespace
+
+std::vector<FttEntry> FttSchedule::entries(const MessageSet& set, std::uint32_t bit_rate) {
+  if (bit_rate == 0) throw SetupError("the bit rate must be positive");
+  std::vector<FttEntry> out;
+  for (const MessageCodec& m : set.codec().messages()) {
+    const FttInfo& info = set.ftt(m);
+    out.push_back({m.def().name, info.kind, info.index, info.period,
+                   bits_to_time(worst_case_frame_bits(m.def().length, m.def().extended), bit_rate)});
+  }
+  return out;
+}
+
+FttSchedule::FttSchedule(const MessageSet& set, const FttConfig& config)
+    : FttSchedule(entries(set, config.bit_rate), config) {}
+
+FttSchedule::FttSchedule(const std::vector<FttEntry>& entries, const FttConfig& config, Fit fit) : config_(config) {
   const Nanos ec = config.elementary_cycle;
   if (ec <= Nanos{0}) throw SetupError("the elementary cycle must be positive");
   if (config.bit_rate == 0) throw SetupError("the bit rate must be positive");
-  auto us = [](Nanos t) { return std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(t).count()); };
-  Nanos longest_async{0};
-  Nanos tm_time{0};         // the TM's worst-case wire time
-  std::uint32_t cycle = 1;  // ECs after which the schedule repeats
-  for (const MessageCodec& m : set.codec().messages()) {
-    const FttInfo& info = set.ftt(m);
-    const Nanos wire = bits_to_time(worst_case_frame_bits(m.def().length, m.def().extended), config.bit_rate);
-    if (info.kind == FttKind::kTrigger) {
-      tm_time = wire;
-      if (info.period != ec) {
-        throw SetupError("the trigger message " + m.def().name + " has period " + us(info.period) +
+  std::array<const FttEntry*, 32> by_index{};
+  for (const FttEntry& m : entries) {
+    if (m.kind == FttKind::kTrigger) {
+      tm_time_ = m.wire;
+      if (m.period != ec) {
+        throw SetupError("the trigger message " + m.name + " has period " + us(m.period) +
                          " us but the elementary cycle is " + us(ec) +
                          " us; make them equal (GenMsgCycleTime in the DBC, or the EC setting)");
       }
-    } else if (info.kind == FttKind::kAsync) {
-      longest_async = std::max(longest_async, wire);
+    } else if (m.kind == FttKind::kAsync) {
+      longest_async_ = std::max(longest_async_, m.wire);
     } else {
-      if (info.period.count() % ec.count() != 0) {
-        throw SetupError("message " + m.def().name + " has period " + us(info.period) +
+      if (m.period <= Nanos{0} || m.period.count() % ec.count() != 0) {
+        throw SetupError("message " + m.name + " has period " + us(m.period) +
                          " us, not a whole number of elementary cycles (" + us(ec) +
                          " us); change its GenMsgCycleTime or the EC");
       }
-      const auto i = static_cast<std::size_t>(info.index);
-      period_ecs_[i] = static_cast<std::uint32_t>(info.period.count() / ec.count());
-      frame_time_[i] = wire;
-      cycle = std::lcm(cycle, period_ecs_[i]);
+      if (m.index < 0 || m.index > 31) {
+        throw SetupError("message " + m.name + " has FttIndex " + std::to_string(m.index) +
+                         "; a synchronous message needs a bit 0..31 of sync_bitmap");
+      }
+      const auto i = static_cast<std::size_t>(m.index);
+      if (by_index[i] != nullptr) {
+        throw SetupError("message " + m.name + " has FttIndex " + std::to_string(m.index) + " like " +
+                         by_index[i]->name + "; give each synchronous message its own index");
+      }
+      by_index[i] = &m;
+      period_ecs_[i] = static_cast<std::uint32_t>(m.period.count() / ec.count());
+      frame_time_[i] = m.wire;
+      cycle_ = std::lcm(cycle_, std::uint64_t{period_ecs_[i]});
     }
   }
-  std::uint64_t worst_ec = 0;
-  Nanos longest{0};  // the longest synchronous window of the cycle
-  if (cycle <= kMostTabled) {
-    cycle_bitmaps_.resize(cycle);
-    for (std::uint64_t k = 0; k < cycle; ++k) cycle_bitmaps_[k] = due(k);
+  if (cycle_ <= kMostTabled) {
+    cycle_bitmaps_.resize(cycle_);
+    for (std::uint64_t k = 0; k < cycle_; ++k) cycle_bitmaps_[k] = due(k);
   }
-  for (std::uint64_t k = 0; k < cycle; ++k) {
+  for (std::uint64_t k = 0; k < cycle_; ++k) {
     const Nanos w = sync_window(bitmap(k));
-    if (w > longest) {
-      longest = w;
-      worst_ec = k;
+    if (w > longest_window_) {
+      longest_window_ = w;
+      worst_ec_ = k;
     }
   }
-  const Nanos needed = tm_time + longest_async + longest;
-  if (needed > ec) {
-    std::ostringstream os;
-    os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message (" << us(tm_time)
-       << " us), one asynchronous frame (" << us(longest_async) << " us) and the synchronous window of EC " << worst_ec
-       << " (" << us(longest) << " us, messages";
-    const std::uint32_t b = bitmap(worst_ec);
-    for (int i = 0; i < 32; ++i) {
-      if ((b >> i) & 1u) os << ' ' << set.sync_message(i)->name();
-    }
-    os << ") need " << us(needed) << " us; lengthen the EC, raise the bit rate or lengthen periods";
-    throw SetupError(os.str());
+  const Nanos needed = tm_time_ + longest_async_ + longest_window_;
+  if (needed <= ec) return;
+  std::ostringstream os;
+  os << "the FTT schedule does not fit the " << us(ec) << " us elementary cycle: the trigger message (" << us(tm_time_)
+     << " us), one asynchronous frame (" << us(longest_async_) << " us) and the synchronous window of EC " << worst_ec_
+     << " (" << us(longest_window_) << " us, messages";
+  const std::uint32_t b = bitmap(worst_ec_);
+  for (std::size_t i = 0; i < 32; ++i) {
+    if ((b >> i) & 1u) os << ' ' << by_index[i]->name;
   }
+  os << ") need " << us(needed) << " us; lengthen the EC, raise the bit rate or lengthen periods";
+  misfit_ = os.str();
+  if (fit == Fit::kRequire) throw SetupError(misfit_);
 }
 
 std::uint32_t FttSchedule::due(std::uint64_t ec_index) const noexcept {

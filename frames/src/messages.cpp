@@ -3,8 +3,6 @@
 #include <string>
 
 namespace canhil::frames {
-namespace {
-
 FttInfo read_ftt(const MessageDef& m, const std::string& file) {
   auto fail = [&](const std::string& what) -> DbcError {
     return DbcError(file, m.line, "message " + m.name + " " + what);
@@ -44,8 +42,6 @@ FttInfo read_ftt(const MessageDef& m, const std::string& file) {
   }
   return info;
 }
-
-}  // namespace
 
 MessageSet::MessageSet(Database db) : codec_(std::move(db)) {
   const std::string& file = codec_.database().file;

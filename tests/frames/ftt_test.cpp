@@ -93,6 +93,36 @@ TEST(FttScheduleChecks, RefusesAScheduleThatDoesNotFit) {
   EXPECT_THROW(FttSchedule(*set, odd), SetupError);
 }
 
+TEST(FttScheduleChecks, AnAnalysisGetsTheMisfitReportedWithTheScheduleBuiltByTheSameRules) {
+  auto set = frames::MessageSet::load(test::shipped_dbc());
+  FttConfig slow;
+  slow.bit_rate = 125'000;
+  const FttSchedule s(FttSchedule::entries(*set, slow.bit_rate), slow, FttSchedule::Fit::kReport);
+  EXPECT_FALSE(s.fits());
+  EXPECT_NE(s.misfit().find("does not fit the 10000 us elementary cycle"), std::string::npos) << s.misfit();
+  EXPECT_EQ(s.cycle_ecs(), 15u) << "periods of 1, 3 and 5 ECs";
+  EXPECT_EQ(s.worst_ec(), 0u) << "every message is due in EC 0";
+  const Nanos frame = bits_to_time(worst_case_frame_bits(8), slow.bit_rate);  // 1080 us
+  EXPECT_EQ(s.longest_sync_window(), 10 * frame + slow.sync_window_guard);
+  EXPECT_EQ(s.trigger_wire(), frame);
+  EXPECT_EQ(s.longest_async_wire(), frame);
+  const FttSchedule fast(FttSchedule::entries(*set, 1'000'000), FttConfig{}, FttSchedule::Fit::kReport);
+  EXPECT_TRUE(fast.fits()) << fast.misfit();
+  EXPECT_EQ(fast.bitmap(5), FttSchedule(*set, FttConfig{}).bitmap(5)) << "the master's own schedule";
+}
+
+TEST(FttScheduleChecks, TwoSynchronousMessagesOnOneIndexAreRefusedByName) {
+  const std::vector<FttEntry> entries = {{"TM", FttKind::kTrigger, -1, 10ms, 135us},
+                                         {"A", FttKind::kSync, 4, 20ms, 135us},
+                                         {"B", FttKind::kSync, 4, 30ms, 135us}};
+  try {
+    FttSchedule s(entries, FttConfig{}, FttSchedule::Fit::kReport);
+    FAIL();
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("message B has FttIndex 4 like A"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(Ftt, AnEcOtherThanTheTriggerPeriodIsRefusedSayingBoth) {
   FttConfig config;
   config.elementary_cycle = 20ms;

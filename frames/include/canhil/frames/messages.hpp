@@ -280,6 +280,10 @@ struct FttInfo {
   Nanos min_gap{0};  ///< asynchronous messages
 };
 
+/// A message's FTT information from its DBC attributes (`file` names the DBC
+/// in errors). Throws DbcError naming the attribute to set.
+FttInfo read_ftt(const MessageDef& m, const std::string& file);
+
 /// The whole contract: a Codec plus typed bindings and FTT information for
 /// every message canhil uses. Immutable and shared between nodes.
 class MessageSet {
