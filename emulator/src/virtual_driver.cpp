@@ -97,6 +97,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       }
       stack->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
                                                             link.layout(), rig.agent);
+      stack->handler->hw().set_bit_rate(session_.options().ftt.bit_rate);
       const double goal_x = session_.scenario().world.field.length_m / 2;
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
       stack->agent = std::make_unique<AgentParticipant>(link, rig.agent, agent_cfg);

@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/frames/ftt.hpp"
+#include "canhil/frames/wire.hpp"
 #include "rtdb_item.hpp"
 
 namespace canhil::laptop {
@@ -34,6 +36,7 @@ HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send sen
     : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)) {
   stats_.received.assign(set_->codec().messages().size(), 0);
   stats_.sent.assign(set_->codec().messages().size(), 0);
+  set_bit_rate(frames::FttConfig{}.bit_rate);
   items_ = std::make_unique<Items>(db, space);
   Items& i = *items_;
   i.pos = resolve(db, layout, space, "CMD_POS", {"x", "y", "heading"}, true);
@@ -246,8 +249,18 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
   const frames::MessageSet& s = *set_;
   const std::uint32_t m6 = (1u << s.ftt(s.m6_1.message()).index) | (1u << s.ftt(s.m6_2.message()).index);
   if (const auto start = m6_slot_.on_tm(tm, rx, ec_, m6)) m6_at_ = *start;
-  // The asynchronous window opens now: kicker and grabber, pose.
-  const Nanos now = rx;
+  // Kicker and grabber, pose: when the TM has left the wire.
+  async_at_ = frames::async_slot(rx, tm_wire_, kLongAgo, Nanos{0});
+}
+
+void HwComm::set_bit_rate(std::uint32_t bit_rate) {
+  if (bit_rate == 0) throw SetupError("the bit rate must be positive");
+  const frames::MessageDef& tm = set_->tm.message().def();
+  tm_wire_ = frames::bits_to_time(frames::worst_case_frame_bits(tm.length, tm.extended), bit_rate);
+}
+
+void HwComm::send_sporadic(Nanos now) {
+  const frames::MessageSet& s = *set_;
   Items& i = *items_;
   i.get(i.kicker);
   i.get(i.grabber);
@@ -284,6 +297,11 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
 }
 
 void HwComm::on_time(Nanos now) {
+  if (now >= async_at_) {
+    const Nanos slot = async_at_;
+    async_at_ = kNever;
+    send_sporadic(slot);
+  }
   if (now < m6_at_) return;
   m6_at_ = kNever;
   m6_slot_.done();

@@ -1,4 +1,5 @@
-// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] [--rt-priority N] [--busy-poll]
+// canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--bit-rate 1000000] [--duration S] [--rt-priority N]
+// [--busy-poll]
 //               [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]
 //               [--slow-ms MS]
 //
@@ -46,7 +47,8 @@ canhil::Nanos wall_now() {
 
 int usage(const char* why) {
   std::fprintf(stderr,
-               "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--duration S] "
+               "canhil-hwcomm: %s\nusage: canhil-hwcomm --iface IFACE [--dbc FILE] [--ec-ms 10] [--bit-rate 1000000] "
+               "[--duration S] "
                "[--rt-priority N] [--busy-poll]\n"
                "         [--rtdb-lib LIB --rtdb-items RTDB_USER_H --rtdb-ini RTDB_INI] [--layout cambada|canhil|FILE]\n"
                "         [--slow-ms MS]\n",
@@ -62,6 +64,7 @@ int main(int argc, char** argv) {
   std::string iface;
   std::string dbc = canhil::frames::default_dbc_path().string();
   double ec_ms = 10;
+  double bit_rate = 1'000'000;  // the TM's wire time: the asynchronous window opens when it has left the wire
   double duration_s = 0;
   int rt_priority = 0;
   bool busy_poll = false;
@@ -81,6 +84,9 @@ int main(int argc, char** argv) {
         dbc = argv[++i];
       } else if (a == "--ec-ms") {
         ec_ms = canhil::laptop::parse_number(a, argv[++i]);
+      } else if (a == "--bit-rate") {
+        bit_rate = canhil::laptop::parse_number(a, argv[++i]);
+        if (!(bit_rate >= 10'000 && bit_rate <= 1'000'000)) return usage("--bit-rate takes 10000..1000000 bit/s");
       } else if (a == "--duration") {
         duration_s = canhil::laptop::parse_number(a, argv[++i]);
       } else if (a == "--rtdb-lib") {
@@ -132,6 +138,7 @@ int main(int argc, char** argv) {
     const auto ec = std::chrono::duration_cast<canhil::Nanos>(std::chrono::duration<double, std::milli>(ec_ms));
     canhil::laptop::HwComm hw(
         set, ec, [&](const canhil::frames::CanFrame& f) { return can.send(f); }, wall_now, *db, layout, agent);
+    hw.set_bit_rate(static_cast<std::uint32_t>(bit_rate));
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const int timer = timerfd_create(CLOCK_REALTIME, TFD_NONBLOCK | TFD_CLOEXEC);

@@ -51,6 +51,13 @@ class HwCommUnit : public ::testing::Test {
     now_ = t;
     hw_->on_frame(set_->tm.encode(frames::Tm{ec, bitmap, 1000}), t);
   }
+  // The last TM's asynchronous window opens: the TM (8 bytes, at most 135 bits
+  // at 1 Mbit/s) has left the wire.
+  void window_opens() {
+    now_ += kTmWire;
+    hw_->on_time(now_);
+  }
+  static constexpr Nanos kTmWire = 135us;
   std::uint32_t bit(const char* name) const { return 1u << set_->ftt(*set_->codec().find(name)).index; }
   std::vector<frames::CanFrame> sent_with(std::uint32_t id) const {
     std::vector<frames::CanFrame> out;
@@ -72,8 +79,11 @@ TEST_F(HwCommUnit, SendsCmdVelInTheM6SlotOfTheTmThatSchedulesIt) {
   CMD_Vel v{0.25f, -0.5f, 1.5f, true};
   DB_put(CMD_VEL, &v);
   tm(1, 10ms, bit("M3_1"));
+  EXPECT_EQ(hw_->next_deadline(), 10ms + kTmWire) << "the asynchronous window's opening: the TM off the wire";
+  window_opens();
   EXPECT_EQ(hw_->next_deadline(), kNever) << "M6 not due in this EC";
   tm(3, 30ms, bit("M6_1") | bit("M6_2"));
+  window_opens();
   EXPECT_EQ(hw_->next_deadline(), 30ms + 10ms - 1ms) << "the window's start: TM + EC - window";
   now_ = 39ms - 1ns;
   hw_->on_time(now_);
@@ -123,8 +133,10 @@ TEST_F(HwCommUnit, AKickGoesOutOnceInTheAsynchronousWindowAndItsPowerIsReset) {
   CMD_Kicker k{static_cast<unsigned char>(0x80 | 30), 70, 35};
   DB_put(CMD_KICKER, &k);
   tm(0, 0ms, 0);
+  EXPECT_TRUE(sent_with(set_->m7.message().id()).empty()) << "not while the TM is on the wire";
+  window_opens();
   const auto m7 = sent_with(set_->m7.message().id());
-  ASSERT_EQ(m7.size(), 1u) << "right after the TM that opens the asynchronous window";
+  ASSERT_EQ(m7.size(), 1u) << "when the TM has left the wire, opening the asynchronous window";
   frames::M7 decoded;
   ASSERT_TRUE(set_->m7.decode(m7[0], decoded).ok());
   EXPECT_EQ(decoded.kick, 0x80 | 30);
@@ -134,8 +146,10 @@ TEST_F(HwCommUnit, AKickGoesOutOnceInTheAsynchronousWindowAndItsPowerIsReset) {
   EXPECT_EQ(after.power, 0) << "sent once: the agent asks again for another kick";
   DB_put(CMD_KICKER, &k);
   tm(1, 990ms, 0);
+  window_opens();
   EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 1u) << "not within M7's minimum gap (1000 ms)";
   tm(2, 1000ms, 0);
+  window_opens();
   EXPECT_EQ(sent_with(set_->m7.message().id()).size(), 2u) << "at the gap";
   EXPECT_EQ(hw_->stats().kicks_sent, 2u);
 }

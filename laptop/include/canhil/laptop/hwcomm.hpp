@@ -16,6 +16,7 @@
 // handler's own counts.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -65,8 +66,11 @@ class HwComm {
 
   /// A received frame with its receive timestamp.
   void on_frame(const frames::CanFrame& frame, Nanos rx_time);
-  /// When the handler must act next (its M6 slot), or kNever.
-  Nanos next_deadline() const noexcept { return m6_at_; }
+  /// The bus's bit rate, for the TM's wire time (1 Mbit/s unless set): the
+  /// asynchronous window opens when the TM has left the wire (frames/ftt_slot.hpp).
+  void set_bit_rate(std::uint32_t bit_rate);
+  /// When the handler must act next (the asynchronous window's opening, its M6 slot), or kNever.
+  Nanos next_deadline() const noexcept { return std::min(async_at_, m6_at_); }
   /// Acts at `now` (call at or after next_deadline()).
   void on_time(Nanos now);
 
@@ -82,6 +86,7 @@ class HwComm {
   void send(const frames::CanFrame& f, const frames::MessageCodec& message);
   std::size_t index_of(const frames::MessageCodec& m) const noexcept;
   void on_tm(const frames::Tm& tm, Nanos rx_time);
+  void send_sporadic(Nanos slot);  // kicker, grabber, pose: in the asynchronous window
   void on_pose(const frames::M4_2& m4);
   void latency(Nanos rx_time);
   void write_hwerrors();
@@ -93,7 +98,9 @@ class HwComm {
   std::unique_ptr<Items> items_;  // the RTDB items in the team's layout, resolved once
   HwCommStats stats_;
   frames::SyncSlot m6_slot_;
-  Nanos m6_at_ = kNever;  // the M6 slot to serve (the last TM's may be replaced by the next)
+  Nanos m6_at_ = kNever;     // the M6 slot to serve (the last TM's may be replaced by the next)
+  Nanos async_at_ = kNever;  // the asynchronous window's opening to serve (likewise)
+  Nanos tm_wire_{0};         // the TM's worst-case wire time
   bool have_tm_ = false;
   std::uint16_t last_ec_ = 0;
   bool have_m4_1_ = false;
