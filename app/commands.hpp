@@ -20,6 +20,8 @@ int run_run(Args& args, const std::optional<std::string>& dbc);
 int run_bench(Args& args, const std::optional<std::string>& dbc);
 /// `canhil timing SOURCE`: timing and FTT compliance of a log or interface.
 int run_timing(Args& args, const std::optional<std::string>& dbc);
+/// `canhil timing --analyse [TRACE]`: schedulability of the message set, and a trace against its bounds.
+int run_timing_analyse(Args& args, const std::optional<std::string>& dbc);
 /// `canhil rtdb list|dump ITEM|watch ITEM|replicate`.
 int run_rtdb(Args& args);
 /// `canhil nodes --iface IFACE`: one robot's node set with physics, in real time.

@@ -135,6 +135,16 @@ const Command kCommands[] = {
                                               violated, or if the capture has no frames, no trigger
                                               message or is shorter than the longest period (unless
                                               --allow-empty)
+  canhil timing --analyse [TRACE] [--json] [--svg FILE] [--ec-ms MS] [--bit-rate BPS] [--sync-window-us US]
+                [--guard-us 20] [--add "NAME ID DLC PERIOD_MS sync|async"]... [--copies NAME]...
+                [--no-what-if] [--slack-us 0]
+                                              what the message set allows, from the DBC: frame times,
+                                              the FTT master's schedule and its test, every sporadic
+                                              message's worst-case response (native CAN's without a
+                                              trigger message), the lowest bit rate, the shortest EC
+                                              and how many more copies fit; with TRACE every observation
+                                              next to its bound; exit 1 if a message misses or an
+                                              observation passes its bound
 )",
      canhil::app::run_timing},
     {"rtdb", "the real-time database on this machine",

@@ -38,6 +38,7 @@ double number(const std::optional<std::string>& v, const char* name, double fall
 }  // namespace
 
 int run_timing(Args& args, const std::optional<std::string>& dbc) {
+  if (args.flag("--analyse") || args.flag("--analyze")) return run_timing_analyse(args, dbc);
   const bool json = args.flag("--json");
   const bool allow_empty = args.flag("--allow-empty");
   const auto svg = args.option("--svg");

@@ -8,13 +8,11 @@
 #include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/wire.hpp"
 
+#include "units.hpp"
+
 namespace canhil::timing {
-namespace {
-
-double ms(Nanos t) { return std::chrono::duration<double, std::milli>(t).count(); }
-double us(Nanos t) { return std::chrono::duration<double, std::micro>(t).count(); }
-
-}  // namespace
+using units::ms;
+using units::us;
 
 const char* kind_name(ViolationKind k) noexcept {
   switch (k) {

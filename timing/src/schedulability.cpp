@@ -8,6 +8,7 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/frames/wire.hpp"
+#include "units.hpp"
 
 namespace canhil::timing {
 namespace {
@@ -16,9 +17,7 @@ namespace {
 // the utilisation is within a hair of 1, and no bus is designed there.
 constexpr Nanos kLongestBusyPeriod = std::chrono::hours(1);
 
-std::int64_t ceil_div(Nanos a, Nanos b) noexcept {
-  return a.count() <= 0 ? 0 : (a.count() + b.count() - 1) / b.count();
-}
+using units::ceil_div;
 
 // Arbitration key: the 11-bit base identifier, then the bit after it (a
 // standard frame's RTR, dominant for data; an extended frame's SRR, always
