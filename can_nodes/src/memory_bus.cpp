@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "canhil/base/demand.hpp"
+#include "canhil/frames/wire.hpp"
 
 namespace canhil::can_nodes {
 
@@ -109,8 +110,59 @@ void MemoryBus::route() {
 }
 
 void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
+  if (wire_.bit_rate != 0 && frame.kind != frames::FrameKind::kError) {
+    queue(from, frame);
+    return;
+  }
+  deliver_now(from, frame, clock_.now());
+}
+
+void MemoryBus::queue(MemoryEndpoint* from, const CanFrame& frame) {
+  const Pending p{frame, from,
+                  frames::arbitration_key(frame.id, frame.extended, frame.kind == frames::FrameKind::kRemote), seq_++};
+  const Nanos now = clock_.now();
+  if (!busy_) {
+    start(p, now);
+  } else if (start_ == now && p.key < on_wire_.key) {
+    // Arbitration started at this very instant: the frame queued now takes part, and wins.
+    pending_.push_back(on_wire_);
+    start(p, now);
+  } else {
+    pending_.push_back(p);
+  }
+}
+
+void MemoryBus::start(const Pending& p, Nanos at) {
+  const CanFrame& f = p.frame;
+  const std::uint32_t bits =
+      wire_.bits == Wire::Bits::kExact
+          ? frames::frame_bits(f)
+          : frames::worst_case_frame_bits(f.kind == frames::FrameKind::kRemote ? 0 : f.len, f.extended);
+  busy_ = true;
+  on_wire_ = p;
+  start_ = at;
+  end_ = at + frames::bits_to_time(bits, wire_.bit_rate);
+}
+
+void MemoryBus::advance(Nanos now) {
+  while (busy_ && end_ <= now) {
+    busy_ = false;
+    const Nanos end = end_;
+    deliver_now(on_wire_.from, on_wire_.frame, end);
+    if (pending_.empty()) break;
+    // The bus is idle: the lowest key wins, and among equal keys the first sent.
+    const auto winner = std::min_element(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
+      return a.key != b.key ? a.key < b.key : a.seq < b.seq;
+    });
+    const Pending next = *winner;
+    pending_.erase(winner);
+    start(next, end);
+  }
+}
+
+void MemoryBus::deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time) {
   ++carried_;
-  const TimedFrame timed{frame, clock_.now()};
+  const TimedFrame timed{frame, time};
   if (tap_) tap_(timed);
   if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < kStandardIds) {
     route();

@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <deque>
 #include <random>
+#include <utility>
+#include <vector>
+
+#include "canhil/frames/wire.hpp"
 
 namespace canhil::can_nodes {
 namespace {
@@ -276,6 +280,45 @@ TEST(Filter, MatchesExtendedAndRemoteFlagsWhenAsked) {
   rtr.kind = frames::FrameKind::kRemote;
   EXPECT_FALSE(Filter::exact(0x131).matches(rtr));
   EXPECT_TRUE(Filter::exact(0x131).matches(make_data_frame(0x131, {})));
+}
+
+TEST(MemoryBusWire, ArbitrationByIdentifierFramesOneAfterTheOtherNoPreemption) {
+  SimulatedClock clock(1ms);
+  MemoryBus bus(clock);
+  bus.set_wire({1'000'000, Wire::Bits::kWorstCase});  // 8 data bytes: 135 us
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto c = bus.attach("c");
+  auto rx = bus.attach("rx");
+  Participant& wire = bus.wire_participant();
+  a->send(make_data_frame(0x300, {1, 2, 3, 4, 5, 6, 7, 8}));  // first, but at the same instant as 0x100
+  b->send(make_data_frame(0x100, {1, 2, 3, 4, 5, 6, 7, 8}));  // arbitration still open: wins
+  EXPECT_EQ(bus.queued(), 1u);
+  EXPECT_FALSE(rx->receive()) << "nothing before its last bit";
+  EXPECT_EQ(wire.next_wakeup(), 1ms + 135us);
+  clock.set(1ms + 50us);
+  c->send(make_data_frame(0x050, {1, 2, 3, 4, 5, 6, 7, 8}));  // higher still, but 0x100 is on the wire
+  std::vector<std::pair<std::uint32_t, Nanos>> got;
+  while (wire.next_wakeup() != kNever) {
+    clock.set(wire.next_wakeup());
+    wire.tick(clock.now());
+    while (auto f = rx->receive()) got.emplace_back(f->frame.id, f->time);
+  }
+  const std::vector<std::pair<std::uint32_t, Nanos>> expected = {
+      {0x100, 1ms + 135us}, {0x050, 1ms + 270us}, {0x300, 1ms + 405us}};
+  EXPECT_EQ(got, expected) << "each stamped at its last bit, the lower identifier first at each idle bus";
+}
+
+TEST(MemoryBusWire, ExactBitsFollowThePayloadsStuffing) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  bus.set_wire({500'000, Wire::Bits::kExact});
+  auto a = bus.attach("a");
+  auto rx = bus.attach("rx");
+  const frames::CanFrame f = make_data_frame(0x000, {0, 0, 0, 0, 0, 0, 0, 0});  // long runs: many stuff bits
+  a->send(f);
+  EXPECT_EQ(bus.wire_participant().next_wakeup(), frames::bits_to_time(frames::frame_bits(f), 500'000));
+  EXPECT_GT(frames::frame_bits(f), frames::best_case_frame_bits(8));
 }
 
 }  // namespace

@@ -19,13 +19,8 @@ constexpr Nanos kLongestBusyPeriod = std::chrono::hours(1);
 
 using units::ceil_div;
 
-// Arbitration key: the 11-bit base identifier, then the bit after it (a
-// standard frame's RTR, dominant for data; an extended frame's SRR, always
-// recessive), then an extended frame's 18 further bits. Lower wins.
-std::uint64_t arbitration_key(const AnalysedMessage& m) noexcept {
-  if (!m.extended) return static_cast<std::uint64_t>(m.id & 0x7FFu) << 19;
-  return (static_cast<std::uint64_t>((m.id >> 18) & 0x7FFu) << 19) | (1u << 18) | (m.id & 0x3FFFFu);
-}
+// Data frames (frames/wire.hpp's order).
+std::uint64_t arbitration_key(const AnalysedMessage& m) noexcept { return frames::arbitration_key(m.id, m.extended); }
 
 std::string name_of(const AnalysedMessage& m) {
   char id[16];

@@ -5,6 +5,16 @@
 // to every other attached endpoint whose filters pass it, in attach order,
 // like SocketCAN with loopback on and own messages off (`receive_own` turns
 // them on). Each endpoint's queue is bounded; overflow is dropped and counted.
+//
+// By default a frame is delivered at the instant it is sent, as vcan does (the
+// shipped robot's traces). With a wire (set_wire: a bit rate) the bus is
+// bit-timed as a real one: frames sent wait in their controllers, each time the
+// bus falls idle the lowest identifier wins arbitration (frames::arbitration_key;
+// a frame queued at the very instant arbitration starts still takes part), and
+// a frame is delivered, stamped, when its last bit has passed (interframe space
+// included; its exact bits or the worst case of its shape). The wire is then a
+// participant of the virtual-time runner (wire_participant()).
+//
 // Deterministic; not thread-safe (virtual time runs on one thread).
 #pragma once
 
@@ -18,6 +28,7 @@
 #include "canhil/can_nodes/bus.hpp"
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/doorbell.hpp"
+#include "canhil/can_nodes/virtual_time.hpp"
 
 namespace canhil::can_nodes {
 
@@ -77,6 +88,14 @@ class MemoryEndpoint final : public Bus {
       std::bitset<kStandardIds>().set()};  // the filters' verdict on each 11-bit data frame
 };
 
+/// A bit-timed wire: its bit rate (0: none, frames delivered at once) and
+/// whether a frame takes its exact bits or the worst case of its shape.
+struct Wire {
+  enum class Bits : std::uint8_t { kExact, kWorstCase };
+  std::uint32_t bit_rate = 0;
+  Bits bits = Bits::kExact;
+};
+
 class MemoryBus {
  public:
   /// `clock` stamps every delivered frame; it must outlive the bus.
@@ -88,6 +107,15 @@ class MemoryBus {
   /// A new endpoint; `queue_capacity` frames may wait before overflow drops.
   /// The endpoint must not outlive the bus.
   std::unique_ptr<MemoryEndpoint> attach(std::string endpoint_name, std::size_t queue_capacity = 4096);
+
+  /// Bit-times the bus (see the top of this file); Wire{} delivers at once again.
+  /// Set it before frames are sent.
+  void set_wire(const Wire& wire) { wire_ = wire; }
+  /// The wire as a participant of the virtual-time runner: it delivers each
+  /// frame when its last bit has passed and starts the next arbitration.
+  Participant& wire_participant() noexcept { return wire_driver_; }
+  /// Frames waiting for the wire (the one on it not counted).
+  std::size_t queued() const noexcept { return pending_.size(); }
 
   /// Puts an error frame on the bus (delivered to endpoints whose error mask matches).
   void inject_error(std::uint32_t error_class);
@@ -108,6 +136,29 @@ class MemoryBus {
   void detach(MemoryEndpoint* endpoint);
 
   void route();  // rebuilds routes_ when stale
+  void deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time);
+
+  // The wire (set_wire): a frame waiting for it, or on it.
+  struct Pending {
+    CanFrame frame;
+    MemoryEndpoint* from = nullptr;
+    std::uint64_t key = 0;  // frames::arbitration_key
+    std::uint64_t seq = 0;  // sending order: equal keys (two senders of one id) go in it
+  };
+  class WireDriver final : public Participant {
+   public:
+    explicit WireDriver(MemoryBus& bus) : bus_(bus) {}
+    std::size_t poll() override { return 0; }
+    void tick(Nanos now) override { bus_.advance(now); }
+    Nanos next_wakeup() const override { return bus_.busy_ ? bus_.end_ : kNever; }
+    bool may_have_frames() const override { return false; }
+
+   private:
+    MemoryBus& bus_;
+  };
+  void queue(MemoryEndpoint* from, const CanFrame& frame);
+  void start(const Pending& p, Nanos at);
+  void advance(Nanos now);
 
   const Clock& clock_;
   std::string name_;
@@ -121,6 +172,14 @@ class MemoryBus {
   bool up_ = true;
   std::uint64_t carried_ = 0;
   std::function<void(const TimedFrame&)> tap_;
+  Wire wire_;
+  std::vector<Pending> pending_;
+  bool busy_ = false;
+  Pending on_wire_;
+  Nanos start_{0};
+  Nanos end_{0};
+  std::uint64_t seq_ = 0;
+  WireDriver wire_driver_{*this};
 };
 
 }  // namespace canhil::can_nodes

@@ -27,6 +27,16 @@ std::uint32_t worst_case_frame_bits(std::uint8_t data_bytes, bool extended = fal
 /// Fewest bits (no stuffing at all).
 std::uint32_t best_case_frame_bits(std::uint8_t data_bytes, bool extended = false) noexcept;
 
+/// Arbitration order as a number, lower wins: the 11-bit base identifier, then
+/// the bit after it (a standard frame's RTR, dominant for data, recessive for
+/// a remote frame; an extended frame's SRR, always recessive), then an
+/// extended frame's IDE-side 18 bits and its RTR.
+constexpr std::uint64_t arbitration_key(std::uint32_t id, bool extended, bool remote = false) noexcept {
+  if (!extended) return (static_cast<std::uint64_t>(id & 0x7FFu) << 20) | (std::uint64_t{remote} << 19);
+  return (static_cast<std::uint64_t>((id >> 18) & 0x7FFu) << 20) | (1u << 19) |
+         (static_cast<std::uint64_t>(id & 0x3FFFFu) << 1) | std::uint64_t{remote};
+}
+
 /// Bits at a bit rate, as time.
 constexpr Nanos bits_to_time(std::uint32_t bits, std::uint32_t bit_rate) noexcept {
   return Nanos{static_cast<std::int64_t>(bits) * 1'000'000'000 / bit_rate};
