@@ -15,6 +15,8 @@
 //            viewer against without; target at least 0.9 of it (bench_view.cpp)
 //   match    five robots and a ten-robot match half on one core, physics alone
 //            for scale; targets 180x and 80x (bench_match.hpp)
+//   analyse  timing --analyse of a 200-message set, FTT-CAN and native; target
+//            at most 50 ms (bench_analyse.hpp)
 // The last three need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
 #include <sched.h>
 #include <time.h>
@@ -28,6 +30,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_analyse.hpp"
 #include "bench_external.hpp"
 #include "bench_match.hpp"
 #include "bench_realtime.hpp"
@@ -148,7 +151,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const double rt_seconds = number_option(args, "--rt-seconds", 10);
   const double rate_frames = number_option(args, "--frames", 200'000);
   const std::string iface = args.option("--iface").value_or("vcan0");
-  const std::string parts = args.option("--part").value_or("virtual,view,match,jitter,vcan,external");
+  const std::string parts = args.option("--part").value_or("virtual,view,match,analyse,jitter,vcan,external");
   const double priority_option = number_option(args, "--priority", 40);
   const auto config = args.option("--config");
   const double cpu_option = number_option(args, "--cpu", 0);
@@ -160,7 +163,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (!(cpu_option >= -1 && cpu_option < CPU_SETSIZE)) throw UsageError("--cpu takes a core number, or -1 for none");
   const int priority = static_cast<int>(priority_option);
   bool want_virtual = false, want_view = false, want_jitter = false, want_vcan = false, want_external = false,
-       want_match = false;
+       want_match = false, want_analyse = false;
   {
     std::istringstream in(parts);
     for (std::string part; std::getline(in, part, ',');) {
@@ -176,9 +179,12 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
         want_match = true;
       } else if (part == "external") {
         want_external = true;
+      } else if (part == "analyse" || part == "analyze") {
+        want_analyse = true;
       } else {
-        throw UsageError("--part takes virtual, view, match, jitter, vcan and external, comma-separated; got '" + part +
-                         "'");
+        throw UsageError(
+            "--part takes virtual, view, match, analyse, jitter, vcan and external, comma-separated; got '" + part +
+            "'");
       }
     }
   }
@@ -196,6 +202,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;
   if (want_view) all_met = bench_view(config, seconds, messages) && all_met;
   if (want_match) all_met = bench_match(config, seconds, messages) && all_met;
+  if (want_analyse) all_met = bench_analyse() && all_met;
   if (!want_jitter && !want_vcan && !want_external) return all_met ? 0 : 1;
   if (!can_nodes::kernel_has_can()) {
     std::printf(

@@ -3,6 +3,7 @@
 // --svg.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -56,6 +57,16 @@ TEST(CanhilTimingAnalyse, JsonAndSvgCarryTheSameVerdict) {
   EXPECT_EQ(text.rfind("<svg ", 0), 0u);
   EXPECT_NE(text.find("EC 0  worst"), std::string::npos) << "the worst EC marked";
   EXPECT_NE(text.find("<title>M9</title>"), std::string::npos) << "each synchronous frame a bar";
+}
+
+TEST(CanhilTimingAnalyse, TheBenchmarkPrintsBothSetsAgainstTheTarget) {
+  // Wall-clock: printed, never judged here (the exit status says met or missed).
+  const CliRun r = canhil("bench --part analyse");
+  EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
+  EXPECT_TRUE(has(r, "FTT-CAN: TM, 31 synchronous, 168 sporadic:")) << r.out;
+  EXPECT_TRUE(has(r, "native CAN: 100 periodic, 100 sporadic:")) << r.out;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 3) << r.out;
+  EXPECT_TRUE(has(r, "; schedulable)  target <= 50 ms:")) << "the sets are meant to fit\n" << r.out;
 }
 
 }  // namespace

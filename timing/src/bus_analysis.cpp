@@ -317,22 +317,36 @@ CopiesLimit copies_limit(const BusSet& set, const BusMessage& m, const AnalysisC
   return out;
 }
 
-std::vector<Nanos> ec_candidates(const BusSet& set) {
+std::vector<Nanos> ec_candidates(const BusSet& set, const AnalysisConfig& config) {
   // An EC divides every synchronous period: the divisors of their greatest
-  // common divisor, in microseconds, shortest first.
+  // common divisor, in microseconds, shortest first; none shorter than EC 0
+  // needs (every synchronous message is due in it, with the TM and one
+  // sporadic frame), which also keeps the schedule cycles to analyse short.
   std::int64_t g = 0;
+  Nanos least = config.ftt.sync_window_guard;
+  Nanos longest_async{0};
   for (const BusMessage& m : set.messages) {
-    if (m.kind == FttKind::kSync)
+    const Nanos wire = wire_of(m, config.ftt.bit_rate);
+    if (m.kind == FttKind::kSync) {
       g = std::gcd(g, std::chrono::duration_cast<std::chrono::microseconds>(m.period).count());
+      least += wire;
+    } else if (m.kind == FttKind::kTrigger) {
+      least += wire;
+    } else {
+      longest_async = std::max(longest_async, wire);
+    }
   }
+  least += longest_async;
   std::vector<Nanos> out;
   if (g <= 0) return out;
   for (std::int64_t d = 1; d * d <= g; ++d) {
     if (g % d != 0) continue;
-    out.push_back(std::chrono::microseconds(d));
-    if (d * d != g) out.push_back(std::chrono::microseconds(g / d));
+    for (const std::int64_t e : {d, g / d}) {
+      if (std::chrono::microseconds(e) >= least) out.push_back(std::chrono::microseconds(e));
+    }
   }
   std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
@@ -358,7 +372,7 @@ WhatIf what_if(const BusSet& set, const AnalysisConfig& config) {
     w.lowest_bit_rate = hi;
   }
   if (set.ftt) {
-    for (const Nanos ec : ec_candidates(set)) {
+    for (const Nanos ec : ec_candidates(set, c)) {
       at = c;
       at.ftt.elementary_cycle = ec;
       if (schedulable(set, at)) {
