@@ -50,8 +50,13 @@ section "5. the demo in virtual time: one robot's whole loop, which drives to th
 section "6. the demo's bus: periods, jitter and FTT compliance of every frame (canhil timing $out/demo.log)"
 "$canhil" timing "$out/demo.log"
 
+section "7. what the message set allows in the worst case, and the demo's bus inside those bounds (canhil timing --analyse; $out/analysis.txt, docs/timing.md)"
+"$canhil" timing --analyse "$out/demo.log" > "$out/analysis.txt"
+grep -E '^(  worst EC|Schedulable|NOT schedulable|Every observation|[0-9]+ observations OUTSIDE)' \
+  "$out/analysis.txt"
+
 if [[ $realtime -eq 1 ]]; then
-  section "7. the same demo in real time on vcan0: emulator, handler and agent as three processes (scripts/demo.sh)"
+  section "8. the same demo in real time on vcan0: emulator, handler and agent as three processes (scripts/demo.sh)"
   bash vcan_setup/with-vcan.sh -- bash scripts/demo.sh 20 "$bin"
 fi
 

@@ -17,6 +17,8 @@ trace_lines=$(echo "$out" | grep -c '^(1700000000' || true)
 grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log' <<< "$out" || fail "no decode summary"
 grep -q 'GOAL at' <<< "$out" || fail "the demo's outcome is missing"
 grep -q 'FTT compliance: no violations' <<< "$out" || fail "the demo's timing report is missing"
+grep -q '^Schedulable: every message meets its deadline' <<< "$out" || fail "the message set's analysis is missing"
+grep -q '^Every observation is inside its bound' <<< "$out" || fail "the demo's trace against the bounds is missing"
 grep -q '^   virtual time: GOAL at' <<< "$out" || fail "no closing line with the outcome"
 grep -qE 'viewer (at|stays up)|no viewer' <<< "$(tail -3 <<< "$out")" || fail "the main job does not end with the viewer's address"
 while IFS= read -r header; do

@@ -303,7 +303,7 @@ CopiesLimit copies_limit(const BusSet& set, const BusMessage& m, const AnalysisC
   if (bad < 0) {
     out.copies = good;
     if (good == cap) {
-      out.limited = cap == kMostCopies                    ? "counted up to " + std::to_string(kMostCopies)
+      out.limited = cap == kMostCopies                    ? "the count, which stops at " + std::to_string(kMostCopies)
                     : set.ftt && m.kind == FttKind::kSync ? "the free FTT indices (32 in all)"
                                                           : "the free identifiers after it";
     }
