@@ -148,7 +148,7 @@ void MemoryBus::advance(Nanos now) {
   while (busy_ && end_ <= now) {
     busy_ = false;
     const Nanos end = end_;
-    deliver_now(on_wire_.from, on_wire_.frame, end);
+    deliver_now(on_wire_.from, on_wire_.frame, wire_.stamp == Wire::Stamp::kStartOfFrame ? start_ : end);
     if (pending_.empty()) break;
     // The bus is idle: the lowest key wins, and among equal keys the first sent.
     const auto winner = std::min_element(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {

@@ -88,12 +88,18 @@ class MemoryEndpoint final : public Bus {
       std::bitset<kStandardIds>().set()};  // the filters' verdict on each 11-bit data frame
 };
 
-/// A bit-timed wire: its bit rate (0: none, frames delivered at once) and
-/// whether a frame takes its exact bits or the worst case of its shape.
+/// A bit-timed wire: its bit rate (0: none, frames delivered at once),
+/// whether a frame takes its exact bits or the worst case of its shape, and
+/// what its time stamp says: its last bit (SocketCAN's software stamp, taken
+/// on reception) or its first (a controller's start-of-frame stamp, and what
+/// canhil's FTT slaves take a TM's stamp to be: frames/ftt_slot.hpp). Either
+/// way a frame is delivered when its last bit has passed.
 struct Wire {
   enum class Bits : std::uint8_t { kExact, kWorstCase };
+  enum class Stamp : std::uint8_t { kEndOfFrame, kStartOfFrame };
   std::uint32_t bit_rate = 0;
   Bits bits = Bits::kExact;
+  Stamp stamp = Stamp::kEndOfFrame;
 };
 
 class MemoryBus {
