@@ -409,7 +409,8 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   EXPECT_EQ(canhil("bench --seconds -1").status, 2);
   const CliRun bad = canhil("bench --part speed");
   EXPECT_EQ(bad.status, 2);
-  EXPECT_TRUE(has(bad, "--part takes virtual, view, match, analyse, jitter, vcan and external, comma-separated; got 'speed'"))
+  EXPECT_TRUE(
+      has(bad, "--part takes virtual, view, match, analyse, jitter, vcan and external, comma-separated; got 'speed'"))
       << bad.out;
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
