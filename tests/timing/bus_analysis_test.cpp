@@ -112,6 +112,12 @@ TEST(FttAnalysis, AWindowFullToTheLastBitFitsAndOneBitOverMisses) {
   ASSERT_FALSE(a.schedulable());
   EXPECT_EQ(a.misses.front().name, "A");
   EXPECT_EQ(a.misses.front().by, 1us) << "misses by one bit";
+  c.what_if = true;
+  c.copies_of = {"B"};
+  a = analyse_bus(set, c);
+  ASSERT_EQ(a.what_if.copies.size(), 1u);
+  EXPECT_EQ(a.what_if.copies[0].copies, 0);
+  EXPECT_EQ(a.what_if.copies[0].limited, "the set, which misses already") << "no room to count in";
 }
 
 TEST(FttAnalysis, SporadicDemandThatFillsAWindowExactlyTakesOneAndOneBitMoreTakesTheNextEc) {

@@ -381,6 +381,7 @@ WhatIf what_if(const BusSet& set, const AnalysisConfig& config) {
       }
     }
   }
+  const bool base_ok = schedulable(set, c);
   std::vector<std::string> names = config.copies_of;
   if (names.empty() && set.messages.size() <= AnalysisConfig::kDefaultCopies) {
     for (const BusMessage& m : set.messages) {
@@ -392,7 +393,7 @@ WhatIf what_if(const BusSet& set, const AnalysisConfig& config) {
         std::find_if(set.messages.begin(), set.messages.end(), [&](const BusMessage& m) { return m.name == name; });
     if (it == set.messages.end()) throw SetupError("--copies " + name + ": the message set has no message " + name);
     if (it->kind == FttKind::kTrigger) throw SetupError("--copies " + name + ": there is one trigger message");
-    w.copies.push_back(copies_limit(set, *it, c));
+    w.copies.push_back(base_ok ? copies_limit(set, *it, c) : CopiesLimit{name, 0, "the set, which misses already"});
   }
   return w;
 }
