@@ -68,6 +68,7 @@ class ExternalHalf final : public emulator::HalfDriver {
   }
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t robot) const override { return driver_.ftt_violations(robot); }
+  std::uint64_t trace_hash() const override { return driver_.trace_hash(); }
 
  private:
   std::string name_;

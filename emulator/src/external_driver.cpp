@@ -223,4 +223,6 @@ std::string ExternalDriver::trace() const { return watch_.trace(); }
 
 std::uint64_t ExternalDriver::ftt_violations(std::size_t robot) const { return watch_.ftt_violations(robot); }
 
+std::uint64_t ExternalDriver::trace_hash() const noexcept { return watch_.trace_hash(); }
+
 }  // namespace canhil::emulator

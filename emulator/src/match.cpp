@@ -90,6 +90,7 @@ class ReferenceHalf final : public HalfDriver {
   void run_until(Nanos end) override { driver_.run_until(end); }
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t robot) const override { return driver_.ftt_violations(robot); }
+  std::uint64_t trace_hash() const override { return driver_.trace_hash(); }
 
  private:
   static VirtualOptions options() {
@@ -188,6 +189,7 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
       t.ftt_violations += driver.ftt_violations(r);
     }
     for (std::size_t t = 0; t < 2; ++t) result.teams[t] += half_tally[t];
+    result.trace_hash = result.trace_hash * 0x100000001b3ULL ^ driver.trace_hash();
   }
   result.virtual_s = played;
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

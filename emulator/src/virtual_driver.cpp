@@ -152,6 +152,8 @@ void VirtualDriver::run_for(Nanos duration) { run_until(clock_.now() + duration)
 
 std::uint64_t VirtualDriver::ftt_violations(std::size_t robot) const { return watch_.ftt_violations(robot); }
 
+std::uint64_t VirtualDriver::trace_hash() const noexcept { return watch_.trace_hash(); }
+
 void VirtualDriver::fill_detail(WorldSnapshot& s) {
   if (!listening_) return;  // no listener on the buses: nothing measured
   watch_.fill(s.buses, clock_.now());

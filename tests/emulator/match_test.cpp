@@ -109,6 +109,9 @@ TEST_F(MatchTest, OneSeedPlaysOneMatchAnotherSeedAnother) {
     EXPECT_EQ(a.teams[t].shots, again.teams[t].shots) << t;
   }
   EXPECT_NE(a.teams[0].possession_s, other.teams[0].possession_s) << "another seed, another match";
+  EXPECT_NE(a.trace_hash, 0u);
+  EXPECT_EQ(a.trace_hash, again.trace_hash) << "the same frames at the same times on every bus";
+  EXPECT_NE(a.trace_hash, other.trace_hash);
 }
 
 TEST_F(MatchTest, FaultsAndFttViolationsCountOnTheBusesThatHadThem) {
@@ -152,6 +155,7 @@ class SeenHalf final : public HalfDriver {
   void run_until(Nanos end) override { driver_.run_until(end); }
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t) const override { return 7; }
+  std::uint64_t trace_hash() const override { return driver_.trace_hash(); }
 
  private:
   static VirtualOptions options() {
@@ -185,6 +189,7 @@ TEST_F(MatchTest, AGivenDriverPlaysEachHalfOnThatHalfsSessionAndGoesBeforeIt) {
     EXPECT_EQ(given.teams[t].kicks, reference.teams[t].kicks) << "the same play as canhil's own driver: " << t;
     EXPECT_EQ(given.teams[t].possession_s, reference.teams[t].possession_s) << t;
   }
+  EXPECT_EQ(given.trace_hash, reference.trace_hash) << "the driver's hash: the same frames";
 }
 
 TEST_F(MatchTest, AMatchNeedsTwoTeamsAndItsReferee) {

@@ -34,6 +34,11 @@ class BusWatch {
   void add(std::size_t robot, const frames::TimedFrame& frame);
 
   std::uint64_t frames(std::size_t robot) const { return counts_.at(robot); }
+  /// A hash of every frame on every bus (time, identifier, kind, length,
+  /// data; FNV-1a, 64 bits), bus by bus in robot order: two runs carried the
+  /// same frames at the same times when it is equal. Always kept (a few ns a
+  /// frame), so a match can be checked anywhere without its trace.
+  std::uint64_t trace_hash() const noexcept;
   /// Violations on robot r's bus so far (check_timing; else 0).
   std::uint64_t ftt_violations(std::size_t robot) const;
   /// Every bus as one candump log (record_trace; else empty).
@@ -47,6 +52,7 @@ class BusWatch {
   std::vector<std::string> interfaces_;
   Options options_;
   std::vector<std::uint64_t> counts_;
+  std::vector<std::uint64_t> hashes_;  // per bus, FNV-1a
   std::vector<std::vector<frames::TimedFrame>> recorded_;
   std::vector<timing::TimingAnalyzer> checkers_;
   std::vector<timing::LiveBusStats> stats_;  // once fill() was called

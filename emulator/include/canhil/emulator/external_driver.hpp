@@ -69,6 +69,8 @@ class ExternalDriver {
   std::string trace() const;
   /// The FTT and timing violations on robot r's bus so far (check_timing; else 0).
   std::uint64_t ftt_violations(std::size_t robot) const;
+  /// BusWatch::trace_hash of the frames so far.
+  std::uint64_t trace_hash() const noexcept;
 
   class Processes;  // the external processes as one participant
 

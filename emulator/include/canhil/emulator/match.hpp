@@ -34,6 +34,8 @@ class HalfDriver {
   virtual Nanos now() const = 0;
   /// The FTT and timing violations on robot r's bus so far.
   virtual std::uint64_t ftt_violations(std::size_t robot) const = 0;
+  /// A hash of every frame on the half's buses so far (BusWatch::trace_hash).
+  virtual std::uint64_t trace_hash() const = 0;
 };
 
 /// Makes the driver of half `half` (0-based) of the match with seed `seed`,
@@ -78,6 +80,9 @@ struct MatchResult {
   physics::SolverHealth solver;  ///< what ODE reported over every half
   double virtual_s = 0;
   double wall_s = 0;
+  /// Every half's BusWatch::trace_hash, combined in order: the same match
+  /// (scenario, seed, binaries) gives the same hash on any machine.
+  std::uint64_t trace_hash = 0;
   bool stopped = false;  ///< cut short (the stop flag): the figures so far
   /// The winner's index; none for a draw.
   std::optional<std::size_t> winner() const;

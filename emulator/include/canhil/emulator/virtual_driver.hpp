@@ -77,6 +77,8 @@ class VirtualDriver {
   const laptop::HwComm* handler(std::size_t robot) const;
   /// The FTT and timing violations on robot r's bus so far (check_timing; else 0).
   std::uint64_t ftt_violations(std::size_t robot) const;
+  /// BusWatch::trace_hash of the frames so far (with a tap on: count_frames, record_trace or check_timing).
+  std::uint64_t trace_hash() const noexcept;
   /// Every bus as a candump log, one interface name per robot, in time order (record_trace).
   std::string trace() const;
 
