@@ -32,7 +32,6 @@ using can_nodes::Wire;
 using frames::FttKind;
 
 constexpr Nanos kEc = 10ms;
-const can_nodes::Filter kTmOnly[] = {can_nodes::Filter::exact(0x010)};
 
 const std::shared_ptr<const frames::MessageSet>& shipped() {
   static const auto set = frames::MessageSet::load(test::shipped_dbc());  // its TM: 0x010, 8 bytes
@@ -51,7 +50,8 @@ frames::CanFrame frame_of(const BusMessage& m, std::mt19937& rng) {
 class SyncSlave final : public can_nodes::Participant {
  public:
   SyncSlave(MemoryBus& bus, const frames::CanFrame& f, int index) : ep_(bus.attach("sync")), frame_(f), index_(index) {
-    ep_->set_filters(kTmOnly);
+    const can_nodes::Filter tm_only[] = {can_nodes::Filter::exact(0x010)};
+    ep_->set_filters(tm_only);
   }
   std::size_t poll() override {
     std::size_t n = 0;
@@ -84,7 +84,8 @@ class AsyncSlave final : public can_nodes::Participant {
   AsyncSlave(MemoryBus& bus, const frames::CanFrame& f, Nanos gap, Nanos tm_wire, Nanos first, Nanos extra,
              std::uint32_t seed)
       : ep_(bus.attach("async")), frame_(f), gap_(gap), tm_wire_(tm_wire), ready_(first), extra_(extra), rng_(seed) {
-    ep_->set_filters(kTmOnly);
+    const can_nodes::Filter tm_only[] = {can_nodes::Filter::exact(0x010)};
+    ep_->set_filters(tm_only);
   }
   std::size_t poll() override {
     std::size_t n = 0;
