@@ -1,6 +1,7 @@
 // app/args.hpp — a small, strict command-line parser for canhil's subcommands.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -33,6 +34,11 @@ class Args {
   }
 
   /// The word after `word` (a subcommand: "up" of `canhil bus up`), or "".
+  /// Whether `--name` (or `--name=...`) is on the command line, not yet taken.
+  bool given(const std::string& name) const {
+    return std::any_of(words_.begin(), words_.end(),
+                       [&](const std::string& w) { return w == name || w.rfind(name + "=", 0) == 0; });
+  }
   std::string word_after(const std::string& word) const {
     for (std::size_t i = 0; i + 1 < words_.size(); ++i) {
       if (words_[i] == word) return words_[i + 1];

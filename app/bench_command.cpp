@@ -15,6 +15,8 @@
 //            viewer against without; target at least 0.9 of it (bench_view.cpp)
 //   match    five robots and a ten-robot match half on one core, physics alone
 //            for scale; targets 180x and 80x (bench_match.hpp)
+//   jobs     match halves per minute with canhil match --jobs 2 against --jobs 1;
+//            target at least 1.8x (bench_jobs.hpp)
 //   analyse  timing --analyse of a 200-message set, FTT-CAN and native; target
 //            at most 50 ms (bench_analyse.hpp)
 // The last three need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
@@ -32,6 +34,7 @@
 
 #include "bench_analyse.hpp"
 #include "bench_external.hpp"
+#include "bench_jobs.hpp"
 #include "bench_match.hpp"
 #include "bench_realtime.hpp"
 #include "bench_view.hpp"
@@ -151,7 +154,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const double rt_seconds = number_option(args, "--rt-seconds", 10);
   const double rate_frames = number_option(args, "--frames", 200'000);
   const std::string iface = args.option("--iface").value_or("vcan0");
-  const std::string parts = args.option("--part").value_or("virtual,view,match,analyse,jitter,vcan,external");
+  const std::string parts = args.option("--part").value_or("virtual,view,match,jobs,analyse,jitter,vcan,external");
   const double priority_option = number_option(args, "--priority", 40);
   const auto config = args.option("--config");
   const double cpu_option = number_option(args, "--cpu", 0);
@@ -163,7 +166,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (!(cpu_option >= -1 && cpu_option < CPU_SETSIZE)) throw UsageError("--cpu takes a core number, or -1 for none");
   const int priority = static_cast<int>(priority_option);
   bool want_virtual = false, want_view = false, want_jitter = false, want_vcan = false, want_external = false,
-       want_match = false, want_analyse = false;
+       want_match = false, want_analyse = false, want_jobs = false;
   {
     std::istringstream in(parts);
     for (std::string part; std::getline(in, part, ',');) {
@@ -179,12 +182,14 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
         want_match = true;
       } else if (part == "external") {
         want_external = true;
+      } else if (part == "jobs") {
+        want_jobs = true;
       } else if (part == "analyse" || part == "analyze") {
         want_analyse = true;
       } else {
         throw UsageError(
-            "--part takes virtual, view, match, analyse, jitter, vcan and external, comma-separated; got '" + part +
-            "'");
+            "--part takes virtual, view, match, jobs, analyse, jitter, vcan and external, comma-separated; got '" +
+            part + "'");
       }
     }
   }
@@ -202,6 +207,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;
   if (want_view) all_met = bench_view(config, seconds, messages) && all_met;
   if (want_match) all_met = bench_match(config, seconds, messages) && all_met;
+  if (want_jobs) all_met = bench_jobs(config, seconds, messages) && all_met;
   if (want_analyse) all_met = bench_analyse() && all_met;
   if (!want_jitter && !want_vcan && !want_external) return all_met ? 0 : 1;
   if (!can_nodes::kernel_has_can()) {

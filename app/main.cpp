@@ -85,11 +85,18 @@ const Command kCommands[] = {
 )",
      canhil::app::run_run},
     {"match", "whole matches of two teams in virtual time, with a table of results",
-     R"(  canhil match SCENARIO.toml [--halves 2] [--half-minutes 10] [--repeat 1] [--seed N] [--json] [--quiet]
+     R"(  canhil match SCENARIO.toml [--halves 2] [--half-minutes 10] [--seeds 1..200 | --repeat 1 [--seed N]]
+               [--jobs CORES] [--records FILE.jsonl | --no-records] [--json] [--quiet]
                                               two teams ([[teams]]) play whole matches in virtual time,
-                                              ends changed at half time, the referee on; per match and in
-                                              total: score, possession, shots, kicks, faults and FTT
-                                              violations per team; seeds N, N+1, ... (docs/teams.md)
+                                              ends changed at half time, the referee on, --jobs at a time
+                                              (worker processes); per match and in total: score,
+                                              possession, shots, kicks, faults and FTT violations per
+                                              team; one record per match appended to FILE
+                                              (match-records.jsonl) (docs/teams.md)
+  canhil match --report RECORDS.jsonl... [--json] [--svg FILE]
+                                              records from any files merged: wins, draws, losses, goal
+                                              difference with its 95 % interval, win rate (Wilson),
+                                              significance (sign test), the figures per team
   canhil match SCENARIO.toml --external [--process "COMMAND"]... [--logs DIR] [--answer-limit S] ...
                                               the teams' own processes play each half, in lockstep, started
                                               afresh per half from [teams.external] (else [external]) or
@@ -114,14 +121,15 @@ const Command kCommands[] = {
 )",
      canhil::app::run_play},
     {"bench", "the performance figures against their targets",
-     R"(  canhil bench [--part virtual,view,match,analyse,jitter,vcan,external] [--seconds 60] [--config S] [--iface vcan0]
+     R"(  canhil bench [--part virtual,view,match,jobs,analyse,jitter,vcan,external] [--seconds 60] [--config S] [--iface vcan0]
                [--rt-seconds 10] [--frames 200000] [--priority 40] [--cpu 0]
                                               the figures against their targets: the five-robot real-time
                                               factor in virtual time; the same with a page on the viewer
                                               (keeps >= 90 %); a ten-robot match half and five
                                               robots on one core (>= 80x and 180x; physics
                                               alone for scale); timing --analyse of a 200-message
-                                              set (<= 50 ms); release jitter against a bare
+                                              set (<= 50 ms); match halves per minute, --jobs 2
+                                              against --jobs 1 (>= 1.8x); release jitter against a bare
                                               clock_nanosleep loop; lossless vcan rate against cangen -g 0;
                                               the one-robot factor with the reference handler and agent as
                                               processes in lockstep (on core --cpu, -1: any), next to

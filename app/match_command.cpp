@@ -7,12 +7,18 @@
 // --external the teams' own processes play (match_external.hpp).
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/external_driver.hpp"
@@ -22,6 +28,9 @@
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "match_external.hpp"
+#include "match_jobs.hpp"
+#include "match_records.hpp"
+#include "match_report.hpp"
 #include "run_external.hpp"
 #include "team_processes.hpp"
 
@@ -41,25 +50,91 @@ long whole(Args& args, const std::string& name, long fallback, long low, long hi
   return static_cast<long>(*v);
 }
 
-// "[#########.........]  45 %  match 2/3" on one line of a terminal.
-class ProgressBar {
+// Progress of a batch on stderr. On a terminal one line, redrawn: a bar,
+// matches done, the running score and an estimate of the time left; else a
+// plain line per match. Off with --quiet.
+class Progress {
  public:
-  explicit ProgressBar(bool on) : on_(on) {}
-  void show(double fraction, const std::string& what) {
-    if (!on_) return;
-    const int width = 30;
-    const int filled = static_cast<int>(std::lround(fraction * width));
-    std::fprintf(stderr, "\r[%s%s] %3.0f %%  %s ", std::string(static_cast<std::size_t>(filled), '#').c_str(),
-                 std::string(static_cast<std::size_t>(width - filled), '.').c_str(), 100 * fraction, what.c_str());
-    std::fflush(stderr);
+  Progress(bool on, bool terminal, std::size_t matches, double match_s, std::vector<std::string> names)
+      : on_(on),
+        terminal_(terminal),
+        matches_(matches),
+        match_s_(match_s),
+        names_(std::move(names)),
+        start_(std::chrono::steady_clock::now()) {}
+  /// A match under way has played `played_s` (virtual).
+  void update(std::uint64_t seed, double played_s) {
+    playing_[seed] = played_s;
+    draw();
   }
-  void done() {
-    if (on_) std::fprintf(stderr, "\r%60s\r", "");
+  /// A match ended: 0 or 1 its winner, 2 a draw, none a failure.
+  void finished(std::optional<int> outcome) {
+    ++done_;
+    if (outcome) ++score_[static_cast<std::size_t>(*outcome)];
+    playing_.clear();
+    if (on_ && !terminal_ && matches_ > 1) {
+      std::fprintf(stderr, "canhil match: %zu/%zu done, %s\n", done_, matches_, status().c_str());
+    } else {
+      draw();
+    }
+  }
+  void clear() {
+    if (on_ && terminal_ && drawn_) std::fprintf(stderr, "\r%100s\r", "");
+    drawn_ = false;
   }
 
  private:
-  bool on_;
+  std::string status() const {
+    char b[200];
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    double progress = static_cast<double>(done_);
+    for (const auto& [seed, s] : playing_) progress += std::min(1.0, s / match_s_);
+    std::string left = "?";
+    if (progress > 0.05) {
+      const double seconds = elapsed / progress * (static_cast<double>(matches_) - progress);
+      char t[32];
+      std::snprintf(t, sizeof t, seconds >= 90 ? "%.0f min" : "%.0f s", seconds >= 90 ? seconds / 60 : seconds);
+      left = t;
+    }
+    std::snprintf(b, sizeof b, "%s %d, %s %d, %d draw(s); about %s left", names_[0].c_str(), score_[0],
+                  names_[1].c_str(), score_[1], score_[2], left.c_str());
+    return b;
+  }
+  void draw() {
+    if (!on_ || !terminal_) return;
+    double progress = static_cast<double>(done_);
+    for (const auto& [seed, s] : playing_) progress += std::min(1.0, s / match_s_);
+    const double fraction = progress / static_cast<double>(matches_);
+    const int width = 24;
+    const int filled = static_cast<int>(std::lround(fraction * width));
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu  %s ", std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                 std::string(static_cast<std::size_t>(width - filled), '.').c_str(), done_, matches_, status().c_str());
+    std::fflush(stderr);
+    drawn_ = true;
+  }
+
+  bool on_, terminal_;
+  std::size_t matches_;
+  double match_s_;
+  std::vector<std::string> names_;
+  std::chrono::steady_clock::time_point start_;
+  std::size_t done_ = 0;
+  std::array<int, 3> score_{};
+  std::map<std::uint64_t, double> playing_;
+  bool drawn_ = false;
 };
+
+// "5..24", "1, 3, 7", "1..10, 20": the seeds as given, ranges folded.
+std::string seed_list(const std::vector<std::uint64_t>& seeds) {
+  std::string out;
+  for (std::size_t i = 0; i < seeds.size();) {
+    std::size_t j = i;
+    while (j + 1 < seeds.size() && seeds[j + 1] == seeds[j] + 1) ++j;
+    out += (out.empty() ? "" : ", ") + std::to_string(seeds[i]) + (j > i ? ".." + std::to_string(seeds[j]) : "");
+    i = j + 1;
+  }
+  return out;
+}
 
 // Virtual seconds per wall second: "34x", or "0.25x" below 10 (the teams' processes in a slow machine).
 std::string factor(double virtual_s, double wall_s) {
@@ -105,11 +180,25 @@ nlohmann::json tally_json(const emulator::TeamTally& t, const emulator::TeamTall
 }  // namespace
 
 int run_match(Args& args, const std::optional<std::string>& dbc) {
+  const bool json = args.flag("--json");
+  if (args.flag("--report")) {
+    const auto svg = args.option("--svg");
+    std::vector<std::string> files = args.positionals();
+    files.erase(files.begin());
+    if (files.empty()) throw UsageError("match --report takes the record files to merge (RECORDS.jsonl...)");
+    return run_match_report(files, json, svg);
+  }
   const auto config = args.option("--config");
   const long halves = whole(args, "--halves", 2, 1, 4);
   const std::optional<double> half_minutes = optional_number(args, "--half-minutes");
+  const bool repeat_given = args.given("--repeat");
   const long repeat = whole(args, "--repeat", 1, 1, 10'000);
-  const bool json = args.flag("--json");
+  const auto seeds_text = args.option("--seeds");
+  const long cores = std::max(1L, static_cast<long>(std::thread::hardware_concurrency()));
+  const bool jobs_given = args.given("--jobs");
+  const long jobs = whole(args, "--jobs", cores, 1, 256);
+  const auto records_option = args.option("--records");
+  const bool no_records = args.flag("--no-records");
   const bool quiet = args.flag("--quiet");
   const std::optional<std::uint64_t> seed = seed_option(args);
   const bool external = args.flag("--external");
@@ -121,6 +210,13 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   if (positional.size() > 2 || (positional.size() == 2 && config)) {
     throw UsageError("match takes one scenario (SCENARIO or --config SCENARIO)");
   }
+  if (seeds_text && (seed || repeat_given)) throw UsageError("--seeds names every seed: leave --seed and --repeat out");
+  if (external && jobs_given && jobs > 1) {
+    throw UsageError(
+        "--external plays one match at a time for now (the teams' processes share the scenario's "
+        "interfaces); leave --jobs out, or split the seeds over machines (docs/teams.md)");
+  }
+  if (records_option && no_records) throw UsageError("--records FILE or --no-records, not both");
   std::string path;
   if (positional.size() == 2) path = positional[1];
   if (config) path = *config;
@@ -156,6 +252,16 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
       throw SetupError(path + ": " + e.what());
     }
   }
+  std::vector<std::uint64_t> seeds;
+  try {
+    if (seeds_text) seeds = parse_seeds(*seeds_text);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  if (seeds.empty()) {
+    const std::uint64_t first_seed = seed.value_or(scenario.seed);
+    for (long k = 0; k < repeat; ++k) seeds.push_back(first_seed + static_cast<std::uint64_t>(k));
+  }
   emulator::MatchOptions match;
   match.halves = static_cast<int>(halves);
   match.half_s = 60 * half_minutes.value_or(10);
@@ -179,13 +285,41 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   std::signal(SIGTERM, stop_match);
   const std::vector<std::string> names = {scenario.teams.at(0).name,
                                           scenario.teams.size() > 1 ? scenario.teams[1].name : std::string()};
-  const std::uint64_t first_seed = seed.value_or(scenario.seed);
+  RecordContext context;
+  context.scenario = path;
+  context.scenario_hash = file_hash(path);
+  context.dbc_hash = file_hash(dbc ? *dbc : frames::default_dbc_path().string());
+  context.version = CANHIL_VERSION;
+  context.halves = match.halves;
+  context.half_s = match.half_s;
+  context.teams = names;
+  if (external) {
+    for (std::size_t t = 0; t < 2 && t < scenario.teams.size(); ++t)
+      context.processes.push_back(scenario.external_of(t).processes);
+  }
+  const std::string records_path =
+      no_records ? std::string()
+                 : records_option.value_or((logs ? *logs + "/" : std::string()) + "match-records.jsonl");
+  // Opened at the first record (a batch that never plays leaves nothing behind), checked now.
+  std::ofstream records;
+  if (!records_path.empty()) {
+    const std::filesystem::path where(records_path);
+    const std::filesystem::path dir = where.has_parent_path() ? where.parent_path() : std::filesystem::path(".");
+    if (::access(std::filesystem::exists(where) ? records_path.c_str() : dir.c_str(), W_OK) != 0) {
+      throw SetupError("cannot write the match records to " + records_path + " (--records FILE, or --no-records)");
+    }
+  }
+  const auto write_record = [&](const nlohmann::json& r) {
+    if (records_path.empty()) return;
+    if (!records.is_open()) records.open(records_path, std::ios::app);
+    records << r.dump() << '\n' << std::flush;
+  };
   const double match_s = match.halves * match.half_s;
+  const long workers = external ? 1 : std::min<long>(jobs, static_cast<long>(seeds.size()));
   if (!json) {
-    std::printf("canhil match: %s, %ld match(es) of %d x %g min, seeds %llu..%llu, %s against %s\n", path.c_str(),
-                repeat, match.halves, match.half_s / 60, static_cast<unsigned long long>(first_seed),
-                static_cast<unsigned long long>(first_seed + static_cast<std::uint64_t>(repeat) - 1), names[0].c_str(),
-                names[1].c_str());
+    std::printf("canhil match: %s, %zu match(es) of %d x %g min, seeds %s, %s against %s%s\n", path.c_str(),
+                seeds.size(), match.halves, match.half_s / 60, seed_list(seeds).c_str(), names[0].c_str(),
+                names[1].c_str(), workers > 1 ? (", " + std::to_string(workers) + " at a time").c_str() : "");
     if (external) {
       // Which bus the teams' processes share with canhil's nodes (the user-space
       // bus, where the kernel has none): one line, every interface on it.
@@ -203,37 +337,32 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     std::fflush(stdout);
   }
   // Not between the lines of the teams' processes (their output is on stderr unless --logs).
-  ProgressBar bar(!quiet && isatty(STDERR_FILENO) != 0 && !(external && !logs));
+  Progress progress(!quiet && !(external && !logs), isatty(STDERR_FILENO) != 0, seeds.size(), match_s, names);
   std::vector<emulator::TeamTally> total(2);
   physics::SolverHealth solver_total;
   std::vector<int> wins(3, 0);  // team 0, team 1, draws
   nlohmann::json matches = nlohmann::json::array();
   double wall = 0, simulated = 0;
   long played = 0;
+  long failed = 0;
   bool stuck = false;  // a process stopped answering: the match in progress is dropped
-  for (long k = 0; k < repeat && !g_stop_match; ++k) {
-    scenario.seed = first_seed + static_cast<std::uint64_t>(k);
-    match_number = static_cast<int>(k + 1);
-    const std::string what = "match " + std::to_string(k + 1) + "/" + std::to_string(repeat);
-    emulator::MatchResult r;
-    try {
-      r = emulator::play_match(
-          scenario, options, match,
-          [&](double s) {
-            bar.show((static_cast<double>(k) * match_s + s) / (static_cast<double>(repeat) * match_s), what);
-          },
-          &g_stop_match);
-    } catch (const SetupError& e) {
-      bar.done();
-      throw UsageError(path + ": " + e.what());
-    } catch (const emulator::ProcessStuck& e) {
-      // The matches played so far are still reported; this one is not.
-      bar.done();
-      std::fprintf(stderr, "canhil match: stopped: %s\n", e.what());
-      stuck = true;
-      break;
+  // Each record in the order of the seeds: into the file, the tally and the output.
+  const auto done = [&](const nlohmann::json& record) {
+    write_record(record);
+    const auto k = static_cast<long>(played + failed);
+    if (!record.at("failed").is_null()) {
+      ++failed;
+      progress.finished(std::nullopt);
+      if (json) {
+        matches.push_back(record);
+      } else {
+        std::printf("match %ld (seed %llu): FAILED: %s\n", k + 1,
+                    static_cast<unsigned long long>(record.at("seed").get<std::uint64_t>()),
+                    record.at("failed").get<std::string>().c_str());
+      }
+      return;
     }
-    bar.done();
+    const emulator::MatchResult r = result_of(record);
     ++played;
     wall += r.wall_s;
     simulated += r.virtual_s;
@@ -241,22 +370,12 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     solver_total.add(r.solver);
     const auto winner = r.winner();
     ++wins[winner ? *winner : 2];
+    progress.finished(winner ? std::optional<int>(static_cast<int>(*winner)) : std::optional<int>(2));
     if (json) {
-      nlohmann::json goals = nlohmann::json::array();
-      for (const auto& g : r.goals)
-        goals.push_back({{"half", g.half + 1}, {"time_s", g.time_s}, {"team", names[g.team]}});
-      matches.push_back(
-          {{"seed", r.seed},
-           {"teams", {tally_json(r.teams[0], r.teams[1], names[0]), tally_json(r.teams[1], r.teams[0], names[1])}},
-           {"goals", goals},
-           {"referee_calls", r.referee_calls},
-           {"solver", solver_json(r.solver)},
-           {"winner", winner ? nlohmann::json(names[*winner]) : nlohmann::json(nullptr)},
-           {"virtual_s", r.virtual_s},
-           {"wall_s", r.wall_s},
-           {"stopped", r.stopped}});
-      continue;
+      matches.push_back(record);
+      return;
     }
+    progress.clear();
     std::printf("match %ld (seed %llu): %s %d : %d %s%s, %zu referee call(s), %.0f s in %.1f s of wall time (%s)\n",
                 k + 1, static_cast<unsigned long long>(r.seed), names[0].c_str(), r.teams[0].goals, r.teams[1].goals,
                 names[1].c_str(), r.stopped ? " (stopped)" : "", r.referee_calls, r.virtual_s, r.wall_s,
@@ -267,7 +386,49 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     print_table(names, r.teams);
     if (r.solver.total() > 0) std::printf("  physics: %s\n", r.solver.summary().c_str());
     std::fflush(stdout);
+  };
+  const auto play = [&](int number, std::uint64_t s, const std::function<void(double)>& on_progress) {
+    // A test's way to make a match's process die (docs/testing.md): a crash, reported, the batch going on.
+    if (const char* die = std::getenv("CANHIL_MATCH_KILL_SEED"); die != nullptr && std::to_string(s) == die) {
+      std::raise(SIGKILL);
+    }
+    emulator::Scenario one = scenario;
+    one.seed = s;
+    match_number = number;
+    return match_record(emulator::play_match(one, options, match, on_progress, &g_stop_match), context);
+  };
+  if (!external) {
+    MatchJobs jobs_of;
+    jobs_of.play = play;
+    jobs_of.failed = [&](std::uint64_t s, const std::string& why) { return failed_record(s, why, context); };
+    jobs_of.done = done;
+    jobs_of.progress = [&](std::uint64_t s, double played_s) { progress.update(s, played_s); };
+    try {
+      play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop_match);
+    } catch (const SetupError& e) {
+      progress.clear();
+      throw UsageError(path + ": " + e.what());
+    }
+  } else {
+    for (std::size_t k = 0; k < seeds.size() && !g_stop_match; ++k) {
+      nlohmann::json record;
+      try {
+        record = play(static_cast<int>(k + 1), seeds[k], [&](double s) { progress.update(seeds[k], s); });
+      } catch (const SetupError& e) {
+        progress.clear();
+        throw UsageError(path + ": " + e.what());
+      } catch (const emulator::ProcessStuck& e) {
+        // The matches played so far are still reported; this one is recorded as failed, and the batch stops.
+        progress.clear();
+        std::fprintf(stderr, "canhil match: stopped: %s\n", e.what());
+        write_record(failed_record(seeds[k], std::string("stuck: ") + e.what(), context));
+        stuck = true;
+        break;
+      }
+      done(record);
+    }
   }
+  progress.clear();
   if (json) {
     nlohmann::json out{
         {"scenario", path},
@@ -278,20 +439,26 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
          {{"teams", {tally_json(total[0], total[1], names[0]), tally_json(total[1], total[0], names[1])}},
           {"wins", {{names[0], wins[0]}, {names[1], wins[1]}}},
           {"draws", wins[2]},
+          {"failed", failed},
           {"solver", solver_json(solver_total)}}},
         {"virtual_s", simulated},
         {"wall_s", wall},
         {"stopped", g_stop_match.load() || stuck}};
     std::printf("%s\n", out.dump(2).c_str());
-  } else if (played > 1) {
-    std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s); %.0f s of play in %.1f s (%s)\n", played,
-                names[0].c_str(), wins[0], names[1].c_str(), wins[1], wins[2], simulated, wall,
+  } else if (played + failed > 1) {
+    std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s)%s; %.0f s of play in %.1f s (%s)\n", played,
+                names[0].c_str(), wins[0], names[1].c_str(), wins[1], wins[2],
+                failed > 0 ? (", " + std::to_string(failed) + " failed").c_str() : "", simulated, wall,
                 factor(simulated, wall).c_str());
     print_table(names, total);
   }
   if (!json && played > 0) std::printf("physics: %s over the match(es)\n", solver_total.summary().c_str());
+  if (!json && !records_path.empty() && played + failed > 0) {
+    std::printf("records: %s (canhil match --report %s)\n", records_path.c_str(), records_path.c_str());
+  }
   if (stuck) return kProcessStuckStatus;
-  return g_stop_match ? 130 : 0;
+  if (g_stop_match) return 130;
+  return failed > 0 ? 1 : 0;  // a match that failed is canhil's fault: a batch's CI must see it
 }
 
 }  // namespace canhil::app

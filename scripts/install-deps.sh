@@ -30,6 +30,8 @@ if [[ "$set_of" == all ]]; then
     python3 python3-canmatrix python3-can
     # the viewer's browser tests (headless, driven by puppeteer-core from npm)
     chromium
+    # canhil match split over hosts, as docs/teams.md shows (tests/app/parallel_shards_test.sh)
+    parallel
   )
 fi
 

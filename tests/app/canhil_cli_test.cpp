@@ -409,8 +409,8 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   EXPECT_EQ(canhil("bench --seconds -1").status, 2);
   const CliRun bad = canhil("bench --part speed");
   EXPECT_EQ(bad.status, 2);
-  EXPECT_TRUE(
-      has(bad, "--part takes virtual, view, match, analyse, jitter, vcan and external, comma-separated; got 'speed'"))
+  EXPECT_TRUE(has(
+      bad, "--part takes virtual, view, match, jobs, analyse, jitter, vcan and external, comma-separated; got 'speed'"))
       << bad.out;
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
@@ -443,14 +443,16 @@ TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOf
 }
 
 TEST(CanhilMatch, PrintsATablePerMatchAndTheTotalsAndJsonForScripts) {
-  const CliRun r = canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --repeat 2 --seed 5");
+  const CliRun r =
+      canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --repeat 2 --seed 5 --no-records");
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_TRUE(has(r, "2 match(es) of 2 x 0.05 min, seeds 5..6, new against old")) << r.out;
   EXPECT_TRUE(has(r, "match 1 (seed 5): new ")) << r.out;
   EXPECT_TRUE(has(r, "match 2 (seed 6): new ")) << r.out;
   EXPECT_TRUE(has(r, "goals  possession  shots  kicks  faults  FTT violations")) << r.out;
   EXPECT_TRUE(has(r, "over 2 matches: new won ")) << r.out;
-  const CliRun j = canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --halves 1 --json --seed 5");
+  const CliRun j =
+      canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --halves 1 --json --seed 5 --no-records");
   ASSERT_EQ(j.status, 0) << j.out;
   EXPECT_EQ(j.out.front(), '{') << "JSON alone on stdout\n" << j.out;
   EXPECT_TRUE(has(j, "\"possession_pct\"")) << j.out;
