@@ -305,6 +305,8 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   if (!records_path.empty()) {
     const std::filesystem::path where(records_path);
     const std::filesystem::path dir = where.has_parent_path() ? where.parent_path() : std::filesystem::path(".");
+    std::error_code made;
+    std::filesystem::create_directories(dir, made);  // --logs DIR's, made now rather than at the first half
     if (::access(std::filesystem::exists(where) ? records_path.c_str() : dir.c_str(), W_OK) != 0) {
       throw SetupError("cannot write the match records to " + records_path + " (--records FILE, or --no-records)");
     }
