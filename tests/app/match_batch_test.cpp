@@ -34,17 +34,17 @@ std::vector<nlohmann::json> records_of(const std::string& path) {
   return out;
 }
 
-constexpr const char* kShort = "match emulator/scenarios/two_teams.toml --half-minutes 0.05 --quiet";
+constexpr const char* kShort = "match emulator/scenarios/two_teams.toml --halves 1 --half-minutes 0.02 --quiet";
 
 TEST(MatchBatch, TwoWorkersGiveTheRecordsOfOneTraceHashesIncluded) {
   const std::string one = scratch("one.jsonl");
   const std::string two = scratch("two.jsonl");
-  const CliRun a = canhil(std::string(kShort) + " --seeds 1..6 --jobs 1 --records " + one);
-  const CliRun b = canhil(std::string(kShort) + " --seeds 1..6 --jobs 2 --records " + two);
+  const CliRun a = canhil(std::string(kShort) + " --seeds 1..4 --jobs 1 --records " + one);
+  const CliRun b = canhil(std::string(kShort) + " --seeds 1..4 --jobs 2 --records " + two);
   ASSERT_EQ(a.status, 0) << a.out;
   ASSERT_EQ(b.status, 0) << b.out;
   std::vector<nlohmann::json> ra = records_of(one), rb = records_of(two);
-  ASSERT_EQ(ra.size(), 6u);
+  ASSERT_EQ(ra.size(), 4u);
   for (auto* rs : {&ra, &rb}) {
     for (auto& r : *rs) r.erase("wall_s");
   }
@@ -142,7 +142,7 @@ TEST(MatchBatch, TheReportRefusesASeedTwiceAndAnotherScenarioByName) {
 
 TEST(MatchBatch, TheBenchmarkPrintsBothRatesAndTheirRatio) {
   // Wall-clock: printed, never judged here (the exit status says met or missed).
-  const CliRun r = canhil("bench --part jobs --seconds 0.5");
+  const CliRun r = canhil("bench --part jobs --seconds 0.1");
   EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
   EXPECT_TRUE(has(r, "--jobs 1: 8 halves in")) << r.out;
   EXPECT_TRUE(has(r, "--jobs 2: 8 halves in")) << r.out;
