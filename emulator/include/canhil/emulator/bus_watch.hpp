@@ -35,9 +35,10 @@ class BusWatch {
 
   std::uint64_t frames(std::size_t robot) const { return counts_.at(robot); }
   /// A hash of every frame on every bus (time, identifier, kind, length,
-  /// data; FNV-1a, 64 bits), bus by bus in robot order: two runs carried the
-  /// same frames at the same times when it is equal. Always kept (a few ns a
-  /// frame), so a match can be checked anywhere without its trace.
+  /// data: three 64-bit words a frame, each mixed in by a multiply), bus by bus
+  /// in robot order: two runs carried the same frames at the same times when
+  /// it is equal. Always kept (a few cycles a frame), so a match can be checked
+  /// anywhere without its trace.
   std::uint64_t trace_hash() const noexcept;
   /// Violations on robot r's bus so far (check_timing; else 0).
   std::uint64_t ftt_violations(std::size_t robot) const;
