@@ -84,11 +84,16 @@ class Progress {
   }
 
  private:
+  // Matches done, and the part played of those under way.
+  double matches_played() const {
+    double played = static_cast<double>(done_);
+    for (const auto& [seed, s] : playing_) played += std::min(1.0, s / match_s_);
+    return played;
+  }
   std::string status() const {
     char b[200];
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    double progress = static_cast<double>(done_);
-    for (const auto& [seed, s] : playing_) progress += std::min(1.0, s / match_s_);
+    const double progress = matches_played();
     std::string left = "?";
     if (progress > 0.05) {
       const double seconds = elapsed / progress * (static_cast<double>(matches_) - progress);
@@ -102,8 +107,7 @@ class Progress {
   }
   void draw() {
     if (!on_ || !terminal_) return;
-    double progress = static_cast<double>(done_);
-    for (const auto& [seed, s] : playing_) progress += std::min(1.0, s / match_s_);
+    const double progress = matches_played();
     const double fraction = progress / static_cast<double>(matches_);
     const int width = 24;
     const int filled = static_cast<int>(std::lround(fraction * width));

@@ -39,14 +39,19 @@ bool write_all(int fd, const std::string& text) {
   return true;
 }
 
-// A line from `fd`, or nothing at its end.
+// The first whole line in `buffer`, taken out of it; nothing while there is none.
+std::optional<std::string> take_line(std::string& buffer) {
+  const auto nl = buffer.find('\n');
+  if (nl == std::string::npos) return std::nullopt;
+  std::string line = buffer.substr(0, nl);
+  buffer.erase(0, nl + 1);
+  return line;
+}
+
+// A line from `fd` (blocking), or nothing at its end.
 std::optional<std::string> read_line(int fd, std::string& buffer) {
   for (;;) {
-    if (const auto nl = buffer.find('\n'); nl != std::string::npos) {
-      std::string line = buffer.substr(0, nl);
-      buffer.erase(0, nl + 1);
-      return line;
-    }
+    if (auto line = take_line(buffer)) return line;
     char b[4096];
     const ssize_t n = ::read(fd, b, sizeof b);
     if (n < 0 && errno == EINTR) continue;
@@ -172,9 +177,8 @@ void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const
       if (n < 0 && errno == EINTR) continue;
       if (n > 0) {
         w.buffer.append(b, static_cast<std::size_t>(n));
-        for (auto nl = w.buffer.find('\n'); nl != std::string::npos; nl = w.buffer.find('\n')) {
-          const std::string line = w.buffer.substr(0, nl);
-          w.buffer.erase(0, nl + 1);
+        while (const auto taken = take_line(w.buffer)) {
+          const std::string& line = *taken;
           if (line.rfind("p ", 0) == 0) {
             char* end = nullptr;
             const unsigned long long seed = std::strtoull(line.c_str() + 2, &end, 10);

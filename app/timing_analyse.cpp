@@ -7,11 +7,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "canhil/frames/candump.hpp"
 #include "canhil/timing/bound_check.hpp"
 #include "canhil/timing/bus_analysis.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "log_file.hpp"
 
 namespace canhil::app {
 namespace {
@@ -49,8 +49,7 @@ int run_timing_analyse(Args& args, const std::optional<std::string>& dbc) {
   for (const std::string& a : added) timing::add_message(set, a);
   for (const std::string& a : added) {
     const std::string name = a.substr(0, a.find_first_of(" \t"));
-    if (config.copies_of.empty() ||
-        std::find(config.copies_of.begin(), config.copies_of.end(), name) == config.copies_of.end())
+    if (std::find(config.copies_of.begin(), config.copies_of.end(), name) == config.copies_of.end())
       config.copies_of.push_back(name);
   }
   // The EC and bit rate: the options, else the DBC's (the trigger message's
@@ -77,17 +76,7 @@ int run_timing_analyse(Args& args, const std::optional<std::string>& dbc) {
     std::shared_ptr<const frames::MessageSet> messages;
     if (set.ftt) messages = frames::MessageSet::create(db);
     timing::BoundChecker checker(analysis, messages, from_ms(slack_us / 1e3));
-    std::ifstream in(source);
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-      ++n;
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      frames::LogEntry e;
-      std::string error;
-      if (!frames::parse_log_line(line, e, &error)) throw SetupError(source + ":" + std::to_string(n) + ": " + error);
-      checker.add({e.frame, e.time});
-    }
+    for_each_log_entry(source, [&](const frames::LogEntry& e) { checker.add({e.frame, e.time}); });
     bounds = checker.finish();
   }
   if (json) {

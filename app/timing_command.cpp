@@ -16,6 +16,7 @@
 #include "canhil/timing/analysis.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "log_file.hpp"
 #include "svg_plot.hpp"
 
 namespace canhil::app {
@@ -55,17 +56,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
   auto set = frames::MessageSet::create(load_chosen_dbc(dbc));
   timing::TimingAnalyzer analyzer(set, cfg);
   if (std::filesystem::exists(source)) {
-    std::ifstream in(source);
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-      ++n;
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      frames::LogEntry e;
-      std::string error;
-      if (!frames::parse_log_line(line, e, &error)) throw SetupError(source + ":" + std::to_string(n) + ": " + error);
-      analyzer.add({e.frame, e.time});
-    }
+    for_each_log_entry(source, [&](const frames::LogEntry& e) { analyzer.add({e.frame, e.time}); });
   } else {
     auto bus = can_nodes::SocketCanBus::open(source);
     bus->set_error_mask(frames::kErrorClassMask);  // error frames count toward the load and the report

@@ -89,7 +89,8 @@ struct AnalysisConfig {
   /// leaves, the EC less the TM and one asynchronous frame.
   std::optional<Nanos> sync_window;
   /// Messages whose extra copies the what-if counts; empty: every message of
-  /// a set of at most kDefaultCopies messages (and every --add).
+  /// a set of at most kDefaultCopies messages (`canhil timing --analyse` puts
+  /// every --add here, so that the what-if counts the messages being tried).
   std::vector<std::string> copies_of;
   static constexpr std::size_t kDefaultCopies = 32;
   bool what_if = true;
