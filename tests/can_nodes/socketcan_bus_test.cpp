@@ -117,14 +117,23 @@ TEST(SocketCan, FiltersGivenAtOpenAreInPlaceBeforeAnyFrameArrives) {
   // A sender busy before and while the socket opens: with the filters set
   // before bind, no other id is ever queued (set_filters() after open() lets
   // in what came in between).
+  // Ordered by counts, not by a sleep: the noise is on the bus before the
+  // socket opens and goes on after (a loaded machine may not run the thread
+  // for a while).
   std::atomic<bool> stop{false};
+  std::atomic<int> noise_sent{0};
   std::thread noise([&] {
-    while (!stop) tx->send(make_data_frame(0x100, {1}));
+    while (!stop) {
+      tx->send(make_data_frame(0x100, {1}));
+      ++noise_sent;
+    }
   });
+  while (noise_sent.load() == 0) std::this_thread::yield();
   SocketCanOptions options;
   options.filters = {Filter::exact(0x131)};
   auto rx = SocketCanBus::open("vcan0", options);
-  std::this_thread::sleep_for(20ms);
+  const int at_open = noise_sent.load();
+  while (noise_sent.load() < at_open + 100) std::this_thread::yield();
   stop = true;
   noise.join();
   tx->send(make_data_frame(0x131, {0xEE}));
