@@ -16,6 +16,7 @@
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
+#include "support/rtdb_ipc.hpp"
 #include "support/team_rtdb.hpp"
 #include "support/test_paths.hpp"
 
@@ -27,8 +28,6 @@ using namespace std::chrono_literals;
 class HwCommUnit : public ::testing::Test {
  protected:
   HwCommUnit() {
-    static int counter = 0;
-    setenv("RTDB_KEY", std::to_string(0x5C000000 + ((getpid() & 0xFFF) << 12) + (++counter << 6)).c_str(), 1);
     setenv("AGENT", "1", 1);
     EXPECT_EQ(DB_init(), 0);
     db_ = rtdb::open_builtin(rtdb::Scope::kOneAgent);
@@ -67,6 +66,7 @@ class HwCommUnit : public ::testing::Test {
     return out;
   }
 
+  test::RtdbKeys keys_;  // keys of its own, set (as a member) before the constructor calls DB_init
   std::shared_ptr<const frames::MessageSet> set_ = frames::MessageSet::load(test::shipped_dbc());
   std::vector<frames::CanFrame> sent_;
   Nanos now_{0};

@@ -14,6 +14,7 @@
 
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "support/child_process.hpp"
+#include "support/rtdb_ipc.hpp"
 #include "support/test_paths.hpp"
 
 namespace {
@@ -31,7 +32,7 @@ std::string run(const std::string& cmd) {
 }
 
 TEST(VcanHwcomm, HandlerBetweenTheEmulatedNodesAndTheRtdb) {
-  setenv("RTDB_KEY", std::to_string(0x5C000000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
+  const canhil::test::RtdbKeys keys;  // its own keys: never another test's (0x5C + pid << 8 could meet HwCommUnit's)
   setenv("AGENT", "1", 1);
   const std::string bin = canhil::test::build_dir();
   canhil::test::ChildProcess emulator(bin + "/app/canhil nodes --iface vcan0 --quiet",
