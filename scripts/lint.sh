@@ -10,8 +10,8 @@
 # clang-tidy's result per file is cached (scripts/lint_tidy.py: a file whose
 # preprocessed text, arguments, configuration and clang-tidy are unchanged is
 # not analysed again); CANHIL_TIDY_CACHE=0 turns the cache off.
-# Most checks run over batches of eight files compiled as one unit (the
-# headers walked once for eight); the static analyser and the checks that
+# Most checks run over batches of up to 32 files compiled as one unit (the
+# headers walked once for them); the static analyser and the checks that
 # depend on the main file run file by file (scripts/lint_tidy.py says which);
 # CANHIL_TIDY_BATCH=1 runs every check file by file, the reference the
 # batches give the same findings as (tests/scripts/lint_test.sh).
@@ -39,7 +39,7 @@ if [[ $format -eq 1 ]]; then
 fi
 options=()
 [[ "${CANHIL_TIDY_CACHE:-1}" == 0 ]] && options=(--cache '')
-options+=(--batch "${CANHIL_TIDY_BATCH:-8}")
+options+=(--batch "${CANHIL_TIDY_BATCH:-32}")
 # clang-tidy exits non-zero on any finding (WarningsAsErrors). The compile
 # database is g++'s: -Wno-unknown-warning-option for its g++-only warnings.
 python3 scripts/lint_tidy.py -p "$db" "${options[@]}" "$files" > "$db/clang-tidy.log" 2>&1 || {

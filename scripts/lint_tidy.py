@@ -11,7 +11,7 @@ file by file would give, in two kinds of run:
   only), bugprone-suspicious-include (an #include of a .cpp), and the checks
   that follow calls or collect over the unit (bugprone-exception-escape,
   -signal-handler, -forward-declaration-namespace, -argument-comment);
-- every other check once over a batch of up to --batch files (default 8)
+- every other check once over a batch of up to --batch files (default 32)
   that share compile arguments and configuration, included one after the other
   in a generated file, the batch's own files added to the header filter so
   their findings are reported as file by file reports them. These checks match
@@ -242,7 +242,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[1], usage=__doc__.split("\n")[0])
     p.add_argument("-p", dest="build_dir", required=True)
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    p.add_argument("--batch", type=int, default=8)
+    p.add_argument("--batch", type=int, default=32)
     p.add_argument("--cache", default=default_cache)
     p.add_argument("--root", default=os.getcwd())
     p.add_argument("regex")
