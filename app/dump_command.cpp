@@ -1,5 +1,4 @@
 #include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -12,6 +11,7 @@
 #include "canhil/frames/describe.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "stop_signals.hpp"
 
 namespace canhil::app {
 namespace {
@@ -118,8 +118,7 @@ int dump_log(const Codec& codec, const std::string& path, bool json, long long h
 int dump_live(const Codec& codec, const std::string& iface, bool json, long long count, double seconds) {
   auto bus = can_nodes::SocketCanBus::open(iface);
   bus->set_error_mask(frames::kErrorClassMask);
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  stop_on_signals(on_signal);
   const can_nodes::WallClock clock;
   const Nanos deadline =
       seconds > 0 ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds)) : kNever;

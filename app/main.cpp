@@ -14,6 +14,7 @@
 #include "canhil/physics/solver_health.hpp"
 #include "canhil/userbus/bus.hpp"
 #include "commands.hpp"
+#include "stop_signals.hpp"
 
 namespace {
 
@@ -261,7 +262,10 @@ int usage_error(const char* what, const Command* command) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+// The command named on the line, its exit status.
+int run_command_line(int argc, char** argv) {
   std::vector<std::string> words(argv + 1, argv + argc);
   Args args(words);
   words.resize(
@@ -302,4 +306,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "canhil: the physics stopped: %s (docs/physics.md, solver health)\n", e.what());
     return 4;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int status = run_command_line(argc, argv);
+  canhil::app::end_by_sigpipe_if_seen();  // a command whose output's reader left ends by SIGPIPE
+  return status;
 }

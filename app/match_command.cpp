@@ -32,6 +32,7 @@
 #include "match_records.hpp"
 #include "match_report.hpp"
 #include "run_external.hpp"
+#include "stop_signals.hpp"
 #include "team_processes.hpp"
 
 namespace canhil::app {
@@ -285,8 +286,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     options.external = true;
     match.driver = external_halves(how);
   }
-  std::signal(SIGINT, stop_match);
-  std::signal(SIGTERM, stop_match);
+  stop_on_signals(stop_match);
   const std::vector<std::string> names = {scenario.teams.at(0).name,
                                           scenario.teams.size() > 1 ? scenario.teams[1].name : std::string()};
   RecordContext context;

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -28,15 +29,33 @@ struct Worker {
   std::optional<std::uint64_t> playing;
 };
 
+// `text` to a worker's pipe or back to the parent's: false when the other end
+// is gone. The SIGPIPE such a write raises is blocked and taken back, so it
+// stays an error of this pipe and never stops the batch (stop_signals.hpp:
+// SIGPIPE stops it when its own output's reader is gone).
 bool write_all(int fd, const std::string& text) {
+  sigset_t pipe_signal;
+  sigset_t before;
+  sigemptyset(&pipe_signal);
+  sigaddset(&pipe_signal, SIGPIPE);
+  pthread_sigmask(SIG_BLOCK, &pipe_signal, &before);
   std::size_t done = 0;
+  bool broken = false;
   while (done < text.size()) {
     const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
+    if (n <= 0) {
+      broken = n < 0 && errno == EPIPE;
+      break;
+    }
     done += static_cast<std::size_t>(n);
   }
-  return true;
+  if (broken && sigismember(&before, SIGPIPE) == 0) {
+    const timespec now{0, 0};
+    sigtimedwait(&pipe_signal, nullptr, &now);  // the one this write raised
+  }
+  pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  return done == text.size();
 }
 
 // The first whole line in `buffer`, taken out of it; nothing while there is none.
@@ -132,7 +151,6 @@ std::string how_it_ended(int status) {
 
 void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const MatchJobs& jobs,
                      const std::atomic<bool>& stop) {
-  std::signal(SIGPIPE, SIG_IGN);  // a worker gone: its pipe says so, not a signal
   std::vector<Worker> pool;
   std::size_t next = 0;     // the next seed to hand out
   std::size_t emitted = 0;  // records passed to done()

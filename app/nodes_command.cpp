@@ -3,13 +3,13 @@
 // to it: a session of one robot without vision or RTDB, on the real-time driver.
 #include <algorithm>
 #include <atomic>
-#include <csignal>
 #include <cstdio>
 
 #include "canhil/emulator/realtime_driver.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "stop_signals.hpp"
 
 namespace canhil::app {
 namespace {
@@ -66,8 +66,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   emulator::RealtimeDriver driver(session, rt);
   const Nanos start = driver.start_time();
 
-  std::signal(SIGINT, stop_on_signal);
-  std::signal(SIGTERM, stop_on_signal);
+  stop_on_signals(stop_on_signal);
   const can_nodes::NodeSet emulated = session.scenario().emulate.at(0);
   std::printf("canhil nodes: robot on %s: %s (EC %.1f ms, %u bit/s)%s; physics every %.0f ms. Ctrl-C stops.\n",
               iface->c_str(), can_nodes::describe(emulated).c_str(), ec_ms, options.ftt.bit_rate,

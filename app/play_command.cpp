@@ -4,7 +4,6 @@
 // recorded robot's traffic to its handler. The summary says how late the
 // sends were.
 #include <atomic>
-#include <csignal>
 #include <fstream>
 #include <map>
 
@@ -12,6 +11,7 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/can_nodes/trace_player.hpp"
 #include "commands.hpp"
+#include "stop_signals.hpp"
 
 namespace canhil::app {
 namespace {
@@ -75,8 +75,7 @@ int run_play(Args& args, const std::optional<std::string>&) {
   std::printf("canhil play: %s, %zu frame(s) over %.3f s, at %gx%s\n", path.c_str(), schedule.size(),
               to_seconds(schedule.span()), speed, loop ? ", looping (Ctrl-C ends)" : "");
   std::fflush(stdout);
-  std::signal(SIGINT, stop_play);
-  std::signal(SIGTERM, stop_play);
+  stop_on_signals(stop_play);
   can_nodes::WallClock clock;
   const Nanos start = clock.now() + std::chrono::milliseconds(20);
   std::uint64_t sent = 0, dropped = 0, skipped = 0, passes = 0;

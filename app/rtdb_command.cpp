@@ -2,7 +2,6 @@
 // this machine (canhil's shipped item configuration), and run the replicator.
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -16,6 +15,7 @@
 #include "canhil/rtdb/replicator.hpp"
 #include "canhil/rtdb/rtdb.h"
 #include "commands.hpp"
+#include "stop_signals.hpp"
 
 namespace canhil::app {
 namespace {
@@ -150,8 +150,7 @@ int run_rtdb(Args& args) {
   struct Closer {
     ~Closer() { DB_free_all(0); }
   } closer;
-  std::signal(SIGINT, stop_rtdb);
-  std::signal(SIGTERM, stop_rtdb);
+  stop_on_signals(stop_rtdb);
 
   if (sub == "list") {
     std::printf("%-14s %-18s %-7s %7s %10s\n", "agent", "item", "kind", "bytes", "age");

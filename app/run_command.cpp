@@ -7,7 +7,6 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -27,6 +26,7 @@
 #include "run_external.hpp"
 #include "run_realtime.hpp"
 #include "run_view.hpp"
+#include "stop_signals.hpp"
 #include "team_processes.hpp"
 #include "virtual_loop.hpp"
 
@@ -94,8 +94,7 @@ int run_virtual(emulator::Session& session, const emulator::RunLength& length, c
   std::printf("canhil run: %zu robot(s), virtual time, %g s (%s), seed %llu, %zu fault rule(s)\n", sc.robot_count(),
               length.seconds, length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
   std::fflush(stdout);
-  std::signal(SIGINT, stop_run);
-  std::signal(SIGTERM, stop_run);
+  stop_on_signals(stop_run);
   const Nanos total = from_seconds(length.seconds);
   const auto wall_start = std::chrono::steady_clock::now();
   drive_virtual(driver, session, control, total, g_stop_run, [&] {

@@ -6,7 +6,6 @@
 
 #include <atomic>
 #include <cerrno>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -22,6 +21,7 @@
 #include "canhil/emulator/referee.hpp"
 #include "canhil/lockstep/conductor.hpp"
 #include "play_summary.hpp"
+#include "stop_signals.hpp"
 #include "team_processes.hpp"
 
 namespace canhil::app {
@@ -166,8 +166,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     std::printf("\n  waiting for %zu process(es), %g s at most\n", expected, attach_limit);
   }
   std::fflush(stdout);
-  std::signal(SIGINT, stop_external);
-  std::signal(SIGTERM, stop_external);
+  stop_on_signals(stop_external);
   const std::size_t attached = conductor.wait_attached(expected, from_seconds(attach_limit));
   int status = 0;
   const char* how = "done";

@@ -1,9 +1,9 @@
 #include "run_realtime.hpp"
 
 #include "canhil/emulator/laptop_link.hpp"
+#include "stop_signals.hpp"
 
 #include <atomic>
-#include <csignal>
 
 namespace canhil::app {
 namespace {
@@ -48,8 +48,7 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   FILE* out = output.out;
   emulator::RealtimeDriver driver(session, options);
   const Nanos start = driver.start_time();
-  std::signal(SIGINT, stop_realtime);
-  std::signal(SIGTERM, stop_realtime);
+  stop_on_signals(stop_realtime);
   char length[32] = "until Ctrl-C";
   if (output.length.seconds > 0) std::snprintf(length, sizeof length, "%g s", output.length.seconds);
   const emulator::Scenario& sc = session.scenario();

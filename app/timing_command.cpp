@@ -4,7 +4,6 @@
 // shorter than the longest period) unless --allow-empty.
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +16,7 @@
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "log_file.hpp"
+#include "stop_signals.hpp"
 #include "svg_plot.hpp"
 
 namespace canhil::app {
@@ -62,7 +62,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
     bus->set_error_mask(frames::kErrorClassMask);  // error frames count toward the load and the report
     const can_nodes::WallClock clock;
     const Nanos end = clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds));
-    std::signal(SIGINT, stop_timing);
+    stop_on_signals(stop_timing);
     if (!json)
       std::fprintf(stderr, "canhil timing: listening on %s for %.0f s (Ctrl-C stops early)\n", source.c_str(), seconds);
     while (!g_stop_timing && clock.now() < end) {

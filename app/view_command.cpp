@@ -2,13 +2,13 @@
 // (viewer::ReplayFeed): the page plays the world log with a timeline and
 // shows the trace's frames around its cursor. Serves until Ctrl-C (or --duration).
 #include <atomic>
-#include <csignal>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/viewer/replay_feed.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "run_view.hpp"
+#include "stop_signals.hpp"
 
 namespace canhil::app {
 namespace {
@@ -45,8 +45,7 @@ int run_view(Args& args, const std::optional<std::string>& dbc) {
   std::printf("canhil view: %s: %zu rows, %zu robot(s), %zu event(s)%s\n", world_log.c_str(), feed->rows(),
               feed->robots(), feed->events().size(), trace ? (", trace " + *trace).c_str() : "");
   const auto server = start_viewer(view, *feed, "canhil view", stdout, /*required=*/true);
-  std::signal(SIGINT, stop_view);
-  std::signal(SIGTERM, stop_view);
+  stop_on_signals(stop_view);
   serve_until(g_stop_view, duration.value_or(1e9));
   return 0;
 }
