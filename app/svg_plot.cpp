@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "canhil/base/xml_text.hpp"
+
 namespace canhil::app {
 namespace {
 
@@ -17,21 +19,6 @@ constexpr double kTop = 40;
 constexpr double kBottom = 50;
 const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
                                 "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22"};
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else if (c == '&')
-      out += "&amp;";
-    else
-      out += c;
-  }
-  return out;
-}
 
 double nice_step(double span) {
   const double raw = span / 6;
@@ -77,7 +64,7 @@ void plot_one(std::ostringstream& os, const physics::Plot& p, double y0) {
   const double ph = kHeight - kTop - kBottom;
   auto X = [&](double x) { return kLeft + (x - xmin) / (xmax - xmin) * pw; };
   auto Y = [&](double y) { return y0 + kTop + ph - (y - ymin) / (ymax - ymin) * ph; };
-  os << "<text x='" << kWidth / 2 << "' y='" << y0 + 22 << "' text-anchor='middle' font-size='15'>" << escape(p.title)
+  os << "<text x='" << kWidth / 2 << "' y='" << y0 + 22 << "' text-anchor='middle' font-size='15'>" << xml_text(p.title)
      << "</text>\n";
   os << "<rect x='" << kLeft << "' y='" << y0 + kTop << "' width='" << pw << "' height='" << ph
      << "' fill='none' stroke='#444'/>\n";
@@ -98,9 +85,9 @@ void plot_one(std::ostringstream& os, const physics::Plot& p, double y0) {
        << num(t) << "</text>\n";
   }
   os << "<text x='" << kLeft + pw / 2 << "' y='" << y0 + kHeight - 10 << "' text-anchor='middle' font-size='12'>"
-     << escape(p.x_label) << "</text>\n";
+     << xml_text(p.x_label) << "</text>\n";
   os << "<text transform='translate(16," << y0 + kTop + ph / 2 << ") rotate(-90)' text-anchor='middle' font-size='12'>"
-     << escape(p.y_label) << "</text>\n";
+     << xml_text(p.y_label) << "</text>\n";
   for (std::size_t k = 0; k < p.series.size(); ++k) {
     const auto& s = p.series[k];
     const char* colour = kColours[k % std::size(kColours)];
@@ -113,7 +100,7 @@ void plot_one(std::ostringstream& os, const physics::Plot& p, double y0) {
     os << "'/>\n";
     os << "<rect x='" << kLeft + pw - 190 << "' y='" << y0 + kTop + 8 + 16 * static_cast<double>(k)
        << "' width='10' height='10' fill='" << colour << "'/><text x='" << kLeft + pw - 175 << "' y='"
-       << y0 + kTop + 17 + 16 * static_cast<double>(k) << "' font-size='11'>" << escape(s.name) << "</text>\n";
+       << y0 + kTop + 17 + 16 * static_cast<double>(k) << "' font-size='11'>" << xml_text(s.name) << "</text>\n";
   }
 }
 

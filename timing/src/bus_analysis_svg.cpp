@@ -4,6 +4,7 @@
 #include <sstream>
 #include <string>
 
+#include "canhil/base/xml_text.hpp"
 #include "canhil/timing/bus_analysis.hpp"
 
 namespace canhil::timing {
@@ -13,22 +14,6 @@ constexpr double kLeft = 150;   // room for the row labels
 constexpr double kWidth = 900;  // the time axis
 constexpr double kRow = 26;
 constexpr double kTop = 50;
-
-std::string esc(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '<') {
-      out += "&lt;";
-    } else if (c == '>') {
-      out += "&gt;";
-    } else if (c == '&') {
-      out += "&amp;";
-    } else {
-      out += c;
-    }
-  }
-  return out;
-}
 
 struct Svg {
   std::ostringstream os;
@@ -41,13 +26,13 @@ struct Svg {
     if (title.empty()) {
       os << "/>\n";
     } else {
-      os << "><title>" << esc(title) << "</title></rect>\n";  // the frame's name where the picture is hovered
+      os << "><title>" << xml_text(title) << "</title></rect>\n";  // the frame's name where the picture is hovered
     }
   }
   void text(double x, double y, const std::string& t, const char* extra = "") {
     char b[128];
     std::snprintf(b, sizeof b, "<text x=\"%.2f\" y=\"%.2f\" font-size=\"12\" %s>", x, y, extra);
-    os << b << esc(t) << "</text>\n";
+    os << b << xml_text(t) << "</text>\n";
   }
 };
 
