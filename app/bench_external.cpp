@@ -1,10 +1,20 @@
 // app/bench_external.cpp — `canhil bench --part external` (bench_external.hpp).
 #include "bench_external.hpp"
 
+#include <linux/futex.h>
 #include <sched.h>
+#include <sys/mman.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <new>
+#include <optional>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
@@ -37,6 +47,48 @@ class PinnedToCore {
   cpu_set_t before_{};
   bool pinned_ = false;
 };
+
+constexpr int kRoundTrips = 20000;
+
+long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value) {
+  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, nullptr, nullptr, 0);
+}
+
+// The floor under every hand-over of the lockstep: a second process (this
+// one's child, on the same cores as this thread) woken through a futex word
+// in shared memory, which wakes this one back, `rounds` times. The mean wall
+// time of one round trip, or nothing if the child could not be started.
+std::optional<Nanos> bare_round_trip(int rounds) {
+  static_assert(std::atomic<std::uint32_t>::is_always_lock_free, "a futex word shared between processes");
+  void* shared =
+      ::mmap(nullptr, sizeof(std::atomic<std::uint32_t>), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  if (shared == MAP_FAILED) return std::nullopt;
+  auto* turn = new (shared) std::atomic<std::uint32_t>(0);  // 0: this process's turn, 1: the child's
+  const pid_t child = ::fork();
+  if (child == 0) {
+    for (int i = 0; i < rounds; ++i) {
+      while (turn->load(std::memory_order_acquire) != 1) futex(turn, FUTEX_WAIT, 0);
+      turn->store(0, std::memory_order_release);
+      futex(turn, FUTEX_WAKE, 1);
+    }
+    ::_exit(0);
+  }
+  std::optional<Nanos> mean;
+  if (child > 0) {
+    const Nanos start = lockstep::wall_clock();
+    for (int i = 0; i < rounds; ++i) {
+      turn->store(1, std::memory_order_release);
+      futex(turn, FUTEX_WAKE, 1);
+      while (turn->load(std::memory_order_acquire) != 0) futex(turn, FUTEX_WAIT, 1);
+    }
+    mean = (lockstep::wall_clock() - start) / rounds;
+    int status = 0;
+    while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+    }
+  }
+  ::munmap(shared, sizeof(std::atomic<std::uint32_t>));
+  return mean;
+}
 
 // The same scenario in-process, virtual time, everything on: its wall time.
 Nanos in_process_wall(const emulator::Scenario& sc, double seconds,
@@ -111,6 +163,24 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   }
   const double handover = to_seconds(fig.waited) - running;
   std::printf("    hand-overs (wake-ups, context switches):           %7.3f s %3.0f %%\n", handover, share(handover));
+  // What no lockstep can go below here: each wait of a process costs at least
+  // one bare round trip between two processes.
+  std::uint64_t waits = 0;
+  for (const lockstep::ProcessReport& p : fig.processes) waits += p.blocks;
+  if (const auto trip = bare_round_trip(kRoundTrips)) {
+    const double floor = to_seconds(in_process) + static_cast<double>(waits) * to_seconds(*trip);
+    std::printf(
+        "  the floor on this machine: one bare hand-over between two processes (a futex, there and back, %s): "
+        "%.1f us\n",
+        pin.pinned() ? "on this core" : "not pinned", to_seconds(*trip) * 1e6);
+    std::printf(
+        "    the processes' %llu waits at that cost alone: %.3f s; with the in-process run's %.3f s, at best %.2f of "
+        "the in-process speed\n",
+        static_cast<unsigned long long>(waits), static_cast<double>(waits) * to_seconds(*trip), to_seconds(in_process),
+        to_seconds(in_process) / floor);
+  } else {
+    std::printf("  the floor on this machine: NOT MEASURED (no second process could be started)\n");
+  }
   return factor >= kTarget;
 }
 

@@ -208,9 +208,11 @@ TEST(VcanExternal, TheBenchPrintsBothFactorsAndWhereTheWallTimeWent) {
   // Wall-clock figures: printed, never judged here (the exit status says met or missed).
   const Finished f = canhil("bench --part external --seconds 2", "bench");
   EXPECT_TRUE(exit_status(f) == 0 || exit_status(f) == 1) << f.output;
-  for (const char* line : {"in-process, canhil's handler and agent:", "external processes in lockstep:",
-                           "target >= 20x", "external / in-process, in this run:", "canhil, lockstep work",
-                           "canhil-hwcomm    running", "canhil-agent     running", "hand-overs"}) {
+  for (const char* line :
+       {"in-process, canhil's handler and agent:", "external processes in lockstep:", "target >= 20x",
+        "external / in-process, in this run:", "canhil, lockstep work", "canhil-hwcomm    running",
+        "canhil-agent     running", "hand-overs", "the floor on this machine: one bare hand-over between two processes",
+        "at that cost alone:", ", at best "}) {
     EXPECT_NE(f.output.find(line), std::string::npos) << line << "\n" << f.output;
   }
   EXPECT_NE(f.output.find("all on CPU 0"), std::string::npos) << f.output;
