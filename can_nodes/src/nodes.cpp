@@ -1,8 +1,13 @@
 #include "canhil/can_nodes/nodes.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
 
+#include "canhil/base/setup_error.hpp"
 #include "canhil/frames/wire.hpp"
 
 namespace canhil::can_nodes {
@@ -37,6 +42,13 @@ Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, c
 FttMaster::FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
                      Nanos first_ec)
     : Node(node_name(NodeId::kMaster), bus, std::move(set)), schedule_(schedule), first_ec_(first_ec) {
+  const auto longest = std::chrono::ceil<std::chrono::microseconds>(schedule_.longest_sync_window());
+  if (longest.count() > std::numeric_limits<std::uint16_t>::max()) {
+    throw SetupError("the synchronous window of EC " + std::to_string(schedule_.worst_ec()) + " is " +
+                     std::to_string(longest.count()) +
+                     " us, more than the trigger message's sync_window_us can say (at most 65535 us); raise the bit "
+                     "rate or spread the synchronous messages over more elementary cycles");
+  }
   bus.set_filters({});  // hears nothing
   wake_at(first_ec_);
 }
@@ -50,8 +62,10 @@ void FttMaster::step(Nanos now) {
   frames::Tm tm;
   tm.ec_counter = static_cast<std::uint16_t>(ec_ & 0xFFFF);
   tm.sync_bitmap = schedule_.bitmap(ec_);
+  // Rounded up: the window announced is never shorter than its frames need
+  // (at a bit rate whose bit is not a whole microsecond, e.g. 800 kbit/s).
   tm.sync_window_us = static_cast<std::uint16_t>(
-      std::chrono::duration_cast<std::chrono::microseconds>(schedule_.sync_window(tm.sync_bitmap)).count());
+      std::chrono::ceil<std::chrono::microseconds>(schedule_.sync_window(tm.sync_bitmap)).count());
   emit(messages().tm.encode(tm), now);
   ++ec_;
   wake_at(first_ec_ + ec * static_cast<std::int64_t>(ec_));

@@ -5,11 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <chrono>
 #include <map>
+#include <string>
+#include <vector>
 
+#include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/can_nodes/virtual_time.hpp"
 #include "support/counter_watch.hpp"
+#include "support/laptop_endpoint.hpp"
 #include "support/node_rig.hpp"
 #include "support/test_paths.hpp"
 
@@ -278,6 +284,62 @@ TEST_F(NodesTest, FaultHookDropsDelaysCorruptsAndDuplicates) {
   frames::M3 m3;
   ASSERT_TRUE(set_->m3[0].decode(laptop_.with_id(0x111)[0].frame, m3).ok());
   EXPECT_EQ(m3.seq, 0x80) << "seq byte corrupted";
+}
+
+// The master alone on a memory bus at a bit rate whose bit is 1.25 us: the
+// window each TM announces is the schedule's rounded up to a microsecond, never
+// shorter than the frames due need (truncating it did, by up to 1 us).
+TEST(FttMasterWindow, TheAnnouncedWindowIsTheSchedulesRoundedUp) {
+  const auto set = frames::MessageSet::load(test::shipped_dbc());
+  frames::FttConfig config;
+  config.bit_rate = 800'000;
+  const frames::FttSchedule schedule(*set, config);
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  const auto endpoint = bus.attach("master");
+  FttMaster master(*endpoint, set, schedule, Nanos{0});
+  test::LaptopEndpoint laptop(bus, set, config.elementary_cycle);
+  VirtualTime run(clock);
+  run.add(master);
+  run.add(laptop);
+  run.run_until(295ms);
+  const auto tms = laptop.decoded(set->tm);
+  ASSERT_EQ(tms.size(), 30u);
+  int fractional = 0;
+  for (std::size_t k = 0; k < tms.size(); ++k) {
+    const Nanos needed = schedule.sync_window(tms[k].sync_bitmap);
+    const Nanos announced = std::chrono::microseconds(tms[k].sync_window_us);
+    EXPECT_GE(announced, needed) << "EC " << k;
+    EXPECT_LT(announced - needed, 1us) << "EC " << k;
+    fractional += needed % 1us != Nanos{0} ? 1 : 0;
+  }
+  EXPECT_GT(fractional, 0) << "at 800 kbit/s some windows are not whole microseconds";
+}
+
+// A window the TM's 16-bit field cannot carry is refused with what to do,
+// never sent wrapped round.
+TEST(FttMasterWindow, AWindowLongerThanTheFieldCanSayIsRefused) {
+  const auto set = frames::MessageSet::load(test::shipped_dbc());
+  frames::FttConfig config;
+  config.elementary_cycle = 200ms;
+  const std::vector<frames::FttEntry> entries = {
+      {"TM", frames::FttKind::kTrigger, -1, 200ms, 100us},
+      {"SLOW", frames::FttKind::kSync, 0, 200ms, 70ms},
+  };
+  const frames::FttSchedule schedule(entries, config);
+  ASSERT_TRUE(schedule.fits());
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  const auto endpoint = bus.attach("master");
+  try {
+    FttMaster master(*endpoint, set, schedule, Nanos{0});
+    ADD_FAILURE() << "a 70 ms window was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("is 70020 us, more than the trigger message's sync_window_us can say"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("raise the bit rate"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
