@@ -45,6 +45,7 @@
 #include "canhil/frames/ftt.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "private_rtdb.hpp"
 #include "run_external.hpp"
 
 namespace canhil::app {
@@ -199,9 +200,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
     external.shim = find_timeshim();
     external.team_preload = preload_shim_into_self(external.shim);
   }
-  if (std::getenv("RTDB_KEY") == nullptr) {
-    setenv("RTDB_KEY", std::to_string(0x57000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
-  }
+  use_private_rtdb_keys(kBenchKeyPrefix);
   const auto messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   bool all_met = true;
   if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;

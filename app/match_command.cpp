@@ -31,6 +31,7 @@
 #include "match_jobs.hpp"
 #include "match_records.hpp"
 #include "match_report.hpp"
+#include "private_rtdb.hpp"
 #include "run_external.hpp"
 #include "stop_signals.hpp"
 #include "team_processes.hpp"
@@ -272,9 +273,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   match.half_s = 60 * half_minutes.value_or(10);
   emulator::SessionOptions options;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-  if (std::getenv("RTDB_KEY") == nullptr) {  // keys of this process, never a live robot's database
-    setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
-  }
+  use_private_rtdb_keys(kRunKeyPrefix);  // keys of this process, never a live robot's database
   int match_number = 0;
   if (external) {
     // Before anything is printed: canhil may start itself again, with the shim preloaded.

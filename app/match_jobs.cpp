@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "canhil/base/setup_error.hpp"
+#include "private_rtdb.hpp"
 
 namespace canhil::app {
 namespace {
@@ -82,7 +83,8 @@ std::optional<std::string> read_line(int fd, std::string& buffer) {
 [[noreturn]] void worker_main(int in, int out, int index, const MatchJobs& jobs) {
   // Its own RTDB keys: never another worker's, nor a robot's.
   const char* base = std::getenv("RTDB_KEY");
-  const long key = (base != nullptr ? std::strtol(base, nullptr, 0) : 0x58000000L) + ((index + 1L) << 16);
+  const long key =
+      (base != nullptr ? std::strtol(base, nullptr, 0) : static_cast<long>(kRunKeyPrefix) << 24) + ((index + 1L) << 16);
   setenv("RTDB_KEY", std::to_string(key).c_str(), 1);
   std::string buffer;
   while (const auto line = read_line(in, buffer)) {

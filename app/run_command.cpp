@@ -23,6 +23,7 @@
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "play_summary.hpp"
+#include "private_rtdb.hpp"
 #include "run_external.hpp"
 #include "run_realtime.hpp"
 #include "run_view.hpp"
@@ -320,10 +321,8 @@ RunSetup set_up(emulator::RunPlan plan, const RunRequest& q, emulator::RunContro
 int run_run(Args& args, const std::optional<std::string>& dbc) {
   const RunRequest q = read_request(args);
   const emulator::RunMode mode = q.overrides.mode;
-  if (mode != emulator::RunMode::kRealtime && std::getenv("RTDB_KEY") == nullptr) {
-    // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
-    setenv("RTDB_KEY", std::to_string(0x58000000 + ((getpid() & 0xFFFF) << 8)).c_str(), 1);
-  }
+  // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
+  if (mode != emulator::RunMode::kRealtime) use_private_rtdb_keys(kRunKeyPrefix);
   emulator::RunPlan plan = make_plan(q, dbc);
   if (mode == emulator::RunMode::kRealtime) {
     emulator::RealtimeOptions rt;

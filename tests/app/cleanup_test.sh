@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# cleanup_test.sh BUILD_DIR — what a canhil process leaves on the machine.
+# A command whose output's reader goes away (`canhil run | head`) stops as
+# Ctrl-C stops it, removing what it set up, and then ends by SIGPIPE as the
+# shell expects (status 141):
+# - `canhil run --virtual-time`: its RTDB's shared memory segments and its
+#   control socket are gone;
+# - `canhil match --jobs 2`: the batch stops early (its last progress line
+#   counts fewer matches than asked for) and no worker's segments are left.
+# A run killed outright (SIGKILL) cannot clean up: the next run removes the
+# segments it left (its own kind of key, nobody attached, its creator gone).
+# Every run stops within a second of virtual time: cheap under the sanitizers.
+set -euo pipefail
+build=$1
+cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+canhil="$build/app/canhil"
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+# Keys of this test only (a process's sets: base, base + 64; a match worker's:
+# base + its number << 16).
+base=$((0x56000000 + (($$ & 0xFF) << 8)))
+failed=0
+fail() { echo "FAIL: $*"; failed=1; }
+# Segments whose key is in [LO, HI).
+segments_in() {
+  local key rest
+  ipcs -m | while read -r key rest; do
+    [[ $key == 0x* ]] && ((key >= $1 && key < $2)) && echo "$key"
+  done || true
+}
+# The run's and the workers' segments, keys in [base, base + 0x40000).
+left_segments() { segments_in "$base" $((base + 0x40000)); }
+
+# pipefail off while canhil writes into head: its own status is the point.
+set +o pipefail
+RTDB_KEY=$base "$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --duration 600 --no-view \
+  --control "$dir/control" 2> "$dir/run.err" | head -n 2 > "$dir/run.out"
+status=${PIPESTATUS[0]}
+set -o pipefail
+[[ $status == 141 ]] || fail "canhil run ended with status $status, not by SIGPIPE (141): $(cat "$dir/run.err")"
+[[ $(wc -l < "$dir/run.out") == 2 ]] || fail "canhil run printed $(wc -l < "$dir/run.out") lines before its reader left"
+[[ ! -e "$dir/control" ]] || fail "canhil run left its control socket $dir/control"
+[[ -z "$(left_segments)" ]] || fail "canhil run left shared memory segments: $(left_segments | tr '\n' ' ')"
+
+set +o pipefail
+RTDB_KEY=$base "$canhil" match emulator/scenarios/two_teams.toml --seeds 1..400 --jobs 2 --halves 1 \
+  --half-minutes 0.05 --no-records 2> "$dir/match.err" | head -n 1 > /dev/null
+status=${PIPESTATUS[0]}
+set -o pipefail
+[[ $status == 141 ]] || fail "canhil match ended with status $status, not by SIGPIPE (141): $(tail -3 "$dir/match.err")"
+done_line=$(grep -o '[0-9]*/400 done' "$dir/match.err" | tail -1 || true)
+[[ -n "$done_line" && "${done_line%%/*}" -lt 400 ]] ||
+  fail "canhil match went on after its reader left (last progress: '${done_line:-none}')"
+[[ -z "$(left_segments)" ]] || fail "canhil match left shared memory segments: $(left_segments | tr '\n' ' ')"
+
+# Killed outright, a run in virtual time paced at real time leaves its
+# segments (keys 0x58000000 + its pid << 8); the next run removes them.
+"$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --duration 600 --speed 1 --no-view \
+  --no-control --quiet > "$dir/killed.out" 2>&1 &
+killed=$!
+killed_base=$((0x58000000 + ((killed & 0xFFFF) << 8)))
+for _ in $(seq 300); do
+  [[ -n "$(segments_in "$killed_base" $((killed_base + 0x100)))" ]] && break
+  sleep 0.1
+done
+kill -KILL "$killed"
+wait "$killed" 2> /dev/null || true
+orphans=$(segments_in "$killed_base" $((killed_base + 0x100)) | wc -l)
+if [[ $orphans == 0 ]]; then
+  fail "the run to be killed had no segments after 30 s: $(cat "$dir/killed.out")"
+else
+  "$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --duration 0.1 --no-view --no-control \
+    --quiet > "$dir/next.out" 2>&1 || fail "the next run failed: $(cat "$dir/next.out")"
+  [[ -z "$(segments_in "$killed_base" $((killed_base + 0x100)))" ]] ||
+    fail "the next run left the $orphans segments of the killed one: $(segments_in "$killed_base" $((killed_base + 0x100)) | tr '\n' ' ')"
+fi
+
+# A sanitizer's report never hides behind the signal the process ended by.
+if grep -l -E "Sanitizer|runtime error:" "$dir/run.err" "$dir/match.err" "$dir/next.out"; then
+  fail "a sanitizer reported: $(grep -h -A5 -E "Sanitizer|runtime error:" "$dir"/*.err "$dir/next.out" | head -20)"
+fi
+
+[[ $failed == 0 ]] || exit 1
+echo "cleanup: run and match stopped on SIGPIPE (141) with nothing left behind (match: $done_line);" \
+  "the $orphans segments of a killed run removed by the next"
