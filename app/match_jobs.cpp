@@ -81,11 +81,7 @@ std::optional<std::string> read_line(int fd, std::string& buffer) {
 }
 
 [[noreturn]] void worker_main(int in, int out, int index, const MatchJobs& jobs) {
-  // Its own RTDB keys: never another worker's, nor a robot's.
-  const char* base = std::getenv("RTDB_KEY");
-  const long key =
-      (base != nullptr ? std::strtol(base, nullptr, 0) : static_cast<long>(kRunKeyPrefix) << 24) + ((index + 1L) << 16);
-  setenv("RTDB_KEY", std::to_string(key).c_str(), 1);
+  use_worker_rtdb_keys(index);  // its own RTDB keys: never another worker's, nor a robot's
   std::string buffer;
   while (const auto line = read_line(in, buffer)) {
     char* end = nullptr;

@@ -1,21 +1,28 @@
 // app/private_rtdb.hpp — the RTDB keys of a canhil process that plays its own
-// robots (a run in virtual time, a match, a benchmark): keys of this process,
-// so that it never meets a live robot's database, and the leftovers of
-// earlier such processes removed. A canhil killed outright (SIGKILL, a crash)
-// cannot remove its shared memory; the next one does, for its own kind of key.
+// robots (a run in virtual time, a match and its workers, a benchmark): keys
+// of this process, so that it never meets a live robot's database nor another
+// such process's, and the leftovers of earlier such processes removed. A
+// canhil killed outright (SIGKILL, a crash) cannot remove its shared memory;
+// the next one does, for its own kind of key.
 #pragma once
 
 namespace canhil::app {
 
-/// The first byte of the keys canhil's runs and matches use (a match's worker
-/// adds its number << 16), and of the benchmark's.
+/// The first byte of the keys canhil's runs and matches use, and of the benchmark's.
 inline constexpr unsigned kRunKeyPrefix = 0x58;
 inline constexpr unsigned kBenchKeyPrefix = 0x57;
 
 /// Removes the shared memory segments whose key starts with `prefix`, of this
 /// user, that no process is attached to and whose creator has ended; then,
-/// unless the user set RTDB_KEY, sets it to `prefix` << 24 plus this
-/// process's id << 8. Returns how many segments it removed.
+/// unless the user set RTDB_KEY, sets it to a range of 256 keys of its own:
+/// `prefix` << 24 plus this process's id << 8 (the id's low 16 bits), or the
+/// next range no segment is in when another process holds that one (their
+/// ids share the low bits). Returns how many segments it removed.
 int use_private_rtdb_keys(unsigned prefix);
+
+/// In a match's worker process (`worker` from 0): its own range, chosen as
+/// use_private_rtdb_keys() chose the batch's, when canhil chose that; when the
+/// user set RTDB_KEY, the user's key plus (worker + 1) << 16.
+void use_worker_rtdb_keys(int worker);
 
 }  // namespace canhil::app

@@ -9,6 +9,7 @@
 #   counts fewer matches than asked for) and no worker's segments are left.
 # A run killed outright (SIGKILL) cannot clean up: the next run removes the
 # segments it left (its own kind of key, nobody attached, its creator gone).
+# A run never takes a key range a live process holds.
 # Every run stops within a second of virtual time: cheap under the sanitizers.
 set -euo pipefail
 build=$1
@@ -75,11 +76,36 @@ else
     fail "the next run left the $orphans segments of the killed one: $(segments_in "$killed_base" $((killed_base + 0x100)) | tr '\n' ' ')"
 fi
 
+# A run whose key range a live process holds (their ids share the low 16
+# bits, or another run stepped into it) takes the next free range and never
+# touches that process's segment (the RTDB would take a segment of another
+# size that nobody is attached to for a stale one of its own and remove it).
+set +e
+(
+  key=$((0x58000000 + ((BASHPID & 0xFFFF) << 8)))
+  perl -e 'shmget($ARGV[0], 64, 01000 | 0600) // die "shmget: $!\n"; sleep 120' "$key" > /dev/null 2>&1 &
+  echo "$key $!" > "$dir/holder"
+  for _ in $(seq 100); do
+    [[ -n "$(segments_in "$key" $((key + 1)))" ]] && break
+    sleep 0.1
+  done
+  exec "$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --duration 0.1 --no-view --no-control \
+    --quiet > "$dir/held.out" 2>&1
+)
+status=$?
+set -e
+read -r held holder < "$dir/holder"
+[[ $status == 0 ]] || fail "a run beside a held key range ended with status $status: $(cat "$dir/held.out")"
+[[ -n "$(segments_in "$held" $((held + 1)))" ]] ||
+  fail "a run removed the segment a live process holds at $(printf '0x%08x' "$held") (its own key range)"
+kill "$holder" 2> /dev/null || true
+ipcrm -M "$held" 2> /dev/null || true
+
 # A sanitizer's report never hides behind the signal the process ended by.
-if grep -l -E "Sanitizer|runtime error:" "$dir/run.err" "$dir/match.err" "$dir/next.out"; then
+if grep -l -E "Sanitizer|runtime error:" "$dir/run.err" "$dir/match.err" "$dir/next.out" "$dir/held.out"; then
   fail "a sanitizer reported: $(grep -h -A5 -E "Sanitizer|runtime error:" "$dir"/*.err "$dir/next.out" | head -20)"
 fi
 
 [[ $failed == 0 ]] || exit 1
 echo "cleanup: run and match stopped on SIGPIPE (141) with nothing left behind (match: $done_line);" \
-  "the $orphans segments of a killed run removed by the next"
+  "the $orphans segments of a killed run removed by the next; a held key range left alone"
