@@ -440,7 +440,8 @@ int sigwait(const sigset_t* set, int* signal) {
 
 int sigtimedwait(const sigset_t* set, siginfo_t* info, const timespec* timeout) {
   CANHIL_REAL(sigtimedwait);
-  if (!shim::active() || timeout == nullptr) return sigwaitinfo(set, info);
+  if (timeout == nullptr) return sigwaitinfo(set, info);
+  if (!shim::active()) return real_sigtimedwait(set, info, timeout);
   // The signals waited for are blocked, so they stay pending: check, then wait for canhil's next change.
   const timespec zero{0, 0};
   int result = 0;

@@ -191,6 +191,19 @@ int hook() {
   return 0;
 }
 
+// A wait for a signal with a timeout (SIGUSR1 blocked, never sent): it ends
+// by the timeout, whether the shim plays a run's clock or not.
+int signal_wait() {
+  sigset_t usr1;
+  sigemptyset(&usr1);
+  sigaddset(&usr1, SIGUSR1);
+  sigprocmask(SIG_BLOCK, &usr1, nullptr);
+  const timespec tenth{0, 100'000'000};
+  const int got = sigtimedwait(&usr1, nullptr, &tenth);
+  say(got < 0 && errno == EAGAIN ? "sigtimedwait-timeout" : "sigtimedwait-wrong");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -204,6 +217,9 @@ int main(int argc, char** argv) {
   if (mode == "blocked") return blocked();
   if (mode == "patient") return patient();
   if (mode == "hook") return hook();
-  std::fprintf(stderr, "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient|hook\n");
+  if (mode == "sigtimedwait") return signal_wait();
+  std::fprintf(stderr,
+               "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient|hook|"
+               "sigtimedwait\n");
   return 2;
 }
