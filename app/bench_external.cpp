@@ -4,6 +4,7 @@
 #include <linux/futex.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/prctl.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <new>
@@ -50,24 +52,41 @@ class PinnedToCore {
 
 constexpr int kRoundTrips = 20000;
 
-long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value) {
-  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, nullptr, nullptr, 0);
+long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const timespec* timeout = nullptr) {
+  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
+}
+
+// Waits until `word` is `wanted` (it is `other` until then), looking every
+// 100 ms whether `partner_gone()` says there is nobody left to change it.
+// False when there is not.
+template <typename Gone>
+bool await(std::atomic<std::uint32_t>* word, std::uint32_t wanted, std::uint32_t other, Gone&& partner_gone) {
+  const timespec look{0, 100'000'000};
+  while (word->load(std::memory_order_acquire) != wanted) {
+    if (futex(word, FUTEX_WAIT, other, &look) < 0 && errno == ETIMEDOUT && partner_gone()) return false;
+  }
+  return true;
 }
 
 // The floor under every hand-over of the lockstep: a second process (this
 // one's child, on the same cores as this thread) woken through a futex word
 // in shared memory, which wakes this one back, `rounds` times. The mean wall
-// time of one round trip, or nothing if the child could not be started.
+// time of one round trip, or nothing if the child could not be started or
+// died on the way.
 std::optional<Nanos> bare_round_trip(int rounds) {
   static_assert(std::atomic<std::uint32_t>::is_always_lock_free, "a futex word shared between processes");
   void* shared =
       ::mmap(nullptr, sizeof(std::atomic<std::uint32_t>), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (shared == MAP_FAILED) return std::nullopt;
   auto* turn = new (shared) std::atomic<std::uint32_t>(0);  // 0: this process's turn, 1: the child's
+  const pid_t parent = ::getpid();
   const pid_t child = ::fork();
   if (child == 0) {
-    for (int i = 0; i < rounds; ++i) {
-      while (turn->load(std::memory_order_acquire) != 1) futex(turn, FUTEX_WAIT, 0);
+    // The child never outlives the bench (Ctrl-C, a crash): it goes with its parent.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    const auto parent_gone = [&] { return ::getppid() != parent; };
+    for (int i = 0; i < rounds && !parent_gone(); ++i) {
+      if (!await(turn, 1, 0, parent_gone)) break;
       turn->store(0, std::memory_order_release);
       futex(turn, FUTEX_WAKE, 1);
     }
@@ -75,15 +94,22 @@ std::optional<Nanos> bare_round_trip(int rounds) {
   }
   std::optional<Nanos> mean;
   if (child > 0) {
+    bool reaped = false;
+    const auto child_gone = [&] {
+      reaped = ::waitpid(child, nullptr, WNOHANG) == child;
+      return reaped;
+    };
     const Nanos start = lockstep::wall_clock();
-    for (int i = 0; i < rounds; ++i) {
+    bool answered = true;
+    for (int i = 0; i < rounds && answered; ++i) {
       turn->store(1, std::memory_order_release);
       futex(turn, FUTEX_WAKE, 1);
-      while (turn->load(std::memory_order_acquire) != 0) futex(turn, FUTEX_WAIT, 1);
+      answered = await(turn, 0, 1, child_gone);
     }
-    mean = (lockstep::wall_clock() - start) / rounds;
-    int status = 0;
-    while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+    if (answered) mean = (lockstep::wall_clock() - start) / rounds;  // a child that died measured nothing
+    if (!reaped) {
+      while (::waitpid(child, nullptr, 0) < 0 && errno == EINTR) {
+      }
     }
   }
   ::munmap(shared, sizeof(std::atomic<std::uint32_t>));
