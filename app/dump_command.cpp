@@ -18,9 +18,6 @@ namespace {
 
 using namespace canhil::frames;
 
-std::atomic<bool> g_stop_dump{false};
-extern "C" void on_signal(int) { g_stop_dump = true; }
-
 /// Prints frames as they come and keeps the counts for the summary.
 class Printer {
  public:
@@ -118,7 +115,7 @@ int dump_log(const Codec& codec, const std::string& path, bool json, long long h
 int dump_live(const Codec& codec, const std::string& iface, bool json, long long count, double seconds) {
   auto bus = can_nodes::SocketCanBus::open(iface);
   bus->set_error_mask(frames::kErrorClassMask);
-  stop_on_signals(on_signal);
+  stop_on_signals();
   const can_nodes::WallClock clock;
   const Nanos deadline =
       seconds > 0 ? clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds)) : kNever;
@@ -127,11 +124,13 @@ int dump_live(const Codec& codec, const std::string& iface, bool json, long long
   if (last != can_nodes::BusState::kUp)
     std::fprintf(stderr, "canhil dump: %s is %s\n", iface.c_str(), can_nodes::state_name(last));
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  while (!g_stop_dump && (count < 0 || static_cast<long long>(printer.frames()) < count) && clock.now() < deadline) {
+  while (!g_stop && (count < 0 || static_cast<long long>(printer.frames()) < count) && clock.now() < deadline) {
     if (!bus->wait_readable(std::chrono::milliseconds(100))) {
       bus->refresh_state();
     }
-    while (auto f = bus->receive()) {
+    while (!g_stop) {  // a flood's backlog stops at Ctrl-C (or the reader gone) too
+      auto f = bus->receive();
+      if (!f) break;
       printer.print(f->time, iface, f->frame);
       if (count >= 0 && static_cast<long long>(printer.frames()) >= count) break;
     }

@@ -39,9 +39,6 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_match{false};
-extern "C" void stop_match(int) { g_stop_match = true; }
-
 // Whole numbers only, in a range.
 long whole(Args& args, const std::string& name, long fallback, long low, long high) {
   const std::optional<double> v = optional_number(args, name);
@@ -285,7 +282,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     options.external = true;
     match.driver = external_halves(how);
   }
-  stop_on_signals(stop_match);
+  stop_on_signals();
   const std::vector<std::string> names = {scenario.teams.at(0).name,
                                           scenario.teams.size() > 1 ? scenario.teams[1].name : std::string()};
   RecordContext context;
@@ -400,7 +397,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     emulator::Scenario one = scenario;
     one.seed = s;
     match_number = number;
-    return match_record(emulator::play_match(one, options, match, on_progress, &g_stop_match), context);
+    return match_record(emulator::play_match(one, options, match, on_progress, &g_stop), context);
   };
   if (!external) {
     MatchJobs jobs_of;
@@ -409,13 +406,13 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     jobs_of.done = done;
     jobs_of.progress = [&](std::uint64_t s, double played_s) { progress.update(s, played_s); };
     try {
-      play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop_match);
+      play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop);
     } catch (const SetupError& e) {
       progress.clear();
       throw UsageError(path + ": " + e.what());
     }
   } else {
-    for (std::size_t k = 0; k < seeds.size() && !g_stop_match; ++k) {
+    for (std::size_t k = 0; k < seeds.size() && !g_stop; ++k) {
       nlohmann::json record;
       try {
         record = play(static_cast<int>(k + 1), seeds[k], [&](double s) { progress.update(seeds[k], s); });
@@ -448,7 +445,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
           {"solver", solver_json(solver_total)}}},
         {"virtual_s", simulated},
         {"wall_s", wall},
-        {"stopped", g_stop_match.load() || stuck}};
+        {"stopped", g_stop.load() || stuck}};
     std::printf("%s\n", out.dump(2).c_str());
   } else if (played + failed > 1) {
     std::printf("over %ld matches: %s won %d, %s won %d, %d draw(s)%s; %.0f s of play in %.1f s (%s)\n", played,
@@ -462,7 +459,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     std::printf("records: %s (canhil match --report %s)\n", records_path.c_str(), records_path.c_str());
   }
   if (stuck) return kProcessStuckStatus;
-  if (g_stop_match) return 130;
+  if (g_stop) return 130;
   return failed > 0 ? 1 : 0;  // a match that failed is canhil's fault: a batch's CI must see it
 }
 

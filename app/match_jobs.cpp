@@ -106,6 +106,7 @@ std::optional<std::string> read_line(int fd, std::string& buffer) {
     }
     if (!write_all(out, reply)) break;
   }
+  release_private_rtdb_keys();
   std::fflush(nullptr);
   _exit(0);
 }
@@ -174,7 +175,14 @@ void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const
     pool.push_back(start(i, jobs, pool));
     hand_out(pool.back());
   }
+  bool told_to_stop = false;
   for (;;) {
+    if (stop && !told_to_stop) {  // each worker stops its match now, as the batch's own process would
+      for (const Worker& w : pool) {
+        if (w.pid > 0) ::kill(w.pid, SIGTERM);
+      }
+      told_to_stop = true;
+    }
     while (emitted < seeds.size() && finished.count(seeds[emitted]) != 0) jobs.done(finished[seeds[emitted++]]);
     std::vector<pollfd> fds;
     std::vector<std::size_t> which;

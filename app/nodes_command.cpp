@@ -14,9 +14,6 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_nodes{false};
-extern "C" void stop_on_signal(int) { g_stop_nodes = true; }
-
 // --emulate Motor1,Motor2,Motor3: the nodes canhil plays; the others are real boards on the bus.
 can_nodes::NodeSet parse_emulate(const std::string& text) {
   can_nodes::NodeSet set;
@@ -66,7 +63,7 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   emulator::RealtimeDriver driver(session, rt);
   const Nanos start = driver.start_time();
 
-  stop_on_signals(stop_on_signal);
+  stop_on_signals();
   const can_nodes::NodeSet emulated = session.scenario().emulate.at(0);
   std::printf("canhil nodes: robot on %s: %s (EC %.1f ms, %u bit/s)%s; physics every %.0f ms. Ctrl-C stops.\n",
               iface->c_str(), can_nodes::describe(emulated).c_str(), ec_ms, options.ftt.bit_rate,
@@ -76,8 +73,8 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   const Nanos end = duration_s > 0 ? start + from_seconds(duration_s) : kNever;
   Nanos next_report = start + std::chrono::seconds(5);
   const can_nodes::RobotNodes& nodes = *session.rig(0).nodes;
-  while (!g_stop_nodes && driver.clock().now() < end) {
-    driver.run_until(std::min(end, driver.clock().now() + std::chrono::seconds(1)), g_stop_nodes);
+  while (!g_stop && driver.clock().now() < end) {
+    driver.run_until(std::min(end, driver.clock().now() + std::chrono::seconds(1)), g_stop);
     for (const auto& [r, state] : driver.bus_state_changes()) {
       std::printf("canhil nodes: %s is %s\n", iface->c_str(), can_nodes::state_name(state));
       std::fflush(stdout);

@@ -16,9 +16,6 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_play{false};
-extern "C" void stop_play(int) { g_stop_play = true; }
-
 std::vector<frames::LogEntry> read_trace(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw UsageError("cannot read " + path);
@@ -75,12 +72,12 @@ int run_play(Args& args, const std::optional<std::string>&) {
   std::printf("canhil play: %s, %zu frame(s) over %.3f s, at %gx%s\n", path.c_str(), schedule.size(),
               to_seconds(schedule.span()), speed, loop ? ", looping (Ctrl-C ends)" : "");
   std::fflush(stdout);
-  stop_on_signals(stop_play);
+  stop_on_signals();
   can_nodes::WallClock clock;
   const Nanos start = clock.now() + std::chrono::milliseconds(20);
   std::uint64_t sent = 0, dropped = 0, skipped = 0, passes = 0;
   Nanos worst_late{0};
-  while (!g_stop_play) {
+  while (!g_stop) {
     const auto due = schedule.next();
     if (!due) break;
     passes = due->pass + 1;
@@ -90,8 +87,8 @@ int run_play(Args& args, const std::optional<std::string>&) {
       continue;
     }
     const Nanos deadline = start + due->at;
-    while (!g_stop_play && clock.now() < deadline) can_nodes::WallClock::sleep_until(deadline);
-    if (g_stop_play) break;
+    while (!g_stop && clock.now() < deadline) can_nodes::WallClock::sleep_until(deadline);
+    if (g_stop) break;
     worst_late = std::max(worst_late, clock.now() - deadline);
     if (bus->send(due->entry->frame) == can_nodes::SendStatus::kOk) {
       ++sent;
@@ -102,9 +99,9 @@ int run_play(Args& args, const std::optional<std::string>&) {
   std::printf(
       "canhil play: %s: %llu frame(s) sent in %llu pass(es), %llu not sent (interface down or queue full), "
       "%llu not mapped; worst lateness %.3f ms\n",
-      g_stop_play ? "stopped" : "done", static_cast<unsigned long long>(sent), static_cast<unsigned long long>(passes),
+      g_stop ? "stopped" : "done", static_cast<unsigned long long>(sent), static_cast<unsigned long long>(passes),
       static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(skipped), to_ms(worst_late));
-  return g_stop_play ? 130 : (dropped > 0 ? 1 : 0);
+  return g_stop ? 130 : (dropped > 0 ? 1 : 0);
 }
 
 }  // namespace canhil::app

@@ -17,12 +17,20 @@ inline constexpr unsigned kBenchKeyPrefix = 0x57;
 /// unless the user set RTDB_KEY, sets it to a range of 256 keys of its own:
 /// `prefix` << 24 plus this process's id << 8 (the id's low 16 bits), or the
 /// next range no segment is in when another process holds that one (their
-/// ids share the low bits). Returns how many segments it removed.
+/// ids share the low bits). The range is claimed from the moment it is
+/// chosen (a segment on its last key, which the RTDB leaves free), so that two
+/// processes starting together never choose one range. Returns how many
+/// segments it removed.
 int use_private_rtdb_keys(unsigned prefix);
 
 /// In a match's worker process (`worker` from 0): its own range, chosen as
 /// use_private_rtdb_keys() chose the batch's, when canhil chose that; when the
 /// user set RTDB_KEY, the user's key plus (worker + 1) << 16.
 void use_worker_rtdb_keys(int worker);
+
+/// Gives back the range this process claimed (main() at the end of every
+/// command, a worker before it ends). A process killed outright leaves its
+/// claim, an orphan that the next one removes.
+void release_private_rtdb_keys();
 
 }  // namespace canhil::app

@@ -20,9 +20,6 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_rtdb{false};
-extern "C" void stop_rtdb(int) { g_stop_rtdb = true; }
-
 int item_by_name(const std::string& name) {
   for (int i = 0; i < DB_item_count(); ++i) {
     if (name == DB_item_name(i)) return i;
@@ -150,7 +147,7 @@ int run_rtdb(Args& args) {
   struct Closer {
     ~Closer() { DB_free_all(0); }
   } closer;
-  stop_on_signals(stop_rtdb);
+  stop_on_signals();
 
   if (sub == "list") {
     std::printf("%-14s %-18s %-7s %7s %10s\n", "agent", "item", "kind", "bytes", "age");
@@ -174,7 +171,7 @@ int run_rtdb(Args& args) {
                 static_cast<long long>(std::chrono::duration_cast<std::chrono::milliseconds>(cfg.delay).count()),
                 cfg.loss);
     std::fflush(stdout);
-    rep.run([&clock] { return clock.now(); }, [](Nanos t) { can_nodes::WallClock::sleep_until(t); }, g_stop_rtdb);
+    rep.run([&clock] { return clock.now(); }, [](Nanos t) { can_nodes::WallClock::sleep_until(t); }, g_stop);
     std::printf("canhil rtdb replicate: %llu cycles, %llu copies, %llu lost\n",
                 static_cast<unsigned long long>(rep.stats().cycles),
                 static_cast<unsigned long long>(rep.stats().copied), static_cast<unsigned long long>(rep.stats().lost));
@@ -197,7 +194,7 @@ int run_rtdb(Args& args) {
                 age_text(age).c_str(), decode(words[2], raw).c_str());
     std::fflush(stdout);
     if (sub == "watch") std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  } while (sub == "watch" && !g_stop_rtdb);
+  } while (sub == "watch" && !g_stop);
   return 0;
 }
 

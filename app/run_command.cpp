@@ -34,9 +34,6 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_run{false};
-extern "C" void stop_run(int) { g_stop_run = true; }
-
 void write_file(const std::string& path, const std::string& text, const char* what) {
   std::ofstream out(path);
   out << text;
@@ -56,7 +53,7 @@ physics::WorldState load_world(const std::string& path) {
 void print_virtual_summary(const emulator::Session& session, const emulator::VirtualDriver& driver, double wall_s) {
   const double simulated = to_seconds(driver.now());
   std::printf("canhil run: %s after %.2f s of virtual time in %.2f s of wall time (%.0fx real time)\n",
-              g_stop_run ? "stopped" : "done", simulated, wall_s, wall_s > 0 ? simulated / wall_s : 0.0);
+              g_stop ? "stopped" : "done", simulated, wall_s, wall_s > 0 ? simulated / wall_s : 0.0);
   const Eigen::Vector3d b = session.world().ball_position();
   std::printf("  ball at (%.2f, %.2f)\n", b.x(), b.y());
   const auto& teams = session.scenario().teams;
@@ -95,10 +92,10 @@ int run_virtual(emulator::Session& session, const emulator::RunLength& length, c
   std::printf("canhil run: %zu robot(s), virtual time, %g s (%s), seed %llu, %zu fault rule(s)\n", sc.robot_count(),
               length.seconds, length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
   std::fflush(stdout);
-  stop_on_signals(stop_run);
+  stop_on_signals();
   const Nanos total = from_seconds(length.seconds);
   const auto wall_start = std::chrono::steady_clock::now();
-  drive_virtual(driver, session, control, total, g_stop_run, [&] {
+  drive_virtual(driver, session, control, total, g_stop, [&] {
     if (out.quiet) return;
     const emulator::WorldSnapshot s = session.snapshot();
     const auto o = driver.outcomes();
@@ -127,7 +124,7 @@ int run_virtual(emulator::Session& session, const emulator::RunLength& length, c
     write_file(*out.world_log, session.world_log(), "world log");
     std::printf("world log written to %s (CSV, one line every %g s)\n", out.world_log->c_str(), out.log_period_s);
   }
-  return g_stop_run ? 130 : 0;
+  return g_stop ? 130 : 0;
 }
 
 // The run's control socket (canhil coach, scripts): --control PATH (an error
@@ -335,7 +332,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     const RunSetup s = set_up(std::move(plan), q, nullptr);
     const int status = run_realtime(*s.session, rt, output);
     s.feed->set_ended();
-    hold_viewer(q.view, s.shown.get(), "canhil run", g_stop_run, stdout);
+    hold_viewer(q.view, s.shown.get(), "canhil run", g_stop, stdout);
     return status;
   }
   if (mode == emulator::RunMode::kExternal) {
@@ -368,7 +365,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   if (q.start_paused)
     std::printf("canhil run: paused at the start (resume or step from the viewer or the control socket)\n");
   const int status = run_virtual(*s.session, length, q.outputs, clock, *s.feed);
-  hold_viewer(q.view, s.shown.get(), "canhil run", g_stop_run, stdout);
+  hold_viewer(q.view, s.shown.get(), "canhil run", g_stop, stdout);
   return status;
 }
 

@@ -32,9 +32,6 @@ namespace fs = std::filesystem;
 constexpr const char* kRestartedVariable = "CANHIL_TIMESHIM_RESTARTED";
 constexpr const char* kTeamPreloadVariable = "CANHIL_TEAM_PRELOAD";
 
-std::atomic<bool> g_stop_run_external{false};
-extern "C" void stop_external(int) { g_stop_run_external = true; }
-
 void write_text(const std::string& path, const std::string& text, const char* what) {
   std::ofstream out(path);
   out << text;
@@ -166,7 +163,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     std::printf("\n  waiting for %zu process(es), %g s at most\n", expected, attach_limit);
   }
   std::fflush(stdout);
-  stop_on_signals(stop_external);
+  stop_on_signals();
   const std::size_t attached = conductor.wait_attached(expected, from_seconds(attach_limit));
   int status = 0;
   const char* how = "done";
@@ -182,7 +179,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     const Nanos total = from_seconds(run.length.seconds);
     std::size_t calls_shown = 0;
     try {
-      while (driver.now() < total && !g_stop_run_external) {
+      while (driver.now() < total && !g_stop) {
         driver.run_until(std::min<Nanos>(driver.now() + std::chrono::seconds(1), total));
         started.reap(driver.now());
         if (const std::string why = started.not_started(); !why.empty()) throw emulator::ProcessStuck(why);
@@ -206,7 +203,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
       status = kProcessStuckStatus;
       how = "stopped (a process did not answer, or never ran)";
     }
-    if (g_stop_run_external && status == 0) {
+    if (g_stop && status == 0) {
       status = 130;
       how = "stopped";
     }

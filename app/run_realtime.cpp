@@ -8,16 +8,13 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_run_realtime{false};
-extern "C" void stop_realtime(int) { g_stop_run_realtime = true; }
-
 void print_summary(FILE* out, const emulator::Session& session, const emulator::RealtimeDriver& driver, Nanos now) {
   const emulator::RealtimeStats st = driver.physics_stats();
   const physics::World& world = session.world();
   const Eigen::Vector3d b = world.ball_position();
   std::fprintf(out,
                "canhil run: %s after %.2f s; physics steps %llu, late %llu, skipped %llu, worst lateness %.1f ms\n",
-               g_stop_run_realtime ? "stopped" : "done", to_seconds(now - driver.start_time()),
+               g_stop ? "stopped" : "done", to_seconds(now - driver.start_time()),
                static_cast<unsigned long long>(st.physics_steps), static_cast<unsigned long long>(st.late_steps),
                static_cast<unsigned long long>(st.skipped_steps), to_ms(st.worst_lateness));
   std::fprintf(out, "  ball at (%.2f, %.2f); %zu goal(s)\n", b.x(), b.y(), session.goals().size());
@@ -48,7 +45,7 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   FILE* out = output.out;
   emulator::RealtimeDriver driver(session, options);
   const Nanos start = driver.start_time();
-  stop_on_signals(stop_realtime);
+  stop_on_signals();
   char length[32] = "until Ctrl-C";
   if (output.length.seconds > 0) std::snprintf(length, sizeof length, "%g s", output.length.seconds);
   const emulator::Scenario& sc = session.scenario();
@@ -69,8 +66,8 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   std::size_t goals_reported = 0;
   driver.start();
   bool priority_said = false;
-  while (!g_stop_run_realtime && driver.clock().now() < end) {
-    driver.run_until(std::min(end, driver.clock().now() + std::chrono::milliseconds(200)), g_stop_run_realtime);
+  while (!g_stop && driver.clock().now() < end) {
+    driver.run_until(std::min(end, driver.clock().now() + std::chrono::milliseconds(200)), g_stop);
     if (!priority_said && !driver.priority_problem().empty()) {
       std::fprintf(out, "canhil run: %s\n", driver.priority_problem().c_str());
       priority_said = true;
@@ -99,7 +96,7 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
     physics::save_state(session.world().save(), *output.save_world);
     std::fprintf(out, "  world saved to %s (start a run from it with --restore-world)\n", output.save_world->c_str());
   }
-  return g_stop_run_realtime ? 130 : 0;
+  return g_stop ? 130 : 0;
 }
 
 }  // namespace canhil::app

@@ -1,33 +1,40 @@
 // app/stop_signals.cpp — stop_signals.hpp.
 #include "stop_signals.hpp"
 
-#include <atomic>
 #include <csignal>
+#include <cstdio>
 
 namespace canhil::app {
+
+std::atomic<bool> g_stop{false};
+
 namespace {
 
-std::atomic<void (*)(int)> g_stop{nullptr};
+static_assert(std::atomic<bool>::is_always_lock_free, "set from a signal handler");
+
 volatile std::sig_atomic_t g_sigpipe = 0;
 
-extern "C" void on_sigpipe(int signal_number) {
-  g_sigpipe = 1;
-  if (auto* stop = g_stop.load()) stop(signal_number);
+extern "C" void on_stop(int signal_number) {
+  if (signal_number == SIGPIPE) g_sigpipe = 1;
+  g_stop = true;
 }
 
 }  // namespace
 
-void stop_on_signals(void (*stop)(int)) {
-  static_assert(std::atomic<void (*)(int)>::is_always_lock_free, "read from a signal handler");
-  g_stop = stop;
-  std::signal(SIGINT, stop);
-  std::signal(SIGTERM, stop);
-  std::signal(SIGPIPE, on_sigpipe);
+void stop_on_signals() {
+  std::signal(SIGINT, on_stop);
+  std::signal(SIGTERM, on_stop);
+  std::signal(SIGPIPE, on_stop);
 }
 
 void end_by_sigpipe_if_seen() {
   if (g_sigpipe == 0) return;
+  std::fflush(nullptr);  // what the command printed before it ended, where a reader still takes it
   std::signal(SIGPIPE, SIG_DFL);
+  sigset_t pipe_signal;
+  sigemptyset(&pipe_signal);
+  sigaddset(&pipe_signal, SIGPIPE);
+  sigprocmask(SIG_UNBLOCK, &pipe_signal, nullptr);
   std::raise(SIGPIPE);
 }
 

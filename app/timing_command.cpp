@@ -22,9 +22,6 @@
 namespace canhil::app {
 namespace {
 
-std::atomic<bool> g_stop_timing{false};
-extern "C" void stop_timing(int) { g_stop_timing = true; }
-
 double number(const std::optional<std::string>& v, const char* name, double fallback) {
   if (!v) return fallback;
   try {
@@ -62,10 +59,10 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
     bus->set_error_mask(frames::kErrorClassMask);  // error frames count toward the load and the report
     const can_nodes::WallClock clock;
     const Nanos end = clock.now() + std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(seconds));
-    stop_on_signals(stop_timing);
+    stop_on_signals();
     if (!json)
       std::fprintf(stderr, "canhil timing: listening on %s for %.0f s (Ctrl-C stops early)\n", source.c_str(), seconds);
-    while (!g_stop_timing && clock.now() < end) {
+    while (!g_stop && clock.now() < end) {
       if (!bus->wait_readable(std::chrono::milliseconds(100))) continue;
       while (auto f = bus->receive()) analyzer.add(*f);
     }

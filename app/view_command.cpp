@@ -11,13 +11,6 @@
 #include "stop_signals.hpp"
 
 namespace canhil::app {
-namespace {
-
-std::atomic<bool> g_stop_view{false};
-extern "C" void stop_view(int) { g_stop_view = true; }
-
-}  // namespace
-
 int run_view(Args& args, const std::optional<std::string>& dbc) {
   const auto trace = args.option("--trace");
   const auto config = args.option("--config");
@@ -45,8 +38,8 @@ int run_view(Args& args, const std::optional<std::string>& dbc) {
   std::printf("canhil view: %s: %zu rows, %zu robot(s), %zu event(s)%s\n", world_log.c_str(), feed->rows(),
               feed->robots(), feed->events().size(), trace ? (", trace " + *trace).c_str() : "");
   const auto server = start_viewer(view, *feed, "canhil view", stdout, /*required=*/true);
-  stop_on_signals(stop_view);
-  serve_until(g_stop_view, duration.value_or(1e9));
+  stop_on_signals();
+  serve_until(g_stop, duration.value_or(1e9));
   return 0;
 }
 
