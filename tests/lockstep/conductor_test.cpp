@@ -298,9 +298,9 @@ TEST(Conductor, AProcessKilledWithoutAWordWhileCanhilWaitsIsNoLongerWaitedFor) {
 // its environment: a team's tool started by hand) keeps the system's calls,
 // timeouts included: a sigtimedwait with a timeout once waited for ever.
 TEST(Conductor, OutsideARunTheShimKeepsASignalWaitsTimeout) {
-  ChildProcess client(std::string("env LD_PRELOAD=") + CANHIL_TEST_TIMESHIM + " " + CANHIL_TEST_LOCKSTEP_CLIENT +
-                          " sigtimedwait",
-                      "/tmp/canhil_lockstep_sigtimedwait.log");
+  ChildProcess client(
+      std::string("env LD_PRELOAD=") + CANHIL_TEST_TIMESHIM + " " + CANHIL_TEST_LOCKSTEP_CLIENT + " sigtimedwait",
+      "/tmp/canhil_lockstep_sigtimedwait.log");
   const std::optional<int> status = client.wait_end(30s);  // only bounds the wait: it takes 0.1 s
   ASSERT_TRUE(status.has_value()) << "still waiting after 30 s: " << client.output();
   EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << client.output();
