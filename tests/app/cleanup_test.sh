@@ -167,7 +167,7 @@ wait "$hold" || status=$?
 [[ -z "$(left_segments)" ]] || fail "a run stopped while holding its viewer left segments: $(left_segments | tr '\n' ' ')"
 
 # A sanitizer's report never hides behind the signal the process ended by.
-if grep -l -E "Sanitizer|runtime error:" "$dir/run.err" "$dir/match.err" "$dir/next.out" "$dir/held.out" \
+if grep -s -l -E "Sanitizer|runtime error:" "$dir/run.err" "$dir/match.err" "$dir/next.out" "$dir/held.out" \
   "$dir/batch.err" "$dir/hold.err"; then
   fail "a sanitizer reported: $(grep -h -A5 -E "Sanitizer|runtime error:" "$dir"/*.err "$dir/next.out" | head -20)"
 fi
