@@ -31,10 +31,9 @@ pid_t g_claim_pid = 0;
 bool alive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
 // Every shared memory segment: f(id, its state). Other users' segments are
-// seen too (SHM_STAT_ANY: without the read permission) where the kernel has
-// it (4.17), and otherwise only those
-// this process may read; a range held by one it cannot see is found by the
-// claim (claim()).
+// seen too where the kernel has SHM_STAT_ANY (Linux 4.17: no read permission
+// needed), elsewhere only those this process may read; a range held by one
+// it cannot see is found by the claim (claim()).
 template <typename F>
 void each_segment(F&& f) {
   shm_info info{};
@@ -51,17 +50,27 @@ void each_segment(F&& f) {
   }
 }
 
-unsigned key_of(const shmid_ds& ds) { return static_cast<unsigned>(ds.shm_perm.__key); }
+struct Segments {
+  std::set<unsigned> used;  // keys of `prefix` in use
+  int removed = 0;          // orphans removed
+};
 
-int remove_orphans(unsigned prefix) {
-  int removed = 0;
+// One look at the segments whose key starts with `prefix`: the keys in use,
+// and, with `remove_orphans`, this user's segments that nobody is attached to
+// and whose creator has ended removed (and not counted as used).
+Segments sweep(unsigned prefix, bool remove_orphans) {
+  Segments out;
   each_segment([&](int id, const shmid_ds& ds) {
-    if (key_of(ds) >> 24 != prefix || ds.shm_perm.uid != ::geteuid() || ds.shm_nattch != 0 || alive(ds.shm_cpid)) {
+    const auto key = static_cast<unsigned>(ds.shm_perm.__key);
+    if (key >> 24 != prefix) return;
+    const bool orphan = ds.shm_perm.uid == ::geteuid() && ds.shm_nattch == 0 && !alive(ds.shm_cpid);
+    if (remove_orphans && orphan && ::shmctl(id, IPC_RMID, nullptr) == 0) {
+      ++out.removed;
       return;
     }
-    if (::shmctl(id, IPC_RMID, nullptr) == 0) ++removed;
+    out.used.insert(key);
   });
-  return removed;
+  return out;
 }
 
 // Takes the range at `base` for this process: false if another has it. A
@@ -76,13 +85,9 @@ bool claim(unsigned base) {
   return true;
 }
 
-// The first range from the one of this process's id that no segment is in,
-// claimed.
-unsigned free_range(unsigned prefix) {
-  std::set<unsigned> used;
-  each_segment([&](int, const shmid_ds& ds) {
-    if (key_of(ds) >> 24 == prefix) used.insert(key_of(ds));
-  });
+// The first range from the one of this process's id that no key of `used`
+// is in, claimed.
+unsigned free_range(unsigned prefix, const std::set<unsigned>& used) {
   const unsigned own = static_cast<unsigned>(::getpid()) & 0xFFFFu;
   for (unsigned k = 0; k <= 0xFFFFu; ++k) {
     const unsigned base = (prefix << 24) | (((own + k) & 0xFFFFu) << 8);
@@ -103,17 +108,17 @@ void set_key(unsigned key) { ::setenv("RTDB_KEY", std::to_string(key).c_str(), 1
 }  // namespace
 
 int use_private_rtdb_keys(unsigned prefix) {
-  const int removed = remove_orphans(prefix);
+  const Segments segments = sweep(prefix, true);
   if (g_chosen_prefix == 0 && user_key() == nullptr) {
     g_chosen_prefix = prefix;
-    set_key(free_range(prefix));
+    set_key(free_range(prefix, segments.used));
   }
-  return removed;
+  return segments.removed;
 }
 
 void use_worker_rtdb_keys(int worker) {
   if (g_chosen_prefix != 0) {
-    set_key(free_range(g_chosen_prefix));
+    set_key(free_range(g_chosen_prefix, sweep(g_chosen_prefix, false).used));
     return;
   }
   const char* base = user_key();
