@@ -203,8 +203,10 @@ std::size_t ExternalDriver::settle() {
     if (sent == announced_ && !woke) break;
     announced_ = sent;
     agents_due = agents_due || woke;
+    // New frames concern only the threads waiting on descriptors; an
+    // activation (a semaphore, a signal, a team's own means) every thread.
+    conductor_.nudge(woke ? lockstep::kEveryChange : lockstep::kDescriptors);
     woke = false;
-    conductor_.nudge();
   }
   for (std::size_t r = 0; r < woken_.size(); ++r) cycled_[r] = cycled_[r] || woken_[r];
   woken_.assign(woken_.size(), false);

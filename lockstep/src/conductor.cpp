@@ -153,20 +153,53 @@ void Conductor::set_time(Nanos now) {
   const std::int64_t ns = now.count();
   if (ns <= board_->now_ns.load(std::memory_order_relaxed)) return;
   board_->now_ns.store(ns, std::memory_order_release);
-  if (next_wakeup() <= now) nudge();
+  if (next_wakeup() <= now) change(kTimeOnly, false);  // only those whose time has come
 }
 
 Nanos Conductor::now() const noexcept { return Nanos(board_->now_ns.load(std::memory_order_acquire)); }
 
-void Conductor::nudge() {
-  board_->epoch.fetch_add(1, std::memory_order_acq_rel);
-  futex(&board_->epoch, FUTEX_WAKE, INT_MAX, nullptr);
+void Conductor::nudge(std::uint32_t what) { change(what, false); }
+
+void Conductor::change(std::uint32_t what, bool everyone) {
+  // The epoch first, as a full barrier: a thread about to block either read
+  // this epoch (and checks after the change) or is seen below as running and
+  // has its wake word raised (its wait then returns at once).
+  const std::uint32_t epoch = board_->epoch.fetch_add(1, std::memory_order_seq_cst) + 1;
+  for (std::size_t kind = 0; kind < kChangeKinds; ++kind) {
+    if ((what & (1U << kind)) != 0) changed_at_[kind] = epoch;
+  }
+  const std::int64_t now = board_->now_ns.load(std::memory_order_relaxed);
+  for (Slot& s : board_->slots) {
+    const SlotState state = static_cast<SlotState>(s.state.load(std::memory_order_seq_cst));
+    if (state == SlotState::kFree || state == SlotState::kGone) continue;
+    const bool blocked = state == SlotState::kBlocked;
+    // A signal wait is not on its word; a wait this change does not concern
+    // stays quiet at its epoch (quiet_pass).
+    if (blocked && !everyone &&
+        (s.signal_wait.load(std::memory_order_relaxed) != 0 ||
+         (s.waits_for.load(std::memory_order_relaxed) & what) == 0) &&
+        s.wake_at_ns.load(std::memory_order_relaxed) > now) {
+      continue;
+    }
+    s.wake.fetch_add(1, std::memory_order_seq_cst);
+    if (blocked) futex(&s.wake, FUTEX_WAKE, INT_MAX, nullptr);
+  }
+}
+
+bool Conductor::untouched_since(const Slot& s, std::uint32_t seen) const noexcept {
+  if (s.wake_at_ns.load(std::memory_order_relaxed) <= board_->now_ns.load(std::memory_order_relaxed)) return false;
+  const std::uint32_t waits = s.waits_for.load(std::memory_order_relaxed);
+  for (std::size_t kind = 0; kind < kChangeKinds; ++kind) {
+    // Epochs wrap: compare by difference.
+    if ((waits & (1U << kind)) != 0 && static_cast<std::int32_t>(seen - changed_at_[kind]) < 0) return false;
+  }
+  return true;
 }
 
 std::uint32_t Conductor::epoch() const noexcept { return board_->epoch.load(std::memory_order_acquire); }
 
 void Conductor::release() {
-  if (board_->released.exchange(1, std::memory_order_acq_rel) == 0) nudge();
+  if (board_->released.exchange(1, std::memory_order_acq_rel) == 0) change(kEveryChange, true);
 }
 
 bool Conductor::released() const noexcept { return board_->released.load(std::memory_order_acquire) != 0; }
@@ -210,8 +243,9 @@ bool Conductor::quiet_pass(std::string* who, bool& retired) {
       const int joined = s.join_tid.load(std::memory_order_relaxed);
       if (s.signal_wait.load(std::memory_order_relaxed) != 0) {
         if (joined == 0 || running_thread(s.pid.load(), joined)) continue;
-      } else if (s.seen_epoch.load(std::memory_order_relaxed) == epoch) {
-        continue;
+      } else {
+        const std::uint32_t seen = s.seen_epoch.load(std::memory_order_relaxed);
+        if (seen == epoch || untouched_since(s, seen)) continue;
       }
     }
     if (who != nullptr) {
@@ -268,8 +302,11 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
   Nanos next_sweep = start + kSweepEvery;
   for (;;) {
     const std::uint32_t seen = board_->changes.load(std::memory_order_acquire);
+    // What a process changed for another (a sem_post) becomes a change now;
+    // one posted after this look keeps them from counting as quiet below.
+    if (const std::uint32_t posted = board_->posted.exchange(0, std::memory_order_acq_rel)) nudge(posted);
     std::string who;
-    const bool processes_quiet = quiet(&who);
+    const bool processes_quiet = quiet(&who) && board_->posted.load(std::memory_order_acquire) == 0;
     const std::string missing = processes_quiet && also ? also() : std::string();
     if (processes_quiet && missing.empty()) break;
     const Nanos now = wall_now();

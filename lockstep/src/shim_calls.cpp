@@ -28,7 +28,11 @@
 #include "shim_core.hpp"
 
 namespace shim = canhil::lockstep::shim;
+using canhil::lockstep::kDescriptors;
 using canhil::lockstep::kNoWake;
+using canhil::lockstep::kOtherChanges;
+using canhil::lockstep::kSemaphores;
+using canhil::lockstep::kTimeOnly;
 using shim::Wait;
 
 namespace {
@@ -72,7 +76,7 @@ bool readable_now(int fd) noexcept {
 /// errno set when the caller must return -1 instead of reading.
 bool wait_readable(const char* what, int fd, int flags) noexcept {
   if (!shim::active() || (flags & MSG_DONTWAIT) != 0 || !blocking(fd)) return true;
-  switch (shim::block(what, receive_deadline(fd), [fd] { return readable_now(fd); })) {
+  switch (shim::block(what, receive_deadline(fd), kDescriptors, [fd] { return readable_now(fd); })) {
     case Wait::kTimedOut:
       errno = EAGAIN;
       return false;
@@ -116,7 +120,7 @@ constexpr int kDoTheRealCall = -1;
 /// Sleeps until virtual `wake_at`: 0; EINTR with the time left in `left`; or
 /// kDoTheRealCall when canhil is gone.
 int sleep_until(const char* what, std::int64_t wake_at, std::int64_t& left) noexcept {
-  const Wait w = shim::block(what, wake_at, [] { return false; });
+  const Wait w = shim::block(what, wake_at, kTimeOnly, [] { return false; });
   left = 0;
   if (w == Wait::kDetached) return kDoTheRealCall;
   if (w == Wait::kInterrupted) {
@@ -145,8 +149,8 @@ class MaskFor {
 
 /// What a call built on block() returns: the ready result, 0 on timeout, -1 EINTR.
 template <class Check>
-int wait_result(const char* what, std::int64_t wake_at, int& result, Check check) noexcept {
-  switch (shim::block(what, wake_at, [&] {
+int wait_result(const char* what, std::int64_t wake_at, std::uint32_t waits_for, int& result, Check check) noexcept {
+  switch (shim::block(what, wake_at, waits_for, [&] {
     result = check();
     return result != 0;
   })) {
@@ -276,7 +280,8 @@ int poll(pollfd* fds, nfds_t count, int timeout_ms) {
   CANHIL_REAL(poll);
   if (!shim::active() || timeout_ms == 0) return real_poll(fds, count, timeout_ms);
   int result = 0;
-  const int r = wait_result("poll", after_ms(timeout_ms), result, [&] { return real_poll(fds, count, 0); });
+  const int r = wait_result("poll", after_ms(timeout_ms), count == 0 ? kTimeOnly : kDescriptors, result,
+                            [&] { return real_poll(fds, count, 0); });
   if (r != -2) {
     if (r == 0) {
       for (nfds_t i = 0; i < count; ++i) fds[i].revents = 0;
@@ -292,8 +297,9 @@ int ppoll(pollfd* fds, nfds_t count, const timespec* timeout, const sigset_t* ma
   const timespec zero{0, 0};
   int result = 0;
   const MaskFor masked(mask);
-  const int r = wait_result("ppoll", timeout == nullptr ? kNoWake : after(ns_of(*timeout)), result,
-                            [&] { return real_ppoll(fds, count, &zero, nullptr); });
+  const int r =
+      wait_result("ppoll", timeout == nullptr ? kNoWake : after(ns_of(*timeout)), count == 0 ? kTimeOnly : kDescriptors,
+                  result, [&] { return real_ppoll(fds, count, &zero, nullptr); });
   if (r != -2) {
     if (r == 0) {
       for (nfds_t i = 0; i < count; ++i) fds[i].revents = 0;
@@ -320,7 +326,7 @@ int select(int count, fd_set* reads, fd_set* writes, fd_set* errors, timeval* ti
   const std::int64_t wake_at =
       timeout == nullptr ? kNoWake : after(timeout->tv_sec * kSecond + timeout->tv_usec * 1000);
   int result = 0;
-  const int r = wait_result("select", wake_at, result, [&] {
+  const int r = wait_result("select", wake_at, count == 0 ? kTimeOnly : kDescriptors, result, [&] {
     restore();
     timeval zero{0, 0};
     return real_select(count, reads, writes, errors, &zero);
@@ -351,8 +357,8 @@ int epoll_wait(int epoll, epoll_event* events, int most, int timeout_ms) {
   CANHIL_REAL(epoll_wait);
   if (!shim::active() || timeout_ms == 0) return real_epoll_wait(epoll, events, most, timeout_ms);
   int result = 0;
-  const int r =
-      wait_result("epoll_wait", after_ms(timeout_ms), result, [&] { return real_epoll_wait(epoll, events, most, 0); });
+  const int r = wait_result("epoll_wait", after_ms(timeout_ms), kDescriptors, result,
+                            [&] { return real_epoll_wait(epoll, events, most, 0); });
   return r != -2 ? r : real_epoll_wait(epoll, events, most, timeout_ms);
 }
 
@@ -445,7 +451,7 @@ int sigtimedwait(const sigset_t* set, siginfo_t* info, const timespec* timeout) 
   // The signals waited for are blocked, so they stay pending: check, then wait for canhil's next change.
   const timespec zero{0, 0};
   int result = 0;
-  const int r = wait_result("sigtimedwait", after(ns_of(*timeout)), result, [&] {
+  const int r = wait_result("sigtimedwait", after(ns_of(*timeout)), kOtherChanges, result, [&] {
     const int s = real_sigtimedwait(set, info, &zero);
     return s >= 0 ? s : (errno == EAGAIN ? 0 : -1);
   });
@@ -493,7 +499,8 @@ int sem_wait(sem_t* semaphore) {
   CANHIL_REAL(sem_trywait);
   if (!shim::active()) return real_sem_wait(semaphore);
   int result = 0;
-  const int r = wait_result("sem_wait", kNoWake, result, [&] { return real_sem_trywait(semaphore) == 0 ? 1 : 0; });
+  const int r =
+      wait_result("sem_wait", kNoWake, kSemaphores, result, [&] { return real_sem_trywait(semaphore) == 0 ? 1 : 0; });
   if (r == -2) return real_sem_wait(semaphore);
   return r == 1 ? 0 : -1;  // -1: EINTR
 }
@@ -507,7 +514,7 @@ int sem_timedwait(sem_t* semaphore, const timespec* deadline) {
     return -1;
   }
   int result = 0;
-  const int r = wait_result("sem_timedwait", shim::to_virtual(CLOCK_REALTIME, ns_of(*deadline)), result,
+  const int r = wait_result("sem_timedwait", shim::to_virtual(CLOCK_REALTIME, ns_of(*deadline)), kSemaphores, result,
                             [&] { return real_sem_trywait(semaphore) == 0 ? 1 : 0; });
   if (r == -2) return real_sem_timedwait(semaphore, deadline);
   if (r == 0) {
@@ -515,6 +522,15 @@ int sem_timedwait(sem_t* semaphore, const timespec* deadline) {
     return -1;
   }
   return r == 1 ? 0 : -1;  // -1: EINTR
+}
+
+// A post another thread or process may wait for: the conductor's next change
+// wakes the threads waiting on semaphores (it would not for CAN frames alone).
+int sem_post(sem_t* semaphore) {
+  CANHIL_REAL(sem_post);
+  const int r = real_sem_post(semaphore);
+  if (r == 0) shim::post_change(kSemaphores);
+  return r;
 }
 
 // Threads: the clock waits for a new thread from its first instruction.

@@ -279,16 +279,30 @@ void release(Slot* slot) noexcept {
   announce_change();
 }
 
-Wait wait_for_change(Slot& slot, const char* what, std::uint32_t epoch, std::int64_t wake_at_ns) noexcept {
+Seen look_before_check(Slot& slot) noexcept {
+  // The full fence orders this thread's last store of its state (running)
+  // before the loads: a conductor that reads the state after its change
+  // bumped the epoch either sees this slot running (and raises its wake
+  // word) or this thread reads the new epoch. The wake word first: when the
+  // epoch read is the old one, the conductor's raise comes later and the
+  // futex wait below returns at once.
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+  const std::uint32_t wake = slot.wake.load(std::memory_order_seq_cst);
+  return Seen{wake, g_board->epoch.load(std::memory_order_seq_cst)};
+}
+
+Wait wait_for_change(Slot& slot, const char* what, Seen seen, std::int64_t wake_at_ns,
+                     std::uint32_t waits_for) noexcept {
   account_busy(slot);
   copy_text(slot.what, sizeof slot.what, what);
   slot.wake_at_ns.store(wake_at_ns, std::memory_order_relaxed);
-  slot.seen_epoch.store(epoch, std::memory_order_relaxed);
+  slot.waits_for.store(waits_for, std::memory_order_relaxed);
+  slot.seen_epoch.store(seen.epoch, std::memory_order_relaxed);
   slot.blocks.fetch_add(1, std::memory_order_relaxed);
   slot.state.store(static_cast<std::uint32_t>(SlotState::kBlocked), std::memory_order_release);
   announce_change();
   const timespec a_second{1, 0};  // then see whether canhil is still there
-  const long r = futex(&g_board->epoch, FUTEX_WAIT, epoch, &a_second);
+  const long r = futex(&slot.wake, FUTEX_WAIT, seen.wake, &a_second);
   const int error = r == 0 ? 0 : errno;
   mark_running(slot);
   if (released()) {
@@ -303,6 +317,13 @@ Wait wait_for_change(Slot& slot, const char* what, std::uint32_t epoch, std::int
     return Wait::kDetached;
   }
   return Wait::kReady;
+}
+
+void post_change(std::uint32_t what) noexcept {
+  // canhil's own process (the shim preloaded into it) makes its changes itself.
+  if (board() == nullptr || g_conducting) return;
+  g_board->posted.fetch_or(what, std::memory_order_release);
+  announce_change();
 }
 
 void begin_signal_wait(const char* what) noexcept {
@@ -462,12 +483,8 @@ extern "C" __attribute__((visibility("default"))) void canhil_shim_frames_sent(l
 }
 
 extern "C" __attribute__((visibility("default"))) void canhil_shim_descriptor_readable(int /*fd*/) {
-  using namespace canhil::lockstep::shim;
-  canhil::lockstep::Board* b = board();
-  if (b == nullptr) return;
-  // As the conductor's nudge: a new epoch, and every waiter checks again.
-  b->epoch.fetch_add(1, std::memory_order_acq_rel);
-  futex(&b->epoch, FUTEX_WAKE, INT_MAX, nullptr);
+  // The conductor's next change wakes every thread waiting on descriptors.
+  canhil::lockstep::shim::post_change(canhil::lockstep::kDescriptors);
 }
 
 /// Called by canhil's Conductor, through dlsym, when the shim is preloaded into

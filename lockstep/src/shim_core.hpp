@@ -55,10 +55,16 @@ enum class Wait : std::uint8_t {
 
 /// Blocks this thread in virtual time: checks ready() (without blocking),
 /// and until it holds or virtual time reaches `wake_at_ns`, marks the slot
-/// blocked and waits for the conductor's next change. `ready` is called with
-/// no lock held; it must not block.
+/// blocked and waits for the conductor's next change of a kind in
+/// `waits_for` (board.hpp's bits: kDescriptors for a poll, kSemaphores for a
+/// sem_wait, kTimeOnly for a sleep). `ready` is called with no lock held; it
+/// must not block.
 template <class Ready>
-Wait block(const char* what, std::int64_t wake_at_ns, Ready&& ready);
+Wait block(const char* what, std::int64_t wake_at_ns, std::uint32_t waits_for, Ready&& ready);
+
+/// This process changed something another thread may wait for (a sem_post):
+/// the conductor passes it on before the processes count as quiet.
+void post_change(std::uint32_t what) noexcept;
 
 /// Marks this thread as waiting for a signal or for another thread only
 /// (sigsuspend, pause, waitpid, pthread_join): quiet whatever the epoch,
@@ -93,19 +99,26 @@ void remember_started(pthread_t thread, Slot* slot) noexcept;
 std::int32_t take_started(pthread_t thread) noexcept;
 /// A pthread_join: a signal wait that lasts while thread `tid` exists.
 void begin_join_wait(std::int32_t tid) noexcept;
-Wait wait_for_change(Slot& slot, const char* what, std::uint32_t epoch, std::int64_t wake_at_ns) noexcept;
+/// What a blocked slot saw before its check: its wake word, then the epoch.
+struct Seen {
+  std::uint32_t wake;
+  std::uint32_t epoch;
+};
+Seen look_before_check(Slot& slot) noexcept;
+Wait wait_for_change(Slot& slot, const char* what, Seen seen, std::int64_t wake_at_ns,
+                     std::uint32_t waits_for) noexcept;
 
 template <class Ready>
-Wait block(const char* what, std::int64_t wake_at_ns, Ready&& ready) {
+Wait block(const char* what, std::int64_t wake_at_ns, std::uint32_t waits_for, Ready&& ready) {
   Slot* slot = my_slot();
   if (slot == nullptr) return Wait::kDetached;
   for (;;) {
-    const std::uint32_t epoch = board()->epoch.load(std::memory_order_acquire);
+    const Seen seen = look_before_check(*slot);
     fire_timers();
     if (ready()) return Wait::kReady;
     if (now_ns() >= wake_at_ns) return Wait::kTimedOut;
     const std::int64_t timer = next_timer();
-    const Wait w = wait_for_change(*slot, what, epoch, timer < wake_at_ns ? timer : wake_at_ns);
+    const Wait w = wait_for_change(*slot, what, seen, timer < wake_at_ns ? timer : wake_at_ns, waits_for);
     if (w != Wait::kReady) return w;  // kReady here: something changed, check again
   }
 }

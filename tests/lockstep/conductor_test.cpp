@@ -4,12 +4,16 @@
 // here depends on the machine's speed: the wall clock only bounds a wait.
 #include "canhil/lockstep/conductor.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <semaphore.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -121,6 +125,61 @@ TEST(Conductor, APollWaitsInVirtualTimeAndWakesWhenDataComes) {
   ASSERT_EQ(drive(conductor, 800ms), "");
   std::fclose(writer);
   EXPECT_EQ(at(said(client.output()), "poll-readable"), 700'000'000) << client.output();
+  std::remove(fifo.c_str());
+}
+
+// Each change wakes only the waits it concerns (board.hpp): through ten
+// changes for descriptors (frames sent) a sleep and a semaphore's wait sleep
+// on, a poll looks each time; canhil's post wakes the semaphore's waiter; and
+// one process's sem_post wakes another's sem_wait in the instant it was made,
+// though canhil changed nothing then (the next change was the poll's timeout
+// at 500 ms).
+TEST(Conductor, AChangeWakesOnlyTheWaitsItConcerns) {
+  const std::string tag = std::to_string(getpid());
+  const std::string fifo = "/tmp/canhil_lockstep_kinds_" + tag;
+  const std::string told = "/canhil-test-told-" + tag;      // posted by the test
+  const std::string passed = "/canhil-test-passed-" + tag;  // posted by a process
+  std::remove(fifo.c_str());
+  sem_unlink(told.c_str());
+  sem_unlink(passed.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  sem_t* told_sem = sem_open(told.c_str(), O_CREAT, 0600, 0);
+  ASSERT_NE(told_sem, SEM_FAILED);
+  Conductor conductor;
+  ChildProcess sleeper(command(conductor, "sleeper"), "/tmp/canhil_lockstep_sleeper.log");
+  ChildProcess poller(command(conductor, "fifo " + fifo), "/tmp/canhil_lockstep_poller.log");
+  ChildProcess waiter(command(conductor, "sem-wait " + told), "/tmp/canhil_lockstep_sem_wait.log");
+  ChildProcess poster(command(conductor, "sem-post " + passed), "/tmp/canhil_lockstep_sem_post.log");
+  ChildProcess receiver(command(conductor, "sem-wait " + passed), "/tmp/canhil_lockstep_sem_receive.log");
+  ASSERT_EQ(conductor.wait_attached(5, 10s), 5u);
+  ASSERT_EQ(conductor.wait_quiet({}, "their first waits"), "");
+  const auto blocks = [&conductor](const ChildProcess& p) {
+    for (const canhil::lockstep::ProcessReport& r : conductor.processes()) {
+      if (r.pid == p.pid()) return r.blocks;
+    }
+    return std::uint64_t{0};
+  };
+  const std::array<std::uint64_t, 3> before{blocks(sleeper), blocks(poller), blocks(waiter)};
+  for (int k = 0; k < 10; ++k) {
+    conductor.nudge(canhil::lockstep::kDescriptors);
+    ASSERT_EQ(conductor.wait_quiet({}, "frames sent"), "");
+  }
+  // A wait looks again on its own after a second of wall time: a slow machine
+  // may add one; every change would add ten.
+  EXPECT_LT(blocks(sleeper), before[0] + 5) << "a sleep sleeps through changes to descriptors";
+  EXPECT_LT(blocks(waiter), before[2] + 5) << "and so does a semaphore's wait";
+  EXPECT_GE(blocks(poller), before[1] + 10) << "a poll looks at each";
+  ASSERT_EQ(sem_post(told_sem), 0);  // the test has no shim: it says what it did
+  conductor.nudge(canhil::lockstep::kSemaphores);
+  ASSERT_EQ(conductor.wait_quiet({}, "the post"), "");
+  EXPECT_EQ(at(said(waiter.output()), "posted"), 0) << waiter.output();
+  ASSERT_EQ(drive(conductor, 1200ms), "") << receiver.output();
+  EXPECT_EQ(at(said(poster.output()), "post"), 300'000'000) << poster.output();
+  EXPECT_EQ(at(said(receiver.output()), "posted"), 300'000'000) << receiver.output();
+  EXPECT_EQ(at(said(sleeper.output()), "slept"), 1'000'000'000) << sleeper.output();
+  sem_close(told_sem);
+  sem_unlink(told.c_str());
+  sem_unlink(passed.c_str());
   std::remove(fifo.c_str());
 }
 

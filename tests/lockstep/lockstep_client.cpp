@@ -1,11 +1,13 @@
 // A program that plays a team's external process under the time shim: it
 // reads the clocks, sleeps, polls, reads a timerfd, starts a thread, spins
-// without ever waiting, or plays a second preload through the shim's hooks,
+// without ever waiting, waits on or posts a semaphore, or plays a second
+// preload through the shim's hooks,
 // and prints what its clocks said at each point
 // (lines "<what> <CLOCK_MONOTONIC in ns>"). tests/lockstep/conductor_test.cpp
 // moves the virtual clock and checks the lines.
 #include <fcntl.h>
 #include <poll.h>
+#include <semaphore.h>
 #include <signal.h>
 #include <sys/select.h>
 #include <sys/syscall.h>
@@ -204,6 +206,32 @@ int signal_wait() {
   return 0;
 }
 
+// A team's process between two looks: a sleep of a second.
+int sleeper() {
+  const timespec second{1, 0};
+  nanosleep(&second, nullptr);
+  say("slept");
+  return 0;
+}
+
+// Two of a team's processes waking each other through a named semaphore:
+// one waits for it, the other posts it after 300 ms.
+int semaphore_wait(const char* name) {
+  sem_t* s = sem_open(name, O_CREAT, 0600, 0);
+  if (s == SEM_FAILED) return 2;
+  say(sem_wait(s) == 0 ? "posted" : "sem-wrong");
+  return 0;
+}
+
+int semaphore_post(const char* name) {
+  sem_t* s = sem_open(name, O_CREAT, 0600, 0);
+  if (s == SEM_FAILED) return 2;
+  const timespec a_while{0, 300'000'000};
+  nanosleep(&a_while, nullptr);
+  say(sem_post(s) == 0 ? "post" : "post-wrong");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -218,8 +246,11 @@ int main(int argc, char** argv) {
   if (mode == "patient") return patient();
   if (mode == "hook") return hook();
   if (mode == "sigtimedwait") return signal_wait();
+  if (mode == "sleeper") return sleeper();
+  if (mode == "sem-wait" && argc > 2) return semaphore_wait(argv[2]);
+  if (mode == "sem-post" && argc > 2) return semaphore_post(argv[2]);
   std::fprintf(stderr,
                "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient|hook|"
-               "sigtimedwait\n");
+               "sigtimedwait|sleeper|sem-wait NAME|sem-post NAME\n");
   return 2;
 }

@@ -35,6 +35,8 @@ class ChildProcess {
     if (pid_ > 0) setpgid(pid_, pid_);  // as the child does: whichever comes first
   }
   ~ChildProcess() { stop(); }
+  /// The child's process id (the command's own, since the shell execs it), or -1 once stopped.
+  int pid() const noexcept { return pid_; }
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
 

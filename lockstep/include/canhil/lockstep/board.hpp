@@ -9,11 +9,19 @@
 // blocks (a sleep, a poll, a blocking read, sigsuspend...) the shim reads the
 // epoch, checks once without blocking whether its call can complete, and if
 // not marks its slot blocked *at that epoch* with the virtual time it would
-// wake at, then waits on the epoch word. The conductor moves the clock only
-// when every slot is blocked at the current epoch (so nobody missed a change)
-// and every frame the processes sent has been seen on the bus. Nothing is
-// counted in advance: a process that decides to send one more frame simply
-// does not block until it has sent it.
+// wake at and what it waits for (descriptors, a semaphore, only the clock),
+// then waits on its slot's own futex word. A change names what it concerns:
+// the conductor wakes only the slots it concerns (and those whose time has
+// come) and counts the others quiet at their older epoch, since nothing they
+// wait for changed. So an agent waiting for its vision frame's semaphore
+// sleeps through the instants whose only news is CAN frames. The conductor
+// moves the clock only when every slot is quiet (blocked at the current
+// epoch, or at one after the last change that concerned it) and every frame
+// the processes sent has been seen on the bus. Nothing is counted in advance:
+// a process that decides to send one more frame simply does not block until
+// it has sent it. A process's own change to another's wait (a sem_post) is
+// posted on the board; the conductor turns it into a change before the
+// processes count as quiet.
 //
 // Layout rules: fixed-size, no pointers, lock-free atomics only (they work
 // across processes in shared memory on Linux); bump kVersion on any change.
@@ -26,7 +34,7 @@
 namespace canhil::lockstep {
 
 inline constexpr std::uint32_t kMagic = 0x4C4B5354;  // "LKST"
-inline constexpr std::uint32_t kVersion = 2;
+inline constexpr std::uint32_t kVersion = 3;
 inline constexpr std::size_t kMaxSlots = 64;
 inline constexpr std::size_t kNameBytes = 32;
 inline constexpr std::size_t kWhatBytes = 24;
@@ -34,6 +42,15 @@ inline constexpr std::size_t kWhatBytes = 24;
 inline constexpr std::int64_t kNoWake = INT64_MAX;
 /// The environment variable naming the board (a POSIX shared-memory name).
 inline constexpr const char* kBoardVariable = "CANHIL_LOCKSTEP";
+
+/// What a blocked thread waits for besides its wake-up time (Slot::waits_for),
+/// and what a change concerns (Conductor::nudge): bits.
+inline constexpr std::uint32_t kTimeOnly = 0;            ///< a sleep: only the clock ends it
+inline constexpr std::uint32_t kDescriptors = 1U << 0;   ///< poll, select, epoll, read: a descriptor's data
+inline constexpr std::uint32_t kSemaphores = 1U << 1;    ///< sem_wait, sem_timedwait: a post
+inline constexpr std::uint32_t kOtherChanges = 1U << 2;  ///< what the shim cannot tell apart (a signal's arrival)
+inline constexpr std::uint32_t kEveryChange = kDescriptors | kSemaphores | kOtherChanges;
+inline constexpr std::size_t kChangeKinds = 3;
 
 enum class SlotState : std::uint32_t {
   kFree = 0,
@@ -45,6 +62,9 @@ enum class SlotState : std::uint32_t {
 struct alignas(64) Slot {
   std::atomic<std::uint32_t> state{0};       ///< SlotState
   std::atomic<std::uint32_t> seen_epoch{0};  ///< the epoch it checked before blocking
+  /// The futex word it waits on: the conductor raises it to wake this slot alone.
+  std::atomic<std::uint32_t> wake{0};
+  std::atomic<std::uint32_t> waits_for{kEveryChange};  ///< what ends its wait besides the clock (bits)
   /// 1 while it waits for a signal only (sigsuspend, pause, waitpid): quiet at
   /// any epoch; the conductor waits for what it signalled by other means.
   std::atomic<std::uint32_t> signal_wait{0};
@@ -74,8 +94,11 @@ struct Board {
   std::int64_t realtime_base_ns = 0;
   std::int64_t monotonic_base_ns = 0;
   alignas(64) std::atomic<std::int64_t> now_ns{0};    ///< virtual time since the run's start
-  alignas(64) std::atomic<std::uint32_t> epoch{0};    ///< futex word the processes wait on
+  alignas(64) std::atomic<std::uint32_t> epoch{0};    ///< bumped by each change the conductor makes
   alignas(64) std::atomic<std::uint32_t> changes{0};  ///< futex word the conductor waits on: bumped on each block
+  /// Changes a process made to another's wait (bits: a sem_post is kSemaphores),
+  /// for the conductor to pass on; set before the process's next block.
+  std::atomic<std::uint32_t> posted{0};
   alignas(64) Slot slots[kMaxSlots];
 };
 

@@ -12,6 +12,7 @@
 // Thread-compatible: one thread drives a Conductor.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -82,9 +83,11 @@ class Conductor {
   /// one of them asked to be woken by then.
   void set_time(Nanos now);
   Nanos now() const noexcept;
-  /// Something a process may be waiting for happened (frames sent, a signal):
-  /// every waiting process checks again.
-  void nudge();
+  /// Something a process may be waiting for happened: the threads whose wait
+  /// it concerns check again (board.hpp's bits: kDescriptors for frames
+  /// sent, kEveryChange for an activation or anything canhil cannot name),
+  /// and so do those whose wake-up time has come. The others sleep on, quiet.
+  void nudge(std::uint32_t what = kEveryChange);
   /// The run is over: every process stops waiting in virtual time and goes on
   /// in real time (a wait whose virtual deadline will never come ends now, so
   /// a process can take its SIGINT and exit). The destructor does it too.
@@ -125,6 +128,11 @@ class Conductor {
   Nanos waited_wall() const noexcept { return waited_; }
 
  private:
+  /// Bumps the epoch and wakes the blocked threads `what` concerns (all of
+  /// them when `everyone`), those whose time has come, and any running one.
+  void change(std::uint32_t what, bool everyone);
+  /// Whether nothing a thread blocked at epoch `seen` waits for has changed since.
+  bool untouched_since(const Slot& s, std::uint32_t seen) const noexcept;
   bool quiet(std::string* who);
   bool quiet_pass(std::string* who, bool& retired);
   void sweep_dead();
@@ -138,6 +146,8 @@ class Conductor {
   Nanos waited_{0};
   bool clocks_here_ = false;
   std::uint64_t frames_of_freed_ = 0;
+  /// The epoch of the last change of each kind (board.hpp's bits, by bit number).
+  std::array<std::uint32_t, kChangeKinds> changed_at_{};
   std::vector<ProcessReport> freed_;  // reports of slots freed (processes gone)
 };
 
