@@ -11,6 +11,7 @@
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -115,6 +116,10 @@ std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const
   const can_err_mask_t no_errors = 0;
   if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &no_errors, sizeof no_errors) < 0) fail("CAN_RAW_ERR_FILTER");
   auto bus = std::unique_ptr<SocketCanBus>(new SocketCanBus(fd, iface, static_cast<int>(ifindex), options));
+  if (options.fed) {
+    // The kernel queues nothing here: feed() gives what the filters pass.
+    if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, nullptr, 0) < 0) fail("CAN_RAW_FILTER");
+  }
   if (!options.filters.empty()) bus->set_filters(options.filters);  // before bind: nothing else gets in
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
@@ -149,6 +154,12 @@ SendStatus SocketCanBus::send(const CanFrame& frame) {
     const ssize_t n = ::write(fd_, &k, sizeof k);
     if (n == static_cast<ssize_t>(sizeof k)) {
       ++stats_.sent;
+      if (options_.fed) {
+        // Fed back in bus order; a frame lost on its way (kept for ever here)
+        // would stop nothing: the oldest goes once many wait.
+        if (own_.size() >= kMostOwnInFlight) own_.pop_front();
+        own_.push_back(from_kernel(k));  // as the driver's socket will read it
+      }
       if (state_ != BusState::kUp) {
         state_ = BusState::kUp;
         ++stats_.state_changes;
@@ -175,6 +186,7 @@ SendStatus SocketCanBus::send(const CanFrame& frame) {
 }
 
 std::optional<TimedFrame> SocketCanBus::receive() {
+  if (options_.fed) return take_fed();
   can_frame k{};
   iovec iov{&k, sizeof k};
   alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t))];
@@ -183,7 +195,6 @@ std::optional<TimedFrame> SocketCanBus::receive() {
   msg.msg_iovlen = 1;
   msg.msg_control = control;
   msg.msg_controllen = sizeof control;
-  if (options_.told_when_readable && !may_be_readable_) return std::nullopt;
   ssize_t n = 0;
   do {
     n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
@@ -191,11 +202,10 @@ std::optional<TimedFrame> SocketCanBus::receive() {
   if (n < 0) {
     const int err = errno;
     if (err != EAGAIN && err != EWOULDBLOCK) note_errno(err);
-    may_be_readable_ = false;
     // Queue empty: drops after the last received frame are reported with no
     // later frame's SO_RXQ_OVFL, so read the socket's drop counter directly.
     // Only a full queue drops, so an empty queue that stayed empty has none new.
-    if (read_since_drop_check_ && !options_.told_when_readable) {  // that mode reads it in stats() only
+    if (read_since_drop_check_) {
       read_drop_counter();
       read_since_drop_check_ = false;
     }
@@ -248,22 +258,32 @@ BusStats SocketCanBus::stats() const {
   return stats_;
 }
 
-void SocketCanBus::note_frame_on_bus(const CanFrame& frame) noexcept {
-  if (may_be_readable_) return;
+void SocketCanBus::feed(const CanFrame& frame) {
+  if (!own_.empty() && own_.front() == frame) {
+    own_.pop_front();  // its own: the kernel would not give it back
+    return;
+  }
+  bool passes = false;
   if (frame.kind == frames::FrameKind::kError) {
-    may_be_readable_ = (frame.id & error_mask_) != 0;
-    return;
+    passes = (frame.id & error_mask_) != 0;
+  } else if (filters_.empty()) {
+    passes = !filters_set_empty_;
+  } else {
+    passes = std::any_of(filters_.begin(), filters_.end(), [&frame](const Filter& f) { return f.matches(frame); });
   }
-  if (filters_.empty()) {
-    may_be_readable_ = !filters_set_empty_;
-    return;
+  if (passes) fed_.push_back(frame);
+}
+
+std::optional<TimedFrame> SocketCanBus::take_fed() {
+  if (fed_.empty()) return std::nullopt;
+  TimedFrame out{fed_.front(), options_.clock != nullptr ? options_.clock->now() : Nanos{0}};
+  fed_.pop_front();
+  if (out.frame.kind == frames::FrameKind::kError) {
+    ++stats_.errors;
+  } else {
+    ++stats_.received;
   }
-  for (const Filter& f : filters_) {
-    if (f.matches(frame)) {
-      may_be_readable_ = true;
-      return;
-    }
-  }
+  return out;
 }
 
 void SocketCanBus::set_filters(std::span<const Filter> filters) {
@@ -276,20 +296,19 @@ void SocketCanBus::set_filters(std::span<const Filter> filters) {
     c.can_mask = f.mask | (f.match_extended ? CAN_EFF_FLAG : 0u) | (f.match_remote ? CAN_RTR_FLAG : 0u);
     k.push_back(c);
   }
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, k.empty() ? nullptr : k.data(),
-                   static_cast<socklen_t>(k.size() * sizeof(can_filter))) < 0) {
+  if (!options_.fed && ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, k.empty() ? nullptr : k.data(),
+                                    static_cast<socklen_t>(k.size() * sizeof(can_filter))) < 0) {
     const int err = errno;
     throw SetupError("cannot set " + std::to_string(k.size()) + " receive filters on " + iface_ + ": " +
                      errno_text(err) + " (the kernel limits the count to CAN_RAW_FILTER_MAX, 512)");
   }
   filters_.assign(filters.begin(), filters.end());
   filters_set_empty_ = filters.empty();  // no filter at all: the socket hears nothing
-  may_be_readable_ = true;
 }
 
 void SocketCanBus::set_error_mask(std::uint32_t mask) {
   const can_err_mask_t m = mask & CAN_ERR_MASK;
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &m, sizeof m) < 0) {
+  if (!options_.fed && ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &m, sizeof m) < 0) {
     const int err = errno;
     throw SetupError("cannot set the error-frame mask on " + iface_ + ": " + errno_text(err));
   }

@@ -74,9 +74,10 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   };
   watch_fd(fence_.descriptor());
   for (const auto& o : observers_) watch_fd(o->fd());
-  // The nodes' sockets read only when the observer saw a frame they take.
+  // The nodes' sockets are fed by the observer (one read per frame for them
+  // all, in the bus's order); the kernel queues nothing on them.
   can_nodes::SocketCanOptions node_options = socket_options;
-  node_options.told_when_readable = true;
+  node_options.fed = true;
   session_.build_nodes(
       [this, &node_options](std::size_t r, const std::string&) {
         auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, node_options);
@@ -137,7 +138,7 @@ void ExternalDriver::observe() {
     while (auto f = observers_[r]->receive()) {
       ++observed_;
       if (can_nodes::DeliveryFence::counts(f->frame)) ++fenced_[r];
-      for (can_nodes::SocketCanBus* s : sockets_[r]) s->note_frame_on_bus(f->frame);
+      for (can_nodes::SocketCanBus* s : sockets_[r]) s->feed(f->frame);
       watch_.add(r, {f->frame, clock_.now()});
     }
   }

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <chrono>
+#include <deque>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -36,11 +37,15 @@ struct SocketCanOptions {
   /// Received frames are timed by this clock (virtual time: the instant they
   /// are read) instead of the kernel's stamp. Must outlive the bus.
   const Clock* clock = nullptr;
-  /// receive() asks the kernel only after note_frame_on_bus() named a frame
-  /// this socket's filters pass (and until the queue is empty again): a driver
-  /// that sees every frame on the interface (lockstep with external processes)
-  /// spares the empty reads. Off: receive() always asks.
-  bool told_when_readable = false;
+  /// receive() takes only the frames feed() hands it: the kernel queues
+  /// nothing on this socket (its own filters are set to none; the ones given
+  /// here or by set_filters() and set_error_mask() are applied by feed(),
+  /// with the kernel's rules). For a driver that reads every frame of the
+  /// interface on one socket of its own (lockstep with external processes):
+  /// one read per frame for all the nodes of an interface, instead of one per
+  /// node that takes it, and none that finds the queue empty. Sending is as
+  /// always.
+  bool fed = false;
 };
 
 /// True when this process can open a CAN_RAW socket at all (the kernel's,
@@ -69,9 +74,10 @@ class SocketCanBus final : public Bus {
   BusStats stats() const override;
   const std::string& name() const override { return iface_; }
 
-  /// A frame went on this socket's interface (told_when_readable): when the
-  /// socket's filters pass it, the next receive() asks the kernel again.
-  void note_frame_on_bus(const CanFrame& frame) noexcept;
+  /// A frame went on this socket's interface (fed): queued for receive() when
+  /// the socket's filters or error mask pass it and this socket did not send
+  /// it (the kernel gives a socket its own frames only with receive_own).
+  void feed(const CanFrame& frame);
   /// Frames sent so far (stats().sent without asking the kernel anything).
   std::uint64_t frames_sent() const noexcept { return stats_.sent; }
   /// The socket, for poll()/epoll in a real-time loop. Owned by this object.
@@ -86,6 +92,9 @@ class SocketCanBus final : public Bus {
   void note_errno(int err);
   void note_drops(std::uint32_t absolute) const;
   void read_drop_counter() const;
+  std::optional<TimedFrame> take_fed();
+  /// Own frames remembered until fed back (fed); more means some were lost.
+  static constexpr std::size_t kMostOwnInFlight = 4096;
 
   int fd_;
   std::string iface_;
@@ -95,8 +104,9 @@ class SocketCanBus final : public Bus {
   mutable BusStats stats_;  // rx_overflow is refreshed from the kernel in const stats()
   mutable std::uint32_t last_drop_count_ = 0;
   bool read_since_drop_check_ = false;  // a frame came since the drop counter was last read
-  bool may_be_readable_ = true;         // told_when_readable: a frame for us may be queued
-  std::vector<Filter> filters_;         // as set, for note_frame_on_bus(); empty: every frame
+  std::deque<CanFrame> fed_;            // fed: the frames receive() gives next
+  std::deque<CanFrame> own_;            // fed: frames this socket sent, not yet fed back
+  std::vector<Filter> filters_;         // as set, for feed(); empty: every frame
   bool filters_set_empty_ = false;      // set_filters({}): no frame at all
   std::uint32_t error_mask_ = 0;
 };
