@@ -42,6 +42,16 @@ double number(std::string_view text, std::string_view field, const std::string& 
   return v;
 }
 
+// A time into the run, in seconds: 0 up to a year (a few hundred years fit the
+// nanosecond count; more would overflow it).
+constexpr double kMostSeconds = 365.0 * 24 * 3600;
+
+Nanos seconds_into_run(std::string_view text, std::string_view field, const std::string& name) {
+  const double s = number(text, field, name);
+  if (s < 0 || s > kMostSeconds) bad(text, name + " must be 0 to 31536000 s (a year), got " + std::string(field));
+  return from_seconds(s);
+}
+
 double probability(std::string_view text, std::string_view field) {
   const double p = number(text, field, "the probability");
   if (p < 0 || p > 1) bad(text, "the probability must be between 0 and 1, got " + std::string(field));
@@ -70,9 +80,7 @@ FaultRule parse_fault(std::string_view text) {
   rule.text = std::string(text);
   std::string_view body = text;
   if (const auto at = body.find('@'); at != std::string_view::npos) {
-    const double from = number(text, body.substr(at + 1), "the start time after @");
-    if (from < 0) bad(text, "the start time must be 0 or more");
-    rule.from = from_seconds(from);
+    rule.from = seconds_into_run(text, body.substr(at + 1), "the start time after @");
     body = body.substr(0, at);
   }
   const auto parts = split(body, ':');
@@ -111,9 +119,7 @@ FaultRule parse_fault(std::string_view text) {
   } else if (kind == "silence") {
     rule.kind = FaultKind::kSilence;
     if (args != 1) bad(text, "silence takes the time in seconds it starts");
-    const double from = number(text, arg(0), "the time");
-    if (from < 0) bad(text, "the time must be 0 or more");
-    rule.from = std::max(rule.from, from_seconds(from));
+    rule.from = std::max(rule.from, seconds_into_run(text, arg(0), "the time"));
   } else if (kind == "error") {
     rule.kind = FaultKind::kErrorFrame;
     if (args > 1) bad(text, "error takes at most a probability");
