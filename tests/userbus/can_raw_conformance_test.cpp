@@ -314,6 +314,42 @@ TEST_F(CanRaw, JoinedFiltersMustAllMatch) {
   EXPECT_EQ(got, (std::vector<canid_t>{0x101}));
 }
 
+// Filters that each take one id (canhil's delivery fence has 512 a socket):
+// standard and extended apart, remote frames not, error frames by the error
+// filter beside them.
+TEST_F(CanRaw, ManySingleIdFiltersStandardExtendedAndErrors) {
+  Sock tx, rx;
+  ASSERT_EQ(tx.bind_to(vcan0), 0);
+  constexpr canid_t kExact = CAN_EFF_FLAG | CAN_RTR_FLAG;
+  std::vector<can_filter> filters;
+  for (canid_t id = 0x100; id < 0x300; id += 2) filters.push_back({id, CAN_SFF_MASK | kExact});
+  filters.push_back({0x7FF, CAN_SFF_MASK | kExact});
+  filters.push_back({0x123 | CAN_EFF_FLAG, CAN_EFF_MASK | kExact});
+  filters.push_back({0x1ABCDEF | CAN_EFF_FLAG, CAN_EFF_MASK | kExact});
+  ASSERT_EQ(rx.set_filters(filters), 0);
+  ASSERT_EQ(rx.set(SOL_CAN_RAW, CAN_RAW_ERR_FILTER, static_cast<can_err_mask_t>(CAN_ERR_BUSOFF)), 0);
+  ASSERT_EQ(rx.bind_to(vcan0), 0);
+  const std::vector<canid_t> sent = {0x100U,
+                                     0x101U,
+                                     0x2FEU,
+                                     0x300U,
+                                     0x7FFU,
+                                     0x100U | CAN_RTR_FLAG,
+                                     0x100U | CAN_EFF_FLAG,
+                                     0x123U,
+                                     0x123U | CAN_EFF_FLAG,
+                                     0x1ABCDEFU | CAN_EFF_FLAG,
+                                     0x0ABCDEFU | CAN_EFF_FLAG,
+                                     0x1ABCDEFU | CAN_EFF_FLAG | CAN_RTR_FLAG};
+  for (const canid_t id : sent) ASSERT_GT(send_frame(tx.fd(), frame(id)), 0);
+  ASSERT_GT(send_frame(tx.fd(), frame(CAN_ERR_FLAG | CAN_ERR_BUSOFF, {0, 0, 0, 0, 0, 0, 0, 0})), 0);
+  ASSERT_GT(send_frame(tx.fd(), frame(CAN_ERR_FLAG | CAN_ERR_CRTL, {0, 0, 0, 0, 0, 0, 0, 0})), 0);
+  std::vector<canid_t> got;
+  while (auto r = receive(rx.fd(), 100)) got.push_back(r->frame.can_id);
+  EXPECT_EQ(got, (std::vector<canid_t>{0x100, 0x2FE, 0x7FF, 0x123 | CAN_EFF_FLAG, 0x1ABCDEF | CAN_EFF_FLAG,
+                                       CAN_ERR_FLAG | CAN_ERR_BUSOFF}));
+}
+
 TEST_F(CanRaw, ErrorFramesOnlyThroughTheErrorFilter) {
   Sock tx, plain, errors;
   ASSERT_EQ(tx.bind_to(vcan0), 0);

@@ -56,6 +56,10 @@ struct Options {
   std::uint32_t count = 0;          // the user's filters (joined filters must all match)
   bool single_ids = false;          // every filter takes one standard or extended id (the kernel serves those last)
   std::vector<Registered> filters;  // the user's, then the error filter if any
+  // single_ids: the filters' ids, sorted, standard and extended apart (a
+  // delivery fence's 512 filters a socket are a search, not 512 tests a frame).
+  std::vector<canid_t> standard_ids;
+  std::vector<canid_t> extended_ids;
 };
 
 struct Connection {
@@ -337,6 +341,12 @@ class Broker {
             (mask == (CAN_SFF_MASK | flags) || ((id & CAN_EFF_FLAG) != 0 && mask == (CAN_EFF_MASK | flags)));
         o.single_ids = o.single_ids && one;
       }
+      if (o.single_ids) {
+        for (const Registered& r : o.filters)
+          ((r.id & CAN_EFF_FLAG) != 0 ? o.extended_ids : o.standard_ids).push_back(r.id);
+        std::sort(o.standard_ids.begin(), o.standard_ids.end());
+        std::sort(o.extended_ids.begin(), o.extended_ids.end());
+      }
       if ((s.err_mask & CAN_ERR_MASK) != 0)
         o.filters.push_back(register_filter(0, (s.err_mask & CAN_ERR_MASK) | CAN_ERR_FLAG));
       std::atomic_thread_fence(std::memory_order_acquire);
@@ -356,10 +366,21 @@ class Broker {
   /// Whether socket options `o` take a frame of `can_id` (raw_rcv's rules:
   /// any filter, or every filter when they are joined).
   static bool wants(const Options& o, canid_t can_id) {
+    const bool joined = (o.flags & kJoinFilters) != 0 && o.count > 1;
+    if (!joined && o.single_ids && (can_id & CAN_ERR_FLAG) == 0) {
+      // A single-id filter's mask keeps the id, the EFF and the RTR flags (11
+      // bits of the id for a standard one, 29 for an extended one).
+      constexpr canid_t kFlags = CAN_EFF_FLAG | CAN_RTR_FLAG;
+      return std::binary_search(o.standard_ids.begin(), o.standard_ids.end(), can_id & (CAN_SFF_MASK | kFlags)) ||
+             std::binary_search(o.extended_ids.begin(), o.extended_ids.end(), can_id & (CAN_EFF_MASK | kFlags));
+    }
     std::uint32_t hits = 0;
-    for (const Registered& r : o.filters) hits += matches(r, can_id) ? 1U : 0U;
-    if (hits == 0) return false;
-    return (o.flags & kJoinFilters) == 0 || o.count <= 1 || hits >= o.count;
+    for (const Registered& r : o.filters) {
+      if (!matches(r, can_id)) continue;
+      if (!joined) return true;
+      ++hits;
+    }
+    return hits > 0 && hits >= o.count;
   }
 
   void route(Connection& sender, const TxRecord& record) {
