@@ -15,12 +15,17 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <new>
 #include <optional>
+#include <string>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/lockstep/conductor.hpp"
+#include "canhil/userbus/bus.hpp"
+#include "canhil/userbus/state.hpp"
 #include "run_external.hpp"
 
 namespace canhil::app {
@@ -116,6 +121,30 @@ std::optional<Nanos> bare_round_trip(int rounds) {
   return mean;
 }
 
+// The user-space bus's broker, when this process runs on that bus: its pid, else 0.
+pid_t bus_broker() {
+  const auto mapped = userbus::MappedState::open(userbus::BusPaths::current());
+  return mapped != nullptr ? mapped->state().broker_pid : 0;
+}
+
+// User and system CPU time of process `pid` (/proc/PID/stat), or nothing.
+std::optional<double> cpu_seconds_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(in, line)) return std::nullopt;
+  const auto name_end = line.rfind(')');
+  if (name_end == std::string::npos) return std::nullopt;
+  // After the name: the state (field 3) and on; utime and stime are fields 14 and 15.
+  unsigned long long user = 0;
+  unsigned long long system = 0;
+  if (std::sscanf(line.c_str() + name_end + 1, " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &user,
+                  &system) != 2) {
+    return std::nullopt;
+  }
+  const long ticks = sysconf(_SC_CLK_TCK);
+  return ticks > 0 ? static_cast<double>(user + system) / static_cast<double>(ticks) : 0.0;
+}
+
 // The same scenario in-process, virtual time, everything on: its wall time.
 Nanos in_process_wall(const emulator::Scenario& sc, double seconds,
                       const std::shared_ptr<const frames::MessageSet>& messages) {
@@ -157,7 +186,10 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   run.length = {bench.seconds, "the bench"};
   run.quiet = true;
   ExternalFigures fig;
+  const pid_t broker = bus_broker();
+  const std::optional<double> broker_before = broker > 0 ? cpu_seconds_of(broker) : std::nullopt;
   const int status = run_external(session, run, bench.shim, bench.team_preload, &fig);
+  const std::optional<double> broker_after = broker > 0 ? cpu_seconds_of(broker) : std::nullopt;
   if (status != 0 || fig.simulated < from_seconds(bench.seconds)) {
     std::printf("  external run: NOT MEASURED (canhil run --external ended with status %d at t = %.3f s)\n", status,
                 to_seconds(fig.simulated));
@@ -189,6 +221,13 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   }
   const double handover = to_seconds(fig.waited) - running;
   std::printf("    hand-overs (wake-ups, context switches):           %7.3f s %3.0f %%\n", handover, share(handover));
+  if (broker_before && broker_after) {
+    // Another process, on any core: every frame passes it, so its time is on
+    // the path of each instant, inside the hand-overs (or, on one core with
+    // canhil, inside canhil's lockstep work).
+    std::printf("    the bus's broker (pid %d, another process), meanwhile: %.2f s of CPU (in 10 ms ticks)\n",
+                static_cast<int>(broker), *broker_after - *broker_before);
+  }
   // What no lockstep can go below here: each wait of a process costs at least
   // one bare round trip between two processes.
   std::uint64_t waits = 0;
