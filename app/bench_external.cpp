@@ -15,11 +15,8 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
 #include <new>
 #include <optional>
-#include <string>
 
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
@@ -127,24 +124,6 @@ pid_t bus_broker() {
   return mapped != nullptr ? mapped->state().broker_pid : 0;
 }
 
-// User and system CPU time of process `pid` (/proc/PID/stat), or nothing.
-std::optional<double> cpu_seconds_of(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string line;
-  if (!std::getline(in, line)) return std::nullopt;
-  const auto name_end = line.rfind(')');
-  if (name_end == std::string::npos) return std::nullopt;
-  // After the name: the state (field 3) and on; utime and stime are fields 14 and 15.
-  unsigned long long user = 0;
-  unsigned long long system = 0;
-  if (std::sscanf(line.c_str() + name_end + 1, " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &user,
-                  &system) != 2) {
-    return std::nullopt;
-  }
-  const long ticks = sysconf(_SC_CLK_TCK);
-  return ticks > 0 ? static_cast<double>(user + system) / static_cast<double>(ticks) : 0.0;
-}
-
 // The same scenario in-process, virtual time, everything on: its wall time.
 Nanos in_process_wall(const emulator::Scenario& sc, double seconds,
                       const std::shared_ptr<const frames::MessageSet>& messages) {
@@ -187,9 +166,9 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   run.quiet = true;
   ExternalFigures fig;
   const pid_t broker = bus_broker();
-  const std::optional<double> broker_before = broker > 0 ? cpu_seconds_of(broker) : std::nullopt;
+  const std::optional<Nanos> broker_before = broker > 0 ? lockstep::cpu_time_of(broker) : std::nullopt;
   const int status = run_external(session, run, bench.shim, bench.team_preload, &fig);
-  const std::optional<double> broker_after = broker > 0 ? cpu_seconds_of(broker) : std::nullopt;
+  const std::optional<Nanos> broker_after = broker > 0 ? lockstep::cpu_time_of(broker) : std::nullopt;
   if (status != 0 || fig.simulated < from_seconds(bench.seconds)) {
     std::printf("  external run: NOT MEASURED (canhil run --external ended with status %d at t = %.3f s)\n", status,
                 to_seconds(fig.simulated));
@@ -226,7 +205,7 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
     // the path of each instant, inside the hand-overs (or, on one core with
     // canhil, inside canhil's lockstep work).
     std::printf("    the bus's broker (pid %d, another process), meanwhile: %.2f s of CPU (in 10 ms ticks)\n",
-                static_cast<int>(broker), *broker_after - *broker_before);
+                static_cast<int>(broker), to_seconds(*broker_after - *broker_before));
   }
   // What no lockstep can go below here: each wait of a process costs at least
   // one bare round trip between two processes.

@@ -354,6 +354,21 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
   return {};
 }
 
+std::optional<Nanos> cpu_time_of(int pid) {
+  const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/stat");
+  if (!fields || fields->empty()) return std::nullopt;
+  // After the parenthesis come field 3 (the state) and on; utime and stime
+  // are fields 14 and 15: the 12th and 13th words there.
+  const char* p = fields->c_str();
+  for (int word = 0; p != nullptr && word < 12; ++word) p = std::strchr(p + 1, ' ');
+  if (p == nullptr) return std::nullopt;
+  char* end = nullptr;
+  const unsigned long long user = std::strtoull(p + 1, &end, 10);
+  const unsigned long long system = end != nullptr ? std::strtoull(end, nullptr, 10) : 0;
+  static const long kTicks = sysconf(_SC_CLK_TCK);
+  return Nanos(kTicks > 0 ? static_cast<long long>(user + system) * (1'000'000'000LL / kTicks) : 0);
+}
+
 Nanos Conductor::processes_cpu() const {
   std::vector<int> pids;
   for (const Slot& s : board_->slots) {
@@ -361,23 +376,9 @@ Nanos Conductor::processes_cpu() const {
     const int pid = s.pid.load(std::memory_order_relaxed);
     if (pid > 0 && std::find(pids.begin(), pids.end(), pid) == pids.end()) pids.push_back(pid);
   }
-  static const long kTicks = sysconf(_SC_CLK_TCK);
-  long long ticks = 0;
-  for (const int pid : pids) {
-    const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/stat");
-    if (!fields || fields->empty()) continue;
-    // After the parenthesis come field 3 (the state) and on; utime and stime
-    // are fields 14 and 15: the 12th and 13th words there.
-    const char* p = fields->c_str();
-    for (int word = 0; p != nullptr && word < 12; ++word) p = std::strchr(p + 1, ' ');
-    if (p != nullptr) {
-      char* end = nullptr;
-      const unsigned long long user = std::strtoull(p + 1, &end, 10);
-      const unsigned long long system = end != nullptr ? std::strtoull(end, nullptr, 10) : 0;
-      ticks += static_cast<long long>(user + system);
-    }
-  }
-  return Nanos(kTicks > 0 ? ticks * (1'000'000'000LL / kTicks) : 0);
+  Nanos sum{0};
+  for (const int pid : pids) sum += cpu_time_of(pid).value_or(Nanos{0});
+  return sum;
 }
 
 std::uint64_t Conductor::frames_sent() const noexcept {

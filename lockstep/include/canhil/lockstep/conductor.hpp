@@ -30,6 +30,9 @@ using Nanos = std::chrono::nanoseconds;
 /// The machine's CLOCK_MONOTONIC by the system call itself: real even in a
 /// canhil whose own clocks follow the board (the shim preloaded into it).
 Nanos wall_clock() noexcept;
+/// User and system CPU time of process `pid` (its /proc stat, in the
+/// kernel's ticks), or nothing when it cannot be read (the process is gone).
+std::optional<Nanos> cpu_time_of(int pid);
 
 struct ConductorOptions {
   /// How long (wall time) a process may take to become quiet before the run
