@@ -204,8 +204,9 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
     // Another process, on any core: every frame passes it, so its time is on
     // the path of each instant, inside the hand-overs (or, on one core with
     // canhil, inside canhil's lockstep work).
-    std::printf("    the bus's broker (pid %d, another process), meanwhile: %.2f s of CPU (in 10 ms ticks)\n",
-                static_cast<int>(broker), to_seconds(*broker_after - *broker_before));
+    std::printf(
+        "    the bus's broker (pid %d, another process), meanwhile: %.2f s of CPU (counted in ticks of 1/%ld s)\n",
+        static_cast<int>(broker), to_seconds(*broker_after - *broker_before), sysconf(_SC_CLK_TCK));
   }
   // What no lockstep can go below here: each wait of a process costs at least
   // one bare round trip between two processes.

@@ -48,7 +48,10 @@ constexpr double kMostSeconds = 365.0 * 24 * 3600;
 
 Nanos seconds_into_run(std::string_view text, std::string_view field, const std::string& name) {
   const double s = number(text, field, name);
-  if (s < 0 || s > kMostSeconds) bad(text, name + " must be 0 to 31536000 s (a year), got " + std::string(field));
+  if (s < 0 || s > kMostSeconds) {
+    bad(text, name + " must be 0 to " + std::to_string(static_cast<long>(kMostSeconds)) + " s (a year), got " +
+                  std::string(field));
+  }
   return from_seconds(s);
 }
 

@@ -227,11 +227,7 @@ std::optional<TimedFrame> SocketCanBus::receive() {
     }
   }
   if (options_.clock != nullptr) out.time = options_.clock->now();
-  if (out.frame.kind == frames::FrameKind::kError) {
-    ++stats_.errors;
-  } else {
-    ++stats_.received;
-  }
+  count_received(out.frame);
   if (state_ != BusState::kUp) {
     state_ = BusState::kUp;
     ++stats_.state_changes;
@@ -278,12 +274,12 @@ std::optional<TimedFrame> SocketCanBus::take_fed() {
   if (fed_.empty()) return std::nullopt;
   TimedFrame out{fed_.front(), options_.clock != nullptr ? options_.clock->now() : Nanos{0}};
   fed_.pop_front();
-  if (out.frame.kind == frames::FrameKind::kError) {
-    ++stats_.errors;
-  } else {
-    ++stats_.received;
-  }
+  count_received(out.frame);
   return out;
+}
+
+void SocketCanBus::count_received(const CanFrame& frame) {
+  ++(frame.kind == frames::FrameKind::kError ? stats_.errors : stats_.received);
 }
 
 void SocketCanBus::set_filters(std::span<const Filter> filters) {

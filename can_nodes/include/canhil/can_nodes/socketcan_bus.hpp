@@ -93,6 +93,8 @@ class SocketCanBus final : public Bus {
   void note_drops(std::uint32_t absolute) const;
   void read_drop_counter() const;
   std::optional<TimedFrame> take_fed();
+  /// A frame given to the node: counted as an error frame or a received one.
+  void count_received(const CanFrame& frame);
   /// Own frames remembered until fed back (fed); more means some were lost.
   static constexpr std::size_t kMostOwnInFlight = 4096;
 
