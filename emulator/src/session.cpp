@@ -175,7 +175,14 @@ void Session::settle() {
 void Session::step(Nanos now, bool with_bus_changes) {
   if (with_bus_changes) apply_bus_changes();
   before_step();
-  world_->step();
+  if (options_.time_physics) {
+    const std::uint64_t contacts = world_->contact_points();
+    const Nanos start = thread_cpu_now();
+    world_->step();
+    physics_timing_.add(world_->contact_points() - contacts, thread_cpu_now() - start);
+  } else {
+    world_->step();
+  }
   after_step(now);
 }
 

@@ -407,6 +407,7 @@ void World::Impl::collide(dGeomID a, dGeomID b) {
     }
     dJointID j = dJointCreateContact(world, contacts, &c[i]);
     dJointAttach(j, ba, bb);
+    ++contact_points;
     // Rows: the normal, two of friction, three of rolling resistance.
     islands.link(index_of(ba), index_of(bb), (s.mode & dContactRolling) != 0 ? 6 : 3);
   }
@@ -547,6 +548,7 @@ const FieldMarkings& World::markings() const noexcept { return impl_->markings; 
 double World::time_s() const noexcept { return impl_->time; }
 const SolverHealth& World::solver_health() const noexcept { return impl_->solver; }
 std::uint64_t World::large_island_substeps() const noexcept { return impl_->split_substeps; }
+std::uint64_t World::contact_points() const noexcept { return impl_->contact_points; }
 std::size_t World::robot_count() const noexcept { return impl_->robots.size(); }
 Robot& World::robot(std::size_t i) { return *impl_->robots.at(i); }
 const Robot& World::robot(std::size_t i) const { return *impl_->robots.at(i); }

@@ -145,6 +145,7 @@ struct World::Impl {
   std::vector<char> big;          // per body: in an island stepped by QuickStep
   std::vector<char> was_enabled;  // per body, across the two passes of a split step
   std::uint64_t split_substeps = 0;
+  std::uint64_t contact_points = 0;  // contact joints made, over every substep
   FieldMarkings markings;
   dWorldID world = nullptr;
   dSpaceID statics = nullptr;   // ground, goals, boundary, static obstacles

@@ -148,5 +148,27 @@ TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
   EXPECT_EQ(session.snapshot().steps, 200u);
 }
 
+TEST_F(SessionTest, TimedStepsCountEveryStepAndItsContactPointsOnlyWhenAsked) {
+  {
+    Session session(scenario_, options_);
+    VirtualDriver driver(session);
+    driver.run_for(200ms);
+    EXPECT_EQ(session.physics_timing().steps, 0U) << "not asked: nothing timed";
+    EXPECT_EQ(session.physics_timing().cpu, Nanos{0});
+  }
+  options_.time_physics = true;
+  Session session(scenario_, options_);
+  VirtualDriver driver(session);
+  driver.run_for(200ms);
+  const PhysicsTiming& t = session.physics_timing();
+  EXPECT_EQ(t.steps, session.snapshot().steps);
+  EXPECT_GT(t.cpu, Nanos{0});
+  // Each of the two robots stands on its three wheels in every substep.
+  const auto substeps = static_cast<double>(scenario_.world.simulation.substeps);
+  EXPECT_GE(t.contacts_per_step(), 2 * 3 * substeps);
+  EXPECT_EQ(t.sum_x, static_cast<double>(session.world().contact_points()))
+      << "the steps' contact points are all the world's";
+}
+
 }  // namespace
 }  // namespace canhil::emulator

@@ -412,6 +412,22 @@ void push_in(World& w) {
   for (int n = 0; n < 3; ++n) w.robot(3).set_wheel_speed(n, turn[static_cast<std::size_t>(n)]);
 }
 
+TEST(Scrum, RobotsPushingTogetherMakeMoreContactPointsThanStandingApart) {
+  World pushing(scrum_scene(64));
+  World standing(scrum_scene(64));
+  EXPECT_EQ(pushing.contact_points(), 0U) << "none before the first step";
+  for (int i = 0; i < 300; ++i) {
+    push_in(pushing);
+    pushing.step();
+    standing.step();
+  }
+  // Four robots on three wheels each, in every substep, at the least.
+  const auto substeps = static_cast<std::uint64_t>(standing.params().simulation.substeps);
+  EXPECT_GE(standing.contact_points(), 300 * substeps * 4 * 3);
+  EXPECT_GT(pushing.contact_points(), standing.contact_points() + 300 * substeps)
+      << "the three robots pushing into one another touch, each substep";
+}
+
 TEST(Scrum, ALargeIslandGoesToQuickStepAndStaysTogether) {
   World w(scrum_scene(64));
   for (int i = 0; i < 300; ++i) {

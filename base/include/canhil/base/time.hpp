@@ -9,6 +9,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <ctime>
 
 namespace canhil {
 
@@ -31,6 +33,14 @@ constexpr Nanos from_seconds(double s) noexcept {
 /// A number of milliseconds as Nanos, rounded toward zero.
 constexpr Nanos from_ms(double ms) noexcept {
   return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::milli>(ms));
+}
+
+/// The calling thread's CPU time so far (CLOCK_THREAD_CPUTIME_ID): for
+/// benchmarks that must not count what other threads and processes did.
+inline Nanos thread_cpu_now() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return Nanos(std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec);
 }
 
 }  // namespace canhil

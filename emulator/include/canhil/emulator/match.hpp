@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "canhil/emulator/physics_timing.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
 
@@ -83,6 +84,8 @@ struct MatchResult {
   /// Every half's BusWatch::trace_hash, combined in order: the same match
   /// (scenario, seed, binaries) gives the same hash on any machine.
   std::uint64_t trace_hash = 0;
+  /// The world's steps over every half, with SessionOptions::time_physics.
+  PhysicsTiming physics;
   bool stopped = false;  ///< cut short (the stop flag): the figures so far
   /// The winner's index; none for a draw.
   std::optional<std::size_t> winner() const;

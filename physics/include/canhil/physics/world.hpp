@@ -166,6 +166,9 @@ class World {
   /// Substeps so far in which an island larger than
   /// simulation.exact_solver_max_rows went to QuickStep (a scrum).
   std::uint64_t large_island_substeps() const noexcept;
+  /// Contact points (ODE contact joints) made so far, over every substep: what
+  /// the solver's rows grow with as bodies touch (`canhil bench --part match`).
+  std::uint64_t contact_points() const noexcept;
 
   std::size_t robot_count() const noexcept;
   Robot& robot(std::size_t index);
