@@ -1,0 +1,61 @@
+// A System V IPC namespace of one's own (own_ipc.hpp).
+#include "canhil/lockstep/own_ipc.hpp"
+
+#include <fcntl.h>
+#include <sched.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+
+#include "canhil/base/setup_error.hpp"
+
+namespace canhil::lockstep {
+namespace {
+
+std::string errno_text(int e) { return std::strerror(e); }
+
+// `text` into the /proc file `path`, whole, or SetupError.
+void write_proc(const char* path, const std::string& text) {
+  const int fd = ::open(path, O_WRONLY | O_CLOEXEC);
+  const ssize_t n = fd >= 0 ? ::write(fd, text.data(), text.size()) : -1;
+  const int e = errno;
+  if (fd >= 0) ::close(fd);
+  if (n != static_cast<ssize_t>(text.size())) {
+    throw SetupError(std::string("cannot write ") + path + " for an IPC namespace of its own: " + errno_text(e));
+  }
+}
+
+}  // namespace
+
+void enter_own_ipc_namespace(IpcWay way) {
+  if (way == IpcWay::kDirect) {
+    if (::unshare(CLONE_NEWIPC) != 0) {
+      throw SetupError("cannot enter an IPC namespace of its own: " + errno_text(errno));
+    }
+    return;
+  }
+  // The ids are read before: inside, until the maps are written, they read as the overflow id.
+  const uid_t uid = ::getuid();
+  const gid_t gid = ::getgid();
+  if (::unshare(CLONE_NEWUSER | CLONE_NEWIPC) != 0) {
+    const int e = errno;
+    throw SetupError("cannot enter an IPC namespace of its own, directly (no CAP_SYS_ADMIN) nor in a user namespace (" +
+                     errno_text(e) +
+                     "): allow unprivileged user namespaces (sysctl kernel.unprivileged_userns_clone=1, "
+                     "user.max_user_namespaces > 0), or play these matches one at a time (--jobs 1)");
+  }
+  write_proc("/proc/self/setgroups", "deny");  // required before an unprivileged gid_map
+  write_proc("/proc/self/uid_map", std::to_string(uid) + " " + std::to_string(uid) + " 1");
+  write_proc("/proc/self/gid_map", std::to_string(gid) + " " + std::to_string(gid) + " 1");
+}
+
+IpcWay enter_own_ipc_namespace() {
+  if (::unshare(CLONE_NEWIPC) == 0) return IpcWay::kDirect;
+  if (errno != EPERM) throw SetupError("cannot enter an IPC namespace of its own: " + errno_text(errno));
+  enter_own_ipc_namespace(IpcWay::kUserNamespace);
+  return IpcWay::kUserNamespace;
+}
+
+}  // namespace canhil::lockstep
