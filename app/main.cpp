@@ -103,7 +103,9 @@ const Command kCommands[] = {
                                               the teams' own processes play each half, in lockstep, started
                                               afresh per half from [teams.external] (else [external]) or
                                               --process; their output to DIR or stderr (needs the robots'
-                                              interfaces, e.g. vcan0..vcan9)
+                                              interfaces, e.g. vcan0..vcan9); one match at a time, or
+                                              --jobs N, each on a user-space bus and in an IPC namespace
+                                              of its own
 )",
      canhil::app::run_match},
     {"view", "a recorded run (world log and trace) in the web viewer, with a timeline",

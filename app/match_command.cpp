@@ -27,6 +27,7 @@
 #include "canhil/emulator/scenario.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "external_worker.hpp"
 #include "match_external.hpp"
 #include "match_jobs.hpp"
 #include "match_records.hpp"
@@ -214,11 +215,6 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     throw UsageError("match takes one scenario (SCENARIO or --config SCENARIO)");
   }
   if (seeds_text && (seed || repeat_given)) throw UsageError("--seeds names every seed: leave --seed and --repeat out");
-  if (external && jobs_given && jobs > 1) {
-    throw UsageError(
-        "--external plays one match at a time for now (the teams' processes share the scenario's "
-        "interfaces); leave --jobs out, or split the seeds over machines (docs/teams.md)");
-  }
   if (records_option && no_records) throw UsageError("--records FILE or --no-records, not both");
   std::string path;
   if (positional.size() == 2) path = positional[1];
@@ -272,8 +268,13 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   use_private_rtdb_keys(kRunKeyPrefix);  // keys of this process, never a live robot's database
   int match_number = 0;
+  // With the teams' processes, one match at a time unless --jobs says more:
+  // each worker then has its own bus and IPC namespace (external_worker.hpp).
+  const long workers =
+      std::min<long>(external && !jobs_given ? 1 : jobs, static_cast<long>(std::max<std::size_t>(1, seeds.size())));
   if (external) {
     // Before anything is printed: canhil may start itself again, with the shim preloaded.
+    if (workers > 1) prepare_external_workers();
     ExternalMatch how;
     how.shim = find_timeshim();
     how.team_preload = preload_shim_into_self(how.shim);
@@ -317,7 +318,6 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     records << r.dump() << '\n' << std::flush;
   };
   const double match_s = match.halves * match.half_s;
-  const long workers = external ? 1 : std::min<long>(jobs, static_cast<long>(seeds.size()));
   if (!json) {
     std::printf("canhil match: %s, %zu match(es) of %d x %g min, seeds %s, %s against %s%s\n", path.c_str(),
                 seeds.size(), match.halves, match.half_s / 60, seed_list(seeds).c_str(), names[0].c_str(),
@@ -327,7 +327,10 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
       // bus, where the kernel has none): one line, every interface on it.
       std::string on;
       for (const std::string& iface : scenario.interfaces) on += (on.empty() ? "" : ", ") + iface;
-      if (!scenario.interfaces.empty()) {
+      if (workers > 1) {
+        std::printf("  each match's processes on %s of a user-space bus and an IPC namespace of the match's own\n",
+                    on.c_str());
+      } else if (!scenario.interfaces.empty()) {
         std::printf("  the teams' processes on %s (%s)\n", on.c_str(), can_nodes::bus_of(scenario.interfaces[0]));
       }
     }
@@ -399,9 +402,22 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     match_number = number;
     return match_record(emulator::play_match(one, options, match, on_progress, &g_stop), context);
   };
-  if (!external) {
+  if (!external || workers > 1) {
     MatchJobs jobs_of;
     jobs_of.play = play;
+    if (external) {
+      // A process that stops answering fails its match; the other workers go on.
+      jobs_of.play = [&](int number, std::uint64_t s, const std::function<void(double)>& on_progress) {
+        try {
+          return play(number, s, on_progress);
+        } catch (const emulator::ProcessStuck& e) {
+          return failed_record(s, std::string("stuck: ") + e.what(), context);
+        }
+      };
+      jobs_of.enter = [&](int) -> std::shared_ptr<void> {
+        return std::make_shared<ExternalWorker>(scenario.interfaces);
+      };
+    }
     jobs_of.failed = [&](std::uint64_t s, const std::string& why) { return failed_record(s, why, context); };
     jobs_of.done = done;
     jobs_of.progress = [&](std::uint64_t s, double played_s) { progress.update(s, played_s); };

@@ -80,7 +80,24 @@ std::optional<std::string> read_line(int fd, std::string& buffer) {
   }
 }
 
+// play()'s SetupError, as the line that tells the parent.
+std::string error_line(const SetupError& e) {
+  std::string text = e.what();
+  for (char& c : text) c = c == '\n' ? ' ' : c;
+  return "e " + text + "\n";
+}
+
 [[noreturn]] void worker_main(int in, int out, int index, const MatchJobs& jobs) {
+  std::shared_ptr<void> held;
+  if (jobs.enter) {
+    try {
+      held = jobs.enter(index);
+    } catch (const SetupError& e) {
+      write_all(out, error_line(e));
+      std::fflush(nullptr);
+      _exit(0);
+    }
+  }
   use_worker_rtdb_keys(index);  // its own RTDB keys: never another worker's, nor a robot's
   std::string buffer;
   while (const auto line = read_line(in, buffer)) {
@@ -100,13 +117,12 @@ std::optional<std::string> read_line(int fd, std::string& buffer) {
       });
       reply = "r " + record.dump() + "\n";
     } catch (const SetupError& e) {
-      std::string text = e.what();
-      for (char& c : text) c = c == '\n' ? ' ' : c;
-      reply = "e " + text + "\n";
+      reply = error_line(e);
     }
     if (!write_all(out, reply)) break;
   }
   release_private_rtdb_keys();
+  held.reset();
   std::fflush(nullptr);
   _exit(0);
 }

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -26,6 +27,10 @@ struct MatchJobs {
   std::function<void(const nlohmann::json& record)> done;
   /// Progress as the workers report it: a match's seed and its virtual seconds so far.
   std::function<void(std::uint64_t seed, double played_s)> progress;
+  /// When set: called first in each worker, with its index; what it returns
+  /// the worker holds until it ends (`canhil match --external`: an IPC
+  /// namespace and a bus of its own). SetupError: the worker's error, as play()'s.
+  std::function<std::shared_ptr<void>(int index)> enter;
 };
 
 /// Plays `seeds` in `workers` processes; stops handing out seeds once `stop`

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "support/test_paths.hpp"
 
@@ -147,6 +148,60 @@ TEST(VcanMatch, BothTeamsProcessesDriveTheirRobotsAndEachProcessWritesItsOwnLog)
             std::string::npos)
       << "and +x in the second";
   fs::remove_all(logs);
+  std::remove(scenario.c_str());
+}
+
+// Each record's lines, without what the wall clock decides.
+std::vector<nlohmann::json> records_without_wall_time(const std::string& path) {
+  std::vector<nlohmann::json> records;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    nlohmann::json r = nlohmann::json::parse(line);
+    r.erase("wall_s");
+    records.push_back(r);
+  }
+  return records;
+}
+
+TEST(VcanMatch, TwoAtATimeEachOnABusAndAnIpcNamespaceOfItsOwnGiveTheRecordsOfOneAtATime) {
+  // A noisy camera: each seed plays a match of its own.
+  const std::string scenario = write_scenario("jobs", 3.0, 2.0, kAgent);
+  std::ofstream(scenario, std::ios::app) << "\n[vision]\npoint_noise_m = 0.02\nball_noise_m = 0.05\n";
+  const std::string one = scratch("_one.jsonl");
+  const std::string two = scratch("_two.jsonl");
+  std::remove(one.c_str());
+  std::remove(two.c_str());
+  const std::string run = scenario + " --external --halves 1 --half-minutes 0.1 --seeds 1..3 --json --quiet";
+  const Finished a = canhil_match(run + " --jobs 1 --records " + one);
+  const Finished b = canhil_match(run + " --jobs 2 --records " + two);
+  ASSERT_EQ(exit_status(a), 0) << a.output << a.errors;
+  ASSERT_EQ(exit_status(b), 0) << b.output << b.errors;
+  const std::vector<nlohmann::json> sequential = records_without_wall_time(one);
+  ASSERT_EQ(sequential.size(), 3u);
+  EXPECT_EQ(records_without_wall_time(two), sequential) << "the same matches, trace hashes included";
+  EXPECT_NE(sequential[0]["trace_hash"], sequential[1]["trace_hash"]) << "the seeds played matches of their own";
+  EXPECT_EQ(without_wall_time(nlohmann::json::parse(b.output)), without_wall_time(nlohmann::json::parse(a.output)));
+  // Two workers, each on its own bus and in its own IPC namespace, none of them this test's.
+  std::error_code unread;
+  const std::string own = fs::read_symlink("/proc/self/ns/ipc", unread).string();
+  std::vector<std::string> spaces;
+  for (std::size_t at = b.errors.find("IPC namespace of its own ("); at != std::string::npos;
+       at = b.errors.find("IPC namespace of its own (", at + 1)) {
+    const std::size_t from = at + 26;
+    spaces.push_back(b.errors.substr(from, b.errors.find_first_of(",)", from) - from));
+  }
+  ASSERT_EQ(spaces.size(), 2u) << b.errors;
+  EXPECT_NE(spaces[0], spaces[1]) << b.errors;
+  for (const std::string& s : spaces) EXPECT_NE(s, own) << b.errors;
+  EXPECT_EQ(a.errors.find("a worker (pid"), std::string::npos) << "one at a time: the batch's own bus\n" << a.errors;
+  // The workers' buses are gone with them.
+  const fs::path bus = std::getenv("CANHIL_BUS_DIR") != nullptr ? std::getenv("CANHIL_BUS_DIR") : "/tmp/none";
+  for (const auto& entry : fs::directory_iterator(bus.parent_path())) {
+    EXPECT_EQ(entry.path().filename().string().rfind(bus.filename().string() + "-worker-", 0), std::string::npos)
+        << entry.path();
+  }
+  std::remove(one.c_str());
+  std::remove(two.c_str());
   std::remove(scenario.c_str());
 }
 

@@ -1,0 +1,58 @@
+// One worker of a parallel `canhil match --external` (external_worker.hpp).
+#include "external_worker.hpp"
+
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/lockstep/own_ipc.hpp"
+
+namespace canhil::app {
+
+void prepare_external_workers() {
+  if (dlsym(RTLD_DEFAULT, "canhil_userbus_interface") != nullptr) return;  // on the user-space bus already
+  std::string preload;
+  try {
+    preload = userbus::find_preload();
+  } catch (const userbus::BusError& e) {
+    throw SetupError(std::string("--external with --jobs gives each match a user-space bus of its own, and ") +
+                     e.what() + "; or leave --jobs out");
+  }
+  const char* before = std::getenv("LD_PRELOAD");
+  const std::string ld = before != nullptr && *before != '\0' ? preload + ":" + before : preload;
+  setenv("LD_PRELOAD", ld.c_str(), 1);
+}
+
+ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
+  const lockstep::IpcWay way = lockstep::enter_own_ipc_namespace();
+  try {
+    userbus::BusPaths here = userbus::BusPaths::current();
+    const std::string folder = here.folder + "-worker-" + std::to_string(getpid());
+    setenv("CANHIL_BUS_DIR", folder.c_str(), 1);
+    paths_ = userbus::BusPaths::current();
+    userbus::BrokerOptions options;
+    options.owner = getpid();  // a worker killed in a match takes its bus with it
+    userbus::start_broker(paths_, options);
+    userbus::add_interfaces(paths_, interfaces);
+  } catch (const userbus::BusError& e) {
+    throw SetupError(std::string("a match worker's own bus: ") + e.what());
+  }
+  std::error_code unread;
+  const std::string ns = std::filesystem::read_symlink("/proc/self/ns/ipc", unread).string();
+  std::fprintf(stderr,
+               "canhil match: a worker (pid %d) on a bus of its own at %s, in an IPC namespace of its own (%s%s)\n",
+               static_cast<int>(getpid()), paths_.folder.c_str(), ns.c_str(),
+               way == lockstep::IpcWay::kUserNamespace ? ", inside a user namespace" : "");
+}
+
+ExternalWorker::~ExternalWorker() {
+  userbus::stop_broker(paths_);
+  std::error_code ignored;
+  std::filesystem::remove(paths_.folder, ignored);  // empty once the broker is gone
+}
+
+}  // namespace canhil::app
