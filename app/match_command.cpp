@@ -425,6 +425,8 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
       play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop);
     } catch (const SetupError& e) {
       progress.clear();
+      // A worker's own bus or namespace is the machine's matter, not the command line's.
+      if (external) throw SetupError(path + ": " + e.what());
       throw UsageError(path + ": " + e.what());
     }
   } else {
