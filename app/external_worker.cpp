@@ -2,8 +2,11 @@
 #include "external_worker.hpp"
 
 #include <dlfcn.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -13,7 +16,34 @@
 
 namespace canhil::app {
 
+namespace {
+
+// The folders of workers' buses whose worker is gone (killed, so it could not
+// remove its own): `<folder>-worker-<pid>`, this user's, the pid not running.
+void remove_orphan_buses(const std::string& folder) {
+  const std::filesystem::path base(folder);
+  const std::string prefix = base.filename().string() + "-worker-";
+  std::error_code failed;
+  for (const auto& entry : std::filesystem::directory_iterator(base.parent_path(), failed)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    struct stat st {};
+    if (end == name.c_str() + prefix.size() || *end != '\0' || pid <= 0 || lstat(entry.path().c_str(), &st) != 0 ||
+        !S_ISDIR(st.st_mode) || st.st_uid != getuid()) {
+      continue;
+    }
+    if (kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // its worker still runs
+    std::error_code ignored;
+    std::filesystem::remove_all(entry.path(), ignored);
+  }
+}
+
+}  // namespace
+
 void prepare_external_workers() {
+  remove_orphan_buses(userbus::BusPaths::current().folder);
   if (dlsym(RTLD_DEFAULT, "canhil_userbus_interface") != nullptr) return;  // on the user-space bus already
   std::string preload;
   try {

@@ -12,11 +12,12 @@
 
 namespace canhil::app {
 
-/// Before the workers are forked: makes sure canhil's own sockets, and the
-/// teams' processes', can go to a bus of a worker's own — the bus's preload is
-/// put in LD_PRELOAD, for the start again that preload_shim_into_self makes
-/// (when canhil is not on the user-space bus already). SetupError when the
-/// preload cannot be found.
+/// Before the workers are forked: removes the buses of workers that were
+/// killed (their folders, `<folder>-worker-<pid>`, the pid gone), and makes
+/// sure canhil's own sockets, and the teams' processes', can go to a bus of a
+/// worker's own: the bus's preload is put in LD_PRELOAD, for the start again
+/// that preload_shim_into_self makes (when canhil is not on the user-space bus
+/// already). SetupError when the preload cannot be found.
 void prepare_external_workers();
 
 class ExternalWorker {

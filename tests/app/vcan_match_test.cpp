@@ -172,8 +172,20 @@ TEST(VcanMatch, TwoAtATimeEachOnABusAndAnIpcNamespaceOfItsOwnGiveTheRecordsOfOne
   std::remove(one.c_str());
   std::remove(two.c_str());
   const std::string run = scenario + " --external --halves 1 --half-minutes 0.1 --seeds 1..3 --json --quiet";
+  // A killed worker's bus folder (its pid gone) is removed; a running one's is not.
+  const fs::path bus = std::getenv("CANHIL_BUS_DIR") != nullptr ? std::getenv("CANHIL_BUS_DIR") : "/tmp/none";
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  waitpid(gone, nullptr, 0);
+  const fs::path orphan = bus.string() + "-worker-" + std::to_string(gone);
+  const fs::path alive = bus.string() + "-worker-" + std::to_string(getpid());
+  fs::create_directories(orphan);
+  fs::create_directories(alive);
   const Finished a = canhil_match(run + " --jobs 1 --records " + one);
   const Finished b = canhil_match(run + " --jobs 2 --records " + two);
+  EXPECT_FALSE(fs::exists(orphan)) << "a killed worker's bus folder is removed by the next batch";
+  EXPECT_TRUE(fs::exists(alive)) << "a running worker's is left alone";
+  fs::remove(alive);
   ASSERT_EQ(exit_status(a), 0) << a.output << a.errors;
   ASSERT_EQ(exit_status(b), 0) << b.output << b.errors;
   const std::vector<nlohmann::json> sequential = records_without_wall_time(one);
@@ -195,7 +207,6 @@ TEST(VcanMatch, TwoAtATimeEachOnABusAndAnIpcNamespaceOfItsOwnGiveTheRecordsOfOne
   for (const std::string& s : spaces) EXPECT_NE(s, own) << b.errors;
   EXPECT_EQ(a.errors.find("a worker (pid"), std::string::npos) << "one at a time: the batch's own bus\n" << a.errors;
   // The workers' buses are gone with them.
-  const fs::path bus = std::getenv("CANHIL_BUS_DIR") != nullptr ? std::getenv("CANHIL_BUS_DIR") : "/tmp/none";
   for (const auto& entry : fs::directory_iterator(bus.parent_path())) {
     EXPECT_EQ(entry.path().filename().string().rfind(bus.filename().string() + "-worker-", 0), std::string::npos)
         << entry.path();
