@@ -41,6 +41,11 @@ void enter_own_ipc_namespace(IpcWay way) {
   const gid_t gid = ::getgid();
   if (::unshare(CLONE_NEWUSER | CLONE_NEWIPC) != 0) {
     const int e = errno;
+    if (e == EINVAL) {
+      throw SetupError(
+          "cannot enter a user namespace for an IPC namespace of its own: the process has more than one thread "
+          "(the kernel allows it to a single-threaded process only)");
+    }
     throw SetupError("cannot enter an IPC namespace of its own, directly (no CAP_SYS_ADMIN) nor in a user namespace (" +
                      errno_text(e) +
                      "): allow unprivileged user namespaces (sysctl kernel.unprivileged_userns_clone=1, "

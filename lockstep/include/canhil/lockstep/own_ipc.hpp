@@ -16,7 +16,8 @@ enum class IpcWay { kDirect, kUserNamespace };
 
 /// Enters a new IPC namespace: directly when allowed, else through a user
 /// namespace (or `way`, to choose). The calling process must have one thread
-/// (a freshly forked child). Throws SetupError saying what failed and what to
+/// for the second way (a freshly forked child; not under ThreadSanitizer,
+/// whose runtime keeps a thread of its own). Throws SetupError saying what failed and what to
 /// do. Returns the way taken.
 IpcWay enter_own_ipc_namespace();
 void enter_own_ipc_namespace(IpcWay way);
