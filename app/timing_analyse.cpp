@@ -16,8 +16,6 @@
 namespace canhil::app {
 namespace {
 
-Nanos from_ms(double ms) { return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::milli>(ms)); }
-
 void positive(const std::optional<double>& v, const char* name) {
   if (v && !(*v > 0)) throw UsageError(std::string(name) + " takes a positive number");
 }

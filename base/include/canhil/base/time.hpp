@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <ctime>
+#include <ratio>
 
 namespace canhil {
 
@@ -26,14 +27,26 @@ inline constexpr Nanos kLongAgo = -std::chrono::duration_cast<Nanos>(std::chrono
 constexpr double to_seconds(Nanos t) noexcept { return std::chrono::duration<double>(t).count(); }
 /// Milliseconds as a double (reports).
 constexpr double to_ms(Nanos t) noexcept { return std::chrono::duration<double, std::milli>(t).count(); }
+namespace detail {
+/// `count` units of Period as Nanos, rounded toward zero; beyond what Nanos
+/// holds (about 292 years) kNever, or -kNever below; NaN 0.
+template <class Period>
+constexpr Nanos saturating_nanos(double count) noexcept {
+  constexpr double kMostSeconds = 9.2e9;  // a little under Nanos::max(), 9.22e9 s
+  constexpr double kMost = kMostSeconds * Period::den / Period::num;
+  if (!(count == count)) return Nanos{0};
+  if (count >= kMost) return kNever;
+  if (count <= -kMost) return -kNever;
+  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, Period>(count));
+}
+}  // namespace detail
+
 /// A number of seconds as Nanos, rounded toward zero (as duration_cast does).
-constexpr Nanos from_seconds(double s) noexcept {
-  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
-}
-/// A number of milliseconds as Nanos, rounded toward zero.
-constexpr Nanos from_ms(double ms) noexcept {
-  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double, std::milli>(ms));
-}
+/// Beyond what Nanos holds it gives kNever (-kNever below) and NaN gives 0:
+/// a conversion that would be undefined never happens.
+constexpr Nanos from_seconds(double s) noexcept { return detail::saturating_nanos<std::ratio<1>>(s); }
+/// A number of milliseconds as Nanos, rounded toward zero; saturating as from_seconds.
+constexpr Nanos from_ms(double ms) noexcept { return detail::saturating_nanos<std::milli>(ms); }
 
 /// The calling thread's CPU time so far (CLOCK_THREAD_CPUTIME_ID): for
 /// benchmarks that must not count what other threads and processes did.
