@@ -5,6 +5,7 @@
 #include "canhil/userbus/bus.hpp"
 
 #include <linux/can.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -147,6 +148,21 @@ TEST_F(OwnBus, EndsWithItsOwner) {
   EXPECT_EQ(waitpid(broker_, &status, 0), broker_);  // it ended by itself
   EXPECT_FALSE(ub::broker_alive(paths_));
   EXPECT_FALSE(fs::exists(paths_.socket));
+}
+
+TEST_F(OwnBus, KeepsNoDescriptorOfItsStarter) {
+  // A pipe's write end open when the broker starts: once this process closes
+  // it, the read end sees the end at once, since the broker holds no copy
+  // (a match's worker is known to have ended by such a pipe).
+  int ends[2];
+  ASSERT_EQ(pipe(ends), 0);
+  start();
+  close(ends[1]);
+  pollfd p{ends[0], POLLIN, 0};
+  EXPECT_EQ(poll(&p, 1, 2000), 1);
+  EXPECT_NE(p.revents & POLLHUP, 0) << "the pipe's end reached: nobody else holds its write end";
+  close(ends[0]);
+  EXPECT_TRUE(ub::broker_alive(paths_)) << "its own listening socket kept";
 }
 
 TEST_F(OwnBus, CangenIntoCandumpLosesNothing) {

@@ -5,6 +5,7 @@
 // SOCK_SEQPACKET connection.
 #include <linux/can/error.h>
 #include <poll.h>
+#include <signal.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
@@ -106,10 +107,15 @@ class Broker {
 
   void run() {
     epoll_event events[64];
+    // Where the kernel gives no pidfd (before Linux 5.3, or a seccomp
+    // profile refusing it), the owner is looked for twice a second instead.
+    const bool look_for_owner = options_.owner > 0 && owner_fd_ < 0;
     while (!stop_) {
-      const int n = epoll_wait(epoll_, events, 64, -1);
+      const int n = epoll_wait(epoll_, events, 64, look_for_owner ? 500 : -1);
+      const int wait_error = errno;
+      if (look_for_owner && kill(options_.owner, 0) != 0 && errno == ESRCH) return;
       if (n < 0) {
-        if (errno == EINTR) continue;
+        if (wait_error == EINTR) continue;
         return;
       }
       for (int i = 0; i < n && !stop_; ++i) {

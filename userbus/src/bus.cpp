@@ -179,6 +179,11 @@ pid_t start_broker(const BusPaths& paths, const BrokerOptions& options) {
   const pid_t child = fork();
   if (child < 0) throw BusError(std::string("cannot start the bus's broker: ") + errno_text(errno));
   if (child == 0) {
+    // Nothing of its starter's but the listening socket: a descriptor kept here
+    // (a worker's pipe to its batch, a caller's socket) would stay open as long
+    // as the broker lives, and its other end would never see it close.
+    if (listen_fd > 3) close_range(3, static_cast<unsigned>(listen_fd) - 1, 0);
+    close_range(static_cast<unsigned>(listen_fd) + 1, ~0U, 0);
     setsid();
     signal(SIGINT, SIG_IGN);
     signal(SIGPIPE, SIG_IGN);
