@@ -3,6 +3,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -54,8 +55,13 @@ std::string program_of(const std::string& command) {
 // `log`: its standard output and error (2: canhil's stderr for both), or -1 to keep canhil's.
 pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent, bool second_set,
             const std::string& path, int log) {
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid != 0) return pid;
+  // It ends with canhil: a canhil (or a match's worker) killed outright leaves
+  // no process of the team running on in real time.
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (getppid() != parent) _exit(127);  // canhil ended before the line above
   for (const std::string& e : environment) {
     const auto eq = e.find('=');
     setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
