@@ -60,15 +60,21 @@ void prepare_external_workers() {
 ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
   const lockstep::IpcWay way = lockstep::enter_own_ipc_namespace();
   try {
-    userbus::BusPaths here = userbus::BusPaths::current();
-    const std::string folder = here.folder + "-worker-" + std::to_string(getpid());
+    const std::string folder = userbus::BusPaths::current().folder + "-worker-" + std::to_string(getpid());
     setenv("CANHIL_BUS_DIR", folder.c_str(), 1);
     paths_ = userbus::BusPaths::current();
+  } catch (const userbus::BusError& e) {
+    throw SetupError(std::string("a match worker's own bus: ") + e.what());
+  }
+  try {
     userbus::BrokerOptions options;
     options.owner = getpid();  // a worker killed in a match takes its bus with it
     userbus::start_broker(paths_, options);
     userbus::add_interfaces(paths_, interfaces);
   } catch (const userbus::BusError& e) {
+    stop_broker(paths_);  // nothing when none started
+    std::error_code ignored;
+    std::filesystem::remove_all(paths_.folder, ignored);
     throw SetupError(std::string("a match worker's own bus: ") + e.what());
   }
   std::error_code unread;
@@ -78,6 +84,8 @@ ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
                static_cast<int>(getpid()), paths_.folder.c_str(), ns.c_str(),
                way == lockstep::IpcWay::kUserNamespace ? ", inside a user namespace" : "");
 }
+
+void ExternalWorker::next_match() { lockstep::enter_own_ipc_namespace(); }
 
 ExternalWorker::~ExternalWorker() {
   userbus::stop_broker(paths_);

@@ -30,6 +30,9 @@ class ExternalWorker {
   explicit ExternalWorker(const std::vector<std::string>& interfaces);
   /// Stops the bus and removes its folder.
   ~ExternalWorker();
+  /// Before each match: a fresh IPC namespace, so that what a team's
+  /// processes left in the last match (a segment, a semaphore) is not there.
+  static void next_match();
   ExternalWorker(const ExternalWorker&) = delete;
   ExternalWorker& operator=(const ExternalWorker&) = delete;
 

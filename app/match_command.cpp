@@ -408,6 +408,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     if (external) {
       // A process that stops answering fails its match; the other workers go on.
       jobs_of.play = [&](int number, std::uint64_t s, const std::function<void(double)>& on_progress) {
+        ExternalWorker::next_match();
         try {
           return play(number, s, on_progress);
         } catch (const emulator::ProcessStuck& e) {
@@ -423,8 +424,11 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     jobs_of.progress = [&](std::uint64_t s, double played_s) { progress.update(s, played_s); };
     try {
       play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop);
+      // Each worker ended in IPC namespaces of its own, away from its claim of keys.
+      if (external) remove_orphan_rtdb_keys(kRunKeyPrefix);
     } catch (const SetupError& e) {
       progress.clear();
+      if (external) remove_orphan_rtdb_keys(kRunKeyPrefix);
       // A worker's own bus or namespace is the machine's matter, not the command line's.
       if (external) throw SetupError(path + ": " + e.what());
       throw UsageError(path + ": " + e.what());

@@ -88,6 +88,7 @@ std::string error_line(const SetupError& e) {
 }
 
 [[noreturn]] void worker_main(int in, int out, int index, const MatchJobs& jobs) {
+  use_worker_rtdb_keys(index);  // its own RTDB keys: never another worker's, nor a robot's
   std::shared_ptr<void> held;
   if (jobs.enter) {
     try {
@@ -98,7 +99,6 @@ std::string error_line(const SetupError& e) {
       _exit(0);
     }
   }
-  use_worker_rtdb_keys(index);  // its own RTDB keys: never another worker's, nor a robot's
   std::string buffer;
   while (const auto line = read_line(in, buffer)) {
     char* end = nullptr;
@@ -260,7 +260,13 @@ void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const
     if (w.from >= 0) ::close(w.from);
     if (w.pid > 0) ::waitpid(w.pid, nullptr, 0);
   }
-  if (!error.empty()) throw SetupError(error);
+  if (!error.empty()) {
+    // What the other workers finished is still reported, in the order of the seeds.
+    for (std::size_t k = emitted; k < seeds.size(); ++k) {
+      if (const auto f = finished.find(seeds[k]); f != finished.end()) jobs.done(f->second);
+    }
+    throw SetupError(error);
+  }
 }
 
 }  // namespace canhil::app

@@ -27,16 +27,19 @@ struct MatchJobs {
   std::function<void(const nlohmann::json& record)> done;
   /// Progress as the workers report it: a match's seed and its virtual seconds so far.
   std::function<void(std::uint64_t seed, double played_s)> progress;
-  /// When set: called first in each worker, with its index; what it returns
-  /// the worker holds until it ends (`canhil match --external`: an IPC
-  /// namespace and a bus of its own). SetupError: the worker's error, as play()'s.
+  /// When set: called in each worker, with its index, after it chose its
+  /// RTDB keys (in the batch's IPC namespace) and before its first match.
+  /// What it returns the worker holds until it ends (`canhil match
+  /// --external`: an IPC namespace and a bus of its own). SetupError: the
+  /// worker's error, as play()'s.
   std::function<std::shared_ptr<void>(int index)> enter;
 };
 
 /// Plays `seeds` in `workers` processes; stops handing out seeds once `stop`
 /// is set (the matches under way finish as play() decides). Throws SetupError
-/// with a worker's message when play() threw SetupError (the scenario itself
-/// is wrong: every match would fail).
+/// with a worker's message when play() or enter() threw SetupError (the
+/// scenario itself is wrong, or the machine: every match would fail), after
+/// done() has had the records the other workers finished.
 void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const MatchJobs& jobs,
                      const std::atomic<bool>& stop);
 

@@ -3,6 +3,7 @@
 
 #include <sys/ipc.h>
 #include <sys/shm.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -26,6 +27,13 @@ unsigned g_chosen_prefix = 0;
 // The claim's segment, and the process that made it (a worker forked later does not remove it).
 int g_claim_id = -1;
 pid_t g_claim_pid = 0;
+ino_t g_claim_namespace = 0;  // the IPC namespace the claim's id belongs to
+
+// The IPC namespace this process is in (its /proc inode), 0 when unknown.
+ino_t ipc_namespace() {
+  struct stat st {};
+  return ::stat("/proc/self/ns/ipc", &st) == 0 ? st.st_ino : 0;
+}
 
 // Whether the process `pid` is there (or there and not ours to signal).
 bool alive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
@@ -82,6 +90,7 @@ bool claim(unsigned base) {
   if (id < 0) return errno != EEXIST && errno != EACCES;
   g_claim_id = id;
   g_claim_pid = ::getpid();
+  g_claim_namespace = ipc_namespace();
   return true;
 }
 
@@ -128,8 +137,12 @@ void use_worker_rtdb_keys(int worker) {
 
 void release_private_rtdb_keys() {
   if (g_claim_id < 0 || g_claim_pid != ::getpid()) return;
-  ::shmctl(g_claim_id, IPC_RMID, nullptr);
+  // In another IPC namespace (a worker of `match --external --jobs`) the id
+  // would name another segment: the claim stays for the batch to sweep.
+  if (ipc_namespace() == g_claim_namespace) ::shmctl(g_claim_id, IPC_RMID, nullptr);
   g_claim_id = -1;
 }
+
+int remove_orphan_rtdb_keys(unsigned prefix) { return sweep(prefix, true).removed; }
 
 }  // namespace canhil::app

@@ -29,8 +29,14 @@ int use_private_rtdb_keys(unsigned prefix);
 void use_worker_rtdb_keys(int worker);
 
 /// Gives back the range this process claimed (main() at the end of every
-/// command, a worker before it ends). A process killed outright leaves its
-/// claim, an orphan that the next one removes.
+/// command, a worker before it ends), when it is still in the IPC namespace
+/// it claimed it in. A process killed outright leaves its claim, an orphan
+/// that the next one removes.
 void release_private_rtdb_keys();
+
+/// Removes the segments use_private_rtdb_keys() would remove as orphans (a
+/// batch's, after its workers ended in IPC namespaces of their own and could
+/// not give their claims back); returns how many.
+int remove_orphan_rtdb_keys(unsigned prefix);
 
 }  // namespace canhil::app

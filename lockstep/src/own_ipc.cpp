@@ -16,6 +16,12 @@ namespace {
 
 std::string errno_text(int e) { return std::strerror(e); }
 
+// What a user can do where the kernel refuses a user namespace.
+constexpr const char* kRemedy =
+    ": run as root, or allow unprivileged user namespaces (Debian: sysctl kernel.unprivileged_userns_clone=1 and "
+    "user.max_user_namespaces > 0; Ubuntu 23.10 and later: sysctl kernel.apparmor_restrict_unprivileged_userns=0), "
+    "or play these matches one at a time (--jobs 1)";
+
 // `text` into the /proc file `path`, whole, or SetupError.
 void write_proc(const char* path, const std::string& text) {
   const int fd = ::open(path, O_WRONLY | O_CLOEXEC);
@@ -23,7 +29,8 @@ void write_proc(const char* path, const std::string& text) {
   const int e = errno;
   if (fd >= 0) ::close(fd);
   if (n != static_cast<ssize_t>(text.size())) {
-    throw SetupError(std::string("cannot write ") + path + " for an IPC namespace of its own: " + errno_text(e));
+    throw SetupError(std::string("cannot write ") + path + " for an IPC namespace of its own (" + errno_text(e) + ")" +
+                     kRemedy);
   }
 }
 
@@ -44,12 +51,10 @@ void enter_own_ipc_namespace(IpcWay way) {
     if (e == EINVAL) {
       throw SetupError(
           "cannot enter a user namespace for an IPC namespace of its own: the process has more than one thread "
-          "(the kernel allows it to a single-threaded process only)");
+          "(the kernel allows it to a single-threaded process only), or the kernel has no user or IPC namespaces");
     }
     throw SetupError("cannot enter an IPC namespace of its own, directly (no CAP_SYS_ADMIN) nor in a user namespace (" +
-                     errno_text(e) +
-                     "): allow unprivileged user namespaces (sysctl kernel.unprivileged_userns_clone=1, "
-                     "user.max_user_namespaces > 0), or play these matches one at a time (--jobs 1)");
+                     errno_text(e) + ")" + kRemedy);
   }
   write_proc("/proc/self/setgroups", "deny");  // required before an unprivileged gid_map
   write_proc("/proc/self/uid_map", std::to_string(uid) + " " + std::to_string(uid) + " 1");

@@ -9,6 +9,7 @@
 // either side. Wall time never decides a result here: it only bounds how long
 // a match may take.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -213,6 +214,86 @@ TEST(VcanMatch, TwoAtATimeEachOnABusAndAnIpcNamespaceOfItsOwnGiveTheRecordsOfOne
   }
   std::remove(one.c_str());
   std::remove(two.c_str());
+  std::remove(scenario.c_str());
+}
+
+// The parent pid of process `pid` (/proc/PID/status), or -1 when it is gone.
+long parent_of(long pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("PPid:", 0) == 0) return std::strtol(line.c_str() + 5, nullptr, 10);
+  }
+  return -1;
+}
+
+// Every number that follows `marker` in `text`.
+std::vector<long> numbers_after(const std::string& text, const std::string& marker) {
+  std::vector<long> found;
+  for (std::size_t at = text.find(marker); at != std::string::npos; at = text.find(marker, at + 1)) {
+    found.push_back(std::strtol(text.c_str() + at + marker.size(), nullptr, 10));
+  }
+  return found;
+}
+
+TEST(VcanMatch, AWorkerKilledInAMatchTakesItsProcessesWithItAndTheBatchGoesOn) {
+  const std::string scenario = write_scenario("killed", 3.0, 2.0, kAgent);
+  const std::string records = scratch("_killed.jsonl");
+  const std::string err = scratch("_killed.err");
+  std::remove(records.c_str());
+  const pid_t batch = fork();
+  ASSERT_GE(batch, 0);
+  if (batch == 0) {
+    const std::string command = "exec timeout 300 " + canhil::test::canhil_binary() + " match " + scenario +
+                                " --external --jobs 2 --seeds 1..3 --halves 1 --half-minutes 0.5 --quiet --records " +
+                                records + " > /dev/null 2> " + err;
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wall time only bounds the waits: a worker with its four processes started
+  // (each team's handler and agent).
+  long worker = -1;
+  std::vector<long> its;
+  for (int k = 0; k < 600 && its.size() < 4; ++k) {
+    usleep(50'000);
+    const std::string text = read_file(err);
+    const std::vector<long> workers = numbers_after(text, "a worker (pid ");
+    if (workers.empty()) continue;
+    worker = workers[0];
+    its.clear();
+    for (const long p : numbers_after(text, "(pid ")) {
+      if (p != worker && parent_of(p) == worker) its.push_back(p);
+    }
+  }
+  ASSERT_EQ(its.size(), 4u) << read_file(err);
+  ASSERT_EQ(kill(static_cast<pid_t>(worker), SIGKILL), 0);
+  const auto any_left = [&] {
+    for (const long p : its) {
+      if (parent_of(p) >= 0) return true;
+    }
+    return false;
+  };
+  for (int k = 0; k < 100 && any_left(); ++k) usleep(50'000);
+  EXPECT_FALSE(any_left()) << "the killed worker's handlers and agents ended with it";
+  int status = 0;
+  ASSERT_EQ(waitpid(batch, &status, 0), batch);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1) << "a failed match: the batch's CI sees it\n" << read_file(err);
+  std::ifstream in(records);
+  int played = 0;
+  int failed = 0;
+  for (std::string line; std::getline(in, line);) {
+    const nlohmann::json r = nlohmann::json::parse(line);
+    if (r["failed"].is_null()) {
+      ++played;
+    } else {
+      ++failed;
+      EXPECT_NE(r["failed"].get<std::string>().find("killed by signal 9"), std::string::npos) << line;
+    }
+  }
+  EXPECT_EQ(failed, 1);
+  EXPECT_EQ(played, 2) << "the other matches were played: the batch went on";
+  std::remove(records.c_str());
+  std::remove(err.c_str());
   std::remove(scenario.c_str());
 }
 
