@@ -21,6 +21,7 @@
 #include "canhil/emulator/referee.hpp"
 #include "canhil/lockstep/conductor.hpp"
 #include "play_summary.hpp"
+#include "private_rtdb.hpp"
 #include "stop_signals.hpp"
 #include "team_processes.hpp"
 
@@ -128,6 +129,9 @@ std::string preload_shim_into_self(const std::string& shim) {
   for (std::string& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
   std::fflush(stdout);
+  // The keys this image claimed: the one started next claims its own (a claim
+  // kept across the exec had no owner to give it back, until the next run).
+  release_private_rtdb_keys();
   execv("/proc/self/exe", argv.data());
   throw SetupError(std::string("canhil could not start itself again with the time shim: ") + std::strerror(errno));
 }
