@@ -43,12 +43,13 @@ std::string read_file(const std::string& path) {
 
 std::string scratch(const std::string& name) { return "/tmp/canhil_vcan_match_" + std::to_string(getpid()) + name; }
 
-// Runs `canhil match` to its end (at most five minutes).
-Finished canhil_match(const std::string& arguments) {
+// Runs `canhil match` to its end (at most five minutes); `environment`:
+// NAME=VALUE words for it.
+Finished canhil_match(const std::string& arguments, const std::string& environment = "") {
   const std::string out = scratch(".out");
   const std::string err = scratch(".err");
-  const std::string command =
-      "timeout 300 " + canhil::test::canhil_binary() + " match " + arguments + " > " + out + " 2> " + err;
+  const std::string command = environment + (environment.empty() ? "" : " ") + "timeout 300 " +
+                              canhil::test::canhil_binary() + " match " + arguments + " > " + out + " 2> " + err;
   Finished f;
   f.status = std::system(command.c_str());
   f.output = read_file(out);
@@ -294,6 +295,24 @@ TEST(VcanMatch, AWorkerKilledInAMatchTakesItsProcessesWithItAndTheBatchGoesOn) {
   EXPECT_EQ(played, 2) << "the other matches were played: the batch went on";
   std::remove(records.c_str());
   std::remove(err.c_str());
+  std::remove(scenario.c_str());
+}
+
+TEST(VcanMatch, AWorkerThatCannotMakeItsBusStopsTheBatchSayingWhy) {
+  // A bus folder of 95 characters: the batch's own would fit a socket's path,
+  // a worker's (`-worker-<pid>` more) cannot.
+  std::string folder = "/tmp/canhil-long-";
+  folder += std::string(95 - folder.size(), 'x');
+  const std::string scenario = write_scenario("nobus", 3.0, 2.0, kAgent);
+  const Finished g =
+      canhil_match(scenario + " --external --jobs 2 --seeds 1..2 --half-minutes 0.1 --no-records --quiet",
+                   "CANHIL_BUS_DIR=" + folder);
+  EXPECT_EQ(exit_status(g), 2) << g.output << g.errors;
+  EXPECT_NE(g.errors.find("a match worker's own bus: the bus folder " + folder + "-worker-"), std::string::npos)
+      << g.errors;
+  EXPECT_NE(g.errors.find("too long for a socket's path"), std::string::npos) << g.errors;
+  EXPECT_EQ(g.errors.find("usage:"), std::string::npos) << "the machine's matter, not the command line's\n" << g.errors;
+  EXPECT_EQ(g.errors.find("started `"), std::string::npos) << "nothing started\n" << g.errors;
   std::remove(scenario.c_str());
 }
 
