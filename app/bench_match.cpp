@@ -181,12 +181,13 @@ bool bench_match(const std::optional<std::string>& config, double seconds,
   // The match's own physics against its world alone: what the factor would
   // be if nothing but the physics cost anything.
   const emulator::PhysicsTiming& p = ten_split.physics;
+  const double alone_s = seconds / reference_ten.factor;  // the same world's CPU time alone
   std::printf(
       "    the %zu-robot half's physics: a step with one contact point more took %.2f us more (a line fitted "
       "over its %llu steps)\n"
       "    its physics is %.2f times its world alone's: with nothing else costing anything, %.2f of physics alone\n",
-      ten.robot_count(), p.us_per_contact(), static_cast<unsigned long long>(p.steps),
-      to_seconds(p.cpu) / (seconds / reference_ten.factor), (seconds / reference_ten.factor) / to_seconds(p.cpu));
+      ten.robot_count(), p.us_per_contact(), static_cast<unsigned long long>(p.steps), to_seconds(p.cpu) / alone_s,
+      alone_s / to_seconds(p.cpu));
   return five_on >= five_target && ten_on >= ten_target && five_share >= five_share_target &&
          ten_share >= ten_share_target;
 }

@@ -2,15 +2,14 @@
 #include "external_worker.hpp"
 
 #include <dlfcn.h>
-#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
+#include "canhil/base/process.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/lockstep/own_ipc.hpp"
 
@@ -34,7 +33,7 @@ void remove_orphan_buses(const std::string& folder) {
         !S_ISDIR(st.st_mode) || st.st_uid != getuid()) {
       continue;
     }
-    if (kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // its worker still runs
+    if (process_alive(static_cast<pid_t>(pid))) continue;  // its worker still runs
     std::error_code ignored;
     std::filesystem::remove_all(entry.path(), ignored);
   }
@@ -72,7 +71,7 @@ ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
     userbus::start_broker(paths_, options);
     userbus::add_interfaces(paths_, interfaces);
   } catch (const userbus::BusError& e) {
-    stop_broker(paths_);  // nothing when none started
+    userbus::stop_broker(paths_);  // nothing when none started
     std::error_code ignored;
     std::filesystem::remove_all(paths_.folder, ignored);
     throw SetupError(std::string("a match worker's own bus: ") + e.what());

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -422,16 +423,19 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     jobs_of.failed = [&](std::uint64_t s, const std::string& why) { return failed_record(s, why, context); };
     jobs_of.done = done;
     jobs_of.progress = [&](std::uint64_t s, double played_s) { progress.update(s, played_s); };
+    std::optional<std::string> failed_setup;
     try {
       play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop);
-      // Each worker ended in IPC namespaces of its own, away from its claim of keys.
-      if (external) remove_orphan_rtdb_keys(kRunKeyPrefix);
     } catch (const SetupError& e) {
+      failed_setup = path + ": " + e.what();
+    }
+    // Each worker ended in IPC namespaces of its own, away from its claim of keys.
+    if (external) remove_orphan_rtdb_keys(kRunKeyPrefix);
+    if (failed_setup) {
       progress.clear();
-      if (external) remove_orphan_rtdb_keys(kRunKeyPrefix);
       // A worker's own bus or namespace is the machine's matter, not the command line's.
-      if (external) throw SetupError(path + ": " + e.what());
-      throw UsageError(path + ": " + e.what());
+      if (external) throw SetupError(*failed_setup);
+      throw UsageError(*failed_setup);
     }
   } else {
     for (std::size_t k = 0; k < seeds.size() && !g_stop; ++k) {

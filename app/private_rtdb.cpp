@@ -7,10 +7,11 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <csignal>
 #include <cstdlib>
 #include <set>
 #include <string>
+
+#include "canhil/base/process.hpp"
 
 namespace canhil::app {
 namespace {
@@ -34,9 +35,6 @@ ino_t ipc_namespace() {
   struct stat st {};
   return ::stat("/proc/self/ns/ipc", &st) == 0 ? st.st_ino : 0;
 }
-
-// Whether the process `pid` is there (or there and not ours to signal).
-bool alive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
 // Every shared memory segment: f(id, its state). Other users' segments are
 // seen too where the kernel has SHM_STAT_ANY (Linux 4.17: no read permission
@@ -71,7 +69,7 @@ Segments sweep(unsigned prefix, bool remove_orphans) {
   each_segment([&](int id, const shmid_ds& ds) {
     const auto key = static_cast<unsigned>(ds.shm_perm.__key);
     if (key >> 24 != prefix) return;
-    const bool orphan = ds.shm_perm.uid == ::geteuid() && ds.shm_nattch == 0 && !alive(ds.shm_cpid);
+    const bool orphan = ds.shm_perm.uid == ::geteuid() && ds.shm_nattch == 0 && !process_alive(ds.shm_cpid);
     if (remove_orphans && orphan && ::shmctl(id, IPC_RMID, nullptr) == 0) {
       ++out.removed;
       return;

@@ -147,6 +147,13 @@ class MaskFor {
   sigset_t old_{};
 };
 
+/// What ends a wait on `count` descriptors: their changes, or only the clock
+/// when there are none (a poll or select used as a sleep).
+template <class Count>
+constexpr std::uint32_t waits_for_descriptors(Count count) noexcept {
+  return count == 0 ? kTimeOnly : kDescriptors;
+}
+
 /// What a call built on block() returns: the ready result, 0 on timeout, -1 EINTR.
 template <class Check>
 int wait_result(const char* what, std::int64_t wake_at, std::uint32_t waits_for, int& result, Check check) noexcept {
@@ -280,7 +287,7 @@ int poll(pollfd* fds, nfds_t count, int timeout_ms) {
   CANHIL_REAL(poll);
   if (!shim::active() || timeout_ms == 0) return real_poll(fds, count, timeout_ms);
   int result = 0;
-  const int r = wait_result("poll", after_ms(timeout_ms), count == 0 ? kTimeOnly : kDescriptors, result,
+  const int r = wait_result("poll", after_ms(timeout_ms), waits_for_descriptors(count), result,
                             [&] { return real_poll(fds, count, 0); });
   if (r != -2) {
     if (r == 0) {
@@ -298,8 +305,8 @@ int ppoll(pollfd* fds, nfds_t count, const timespec* timeout, const sigset_t* ma
   int result = 0;
   const MaskFor masked(mask);
   const int r =
-      wait_result("ppoll", timeout == nullptr ? kNoWake : after(ns_of(*timeout)), count == 0 ? kTimeOnly : kDescriptors,
-                  result, [&] { return real_ppoll(fds, count, &zero, nullptr); });
+      wait_result("ppoll", timeout == nullptr ? kNoWake : after(ns_of(*timeout)), waits_for_descriptors(count), result,
+                  [&] { return real_ppoll(fds, count, &zero, nullptr); });
   if (r != -2) {
     if (r == 0) {
       for (nfds_t i = 0; i < count; ++i) fds[i].revents = 0;
@@ -326,7 +333,7 @@ int select(int count, fd_set* reads, fd_set* writes, fd_set* errors, timeval* ti
   const std::int64_t wake_at =
       timeout == nullptr ? kNoWake : after(timeout->tv_sec * kSecond + timeout->tv_usec * 1000);
   int result = 0;
-  const int r = wait_result("select", wake_at, count == 0 ? kTimeOnly : kDescriptors, result, [&] {
+  const int r = wait_result("select", wake_at, waits_for_descriptors(count), result, [&] {
     restore();
     timeval zero{0, 0};
     return real_select(count, reads, writes, errors, &zero);

@@ -5,7 +5,6 @@
 // SOCK_SEQPACKET connection.
 #include <linux/can/error.h>
 #include <poll.h>
-#include <signal.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
@@ -18,6 +17,7 @@
 #include <cstring>
 #include <vector>
 
+#include "canhil/base/process.hpp"
 #include "canhil/userbus/bus.hpp"
 #include "canhil/userbus/state.hpp"
 
@@ -113,7 +113,7 @@ class Broker {
     while (!stop_) {
       const int n = epoll_wait(epoll_, events, 64, look_for_owner ? 500 : -1);
       const int wait_error = errno;
-      if (look_for_owner && kill(options_.owner, 0) != 0 && errno == ESRCH) return;
+      if (look_for_owner && !process_alive(options_.owner)) return;
       if (n < 0) {
         if (wait_error == EINTR) continue;
         return;
