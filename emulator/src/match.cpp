@@ -183,7 +183,7 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
     }
     if (const Referee* referee = session.referee()) result.referee_calls += referee->calls().size();
     result.solver.add(session.world().solver_health());
-    result.physics += session.physics_timing();
+    result.timing += session.step_timing();
     for (std::size_t r = 0; r < s.robot_count(); ++r) {
       TeamTally& t = half_tally[s.team_of(r)];
       for (const can_nodes::FaultCount& c : session.rig(r).faults->counts()) t.faults += c.applied;

@@ -175,11 +175,11 @@ void Session::settle() {
 void Session::step(Nanos now, bool with_bus_changes) {
   if (with_bus_changes) apply_bus_changes();
   before_step();
-  if (options_.time_physics) {
+  if (options_.time_steps) {
     const std::uint64_t contacts = world_->contact_points();
     const Nanos start = thread_cpu_now();
     world_->step();
-    physics_timing_.add(world_->contact_points() - contacts, thread_cpu_now() - start);
+    step_timing_.physics.add(world_->contact_points() - contacts, thread_cpu_now() - start);
   } else {
     world_->step();
   }
@@ -251,7 +251,13 @@ void Session::after_step(Nanos now) {
     if (rig.shared != nullptr) rig.shared->publish();
     world_->robot(rig.index).drain(rig.faults->battery_drain_until(now));
   }
-  if (vision_) vision_->on_step(*world_);
+  if (vision_ && options_.time_steps) {
+    const Nanos start = thread_cpu_now();
+    vision_->on_step(*world_);
+    step_timing_.vision += thread_cpu_now() - start;
+  } else if (vision_) {
+    vision_->on_step(*world_);
+  }
   for (std::size_t t = 0; t < laptops_.size(); ++t) laptops_[t]->step(now, team_coaches_[t]);
   log_world(now);
   const bool scored = goals_.step(*world_, now);

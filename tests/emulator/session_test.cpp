@@ -148,19 +148,20 @@ TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
   EXPECT_EQ(session.snapshot().steps, 200u);
 }
 
-TEST_F(SessionTest, TimedStepsCountEveryStepAndItsContactPointsOnlyWhenAsked) {
+TEST_F(SessionTest, TimedStepsCountEveryStepItsContactPointsAndTheVisionOnlyWhenAsked) {
   {
     Session session(scenario_, options_);
     VirtualDriver driver(session);
     driver.run_for(200ms);
-    EXPECT_EQ(session.physics_timing().steps, 0U) << "not asked: nothing timed";
-    EXPECT_EQ(session.physics_timing().cpu, Nanos{0});
+    EXPECT_EQ(session.step_timing().physics.steps, 0U) << "not asked: nothing timed";
+    EXPECT_EQ(session.step_timing().physics.cpu, Nanos{0});
+    EXPECT_EQ(session.step_timing().vision, Nanos{0});
   }
-  options_.time_physics = true;
+  options_.time_steps = true;
   Session session(scenario_, options_);
   VirtualDriver driver(session);
   driver.run_for(200ms);
-  const PhysicsTiming& t = session.physics_timing();
+  const PhysicsTiming& t = session.step_timing().physics;
   EXPECT_EQ(t.steps, session.snapshot().steps);
   EXPECT_GT(t.cpu, Nanos{0});
   // Each of the two robots stands on its three wheels in every substep.
@@ -168,6 +169,19 @@ TEST_F(SessionTest, TimedStepsCountEveryStepAndItsContactPointsOnlyWhenAsked) {
   EXPECT_GE(t.contacts_per_step(), 2 * 3 * substeps);
   EXPECT_EQ(t.sum_x, static_cast<double>(session.world().contact_points()))
       << "the steps' contact points are all the world's";
+  EXPECT_GT(session.step_timing().vision, Nanos{0}) << "two robots' camera frames in 200 ms";
+}
+
+TEST_F(SessionTest, TimedStepsWithoutVisionCountNoVision) {
+  options_.time_steps = true;
+  options_.vision_on = false;
+  Session session(scenario_, options_);
+  VirtualOptions no_laptop;
+  no_laptop.reference_laptop = false;
+  VirtualDriver driver(session, no_laptop);
+  driver.run_for(200ms);
+  EXPECT_EQ(session.step_timing().physics.steps, session.snapshot().steps);
+  EXPECT_EQ(session.step_timing().vision, Nanos{0});
 }
 
 }  // namespace

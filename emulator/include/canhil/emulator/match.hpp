@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "canhil/emulator/physics_timing.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
+#include "canhil/emulator/step_timing.hpp"
 
 namespace canhil::emulator {
 
@@ -84,8 +84,9 @@ struct MatchResult {
   /// Every half's BusWatch::trace_hash, combined in order: the same match
   /// (scenario, seed, binaries) gives the same hash on any machine.
   std::uint64_t trace_hash = 0;
-  /// The world's steps over every half, with SessionOptions::time_physics.
-  PhysicsTiming physics;
+  /// The world's steps and the vision over every half, with
+  /// SessionOptions::time_steps.
+  StepTiming timing;
   bool stopped = false;  ///< cut short (the stop flag): the figures so far
   /// The winner's index; none for a draw.
   std::optional<std::size_t> winner() const;

@@ -37,11 +37,11 @@
 #include "canhil/can_nodes/fault.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
-#include "canhil/emulator/physics_timing.hpp"
 #include "canhil/emulator/referee_desk.hpp"
 #include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/shared_robot_io.hpp"
+#include "canhil/emulator/step_timing.hpp"
 #include "canhil/emulator/world_log.hpp"
 #include "canhil/physics/world.hpp"
 #include "canhil/vision_emu/runner.hpp"
@@ -163,9 +163,9 @@ class Session {
   const can_nodes::NodeParams& node_params() const noexcept { return node_params_; }
   /// The physics step period.
   Nanos step_period() const noexcept { return step_period_; }
-  /// What the world's steps cost so far, with SessionOptions::time_physics
-  /// (else nothing counted).
-  const PhysicsTiming& physics_timing() const noexcept { return physics_timing_; }
+  /// What the world's steps and the vision cost so far, with
+  /// SessionOptions::time_steps (else nothing counted).
+  const StepTiming& step_timing() const noexcept { return step_timing_; }
   /// One world step at `now` on the nodes' clock, in the one order every
   /// driver uses: the queued bus changes (`with_bus_changes`: a driver whose
   /// nodes run on this thread; the real-time driver applies them on the nodes'
@@ -258,7 +258,7 @@ class Session {
   const SessionOptions& options_;  // plan_'s
   std::unique_ptr<physics::World> world_;
   Nanos step_period_{0};
-  PhysicsTiming physics_timing_;
+  StepTiming step_timing_;
   can_nodes::NodeParams node_params_;  // the nodes keep a reference: it lives as long as they do
   std::vector<Rig> rigs_;
   std::unique_ptr<vision_emu::VisionRunner> vision_;

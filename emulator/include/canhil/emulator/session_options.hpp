@@ -26,10 +26,10 @@ struct SessionOptions {
   /// laptop side's defaults are those of a real-time run.
   bool external = false;
   Nanos world_log_period{0};  ///< 0: no world log
-  /// Each world step timed in the stepping thread's CPU time
-  /// (Session::physics_timing), for `canhil bench --part match`: two clock
-  /// reads a step.
-  bool time_physics = false;
+  /// Each world step, and the vision after it, timed in the stepping
+  /// thread's CPU time (Session::step_timing), for `canhil bench --part
+  /// match`: four clock reads a step.
+  bool time_steps = false;
   /// A saved world (physics::load_state) to start from instead of the placements.
   std::optional<physics::WorldState> initial_state;
 };

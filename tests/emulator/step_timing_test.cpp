@@ -1,6 +1,6 @@
-// The line `canhil bench --part match` fits to a run's world steps: checked
-// against values worked by hand.
-#include "canhil/emulator/physics_timing.hpp"
+// The line `canhil bench --part match` fits to a run's world steps, and the
+// halves' timings added up: checked against values worked by hand.
+#include "canhil/emulator/step_timing.hpp"
 
 #include <gtest/gtest.h>
 
@@ -41,6 +41,19 @@ TEST(PhysicsTiming, RunsAddUpAsOneAndNoSpreadGivesNoSlope) {
   flat.add(16, 30us);
   EXPECT_EQ(flat.us_per_contact(), 0) << "every step made as many contact points: no line";
   EXPECT_EQ(PhysicsTiming{}.contacts_per_step(), 0);
+}
+
+TEST(StepTiming, HalvesAddUpTheirPhysicsAndTheirVision) {
+  StepTiming first;
+  first.physics.add(10, 23us);
+  first.vision = 5us;
+  StepTiming second;
+  second.physics.add(12, 27us);
+  second.vision = 7us;
+  first += second;
+  EXPECT_EQ(first.physics.steps, 2U);
+  EXPECT_EQ(first.physics.cpu, 50us);
+  EXPECT_EQ(first.vision, 12us);
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
-// canhil/emulator/physics_timing.hpp — what a run's world steps cost
-// (SessionOptions::time_physics): their CPU time, and a least-squares line of
-// one step's CPU time over the contact points it made, so that `canhil bench
-// --part match` can say what the physics itself costs per contact.
+// canhil/emulator/step_timing.hpp — what a run's steps cost
+// (SessionOptions::time_steps): the world's steps in CPU time with a
+// least-squares line of one step's CPU time over the contact points it made,
+// and the emulated vision that follows each step, so that `canhil bench
+// --part match` can say what the physics itself costs per contact and what
+// is left once the physics and the camera are paid for.
 #pragma once
 
 #include <cstdint>
@@ -50,6 +52,19 @@ struct PhysicsTiming {
     const auto n = static_cast<double>(steps);
     const double spread = n * sum_xx - sum_x * sum_x;
     return spread > 1e-9 * n * n ? (n * sum_xy - sum_x * sum_y) / spread : 0;
+  }
+};
+
+struct StepTiming {
+  PhysicsTiming physics;  ///< the world's steps
+  /// The emulated vision after each step: the frames due seen, with their
+  /// noise, and written to the RTDB (VISION_INFO), as a team's camera costs.
+  Nanos vision{0};
+
+  StepTiming& operator+=(const StepTiming& other) noexcept {
+    physics += other.physics;
+    vision += other.vision;
+    return *this;
   }
 };
 
