@@ -217,6 +217,17 @@ TEST(VcanExternal, TheBenchPrintsBothFactorsAndWhereTheWallTimeWent) {
   }
   EXPECT_NE(f.output.find("all on CPU 0"), std::string::npos) << f.output;
   EXPECT_EQ(f.output.find("NOT MEASURED"), std::string::npos) << f.output;
+  // Two floors: the hand-overs alone, then lower with the processes' own running too.
+  const std::size_t first = f.output.find(", at best ");
+  const std::size_t second = f.output.find("with the processes' own running as measured above");
+  ASSERT_NE(first, std::string::npos) << f.output;
+  ASSERT_NE(second, std::string::npos) << f.output;
+  const std::size_t then = f.output.find(", at best ", second);
+  ASSERT_NE(then, std::string::npos) << f.output;
+  const double hand_overs_only = std::strtod(f.output.c_str() + first + 10, nullptr);
+  const double with_running = std::strtod(f.output.c_str() + then + 10, nullptr);
+  EXPECT_GT(hand_overs_only, 0) << f.output;
+  EXPECT_LE(with_running, hand_overs_only) << f.output;
   // The user-space bus's broker is a process of its own on every frame's path: its CPU time is said.
   const bool user_space = std::string(canhil::can_nodes::bus_of("vcan0")) == "canhil's user-space bus";
   EXPECT_EQ(f.output.find("the bus's broker (pid ") != std::string::npos, user_space) << f.output;
