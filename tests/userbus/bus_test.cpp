@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "canhil/userbus/state.hpp"
 #include "support/test_paths.hpp"
 
 namespace {
@@ -148,6 +149,67 @@ TEST_F(OwnBus, EndsWithItsOwner) {
   EXPECT_EQ(waitpid(broker_, &status, 0), broker_);  // it ended by itself
   EXPECT_FALSE(ub::broker_alive(paths_));
   EXPECT_FALSE(fs::exists(paths_.socket));
+}
+
+TEST_F(OwnBus, ItsBrokerSpinsOnlyWhileARunThatAskedLives) {
+  start({"vcan0"});
+  const auto mapped = ub::MappedState::open(paths_);
+  ASSERT_NE(mapped, nullptr);
+  ub::State& state = mapped->state();
+  // The broker counts each time it looks for a next frame before sleeping;
+  // a frame sent wakes it (a connection, its hello, the frame, its close).
+  const auto spins_after_a_frame = [&] {
+    const std::uint64_t before = state.spins.load();
+    const std::string out = on_bus("cansend vcan0 123#11");
+    EXPECT_EQ(out, "");
+    return state.spins.load() - before;
+  };
+  EXPECT_EQ(state.spin_us.load(), 0U) << "a bus starts sleeping at once";
+  EXPECT_EQ(spins_after_a_frame(), 0U);
+  {
+    const ub::BrokerSpin spin(paths_, 50);
+    EXPECT_EQ(state.spin_us.load(), 50U);
+    EXPECT_EQ(state.spin_pid.load(), getpid());
+    EXPECT_GT(spins_after_a_frame(), 0U);
+  }
+  EXPECT_EQ(state.spin_us.load(), 0U) << "given back when the run ends";
+  EXPECT_EQ(spins_after_a_frame(), 0U);
+  // A run that died without giving it back: the broker sleeps at once.
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  waitpid(gone, nullptr, 0);
+  state.spin_pid.store(gone);
+  state.spin_us.store(50);
+  EXPECT_EQ(spins_after_a_frame(), 0U);
+  // A run that took the bus over after this one: its setting outlives this one's end.
+  {
+    const ub::BrokerSpin spin(paths_, 50);
+    state.spin_pid.store(broker_);  // alive, and not this process
+  }
+  EXPECT_EQ(state.spin_us.load(), 50U);
+  EXPECT_GT(spins_after_a_frame(), 0U);
+  EXPECT_THROW(ub::BrokerSpin(ub::BusPaths{"/nonexistent", "/nonexistent/bus.sock", "/nonexistent/state"}, 50),
+               ub::BusError);
+}
+
+TEST_F(OwnBus, ABusOfAnotherCanhilIsNamedSo) {
+  start({"vcan0"});
+  {
+    const auto mapped = ub::MappedState::open(paths_);
+    ASSERT_NE(mapped, nullptr);
+    mapped->state().version = ub::kVersion - 1;  // as an older canhil left it
+  }
+  EXPECT_EQ(ub::MappedState::open(paths_), nullptr);
+  try {
+    ub::describe(paths_);
+    ADD_FAILURE() << "a state of another version read";
+  } catch (const ub::BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("was started by another canhil (its state is version " +
+                                         std::to_string(ub::kVersion - 1) + ", this canhil's " +
+                                         std::to_string(ub::kVersion) + "): stop it (`canhil bus down`)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(OwnBus, KeepsNoDescriptorOfItsStarter) {

@@ -5,6 +5,7 @@
 // SOCK_SEQPACKET connection.
 #include <linux/can/error.h>
 #include <poll.h>
+#include <sched.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
@@ -81,6 +82,12 @@ std::int64_t now_ns() {
   return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 
+std::int64_t monotonic_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
+}
+
 class Broker {
  public:
   Broker(int listen_fd, State& state, const BrokerOptions& options)
@@ -111,7 +118,8 @@ class Broker {
     // profile refusing it), the owner is looked for twice a second instead.
     const bool look_for_owner = options_.owner > 0 && owner_fd_ < 0;
     while (!stop_) {
-      const int n = epoll_wait(epoll_, events, 64, look_for_owner ? 500 : -1);
+      int n = spin(events);
+      if (n == 0) n = epoll_wait(epoll_, events, 64, look_for_owner ? 500 : -1);
       const int wait_error = errno;
       if (look_for_owner && !process_alive(options_.owner)) return;
       if (n < 0) {
@@ -132,6 +140,21 @@ class Broker {
   }
 
  private:
+  // What arrives within the spin a lockstep run asked for (State::spin_us),
+  // looked for while giving way to any other runnable thread: 0 when nothing
+  // came, or when no run asks.
+  int spin(epoll_event* events) {
+    const std::uint32_t us = state_.spin_us.load(std::memory_order_acquire);
+    if (us == 0 || !process_alive(state_.spin_pid.load(std::memory_order_relaxed))) return 0;
+    state_.spins.fetch_add(1, std::memory_order_relaxed);
+    const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(us) * 1000;
+    for (;;) {
+      const int n = epoll_wait(epoll_, events, 64, 0);
+      if (n != 0 || monotonic_ns() >= until) return n;
+      sched_yield();
+    }
+  }
+
   void watch(int fd) {
     epoll_event e{};
     e.events = EPOLLIN;

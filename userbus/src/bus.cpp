@@ -59,9 +59,18 @@ std::unique_ptr<MappedState> require_state(const BusPaths& paths) {
     throw BusError("no user-space CAN bus runs at " + paths.folder + ": start one with `canhil bus up vcan0`");
   }
   auto mapped = MappedState::open(paths);
-  if (!mapped)
-    throw BusError("the bus at " + paths.folder + " has no state file: stop it (`canhil bus down`) and start it again");
-  return mapped;
+  if (mapped) return mapped;
+  // A bus another canhil started keeps its own layout of the state.
+  std::uint32_t head[2] = {0, 0};  // State's magic and version
+  const int fd = ::open(paths.state.c_str(), O_RDONLY | O_CLOEXEC);
+  const bool read_head = fd >= 0 && ::read(fd, head, sizeof head) == static_cast<ssize_t>(sizeof head);
+  if (fd >= 0) close(fd);
+  if (read_head && head[0] == kMagic && head[1] != kVersion) {
+    throw BusError("the bus at " + paths.folder + " was started by another canhil (its state is version " +
+                   std::to_string(head[1]) + ", this canhil's " + std::to_string(kVersion) +
+                   "): stop it (`canhil bus down`) and start it again");
+  }
+  throw BusError("the bus at " + paths.folder + " has no state file: stop it (`canhil bus down`) and start it again");
 }
 
 std::string filter_text(const Socket& s) {
@@ -114,6 +123,21 @@ std::unique_ptr<MappedState> MappedState::open(const BusPaths& paths) {
 }
 
 MappedState::~MappedState() { munmap(state_, sizeof(State)); }
+
+BrokerSpin::BrokerSpin(const BusPaths& paths, std::uint32_t us) : mapped_(MappedState::open(paths)) {
+  if (!mapped_) throw BusError("no user-space CAN bus at " + paths.folder + " to ask its broker to spin");
+  State& s = mapped_->state();
+  s.spin_pid.store(static_cast<std::int32_t>(getpid()), std::memory_order_relaxed);
+  s.spin_us.store(us, std::memory_order_release);
+}
+
+BrokerSpin::~BrokerSpin() {
+  State& s = mapped_->state();
+  // Another run may have taken the bus over since: its setting stays.
+  if (s.spin_pid.load(std::memory_order_relaxed) == static_cast<std::int32_t>(getpid())) {
+    s.spin_us.store(0, std::memory_order_release);
+  }
+}
 
 bool broker_alive(const BusPaths& paths) {
   const int fd = connect_to(paths);

@@ -55,6 +55,25 @@ class MappedState {
   State* state_;
 };
 
+/// While it lives, the broker of the bus at `paths` keeps looking for the
+/// next frame for `us` microseconds after each before it sleeps, giving way
+/// to any other runnable thread meanwhile (State::spin_us). In a lockstep
+/// run the next frame comes tens of microseconds after the last, and where an
+/// idle core halts (a virtual machine's: WSL2, Docker Desktop, most CI) waking
+/// a sleeping broker on another core costs more than that, at every hop. The
+/// broker stops looking when the holder's process ends, however it ends.
+class BrokerSpin {
+ public:
+  /// Throws BusError when the bus has no state to map.
+  BrokerSpin(const BusPaths& paths, std::uint32_t us);
+  ~BrokerSpin();
+  BrokerSpin(const BrokerSpin&) = delete;
+  BrokerSpin& operator=(const BrokerSpin&) = delete;
+
+ private:
+  std::unique_ptr<MappedState> mapped_;
+};
+
 /// Whether a broker answers at the bus's socket.
 bool broker_alive(const BusPaths& paths);
 

@@ -31,7 +31,7 @@
 namespace canhil::userbus {
 
 inline constexpr std::uint32_t kMagic = 0x43414e42;  // "CANB"
-inline constexpr std::uint32_t kVersion = 1;
+inline constexpr std::uint32_t kVersion = 2;
 inline constexpr int kMaxInterfaces = 32;
 inline constexpr int kMaxSockets = 1024;
 inline constexpr int kMaxFilters = 512;  // CAN_RAW_FILTER_MAX, as the kernel
@@ -125,6 +125,12 @@ struct State {
   std::uint32_t grace_us;  ///< how long the broker waits for a full receiver before it drops
   SharedLock lock;         ///< held to add or remove an interface
   std::atomic<std::uint32_t> interfaces_seq;
+  /// How long the broker keeps looking for the next frame after each before
+  /// it sleeps, giving way to any other runnable thread meanwhile, while the
+  /// process `spin_pid` lives (a lockstep run: BrokerSpin); 0: it sleeps at once.
+  std::atomic<std::uint32_t> spin_us;
+  std::atomic<std::int32_t> spin_pid;
+  std::atomic<std::uint64_t> spins;  ///< how many times the broker looked on so, counted by it
   Interface interfaces[kMaxInterfaces];
   Socket sockets[kMaxSockets];
 };
