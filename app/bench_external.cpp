@@ -118,10 +118,16 @@ std::optional<Nanos> bare_round_trip(int rounds) {
   return mean;
 }
 
-// The user-space bus's broker, when this process runs on that bus: its pid, else 0.
-pid_t bus_broker() {
+// The user-space bus's broker, when this process runs on that bus: its pid
+// (else 0) and how many times it has looked for a next frame before sleeping.
+struct BrokerLook {
+  pid_t pid = 0;
+  std::uint64_t spins = 0;
+};
+BrokerLook look_at_broker() {
   const auto mapped = userbus::MappedState::open(userbus::BusPaths::current());
-  return mapped != nullptr ? mapped->state().broker_pid : 0;
+  if (mapped == nullptr) return {};
+  return {mapped->state().broker_pid, mapped->state().spins.load()};
 }
 
 // The same scenario in-process, virtual time, everything on: its wall time.
@@ -165,10 +171,12 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   run.length = {bench.seconds, "the bench"};
   run.quiet = true;
   ExternalFigures fig;
-  const pid_t broker = bus_broker();
+  const BrokerLook look_before = look_at_broker();
+  const pid_t broker = look_before.pid;
   const std::optional<Nanos> broker_before = broker > 0 ? lockstep::cpu_time_of(broker) : std::nullopt;
   const int status = run_external(session, run, bench.shim, bench.team_preload, &fig);
   const std::optional<Nanos> broker_after = broker > 0 ? lockstep::cpu_time_of(broker) : std::nullopt;
+  const std::uint64_t spins = look_at_broker().spins - look_before.spins;
   if (status != 0 || fig.simulated < from_seconds(bench.seconds)) {
     std::printf("  external run: NOT MEASURED (canhil run --external ended with status %d at t = %.3f s)\n", status,
                 to_seconds(fig.simulated));
@@ -207,6 +215,9 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
     std::printf(
         "    the bus's broker (pid %d, another process), meanwhile: %.2f s of CPU (counted in ticks of 1/%ld s)\n",
         static_cast<int>(broker), to_seconds(*broker_after - *broker_before), sysconf(_SC_CLK_TCK));
+    std::printf(
+        "      it looked for the next frame %llu times, up to %g us each, before sleeping ([external] bus_spin_us)\n",
+        static_cast<unsigned long long>(spins), sc.external.bus_spin_us);
   }
   // What no lockstep can go below here: each wait of a process costs at least
   // one bare round trip between two processes.

@@ -281,6 +281,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     how.team_preload = preload_shim_into_self(how.shim);
     how.logs = logs;
     how.match = &match_number;
+    how.alone = workers == 1;
     options.external = true;
     match.driver = external_halves(how);
   }

@@ -29,7 +29,8 @@ class ExternalHalf final : public emulator::HalfDriver {
         conductor_(conductor_options(session.scenario())),
         driver_(session, conductor_, driver_options(session)),
         processes_(conductor_.environment(how.shim, how.team_preload.empty() ? nullptr : how.team_preload.c_str()),
-                   stderr, ProcessOutput{how.logs, file_prefix, true}) {
+                   stderr, ProcessOutput{how.logs, file_prefix, true}),
+        spin_(how.alone ? spin_the_bus(session) : nullptr) {
     std::fprintf(stderr, "canhil match: %s, the teams' processes:\n", name.c_str());
     const std::size_t expected = processes_.start_all(session);
     const double limit = attach_limit_s(session.scenario());
@@ -75,6 +76,7 @@ class ExternalHalf final : public emulator::HalfDriver {
   lockstep::Conductor conductor_;
   emulator::ExternalDriver driver_;
   TeamProcesses processes_;
+  std::unique_ptr<userbus::BrokerSpin> spin_;
 };
 
 }  // namespace

@@ -19,6 +19,9 @@ struct ExternalMatch {
   /// none: on canhil's stderr (its stdout is the table, or JSON).
   std::optional<std::string> logs;
   int* match = nullptr;  ///< the number of the match being played (1, 2, ...), for the logs' names
+  /// One match at a time: the bus's broker may spin (spin_the_bus). Not for
+  /// --jobs 2 and more, whose workers would take each other's cores.
+  bool alone = true;
 };
 
 /// The halves' drivers. A process that does not attach within the scenario's

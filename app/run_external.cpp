@@ -143,6 +143,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   emulator::ExternalOptions driver_options;
   driver_options.start_limit = from_seconds(attach_limit);
   emulator::ExternalDriver driver(session, conductor, driver_options);
+  const auto spin = spin_the_bus(session);
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s (%s), seed %llu\n", robots,
               run.length.seconds, run.length.source.c_str(), static_cast<unsigned long long>(session.scenario().seed));

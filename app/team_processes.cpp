@@ -17,6 +17,7 @@
 
 #include "canhil/base/assets.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/lockstep/conductor.hpp"
 
@@ -106,6 +107,18 @@ lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario)
   o.answer_limit = from_seconds(answer);
   o.busy_limit = from_seconds(busy);
   return o;
+}
+
+std::unique_ptr<userbus::BrokerSpin> spin_the_bus(const emulator::Session& session) {
+  double us = 0;
+  for (const emulator::ExternalSide* side : external_sides(session.scenario())) us = std::max(us, side->bus_spin_us);
+  if (us <= 0 || session.robot_count() == 0) return nullptr;
+  if (std::string(can_nodes::bus_of(session.rig(0).interface)) != "canhil's user-space bus") return nullptr;
+  try {
+    return std::make_unique<userbus::BrokerSpin>(userbus::BusPaths::current(), static_cast<std::uint32_t>(us));
+  } catch (const userbus::BusError&) {
+    return nullptr;  // a bus canhil's preload found but cannot map: the run goes on, its broker sleeping at once
+  }
 }
 
 double attach_limit_s(const emulator::Scenario& scenario) {

@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "canhil/base/time.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/lockstep/conductor.hpp"
+#include "canhil/userbus/bus.hpp"
 
 namespace canhil::app {
 
@@ -34,6 +36,14 @@ lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario)
 /// How long (wall time) the run waits for all its processes to attach: the
 /// longest attach_limit_s of the teams' sides.
 double attach_limit_s(const emulator::Scenario& scenario);
+
+/// While it lives, the broker of canhil's user-space bus, when the session's
+/// robots are on it, looks for each next frame for the longest bus_spin_us of
+/// the teams' sides before it sleeps (userbus::BrokerSpin). Nothing on the
+/// kernel's SocketCAN, or when that is 0. For a run alone: lockstep runs side
+/// by side (`match --jobs 2`) each have a bus of their own, and spinning
+/// brokers would take each other's cores.
+std::unique_ptr<userbus::BrokerSpin> spin_the_bus(const emulator::Session& session);
 
 /// Every team that attacks the -x goal (in any half, with `both_ends`: a
 /// match of more than one half changes ends) must be told so: its layout

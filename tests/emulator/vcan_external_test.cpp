@@ -231,6 +231,13 @@ TEST(VcanExternal, TheBenchPrintsBothFactorsAndWhereTheWallTimeWent) {
   // The user-space bus's broker is a process of its own on every frame's path: its CPU time is said.
   const bool user_space = std::string(canhil::can_nodes::bus_of("vcan0")) == "canhil's user-space bus";
   EXPECT_EQ(f.output.find("the bus's broker (pid ") != std::string::npos, user_space) << f.output;
+  // There, a run alone asks it to look for each next frame before sleeping ([external] bus_spin_us).
+  const std::size_t looked = f.output.find("it looked for the next frame ");
+  EXPECT_EQ(looked != std::string::npos, user_space) << f.output;
+  if (looked != std::string::npos) {
+    EXPECT_GT(std::strtoull(f.output.c_str() + looked + 29, nullptr, 10), 0U) << f.output;
+    EXPECT_NE(f.output.find("up to 200 us each", looked), std::string::npos) << f.output;
+  }
 }
 
 }  // namespace
