@@ -208,6 +208,10 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   }
   const double handover = to_seconds(fig.waited) - running;
   std::printf("    hand-overs (wake-ups, context switches):           %7.3f s %3.0f %%\n", handover, share(handover));
+  std::printf(
+      "      canhil's waits: %llu answered while it looked, up to %g us each, %llu slept ([external] spin_us)\n",
+      static_cast<unsigned long long>(fig.looks_answered), sc.external.spin_us,
+      static_cast<unsigned long long>(fig.sleeps));
   if (broker_before && broker_after) {
     // Another process, on any core: every frame passes it, so its time is on
     // the path of each instant, inside the hand-overs (or, on one core with

@@ -62,6 +62,9 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
   std::printf("  wall time: canhil %.3f s (%.0f %%), waiting for the processes %.3f s (%.0f %%)\n",
               to_seconds(wall - waited), w > 0 ? 100 * to_seconds(wall - waited) / w : 0.0, to_seconds(waited),
               w > 0 ? 100 * to_seconds(waited) / w : 0.0);
+  std::printf("    canhil's waits: %llu answered while it looked ([external] spin_us), %llu slept\n",
+              static_cast<unsigned long long>(conductor.looks_answered()),
+              static_cast<unsigned long long>(conductor.sleeps()));
   for (const lockstep::ProcessReport& p : conductor.processes()) {
     std::printf("    %-16s pid %-7d %.3f s running, %llu waits, %llu CAN frames written, %d thread(s)\n",
                 p.name.c_str(), p.pid, to_seconds(p.busy_wall), static_cast<unsigned long long>(p.blocks),
@@ -218,7 +221,9 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
   started.stop_all();
   print_summary(session, driver, conductor, wall, how);
   if (figures != nullptr)
-    *figures = ExternalFigures{driver.now(), wall, conductor.waited_wall(), conductor.processes()};
+    *figures = ExternalFigures{
+        driver.now(),      wall, conductor.waited_wall(), conductor.processes(), conductor.looks_answered(),
+        conductor.sleeps()};
   if (run.trace) {
     write_text(*run.trace, driver.trace(), "trace");
     std::printf("trace written to %s (candump log in virtual time)\n", run.trace->c_str());

@@ -100,12 +100,15 @@ lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario)
   lockstep::ConductorOptions o;
   double answer = 0;
   double busy = 0;
+  double spin_us = 0;
   for (const emulator::ExternalSide* side : external_sides(scenario)) {
     answer = std::max(answer, side->answer_limit_s);
     busy = std::max(busy, side->busy_limit_s);
+    spin_us = std::max(spin_us, side->spin_us);
   }
   o.answer_limit = from_seconds(answer);
   o.busy_limit = from_seconds(busy);
+  o.spin = from_seconds(spin_us * 1e-6);
   return o;
 }
 

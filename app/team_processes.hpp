@@ -30,8 +30,8 @@ std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenar
 
 /// The lockstep conductor's limits for a run: every process waits on the one
 /// virtual clock, so each limit is the longest any team gives (answer_limit_s,
-/// busy_limit_s); a team's processes get at least their own team's. The
-/// attach limit is attach_limit_s().
+/// busy_limit_s, spin_us); a team's processes get at least their own team's.
+/// The attach limit is attach_limit_s().
 lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario);
 /// How long (wall time) the run waits for all its processes to attach: the
 /// longest attach_limit_s of the teams' sides.

@@ -173,6 +173,7 @@ void read_external(const TableReader& r, ExternalSide& e) {
   if (const auto v = r.number("answer_limit_s", 0.01, 3600.0)) e.answer_limit_s = *v;
   if (const auto v = r.number("attach_limit_s", 0.1, 3600.0)) e.attach_limit_s = *v;
   if (const auto v = r.number("busy_limit_s", 0.1, 3600.0)) e.busy_limit_s = *v;
+  if (const auto v = r.number("spin_us", 0.0, 100000.0)) e.spin_us = *v;
   if (const auto v = r.number("bus_spin_us", 0.0, 100000.0)) e.bus_spin_us = *v;
 }
 
@@ -183,8 +184,8 @@ const std::vector<std::string>& laptop_fields() {
   return fields;
 }
 const std::vector<std::string>& external_fields() {
-  static const std::vector<std::string> fields = {"processes", "answer_limit_s", "attach_limit_s", "busy_limit_s",
-                                                  "bus_spin_us"};
+  static const std::vector<std::string> fields = {"processes",    "answer_limit_s", "attach_limit_s",
+                                                  "busy_limit_s", "spin_us",        "bus_spin_us"};
   return fields;
 }
 

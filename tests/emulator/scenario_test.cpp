@@ -108,14 +108,16 @@ TEST(Scenarios, TheExternalTableGivesTheTeamsProcessesAndTheirLimits) {
   const Scenario none = parse_scenario("", "s.toml");
   EXPECT_TRUE(none.external.processes.empty()) << "none: started by hand";
   EXPECT_DOUBLE_EQ(none.external.answer_limit_s, 1.0);
+  EXPECT_DOUBLE_EQ(none.external.spin_us, 50);
   EXPECT_DOUBLE_EQ(none.external.bus_spin_us, 200);
   const Scenario s = parse_scenario(
       "[external]\nprocesses = [\"./hwcomm --iface {iface}\", \"./agent\"]\nanswer_limit_s = 2.5\n"
-      "attach_limit_s = 10\nbus_spin_us = 0\n",
+      "attach_limit_s = 10\nspin_us = 0\nbus_spin_us = 0\n",
       "s.toml");
   EXPECT_EQ(s.external.processes, (std::vector<std::string>{"./hwcomm --iface {iface}", "./agent"}));
   EXPECT_DOUBLE_EQ(s.external.answer_limit_s, 2.5);
   EXPECT_DOUBLE_EQ(s.external.attach_limit_s, 10);
+  EXPECT_DOUBLE_EQ(s.external.spin_us, 0);
   EXPECT_DOUBLE_EQ(s.external.bus_spin_us, 0);
   EXPECT_NE(error_of("[external]\nbus_spin_us = -1\n")
                 .find("bad.toml:2: external.bus_spin_us: must be a number from 0 to "

@@ -78,11 +78,23 @@ double opponent_goal_at(const std::string& output) {
 }
 
 TEST(VcanExternal, TheReferenceHandlerAndAgentGiveTheSameTraceTwiceAndScoreAsInProcess) {
-  const std::string external = kRun + " --external --duration 6 --process \"canhil-hwcomm --iface {iface}\"" + kAgent;
-  const Finished a = canhil(external + " --trace " + trace_path("a") + " --world-log " + trace_path("world_a"), "a");
-  const Finished b = canhil(external + " --trace " + trace_path("b") + " --world-log " + trace_path("world_b"), "b");
+  const std::string tail = " --external --duration 6 --process \"canhil-hwcomm --iface {iface}\"" + kAgent;
+  const Finished a = canhil(kRun + tail + " --trace " + trace_path("a") + " --world-log " + trace_path("world_a"), "a");
+  // The second time canhil and the bus's broker sleep at once instead of looking on: only the waiting differs.
+  const std::string sleeping = trace_path("sleeping") + ".toml";
+  {
+    std::ofstream out(sleeping);
+    out << read_file(canhil::test::source_dir() + "/emulator/scenarios/one_robot.toml")
+        << "\n[external]\nspin_us = 0\nbus_spin_us = 0\n";
+  }
+  const Finished b = canhil("run --no-control --quiet --config " + sleeping + tail + " --trace " + trace_path("b") +
+                                " --world-log " + trace_path("world_b"),
+                            "b");
+  std::remove(sleeping.c_str());
   ASSERT_EQ(exit_status(a), 0) << a.output;
   ASSERT_EQ(exit_status(b), 0) << b.output;
+  EXPECT_EQ(a.output.find("canhil's waits: 0 answered while it looked"), std::string::npos) << a.output;
+  EXPECT_NE(b.output.find("canhil's waits: 0 answered while it looked"), std::string::npos) << b.output;
   const std::string trace_a = read_file(trace_path("a"));
   const std::string trace_b = read_file(trace_path("b"));
   EXPECT_GT(trace_a.size(), 10'000u) << "six seconds of a robot's bus";
@@ -217,6 +229,8 @@ TEST(VcanExternal, TheBenchPrintsBothFactorsAndWhereTheWallTimeWent) {
   }
   EXPECT_NE(f.output.find("all on CPU 0"), std::string::npos) << f.output;
   EXPECT_EQ(f.output.find("NOT MEASURED"), std::string::npos) << f.output;
+  EXPECT_NE(f.output.find("canhil's waits: "), std::string::npos) << f.output;
+  EXPECT_NE(f.output.find("up to 50 us each"), std::string::npos) << "[external] spin_us's default\n" << f.output;
   // Two floors: the hand-overs alone, then lower with the processes' own running too.
   const std::size_t first = f.output.find(", at best ");
   const std::size_t second = f.output.find("with the processes' own running as measured above");

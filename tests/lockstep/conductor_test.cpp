@@ -6,7 +6,9 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <semaphore.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -294,6 +296,42 @@ TEST(Conductor, CanhilsOwnConditionIsWaitedForAndNamed) {
       stuck,
       "canhil waited 0.200 s of wall time after the frame at 33 ms for agent1's epilogue (not on the CPU: blocked "
       "on something canhil will not give)");
+}
+
+TEST(Conductor, ItLooksForAFrameOnItsSocketBeforeItSleeps) {
+  // canhil's own condition: a frame in flight, written 20 ms into the wait.
+  const auto wait_for_a_frame = [](Nanos spin, std::uint64_t* answered, std::uint64_t* slept) {
+    int ends[2];
+    ASSERT_EQ(socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, ends), 0);
+    ConductorOptions options;
+    options.answer_limit = 30s;
+    options.spin = spin;
+    Conductor conductor(options);
+    std::thread writer([&] {
+      std::this_thread::sleep_for(20ms);
+      ASSERT_EQ(write(ends[1], "x", 1), 1);
+    });
+    const auto frame_here = [&] {
+      pollfd p{ends[0], POLLIN, 0};
+      return poll(&p, 1, 0) > 0 ? std::string() : std::string("the frame");
+    };
+    EXPECT_EQ(conductor.wait_quiet(frame_here, "the frame at 10 ms", std::nullopt, ends[0]), "");
+    writer.join();
+    *answered = conductor.looks_answered();
+    *slept = conductor.sleeps();
+    close(ends[0]);
+    close(ends[1]);
+  };
+  std::uint64_t answered = 0;
+  std::uint64_t slept = 0;
+  // Looking for up to 10 s (giving way to the writer): it comes during the look.
+  wait_for_a_frame(10s, &answered, &slept);
+  EXPECT_EQ(answered, 1U);
+  EXPECT_EQ(slept, 0U);
+  // Not looking: the wait sleeps until it comes.
+  wait_for_a_frame(Nanos{0}, &answered, &slept);
+  EXPECT_EQ(answered, 0U);
+  EXPECT_GE(slept, 1U);
 }
 
 TEST(Conductor, AProcessKilledWithoutAWordIsNoLongerWaitedFor) {

@@ -101,6 +101,9 @@ struct ExternalSide {
   double answer_limit_s = 1.0;         ///< wall time a process may take over one instant
   double attach_limit_s = 60.0;        ///< wall time the processes may take to start, until they first all wait
   double busy_limit_s = 60.0;          ///< wall time an instant may take while the processes compute on the CPU
+  /// How long canhil looks for the processes' answer before it sleeps
+  /// (lockstep::ConductorOptions::spin); 0: at once.
+  double spin_us = 50;
   /// On canhil's user-space bus, run alone: how long its broker keeps looking
   /// for the next frame before it sleeps (userbus::BrokerSpin); 0: at once.
   double bus_spin_us = 200;

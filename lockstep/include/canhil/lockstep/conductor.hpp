@@ -45,6 +45,12 @@ struct ConductorOptions {
   /// the CPU is not one that stopped answering, but one that computes for
   /// longer than this is named as hung in a loop.
   Nanos busy_limit = std::chrono::seconds(60);
+  /// How long canhil looks for what it waits for (the processes quiet, a
+  /// frame on its sockets) before it sleeps, giving way to any other runnable
+  /// thread while it looks. The answer usually comes within tens of
+  /// microseconds, and where an idle core halts (a virtual machine's) waking
+  /// from a sleep costs about as much again. 0: it sleeps at once.
+  Nanos spin = std::chrono::microseconds(50);
   /// CLOCK_REALTIME at virtual 0 (gettimeofday, time): 2026-01-01 00:00:00 UTC,
   /// the same in every run so that what the processes print is the same.
   std::int64_t realtime_base_ns = 1'767'225'600LL * 1'000'000'000;
@@ -129,6 +135,10 @@ class Conductor {
   bool clocks_virtual_here() const noexcept { return clocks_here_; }
   /// Wall time spent in wait_quiet (canhil waiting for the processes).
   Nanos waited_wall() const noexcept { return waited_; }
+  /// How wait_quiet's looks ended (ConductorOptions::spin): with what it
+  /// waited for come, or in a sleep.
+  std::uint64_t looks_answered() const noexcept { return looks_answered_; }
+  std::uint64_t sleeps() const noexcept { return sleeps_; }
 
  private:
   /// Bumps the epoch and wakes the blocked threads `what` concerns (all of
@@ -142,11 +152,16 @@ class Conductor {
   /// User and system CPU time of every process on the board, summed.
   Nanos processes_cpu() const;
   void retire(Slot& slot);
+  /// Looks for up to ConductorOptions::spin for a change on the board since
+  /// `seen`, or for `ready_fd` (when >= 0) to be readable: whether one came.
+  bool look_briefly(std::uint32_t seen, int ready_fd) const;
 
   ConductorOptions options_;
   std::string name_;
   Board* board_ = nullptr;
   Nanos waited_{0};
+  std::uint64_t looks_answered_ = 0;
+  std::uint64_t sleeps_ = 0;
   bool clocks_here_ = false;
   std::uint64_t frames_of_freed_ = 0;
   /// The epoch of the last change of each kind (board.hpp's bits, by bit number).
