@@ -209,8 +209,9 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   const double handover = to_seconds(fig.waited) - running;
   std::printf("    hand-overs (wake-ups, context switches):           %7.3f s %3.0f %%\n", handover, share(handover));
   std::printf(
-      "      canhil's waits: %llu answered while it looked, up to %g us each, %llu slept ([external] spin_us)\n",
-      static_cast<unsigned long long>(fig.looks_answered), sc.external.spin_us,
+      "      canhil's looks before sleeping, up to %g us each ([external] spin_us): %llu answered, %llu ended in a "
+      "sleep\n",
+      sc.external.spin_us, static_cast<unsigned long long>(fig.looks_answered),
       static_cast<unsigned long long>(fig.sleeps));
   if (broker_before && broker_after) {
     // Another process, on any core: every frame passes it, so its time is on
@@ -220,7 +221,8 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
         "    the bus's broker (pid %d, another process), meanwhile: %.2f s of CPU (counted in ticks of 1/%ld s)\n",
         static_cast<int>(broker), to_seconds(*broker_after - *broker_before), sysconf(_SC_CLK_TCK));
     std::printf(
-        "      it looked for the next frame %llu times, up to %g us each, before sleeping ([external] bus_spin_us)\n",
+        "      (its looks included) it looked for a next frame %llu times, up to %g us each ([external] "
+        "bus_spin_us)\n",
         static_cast<unsigned long long>(spins), sc.external.bus_spin_us);
   }
   // What no lockstep can go below here: each wait of a process costs at least

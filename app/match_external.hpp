@@ -21,7 +21,7 @@ struct ExternalMatch {
   int* match = nullptr;  ///< the number of the match being played (1, 2, ...), for the logs' names
   /// One match at a time: the bus's broker may spin (spin_the_bus). Not for
   /// --jobs 2 and more, whose workers would take each other's cores.
-  bool alone = true;
+  bool alone = false;
 };
 
 /// The halves' drivers. A process that does not attach within the scenario's

@@ -62,7 +62,7 @@ void print_summary(const emulator::Session& session, const emulator::ExternalDri
   std::printf("  wall time: canhil %.3f s (%.0f %%), waiting for the processes %.3f s (%.0f %%)\n",
               to_seconds(wall - waited), w > 0 ? 100 * to_seconds(wall - waited) / w : 0.0, to_seconds(waited),
               w > 0 ? 100 * to_seconds(waited) / w : 0.0);
-  std::printf("    canhil's waits: %llu answered while it looked ([external] spin_us), %llu slept\n",
+  std::printf("    canhil's looks before sleeping ([external] spin_us): %llu answered, %llu ended in a sleep\n",
               static_cast<unsigned long long>(conductor.looks_answered()),
               static_cast<unsigned long long>(conductor.sleeps()));
   for (const lockstep::ProcessReport& p : conductor.processes()) {

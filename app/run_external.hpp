@@ -30,8 +30,8 @@ struct ExternalFigures {
   Nanos wall{0};       ///< from the processes' start to the run's end
   Nanos waited{0};     ///< of `wall`, canhil waiting for the processes
   std::vector<lockstep::ProcessReport> processes;
-  std::uint64_t looks_answered = 0;  ///< canhil's waits that ended while it looked (spin_us)
-  std::uint64_t sleeps = 0;          ///< and those that slept
+  std::uint64_t looks_answered = 0;  ///< canhil's looks before sleeping that something ended (spin_us)
+  std::uint64_t sleeps = 0;          ///< and those that ended in a sleep
 };
 
 /// Exit status 3: a process stopped answering (named on stderr); the trace

@@ -82,9 +82,11 @@ std::int64_t now_ns() {
   return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 
+// The system call itself: a broker started by a process with the time shim
+// preloaded must not read a virtual clock that stands still.
 std::int64_t monotonic_ns() {
   timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
+  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &t);
   return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 
@@ -107,6 +109,7 @@ class Broker {
       if (c.fd >= 0) close(c.fd);
     }
     if (owner_fd_ >= 0) close(owner_fd_);
+    if (asker_fd_ >= 0) close(asker_fd_);
     close(epoll_);
   }
   Broker(const Broker&) = delete;
@@ -140,12 +143,13 @@ class Broker {
   }
 
  private:
-  // What arrives within the spin a lockstep run asked for (State::spin_us),
+  // What arrives within the spin a lockstep run asked for (State::spin),
   // looked for while giving way to any other runnable thread: 0 when nothing
-  // came, or when no run asks.
+  // came, or when no living run asks.
   int spin(epoll_event* events) {
-    const std::uint32_t us = state_.spin_us.load(std::memory_order_acquire);
-    if (us == 0 || !process_alive(state_.spin_pid.load(std::memory_order_relaxed))) return 0;
+    const std::uint64_t word = state_.spin.load(std::memory_order_acquire);
+    const std::uint32_t us = spin_us(word);
+    if (us == 0 || !asker_alive(spin_pid(word))) return 0;
     state_.spins.fetch_add(1, std::memory_order_relaxed);
     const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(us) * 1000;
     for (;;) {
@@ -153,6 +157,24 @@ class Broker {
       if (n != 0 || monotonic_ns() >= until) return n;
       sched_yield();
     }
+  }
+
+  // Whether the process that asked for the spin still runs: through a pidfd,
+  // which says so once it has ended even before it is reaped, and cannot be
+  // taken for a later process of the same pid; else by kill(pid, 0).
+  bool asker_alive(pid_t pid) {
+    if (pid != asker_pid_) {
+      if (asker_fd_ >= 0) close(asker_fd_);
+      asker_pid_ = pid;
+      asker_fd_ = pid > 0 ? static_cast<int>(syscall(SYS_pidfd_open, pid, 0)) : -1;
+      asker_gone_ = pid <= 0 || (asker_fd_ < 0 && errno == ESRCH);
+    }
+    if (asker_gone_) return false;
+    if (asker_fd_ < 0) return process_alive(pid);
+    pollfd p{asker_fd_, POLLIN, 0};
+    const timespec at_once{0, 0};
+    asker_gone_ = syscall(SYS_ppoll, &p, 1, &at_once, nullptr, 8) != 0;  // readable once it has ended
+    return !asker_gone_;
   }
 
   void watch(int fd) {
@@ -506,6 +528,9 @@ class Broker {
   BrokerOptions options_;
   int epoll_ = -1;
   int owner_fd_ = -1;
+  pid_t asker_pid_ = 0;  // the spin's asker, watched through asker_fd_
+  int asker_fd_ = -1;
+  bool asker_gone_ = true;
   bool stop_ = false;
   bool up_[kMaxInterfaces] = {};
   bool known_[kMaxInterfaces] = {};

@@ -54,22 +54,26 @@ int ask_broker(const BusPaths& paths, std::uint32_t op) {
   return answer;
 }
 
+// When the bus at `paths` was started by a canhil whose state has another
+// layout (State::version): what to tell the user; else empty.
+std::string of_another_canhil(const BusPaths& paths) {
+  std::uint32_t head[2] = {0, 0};  // State's magic and version
+  const int fd = ::open(paths.state.c_str(), O_RDONLY | O_CLOEXEC);
+  const bool read_head = fd >= 0 && ::read(fd, head, sizeof head) == static_cast<ssize_t>(sizeof head);
+  if (fd >= 0) close(fd);
+  if (!read_head || head[0] != kMagic || head[1] == kVersion) return {};
+  return "the bus at " + paths.folder + " was started by another canhil (its state is version " +
+         std::to_string(head[1]) + ", this canhil's " + std::to_string(kVersion) +
+         "): stop it (`canhil bus down`) and start it again";
+}
+
 std::unique_ptr<MappedState> require_state(const BusPaths& paths) {
   if (!broker_alive(paths)) {
     throw BusError("no user-space CAN bus runs at " + paths.folder + ": start one with `canhil bus up vcan0`");
   }
   auto mapped = MappedState::open(paths);
   if (mapped) return mapped;
-  // A bus another canhil started keeps its own layout of the state.
-  std::uint32_t head[2] = {0, 0};  // State's magic and version
-  const int fd = ::open(paths.state.c_str(), O_RDONLY | O_CLOEXEC);
-  const bool read_head = fd >= 0 && ::read(fd, head, sizeof head) == static_cast<ssize_t>(sizeof head);
-  if (fd >= 0) close(fd);
-  if (read_head && head[0] == kMagic && head[1] != kVersion) {
-    throw BusError("the bus at " + paths.folder + " was started by another canhil (its state is version " +
-                   std::to_string(head[1]) + ", this canhil's " + std::to_string(kVersion) +
-                   "): stop it (`canhil bus down`) and start it again");
-  }
+  if (const std::string other = of_another_canhil(paths); !other.empty()) throw BusError(other);
   throw BusError("the bus at " + paths.folder + " has no state file: stop it (`canhil bus down`) and start it again");
 }
 
@@ -126,17 +130,14 @@ MappedState::~MappedState() { munmap(state_, sizeof(State)); }
 
 BrokerSpin::BrokerSpin(const BusPaths& paths, std::uint32_t us) : mapped_(MappedState::open(paths)) {
   if (!mapped_) throw BusError("no user-space CAN bus at " + paths.folder + " to ask its broker to spin");
-  State& s = mapped_->state();
-  s.spin_pid.store(static_cast<std::int32_t>(getpid()), std::memory_order_relaxed);
-  s.spin_us.store(us, std::memory_order_release);
+  word_ = spin_word(getpid(), us);
+  mapped_->state().spin.store(word_, std::memory_order_release);
 }
 
 BrokerSpin::~BrokerSpin() {
-  State& s = mapped_->state();
   // Another run may have taken the bus over since: its setting stays.
-  if (s.spin_pid.load(std::memory_order_relaxed) == static_cast<std::int32_t>(getpid())) {
-    s.spin_us.store(0, std::memory_order_release);
-  }
+  std::uint64_t mine = word_;
+  mapped_->state().spin.compare_exchange_strong(mine, 0, std::memory_order_acq_rel);
 }
 
 bool broker_alive(const BusPaths& paths) {
@@ -372,6 +373,11 @@ void join_bus_if_needed(char** argv) {
   }
   const BusPaths paths = BusPaths::current();
   if (!broker_alive(paths)) return;
+  if (const std::string other = of_another_canhil(paths); !other.empty()) {
+    // Its preload would not join it: the kernel answers, without CAN.
+    std::fprintf(stderr, "%s: %s\n", argv[0], other.c_str());
+    return;
+  }
   std::string preload;
   try {
     preload = find_preload();

@@ -135,8 +135,9 @@ class Conductor {
   bool clocks_virtual_here() const noexcept { return clocks_here_; }
   /// Wall time spent in wait_quiet (canhil waiting for the processes).
   Nanos waited_wall() const noexcept { return waited_; }
-  /// How wait_quiet's looks ended (ConductorOptions::spin): with what it
-  /// waited for come, or in a sleep.
+  /// How wait_quiet's looks ended (ConductorOptions::spin), over the run: with
+  /// something come (a change on the board, a semaphore posted, a frame on
+  /// canhil's descriptor), or in a sleep. A wait may look more than once.
   std::uint64_t looks_answered() const noexcept { return looks_answered_; }
   std::uint64_t sleeps() const noexcept { return sleeps_; }
 
@@ -153,7 +154,8 @@ class Conductor {
   Nanos processes_cpu() const;
   void retire(Slot& slot);
   /// Looks for up to ConductorOptions::spin for a change on the board since
-  /// `seen`, or for `ready_fd` (when >= 0) to be readable: whether one came.
+  /// `seen`, a semaphore posted by a process, or `ready_fd` (when >= 0) to be
+  /// readable: whether one came.
   bool look_briefly(std::uint32_t seen, int ready_fd) const;
 
   ConductorOptions options_;

@@ -57,7 +57,7 @@ class MappedState {
 
 /// While it lives, the broker of the bus at `paths` keeps looking for the
 /// next frame for `us` microseconds after each before it sleeps, giving way
-/// to any other runnable thread meanwhile (State::spin_us). In a lockstep
+/// to any other runnable thread meanwhile (State::spin). In a lockstep
 /// run the next frame comes tens of microseconds after the last, and where an
 /// idle core halts (a virtual machine's: WSL2, Docker Desktop, most CI) waking
 /// a sleeping broker on another core costs more than that, at every hop. The
@@ -72,6 +72,7 @@ class BrokerSpin {
 
  private:
   std::unique_ptr<MappedState> mapped_;
+  std::uint64_t word_ = 0;
 };
 
 /// Whether a broker answers at the bus's socket.

@@ -125,15 +125,23 @@ struct State {
   std::uint32_t grace_us;  ///< how long the broker waits for a full receiver before it drops
   SharedLock lock;         ///< held to add or remove an interface
   std::atomic<std::uint32_t> interfaces_seq;
-  /// How long the broker keeps looking for the next frame after each before
-  /// it sleeps, giving way to any other runnable thread meanwhile, while the
-  /// process `spin_pid` lives (a lockstep run: BrokerSpin); 0: it sleeps at once.
-  std::atomic<std::uint32_t> spin_us;
-  std::atomic<std::int32_t> spin_pid;
+  /// How long the broker keeps looking for the next frame after each batch
+  /// before it sleeps, giving way to any other runnable thread meanwhile,
+  /// while the process that asked lives (a lockstep run: BrokerSpin): one
+  /// word, spin_word(pid, microseconds), so that it is set and given back
+  /// whole; 0: the broker sleeps at once.
+  std::atomic<std::uint64_t> spin;
   std::atomic<std::uint64_t> spins;  ///< how many times the broker looked on so, counted by it
   Interface interfaces[kMaxInterfaces];
   Socket sockets[kMaxSockets];
 };
+
+/// State::spin's word: who asked (a pid) and for how long (microseconds).
+inline constexpr std::uint64_t spin_word(pid_t pid, std::uint32_t us) noexcept {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(pid)) << 32) | us;
+}
+inline constexpr pid_t spin_pid(std::uint64_t word) noexcept { return static_cast<pid_t>(word >> 32); }
+inline constexpr std::uint32_t spin_us(std::uint64_t word) noexcept { return static_cast<std::uint32_t>(word); }
 
 /// The interface called `name`, or nullptr.
 inline Interface* find_interface(State& s, const char* name) noexcept {
