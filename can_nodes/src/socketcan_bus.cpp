@@ -205,7 +205,7 @@ std::optional<TimedFrame> SocketCanBus::receive() {
     // Queue empty: drops after the last received frame are reported with no
     // later frame's SO_RXQ_OVFL, so read the socket's drop counter directly.
     // Only a full queue drops, so an empty queue that stayed empty has none new.
-    if (read_since_drop_check_) {
+    if (read_since_drop_check_ && options_.drops_when_empty) {
       read_drop_counter();
       read_since_drop_check_ = false;
     }

@@ -54,9 +54,13 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   fenced_.assign(n, 0);
   woken_.assign(n, false);
   cycled_.assign(n, false);
+  // The observers are read empty at every instant; a frame dropped at one
+  // never reaches the fence's count, and canhil says what it waited for.
+  can_nodes::SocketCanOptions observer_options = socket_options;
+  observer_options.drops_when_empty = false;
   for (std::size_t r = 0; r < n; ++r) {
     if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
-    observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options));
+    observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, observer_options));
     observers_.back()->set_error_mask(frames::kErrorClassMask);  // error frames belong in the trace
     if (observers_.back()->state() != can_nodes::BusState::kUp) {
       const std::string& iface = session_.rig(r).interface;

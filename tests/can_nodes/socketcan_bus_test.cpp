@@ -188,6 +188,28 @@ TEST(SocketCan, ErrorFramesReachOnlySocketsWhoseMaskAsks) {
   }
 }
 
+TEST(SocketCan, DropsAfterTheLastFrameReadAreCountedWithoutTheCheckWhenEmptyToo) {
+  // A receiver that reads nothing while 2000 frames come: its small buffer
+  // overflows, and the drops come after the last frame queued, so no frame's
+  // SO_RXQ_OVFL tells them. The lockstep's observers skip the drop counter at
+  // each empty read (drops_when_empty); stats() still reads it.
+  for (const bool when_empty : {true, false}) {
+    SocketCanOptions options;
+    options.receive_buffer_bytes = 4096;
+    options.drops_when_empty = when_empty;
+    auto tx = SocketCanBus::open("vcan0");
+    auto rx = SocketCanBus::open("vcan0", options);
+    for (int i = 0; i < 2000; ++i) {
+      ASSERT_NE(tx->send(make_data_frame(0x100, {static_cast<std::uint8_t>(i)})), SendStatus::kDown);
+    }
+    std::size_t received = 0;
+    while (rx->receive()) ++received;
+    const BusStats st = rx->stats();
+    EXPECT_GT(st.rx_overflow, 0u) << "the buffer overflowed (drops_when_empty " << when_empty << ")";
+    EXPECT_EQ(received + st.rx_overflow, tx->stats().sent) << "drops_when_empty " << when_empty;
+  }
+}
+
 TEST(SocketCan, TimestampsAreMonotonic) {
   auto tx = SocketCanBus::open("vcan0");
   auto rx = SocketCanBus::open("vcan0");
