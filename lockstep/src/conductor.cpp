@@ -22,6 +22,7 @@
 #include <optional>
 #include <string>
 
+#include "canhil/base/preload.hpp"
 #include "canhil/base/setup_error.hpp"
 
 namespace canhil::lockstep {
@@ -79,10 +80,17 @@ bool alive(const Slot& s) {
 }  // namespace
 
 Nanos wall_clock() noexcept {
+  // libc's own clock_gettime (the vDSO's, no system call): in a run whose
+  // canhil is itself preloaded with the shim (a team library stamping
+  // items), the one the program calls is virtual. The raw system call where
+  // libc cannot be looked up.
+  static const auto libc_clock = preload::libc_symbol<int (*)(clockid_t, timespec*)>("clock_gettime");
   timespec ts{};
-  // The raw system call: in a run whose canhil is itself preloaded with the
-  // shim (a team library stamping items), clock_gettime would be virtual.
-  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
+  if (libc_clock != nullptr) {
+    libc_clock(CLOCK_MONOTONIC, &ts);
+  } else {
+    syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
+  }
   return std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
 }
 

@@ -45,6 +45,16 @@ F next_symbol(const char* name, const char* version) noexcept {
   return reinterpret_cast<F>(dlvsym(RTLD_NEXT, name, version));
 }
 
+/// libc's own definition of `name`, past every preload whatever the caller
+/// is compiled into (a program that has a preload in front of its own calls:
+/// canhil with the time shim in it, for the wall clock it must still read).
+/// nullptr when libc does not define it. Look each call up once.
+template <class F>
+F libc_symbol(const char* name) noexcept {
+  void* libc = dlopen("libc.so.6", RTLD_NOW | RTLD_NOLOAD);
+  return libc != nullptr ? reinterpret_cast<F>(dlsym(libc, name)) : nullptr;
+}
+
 /// The first definition of `name` in the process, in whichever loaded object:
 /// how one preload finds what another exports (a hook) without linking it.
 /// nullptr when no loaded object defines it (that preload is not there).
