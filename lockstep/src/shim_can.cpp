@@ -20,7 +20,8 @@ namespace shim = canhil::lockstep::shim;
 /// preload may answer for descriptors of its own, counted through the hook
 /// by that preload).
 void count_if_can(int fd, std::int64_t frames) noexcept {
-  if (frames <= 0 || !shim::active()) return;
+  // canhil's own process counts its frames itself (it has no slot to count them in).
+  if (frames <= 0 || !shim::active() || shim::conducting()) return;
   int domain = 0;
   socklen_t size = sizeof domain;
   if (syscall(SYS_getsockopt, fd, SOL_SOCKET, SO_DOMAIN, &domain, &size) != 0 || domain != AF_CAN) return;
