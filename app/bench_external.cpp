@@ -29,6 +29,7 @@ namespace canhil::app {
 namespace {
 
 constexpr double kTarget = 20;  // times real time, one robot, one core
+constexpr int kInProcessRuns = 3;
 
 // Pins this thread (and what it starts) to one core for its lifetime.
 class PinnedToCore {
@@ -161,7 +162,11 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
       pin.pinned() ? ("all on CPU " + std::to_string(bench.cpu)).c_str() : "not pinned to a core",
       sc.external.processes[0].c_str(), sc.external.processes[1].c_str());
   std::fflush(stdout);
-  const Nanos in_process = in_process_wall(sc, bench.seconds, messages);
+  // The fastest of three: a run of a few tens of milliseconds, which noise
+  // only ever lengthens, is the yardstick of the share below.
+  Nanos in_process = in_process_wall(sc, bench.seconds, messages);
+  for (int k = 1; k < kInProcessRuns; ++k)
+    in_process = std::min(in_process, in_process_wall(sc, bench.seconds, messages));
 
   emulator::SessionOptions options;
   options.messages = messages;
@@ -185,8 +190,8 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   const double factor_in = bench.seconds / to_seconds(in_process);
   const double wall = to_seconds(fig.wall);
   const double factor = bench.seconds / wall;
-  std::printf("  in-process, canhil's handler and agent:         %7.1fx real time (wall %.3f s)\n", factor_in,
-              to_seconds(in_process));
+  std::printf("  in-process, canhil's handler and agent:         %7.1fx real time (wall %.3f s, the fastest of %d)\n",
+              factor_in, to_seconds(in_process), kInProcessRuns);
   std::printf("  external processes in lockstep:                 %7.1fx real time (wall %.3f s)  target >= %gx: %s\n",
               factor, wall, kTarget, factor >= kTarget ? "met" : "MISSED");
   std::printf("  external / in-process, in this run:             %7.2f (the share of the in-process speed kept)\n",
