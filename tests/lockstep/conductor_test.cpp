@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <semaphore.h>
+#include <sys/mman.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -75,6 +76,29 @@ std::multimap<std::string, long long> said(const std::string& output) {
 long long at(const std::multimap<std::string, long long>& lines, const std::string& what) {
   const auto it = lines.find(what);
   return it == lines.end() ? -1 : it->second;
+}
+
+TEST(Conductor, RemovesTheBoardsOfCanhilsThatWereKilledAndKeepsTheOthers) {
+  // A board left by a canhil that ended without removing it (SIGKILL), and
+  // one of a canhil that still runs (this process, an index it never uses).
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  waitpid(gone, nullptr, 0);
+  const std::string left = "/canhil-lockstep-" + std::to_string(gone) + "-0";
+  const std::string running = "/canhil-lockstep-" + std::to_string(getpid()) + "-999999";
+  for (const std::string& name : {left, running}) {
+    const int fd = shm_open(name.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+    ASSERT_GE(fd, 0) << name;
+    close(fd);
+  }
+  const auto exists = [](const std::string& name) {
+    struct stat st {};
+    return stat(("/dev/shm" + name).c_str(), &st) == 0;
+  };
+  { const Conductor conductor; }
+  EXPECT_FALSE(exists(left)) << "the killed canhil's board is removed";
+  EXPECT_TRUE(exists(running)) << "a running canhil's board stays";
+  shm_unlink(running.c_str());
 }
 
 TEST(Conductor, GivesEachProcessTheBoardAndThePreloadedShim) {
