@@ -2,7 +2,6 @@
 #include "external_worker.hpp"
 
 #include <dlfcn.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -21,22 +20,13 @@ namespace {
 // remove its own): `<folder>-worker-<pid>`, this user's, the pid not running.
 void remove_orphan_buses(const std::string& folder) {
   const std::filesystem::path base(folder);
-  const std::string prefix = base.filename().string() + "-worker-";
-  std::error_code failed;
-  for (const auto& entry : std::filesystem::directory_iterator(base.parent_path(), failed)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    char* end = nullptr;
-    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
-    struct stat st {};
-    if (end == name.c_str() + prefix.size() || *end != '\0' || pid <= 0 || lstat(entry.path().c_str(), &st) != 0 ||
-        !S_ISDIR(st.st_mode) || st.st_uid != getuid()) {
-      continue;
-    }
-    if (process_alive(static_cast<pid_t>(pid))) continue;  // its worker still runs
-    std::error_code ignored;
-    std::filesystem::remove_all(entry.path(), ignored);
-  }
+  for_each_left_by_the_dead(base.parent_path(), base.filename().string() + "-worker-", '\0',
+                            [](const std::filesystem::path& bus) {
+                              std::error_code ignored;
+                              if (std::filesystem::is_directory(std::filesystem::symlink_status(bus, ignored))) {
+                                std::filesystem::remove_all(bus, ignored);
+                              }
+                            });
 }
 
 }  // namespace

@@ -96,27 +96,29 @@ std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenar
   return sides;
 }
 
+namespace {
+
+// The longest `field` the run's external sides give: the processes share one
+// virtual clock, so each team's processes get at least their own team's.
+double longest(const emulator::Scenario& scenario, double emulator::ExternalSide::*field) {
+  double most = 0;
+  for (const emulator::ExternalSide* side : external_sides(scenario)) most = std::max(most, side->*field);
+  return most;
+}
+
+}  // namespace
+
 lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario) {
   lockstep::ConductorOptions o;
-  double answer = 0;
-  double busy = 0;
-  double spin_us = 0;
-  for (const emulator::ExternalSide* side : external_sides(scenario)) {
-    answer = std::max(answer, side->answer_limit_s);
-    busy = std::max(busy, side->busy_limit_s);
-    spin_us = std::max(spin_us, side->spin_us);
-  }
-  o.answer_limit = from_seconds(answer);
-  o.busy_limit = from_seconds(busy);
-  o.spin = from_seconds(spin_us * 1e-6);
+  o.answer_limit = from_seconds(longest(scenario, &emulator::ExternalSide::answer_limit_s));
+  o.busy_limit = from_seconds(longest(scenario, &emulator::ExternalSide::busy_limit_s));
+  o.spin = from_seconds(longest(scenario, &emulator::ExternalSide::spin_us) * 1e-6);
   return o;
 }
 
 std::unique_ptr<userbus::BrokerSpin> spin_the_bus(const emulator::Session& session) {
-  double us = 0;
-  for (const emulator::ExternalSide* side : external_sides(session.scenario())) us = std::max(us, side->bus_spin_us);
-  if (us <= 0 || session.robot_count() == 0) return nullptr;
-  if (std::string(can_nodes::bus_of(session.rig(0).interface)) != "canhil's user-space bus") return nullptr;
+  const double us = longest(session.scenario(), &emulator::ExternalSide::bus_spin_us);
+  if (us <= 0 || session.robot_count() == 0 || !can_nodes::on_user_space_bus(session.rig(0).interface)) return nullptr;
   try {
     return std::make_unique<userbus::BrokerSpin>(userbus::BusPaths::current(), static_cast<std::uint32_t>(us));
   } catch (const userbus::BusError&) {
@@ -125,9 +127,7 @@ std::unique_ptr<userbus::BrokerSpin> spin_the_bus(const emulator::Session& sessi
 }
 
 double attach_limit_s(const emulator::Scenario& scenario) {
-  double limit = 0;
-  for (const emulator::ExternalSide* side : external_sides(scenario)) limit = std::max(limit, side->attach_limit_s);
-  return limit;
+  return longest(scenario, &emulator::ExternalSide::attach_limit_s);
 }
 
 void require_told_goal(const emulator::Scenario& scenario, bool both_ends, FILE* warn) {

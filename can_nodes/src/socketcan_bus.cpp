@@ -69,11 +69,15 @@ bool kernel_has_can() {
   return true;
 }
 
-const char* bus_of(const std::string& iface) {
+bool on_user_space_bus(const std::string& iface) {
   // The bus's preload says so itself; canhil does not link it.
   using Has = int (*)(const char*);
   const auto has = reinterpret_cast<Has>(dlsym(RTLD_DEFAULT, "canhil_userbus_interface"));
-  return has != nullptr && has(iface.c_str()) != 0 ? "canhil's user-space bus" : "the kernel's SocketCAN";
+  return has != nullptr && has(iface.c_str()) != 0;
+}
+
+const char* bus_of(const std::string& iface) {
+  return on_user_space_bus(iface) ? "canhil's user-space bus" : "the kernel's SocketCAN";
 }
 
 std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const SocketCanOptions& options) {

@@ -177,9 +177,8 @@ void Session::step(Nanos now, bool with_bus_changes) {
   before_step();
   if (options_.time_steps) {
     const std::uint64_t contacts = world_->contact_points();
-    const Nanos start = thread_cpu_now();
-    world_->step();
-    step_timing_.physics.add(world_->contact_points() - contacts, thread_cpu_now() - start);
+    const Nanos spent = thread_cpu_of([this] { world_->step(); });
+    step_timing_.physics.add(world_->contact_points() - contacts, spent);
   } else {
     world_->step();
   }
@@ -252,9 +251,7 @@ void Session::after_step(Nanos now) {
     world_->robot(rig.index).drain(rig.faults->battery_drain_until(now));
   }
   if (vision_ && options_.time_steps) {
-    const Nanos start = thread_cpu_now();
-    vision_->on_step(*world_);
-    step_timing_.vision += thread_cpu_now() - start;
+    step_timing_.vision += thread_cpu_of([this] { vision_->on_step(*world_); });
   } else if (vision_) {
     vision_->on_step(*world_);
   }

@@ -1,7 +1,6 @@
 // canhil/lockstep/conductor.cpp — the board's owner (conductor.hpp).
 #include "canhil/lockstep/conductor.hpp"
 
-#include <dirent.h>
 #include <dlfcn.h>
 #include <fcntl.h>
 #include <linux/futex.h>
@@ -9,7 +8,6 @@
 #include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
-#include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
@@ -20,10 +18,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <new>
 #include <optional>
 #include <string>
-#include <string_view>
 
 #include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
@@ -82,28 +80,12 @@ bool alive(const Slot& s) {
 }
 
 // The boards of canhil processes that ended without removing theirs (killed
-// outright: SIGKILL, an out-of-memory kill), this user's, from /dev/shm. A
-// board is named after its canhil's pid, which is looked for; a board of a
-// process that still runs stays. How many were removed.
-int remove_orphan_boards() {
-  DIR* dir = opendir("/dev/shm");
-  if (dir == nullptr) return 0;
-  constexpr std::string_view kPrefix = "canhil-lockstep-";
-  int removed = 0;
-  while (const dirent* e = readdir(dir)) {
-    const std::string_view name = e->d_name;
-    if (name.substr(0, kPrefix.size()) != kPrefix) continue;
-    char* end = nullptr;
-    const long pid = std::strtol(e->d_name + kPrefix.size(), &end, 10);
-    if (end == e->d_name + kPrefix.size() || *end != '-' || pid <= 0 || process_alive(static_cast<pid_t>(pid))) {
-      continue;
-    }
-    struct stat st {};
-    if (fstatat(dirfd(dir), e->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0 || st.st_uid != getuid()) continue;
-    if (shm_unlink(("/" + std::string(name)).c_str()) == 0) ++removed;
-  }
-  closedir(dir);
-  return removed;
+// outright: SIGKILL, an out-of-memory kill), this user's, from /dev/shm
+// (`canhil-lockstep-<pid>-<n>`); a board of a process that still runs stays.
+void remove_orphan_boards() {
+  for_each_left_by_the_dead("/dev/shm", "canhil-lockstep-", '-', [](const std::filesystem::path& board) {
+    shm_unlink(("/" + board.filename().string()).c_str());
+  });
 }
 
 }  // namespace

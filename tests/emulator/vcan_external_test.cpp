@@ -246,7 +246,7 @@ TEST(VcanExternal, TheBenchPrintsBothFactorsAndWhereTheWallTimeWent) {
   EXPECT_GT(hand_overs_only, 0) << f.output;
   EXPECT_LE(with_running, hand_overs_only) << f.output;
   // The user-space bus's broker is a process of its own on every frame's path: its CPU time is said.
-  const bool user_space = std::string(canhil::can_nodes::bus_of("vcan0")) == "canhil's user-space bus";
+  const bool user_space = canhil::can_nodes::on_user_space_bus("vcan0");
   EXPECT_EQ(f.output.find("the bus's broker (pid ") != std::string::npos, user_space) << f.output;
   // There, a run alone asks it to look for each next frame before sleeping ([external] bus_spin_us).
   const std::size_t looked = f.output.find("it looked for a next frame ");

@@ -56,4 +56,12 @@ inline Nanos thread_cpu_now() noexcept {
   return Nanos(std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec);
 }
 
+/// The calling thread's CPU time that `work()` took.
+template <class Work>
+Nanos thread_cpu_of(Work&& work) {
+  const Nanos start = thread_cpu_now();
+  work();
+  return thread_cpu_now() - start;
+}
+
 }  // namespace canhil

@@ -59,6 +59,10 @@ struct SocketCanOptions {
 /// or canhil's user-space bus when this process runs on it).
 bool kernel_has_can();
 
+/// Whether `iface` is on canhil's user-space bus: this process runs on it
+/// (libcanhil-bus.so preloaded) and the bus has that interface.
+bool on_user_space_bus(const std::string& iface);
+
 /// Which bus interface `iface` is on, for the reports: "canhil's user-space
 /// bus" when this process runs on it (libcanhil-bus.so preloaded, a bus up
 /// with that interface), else "the kernel's SocketCAN".
