@@ -10,17 +10,15 @@
 #include <cerrno>
 #include <cstring>
 
+#include "canhil/base/errno_text.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
-#include "errno_text.hpp"
 
 namespace canhil::can_nodes {
 namespace {
 
 constexpr std::uint32_t kIdsPerSocket = 512;  // CAN_RAW_FILTER_MAX
 constexpr int kReceiveBuffer = 1 << 20;
-
-using detail::errno_text;
 
 // A socket on `ifindex` that receives exactly the standard data frames with
 // ids first .. first + kIdsPerSocket - 1, each through its own single-id filter.

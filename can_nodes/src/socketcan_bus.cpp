@@ -1,5 +1,5 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
-#include "errno_text.hpp"
+#include "canhil/base/errno_text.hpp"
 
 #include <dlfcn.h>
 #include <fcntl.h>
@@ -19,8 +19,6 @@
 
 namespace canhil::can_nodes {
 namespace {
-
-using detail::errno_text;
 
 can_frame to_kernel(const CanFrame& f) {
   can_frame k{};

@@ -91,17 +91,9 @@ void remove_orphan_boards() {
 }  // namespace
 
 Nanos wall_clock() noexcept {
-  // libc's own clock_gettime (the vDSO's, no system call): in a run whose
-  // canhil is itself preloaded with the shim (a team library stamping
-  // items), the one the program calls is virtual. The raw system call where
-  // libc cannot be looked up.
-  static const auto libc_clock = preload::libc_symbol<int (*)(clockid_t, timespec*)>("clock_gettime");
-  timespec ts{};
-  if (libc_clock != nullptr) {
-    libc_clock(CLOCK_MONOTONIC, &ts);
-  } else {
-    syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
-  }
+  // In a run whose canhil is itself preloaded with the shim (a team library
+  // stamping items), the clock_gettime the program calls is virtual.
+  const timespec ts = ::canhil::preload::real_monotonic();
   return std::chrono::seconds(ts.tv_sec) + Nanos(ts.tv_nsec);
 }
 

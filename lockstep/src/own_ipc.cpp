@@ -9,12 +9,11 @@
 #include <cstring>
 #include <string>
 
+#include "canhil/base/errno_text.hpp"
 #include "canhil/base/setup_error.hpp"
 
 namespace canhil::lockstep {
 namespace {
-
-std::string errno_text(int e) { return std::strerror(e); }
 
 // What a user can do where the kernel refuses a user namespace.
 constexpr const char* kRemedy =

@@ -27,4 +27,15 @@ TEST(Preload, LibcSymbolIsLibcsOwnAndNoneForWhatLibcLacks) {
   EXPECT_EQ(canhil::preload::libc_symbol<ClockGettime>("canhil_no_such_call"), nullptr);
 }
 
+TEST(Preload, RealMonotonicIsTheMachinesClock) {
+  timespec before{};
+  timespec after{};
+  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &before);
+  const timespec real = canhil::preload::real_monotonic();
+  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &after);
+  const auto ns = [](const timespec& t) { return t.tv_sec * 1'000'000'000LL + t.tv_nsec; };
+  EXPECT_LE(ns(before), ns(real));
+  EXPECT_LE(ns(real), ns(after));
+}
+
 }  // namespace

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <vector>
 
+#include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
 #include "canhil/userbus/bus.hpp"
 #include "canhil/userbus/state.hpp"
@@ -82,11 +83,10 @@ std::int64_t now_ns() {
   return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 
-// The system call itself: a broker started by a process with the time shim
-// preloaded must not read a virtual clock that stands still.
+// Past the time shim: a broker started by a process with the shim preloaded
+// must not read a virtual clock that stands still.
 std::int64_t monotonic_ns() {
-  timespec t{};
-  syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &t);
+  const timespec t = ::canhil::preload::real_monotonic();
   return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 

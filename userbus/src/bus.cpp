@@ -19,12 +19,11 @@
 #include <cstring>
 #include <sstream>
 
+#include "canhil/base/errno_text.hpp"
 #include "canhil/userbus/state.hpp"
 
 namespace canhil::userbus {
 namespace {
-
-std::string errno_text(int e) { return std::strerror(e); }
 
 int connect_to(const BusPaths& paths) {
   const int fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);

@@ -19,6 +19,7 @@
 #include <cstdarg>
 #include <cstddef>
 #include <cstdio>
+#include <ctime>
 
 namespace canhil::preload {
 
@@ -53,6 +54,21 @@ template <class F>
 F libc_symbol(const char* name) noexcept {
   void* libc = dlopen("libc.so.6", RTLD_NOW | RTLD_NOLOAD);
   return libc != nullptr ? reinterpret_cast<F>(dlsym(libc, name)) : nullptr;
+}
+
+/// CLOCK_MONOTONIC as the machine has it, past a preload that makes the
+/// clocks virtual (the time shim in canhil, or in whoever forked a bus's
+/// broker): libc's own clock_gettime (the vDSO's, no system call), else the
+/// system call.
+inline timespec real_monotonic() noexcept {
+  static const auto libc_clock = libc_symbol<int (*)(clockid_t, timespec*)>("clock_gettime");
+  timespec ts{};
+  if (libc_clock != nullptr) {
+    libc_clock(CLOCK_MONOTONIC, &ts);
+  } else {
+    syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
+  }
+  return ts;
 }
 
 /// The first definition of `name` in the process, in whichever loaded object:
