@@ -449,6 +449,32 @@ TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOf
     EXPECT_GT(physics_only, 0) << r.out;
     EXPECT_LT(with_vision, physics_only) << r.out;
   }
+  // Each run's physics a step next to its world alone, standing and driving:
+  // both figures there (which is dearer is a timing, not judged here).
+  EXPECT_TRUE(has(r, "(in brackets: the same world alone, its robots standing, then every robot driving")) << r.out;
+  for (const char* label : {"    five robots, everything on:", "    10 robots, a match half:"}) {
+    const std::size_t row = r.out.find(label);
+    ASSERT_NE(row, std::string::npos) << label << "\n" << r.out;
+    const std::size_t open = r.out.find(" us (", row);
+    ASSERT_LT(open, r.out.find('\n', row)) << r.out;
+    char* end = nullptr;
+    const double standing = std::strtod(r.out.c_str() + open + 5, &end);
+    ASSERT_EQ(*end, ',') << r.out;
+    const double driving = std::strtod(end + 1, nullptr);
+    EXPECT_GT(standing, 0) << r.out;
+    EXPECT_GT(driving, 0) << r.out;
+  }
+  // What each target leaves once the run's physics is paid for, next to what
+  // the vision and the rest took.
+  EXPECT_TRUE(has(r, "what each target leaves for everything but the run's physics, as it ran:")) << r.out;
+  for (const char* target : {"(target 0.85)", "(target 0.75)"}) {
+    const std::size_t last = r.out.rfind(target);
+    const std::size_t line = r.out.rfind('\n', last) + 1;
+    const std::size_t took = r.out.find("; its vision took ", line);
+    ASSERT_LT(took, last) << r.out;
+    EXPECT_GT(std::strtod(r.out.c_str() + took + 18, nullptr), 0) << r.out;
+    EXPECT_LT(r.out.find(" and the rest ", took), last) << r.out;
+  }
   // Each figure over its own scenario's physics alone (the ten robots' was once over the five's).
   const auto figure_after = [&](const std::string& label) {
     const std::size_t at = r.out.find(label);
