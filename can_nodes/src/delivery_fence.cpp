@@ -1,11 +1,13 @@
 #include "canhil/can_nodes/delivery_fence.hpp"
 
+#include <dlfcn.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <unistd.h>
+
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -13,6 +15,7 @@
 #include "canhil/base/errno_text.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
+#include "canhil/can_nodes/socketcan_bus.hpp"
 
 namespace canhil::can_nodes {
 namespace {
@@ -74,6 +77,18 @@ std::size_t DeliveryFence::add(const std::string& iface) {
     throw SetupError("no network interface named " + iface + ": create it with `vcan_setup/vcan-up.sh " + iface + "`");
   }
   const std::size_t index = interfaces_.size();
+  if (on_user_space_bus(iface)) {
+    // The bus's preload, in this process; canhil does not link it.
+    using Rounds = unsigned long long (*)();
+    rounds_ = reinterpret_cast<Rounds>(dlsym(RTLD_DEFAULT, "canhil_userbus_rounds"));
+    if (rounds_ == nullptr) {
+      throw SetupError(iface +
+                       " is on canhil's user-space bus, but its preload cannot tell when frames are "
+                       "delivered: it is of another canhil; start this canhil's bus (`canhil bus down`, then up)");
+    }
+    interfaces_.emplace_back();
+    return index;
+  }
   Interface& added = interfaces_.emplace_back();
   for (std::uint32_t first = 0; first < kStandardIds; first += kIdsPerSocket) {
     const int fd = open_fence_socket(iface, ifindex, first);
@@ -115,6 +130,20 @@ void DeliveryFence::drain() {
       }
     }
   } while (n == static_cast<int>(ready.size()));
+}
+
+bool DeliveryFence::reached(std::size_t index, std::uint64_t fenced) {
+  Interface& i = interfaces_.at(index);
+  if (!i.sockets.empty() || rounds_ == nullptr) return i.delivered >= fenced;
+  const std::uint64_t round = rounds_();
+  if (round % 2 == 0) return true;  // no round under way: every one before has ended
+  if (i.odd_round == 0 || i.odd_for != fenced) {
+    // The round under way may be the one handing out the latest frame read.
+    i.odd_for = fenced;
+    i.odd_round = round;
+    return false;
+  }
+  return round != i.odd_round;  // that round has ended since
 }
 
 bool DeliveryFence::counts(const frames::CanFrame& frame) noexcept {

@@ -151,11 +151,10 @@ void ExternalDriver::observe() {
 std::string ExternalDriver::in_flight(std::uint64_t sent) {
   observe();
   if (observed_ < sent) return "the frames sent to reach the bus";
-  // The observer is among the first sockets a frame reaches; the fence is the last.
+  // The observer may have a frame that later sockets have not yet: the fence says when all have it.
   fence_.drain();
   for (std::size_t r = 0; r < fenced_.size(); ++r) {
-    if (fence_.delivered(r) < fenced_[r])
-      return "the frames on " + session_.rig(r).interface + " to reach every socket";
+    if (!fence_.reached(r, fenced_[r])) return "the frames on " + session_.rig(r).interface + " to reach every socket";
   }
   return {};
 }

@@ -468,9 +468,18 @@ class Broker {
     c.queued.push_back(r);
   }
 
+  /// One round: what route() queued handed to its sockets, State::rounds odd
+  /// meanwhile.
+  void flush() {
+    if (dirty_.empty()) return;
+    state_.rounds.fetch_add(1, std::memory_order_acq_rel);
+    hand_over();
+    state_.rounds.fetch_add(1, std::memory_order_release);
+  }
+
   /// Sends every connection what this round routed to it, in one call each;
   /// a receiver whose buffer is full gets the grace once, then drops.
-  void flush() {
+  void hand_over() {
     // In the kernel's order of serving (af_can.c, can_rcv_filter): sockets
     // with no filter, mask or inverted filters first, those whose filters all
     // take a single id last; within each, the latest opened first. A socket

@@ -1,9 +1,8 @@
 // A bus socket's life and options: socket, bind, close and the dup family,
 // setsockopt and getsockopt (SOL_CAN_RAW and the SOL_SOCKET options CAN_RAW
-// programs use), getsockname, ioctl (time stamps and the interface calls),
-// and the interface names (if_nametoindex, if_indextoname), each with the
-// kernel's answers (net/can/raw.c, net/core/sock.c). Other descriptors and
-// other interfaces go on to libc unchanged.
+// programs use), getsockname, ioctl (time stamps here, the interface calls in
+// preload_interfaces.cpp), each with the kernel's answers (net/can/raw.c,
+// net/core/sock.c). Other descriptors go on to libc unchanged.
 #include <fcntl.h>
 #include <linux/can/raw.h>
 #include <linux/capability.h>
@@ -78,11 +77,6 @@ void update(Socket& s, F change) {
   change();
   s.seq.fetch_add(1, std::memory_order_release);
   s.lock.unlock();
-}
-
-int fail(int e) {
-  errno = e;
-  return -1;
 }
 
 int bind_socket(Socket& s, const sockaddr* address, socklen_t size) {
@@ -326,57 +320,6 @@ int get_socket_option(Socket& s, int name, void* value, socklen_t* size) {
   return give_option(value, size, &v, sizeof v);
 }
 
-/// The interface ioctls for the bus's interfaces; 1 when `request` is not
-/// one or the interface is not the bus's.
-int interface_ioctl(unsigned long request, void* arg) {
-  switch (request) {
-    case SIOCGIFINDEX:
-    case SIOCGIFNAME:
-    case SIOCGIFFLAGS:
-    case SIOCSIFFLAGS:
-    case SIOCGIFMTU:
-    case SIOCSIFMTU:
-      break;
-    default:
-      return 1;
-  }
-  ifreq r{};
-  if (!copy_in(&r, arg, sizeof r)) return 1;  // let the kernel answer EFAULT
-  Interface* i = nullptr;
-  if (request == SIOCGIFNAME) {
-    i = interface_at(r.ifr_ifindex);
-  } else {
-    r.ifr_name[IFNAMSIZ - 1] = '\0';
-    i = interface_named(r.ifr_name);
-  }
-  if (i == nullptr) return 1;
-  switch (request) {
-    case SIOCGIFINDEX:
-      r.ifr_ifindex = i->index;
-      break;
-    case SIOCGIFNAME:
-      std::memcpy(r.ifr_name, i->name, IFNAMSIZ);
-      break;
-    case SIOCGIFFLAGS:
-      r.ifr_flags = static_cast<short>(IFF_NOARP | (i->up.load() != 0 ? (IFF_UP | IFF_RUNNING) : 0));
-      break;
-    case SIOCGIFMTU:
-      r.ifr_mtu = static_cast<int>(i->mtu.load());
-      break;
-    case SIOCSIFMTU:  // vcan_change_mtu: only while down, only the two CAN MTUs
-      if (i->up.load() != 0) return fail(EBUSY);
-      if (r.ifr_mtu != static_cast<int>(CAN_MTU) && r.ifr_mtu != static_cast<int>(CANFD_MTU)) return fail(EINVAL);
-      i->mtu.store(static_cast<std::uint32_t>(r.ifr_mtu));
-      return 0;
-    default: {  // SIOCSIFFLAGS: up or down, as `ip link set` (the bus is its user's: no capability asked)
-      const std::uint32_t up = (r.ifr_flags & IFF_UP) != 0 ? 1 : 0;
-      if (i->up.exchange(up) != up) interfaces_changed();
-      return 0;
-    }
-  }
-  return copy_out(arg, &r, sizeof r) ? 0 : fail(EFAULT);
-}
-
 int stamp_ioctl(Socket& s, unsigned long request, void* arg) {
   // sock_gettstamp: from now on reads keep their frame's time; none read yet is ENOENT,
   // one read while nothing was kept is the time of this call.
@@ -571,31 +514,6 @@ int ioctl(int fd, unsigned long request, ...) {
   }
   CANHIL_REAL(ioctl);
   return real_ioctl(fd, request, arg);
-}
-
-unsigned int if_nametoindex(const char* name) {
-  if (name != nullptr && bus::bus_state(false) != nullptr) {
-    if (const auto* i = bus::interface_named(name)) return static_cast<unsigned int>(i->index);
-  }
-  CANHIL_REAL(if_nametoindex);
-  return real_if_nametoindex(name);
-}
-
-/// Whether interface `name` is on the user-space bus this process runs on
-/// (canhil's reports ask, through dlsym: can_nodes::bus_of).
-int canhil_userbus_interface(const char* name) {
-  return name != nullptr && bus::bus_state(false) != nullptr && bus::interface_named(name) != nullptr ? 1 : 0;
-}
-
-char* if_indextoname(unsigned int index, char* name) {
-  if (bus::bus_state(false) != nullptr) {
-    if (const auto* i = bus::interface_at(static_cast<int>(index))) {
-      std::memcpy(name, i->name, IF_NAMESIZE);
-      return name;
-    }
-  }
-  CANHIL_REAL(if_indextoname);
-  return real_if_indextoname(index, name);
 }
 
 }  // extern "C"

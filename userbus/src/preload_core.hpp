@@ -6,6 +6,7 @@
 #include <sys/socket.h>
 #include <sys/types.h>
 
+#include <cerrno>
 #include <cstddef>
 #include <cstdint>
 
@@ -48,6 +49,18 @@ bool copy_out(void* to, const void* from, std::size_t n) noexcept;
 /// The interface of index `index` or called `name` on the current bus.
 Interface* interface_at(int index) noexcept;
 Interface* interface_named(const char* name) noexcept;
+
+/// errno set to `e`, and -1: a call's failure as libc reports it.
+inline int fail(int e) noexcept {
+  errno = e;
+  return -1;
+}
+
+/// The interface ioctls (SIOCGIFINDEX, SIOCGIFNAME, SIOCGIFFLAGS,
+/// SIOCSIFFLAGS, SIOCGIFMTU, SIOCSIFMTU) for the bus's interfaces, on any
+/// descriptor; 1 when `request` is not one of them or the interface is not
+/// the bus's (the kernel answers).
+int interface_ioctl(unsigned long request, void* arg) noexcept;
 
 /// The lockstep time shim's hook, when it is loaded beside this preload.
 void count_sent(long long frames) noexcept;

@@ -31,7 +31,7 @@
 namespace canhil::userbus {
 
 inline constexpr std::uint32_t kMagic = 0x43414e42;  // "CANB"
-inline constexpr std::uint32_t kVersion = 2;
+inline constexpr std::uint32_t kVersion = 3;
 inline constexpr int kMaxInterfaces = 32;
 inline constexpr int kMaxSockets = 1024;
 inline constexpr int kMaxFilters = 512;  // CAN_RAW_FILTER_MAX, as the kernel
@@ -132,6 +132,12 @@ struct State {
   /// whole; 0: the broker sleeps at once.
   std::atomic<std::uint64_t> spin;
   std::atomic<std::uint64_t> spins;  ///< how many times the broker looked on so, counted by it
+  /// The broker's rounds of handing frames to their sockets: odd while one
+  /// is under way, even between them. A program that has read a frame on one
+  /// socket and then finds this even, or past the odd value it saw after
+  /// that read, knows the frame is in every socket that takes it (canhil's
+  /// lockstep: can_nodes::DeliveryFence, through canhil_userbus_rounds).
+  std::atomic<std::uint64_t> rounds;
   Interface interfaces[kMaxInterfaces];
   Socket sockets[kMaxSockets];
 };

@@ -1,0 +1,107 @@
+// The bus's interfaces as programs ask for them: the interface ioctls, the
+// names (if_nametoindex, if_indextoname), and what canhil itself asks of the
+// bus it runs on (through dlsym: canhil does not link the preload). An
+// interface that is not the bus's goes on to libc and the kernel.
+#include <linux/can.h>
+#include <linux/sockios.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
+
+#include <atomic>
+#include <cstring>
+
+#include "canhil/base/preload.hpp"
+#include "preload_core.hpp"
+
+namespace canhil::userbus::preload {
+
+int interface_ioctl(unsigned long request, void* arg) noexcept {
+  switch (request) {
+    case SIOCGIFINDEX:
+    case SIOCGIFNAME:
+    case SIOCGIFFLAGS:
+    case SIOCSIFFLAGS:
+    case SIOCGIFMTU:
+    case SIOCSIFMTU:
+      break;
+    default:
+      return 1;
+  }
+  ifreq r{};
+  if (!copy_in(&r, arg, sizeof r)) return 1;  // let the kernel answer EFAULT
+  Interface* i = nullptr;
+  if (request == SIOCGIFNAME) {
+    i = interface_at(r.ifr_ifindex);
+  } else {
+    r.ifr_name[IFNAMSIZ - 1] = '\0';
+    i = interface_named(r.ifr_name);
+  }
+  if (i == nullptr) return 1;
+  switch (request) {
+    case SIOCGIFINDEX:
+      r.ifr_ifindex = i->index;
+      break;
+    case SIOCGIFNAME:
+      std::memcpy(r.ifr_name, i->name, IFNAMSIZ);
+      break;
+    case SIOCGIFFLAGS:
+      r.ifr_flags = static_cast<short>(IFF_NOARP | (i->up.load() != 0 ? (IFF_UP | IFF_RUNNING) : 0));
+      break;
+    case SIOCGIFMTU:
+      r.ifr_mtu = static_cast<int>(i->mtu.load());
+      break;
+    case SIOCSIFMTU:  // vcan_change_mtu: only while down, only the two CAN MTUs
+      if (i->up.load() != 0) return fail(EBUSY);
+      if (r.ifr_mtu != static_cast<int>(CAN_MTU) && r.ifr_mtu != static_cast<int>(CANFD_MTU)) return fail(EINVAL);
+      i->mtu.store(static_cast<std::uint32_t>(r.ifr_mtu));
+      return 0;
+    default: {  // SIOCSIFFLAGS: up or down, as `ip link set` (the bus is its user's: no capability asked)
+      const std::uint32_t up = (r.ifr_flags & IFF_UP) != 0 ? 1 : 0;
+      if (i->up.exchange(up) != up) interfaces_changed();
+      return 0;
+    }
+  }
+  return copy_out(arg, &r, sizeof r) ? 0 : fail(EFAULT);
+}
+
+}  // namespace canhil::userbus::preload
+
+namespace bus = canhil::userbus::preload;
+
+#pragma GCC visibility push(default)
+extern "C" {
+
+unsigned int if_nametoindex(const char* name) {
+  if (name != nullptr && bus::bus_state(false) != nullptr) {
+    if (const auto* i = bus::interface_named(name)) return static_cast<unsigned int>(i->index);
+  }
+  CANHIL_REAL(if_nametoindex);
+  return real_if_nametoindex(name);
+}
+
+/// Whether interface `name` is on the user-space bus this process runs on
+/// (canhil's reports ask, through dlsym: can_nodes::bus_of).
+int canhil_userbus_interface(const char* name) {
+  return name != nullptr && bus::bus_state(false) != nullptr && bus::interface_named(name) != nullptr ? 1 : 0;
+}
+
+/// The broker's rounds (State::rounds) on the bus this process runs on, or
+/// 0 without one (canhil's delivery fence asks, through dlsym).
+unsigned long long canhil_userbus_rounds() {
+  const canhil::userbus::State* state = bus::bus_state(false);
+  return state != nullptr ? state->rounds.load(std::memory_order_acquire) : 0;
+}
+
+char* if_indextoname(unsigned int index, char* name) {
+  if (bus::bus_state(false) != nullptr) {
+    if (const auto* i = bus::interface_at(static_cast<int>(index))) {
+      std::memcpy(name, i->name, IF_NAMESIZE);
+      return name;
+    }
+  }
+  CANHIL_REAL(if_indextoname);
+  return real_if_indextoname(index, name);
+}
+
+}  // extern "C"
+#pragma GCC visibility pop
