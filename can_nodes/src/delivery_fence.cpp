@@ -90,6 +90,7 @@ std::size_t DeliveryFence::add(const std::string& iface) {
     return index;
   }
   Interface& added = interfaces_.emplace_back();
+  has_sockets_ = true;
   for (std::uint32_t first = 0; first < kStandardIds; first += kIdsPerSocket) {
     const int fd = open_fence_socket(iface, ifindex, first);
     added.sockets.push_back(fd);
@@ -105,6 +106,7 @@ std::size_t DeliveryFence::add(const std::string& iface) {
 }
 
 void DeliveryFence::drain() {
+  if (!has_sockets_) return;  // only interfaces of the user-space bus, whose reached() asks the bus
   std::array<epoll_event, 16> ready{};
   // Only counts matter: the frames are read in batches and forgotten.
   std::array<can_frame, 64> frames{};

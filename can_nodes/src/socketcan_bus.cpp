@@ -136,7 +136,18 @@ std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const
 }
 
 SocketCanBus::SocketCanBus(int fd, std::string iface, int ifindex, const SocketCanOptions& options)
-    : fd_(fd), iface_(std::move(iface)), ifindex_(ifindex), options_(options) {}
+    : fd_(fd), iface_(std::move(iface)), ifindex_(ifindex), options_(options) {
+  // The bus's preload, in this process when it runs on the bus (canhil does not link it).
+  using Waiting = long long (*)(int);
+  if (on_user_space_bus(iface_)) waiting_ = reinterpret_cast<Waiting>(dlsym(RTLD_DEFAULT, "canhil_userbus_waiting"));
+}
+
+std::optional<bool> SocketCanBus::waiting() const {
+  if (waiting_ == nullptr) return std::nullopt;
+  const long long n = waiting_(fd_);
+  if (n < 0) return std::nullopt;
+  return n > 0;
+}
 
 SocketCanBus::~SocketCanBus() { ::close(fd_); }
 
@@ -189,6 +200,11 @@ SendStatus SocketCanBus::send(const CanFrame& frame) {
 
 std::optional<TimedFrame> SocketCanBus::receive() {
   if (options_.fed) return take_fed();
+  if (options_.skips_empty_reads && waiting() == false) {
+    ++skipped_;
+    found_empty();
+    return std::nullopt;
+  }
   can_frame k{};
   iovec iov{&k, sizeof k};
   alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t))];
@@ -204,13 +220,7 @@ std::optional<TimedFrame> SocketCanBus::receive() {
   if (n < 0) {
     const int err = errno;
     if (err != EAGAIN && err != EWOULDBLOCK) note_errno(err);
-    // Queue empty: drops after the last received frame are reported with no
-    // later frame's SO_RXQ_OVFL, so read the socket's drop counter directly.
-    // Only a full queue drops, so an empty queue that stayed empty has none new.
-    if (read_since_drop_check_ && options_.drops_when_empty) {
-      read_drop_counter();
-      read_since_drop_check_ = false;
-    }
+    found_empty();
     return std::nullopt;
   }
   read_since_drop_check_ = true;
@@ -235,6 +245,16 @@ std::optional<TimedFrame> SocketCanBus::receive() {
     ++stats_.state_changes;
   }
   return out;
+}
+
+void SocketCanBus::found_empty() {
+  // Drops after the last received frame are reported with no later frame's
+  // SO_RXQ_OVFL, so read the socket's drop counter directly. Only a full
+  // queue drops, so an empty queue that stayed empty has none new.
+  if (read_since_drop_check_ && options_.drops_when_empty) {
+    read_drop_counter();
+    read_since_drop_check_ = false;
+  }
 }
 
 void SocketCanBus::note_drops(std::uint32_t absolute) const {

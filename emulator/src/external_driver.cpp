@@ -58,6 +58,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   // never reaches the fence's count, and canhil says what it waited for.
   can_nodes::SocketCanOptions observer_options = socket_options;
   observer_options.drops_when_empty = false;
+  observer_options.skips_empty_reads = true;  // on the user-space bus: its counts say so, no system call
   for (std::size_t r = 0; r < n; ++r) {
     if (fence_.add(session_.rig(r).interface) != r) throw std::logic_error("one fenced interface per robot");
     observers_.push_back(can_nodes::SocketCanBus::open(session_.rig(r).interface, observer_options));
@@ -103,6 +104,22 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     laptop.defer_activation(true);
   });
   session_.on_vision_frame([this](std::size_t r, Nanos) { woken_[r] = true; });
+  // On the user-space bus canhil's looks ask the bus's counts in memory
+  // whether a frame reached an observer, or the fence, instead of polling.
+  bool counted = true;
+  for (const auto& o : observers_) counted = counted && o->waiting().has_value();
+  if (counted) {
+    arrived_ = [this] {
+      for (const auto& o : observers_) {
+        if (o->waiting() == true) return true;
+      }
+      if (!waiting_on_fence_) return false;
+      for (std::size_t r = 0; r < fenced_.size(); ++r) {
+        if (!fence_.reached(r, fenced_[r])) return false;
+      }
+      return true;
+    };
+  }
   lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
 }
 
@@ -149,12 +166,16 @@ void ExternalDriver::observe() {
 }
 
 std::string ExternalDriver::in_flight(std::uint64_t sent) {
+  waiting_on_fence_ = false;
   observe();
   if (observed_ < sent) return "the frames sent to reach the bus";
   // The observer may have a frame that later sockets have not yet: the fence says when all have it.
   fence_.drain();
   for (std::size_t r = 0; r < fenced_.size(); ++r) {
-    if (!fence_.reached(r, fenced_[r])) return "the frames on " + session_.rig(r).interface + " to reach every socket";
+    if (!fence_.reached(r, fenced_[r])) {
+      waiting_on_fence_ = true;
+      return "the frames on " + session_.rig(r).interface + " to reach every socket";
+    }
   }
   return {};
 }
@@ -199,7 +220,7 @@ std::size_t ExternalDriver::settle() {
           }
           return {};
         },
-        "what canhil did at " + at_time(clock_.now()), limit, arrivals_);
+        "what canhil did at " + at_time(clock_.now()), limit, arrivals_, arrived_);
     if (!stuck.empty()) {
       observe();  // what reached the bus up to the stop belongs in the trace
       throw ProcessStuck(stuck);

@@ -296,7 +296,7 @@ void Conductor::sweep_dead() {
 }
 
 std::string Conductor::wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
-                                  std::optional<Nanos> limit, int ready_fd) {
+                                  std::optional<Nanos> limit, int ready_fd, const std::function<bool()>& arrived) {
   const Nanos answer_limit = limit.value_or(options_.answer_limit);
   const Nanos start = wall_now();
   Nanos until = start + answer_limit;
@@ -353,7 +353,7 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
       return "canhil waited " + within + " after " + waiting_for + " for " + missing + state;
     }
     const int fd_to_watch = processes_quiet ? ready_fd : -1;
-    if (look_briefly(seen, fd_to_watch)) {
+    if (look_briefly(seen, fd_to_watch, arrived)) {
       ++looks_answered_;
       continue;
     }
@@ -373,7 +373,7 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
   return {};
 }
 
-bool Conductor::look_briefly(std::uint32_t seen, int ready_fd) const {
+bool Conductor::look_briefly(std::uint32_t seen, int ready_fd, const std::function<bool()>& arrived) const {
   if (options_.spin <= Nanos{0}) return false;
   const Nanos until = wall_now() + options_.spin;
   const timespec at_once{0, 0};
@@ -381,8 +381,13 @@ bool Conductor::look_briefly(std::uint32_t seen, int ready_fd) const {
   for (;;) {
     if (board_->changes.load(std::memory_order_acquire) != seen) return true;
     if (board_->posted.load(std::memory_order_acquire) != 0) return true;  // a sem_post to pass on
-    // The system call itself, as for the sleep below.
-    if (ready_fd >= 0 && syscall(SYS_ppoll, &p, 1, &at_once, nullptr, 8) > 0) return true;
+    if (ready_fd >= 0) {
+      if (arrived) {
+        if (arrived()) return true;
+      } else if (syscall(SYS_ppoll, &p, 1, &at_once, nullptr, 8) > 0) {  // the system call itself, as below
+        return true;
+      }
+    }
     if (wall_now() >= until) return false;
     sched_yield();
   }

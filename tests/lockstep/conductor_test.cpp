@@ -358,6 +358,28 @@ TEST(Conductor, ItLooksForAFrameOnItsSocketBeforeItSleeps) {
   EXPECT_GE(slept, 1U);
 }
 
+TEST(Conductor, ItsLooksAskWhatArrivedInMemoryInsteadOfPollingWhenTold) {
+  // A descriptor that never becomes readable, and canhil's own condition met
+  // only once the looks have asked `arrived` three times (the bus's counts in
+  // memory, on the user-space bus): polled alone, the wait would end at its
+  // limit with canhil still waiting.
+  int ends[2];
+  ASSERT_EQ(socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, ends), 0);
+  ConductorOptions options;
+  options.answer_limit = 2s;
+  options.spin = 10s;
+  Conductor conductor(options);
+  int asked = 0;
+  const auto arrived = [&] { return ++asked >= 3; };
+  const auto here = [&] { return asked >= 3 ? std::string() : std::string("the frame"); };
+  EXPECT_EQ(conductor.wait_quiet(here, "the frame at 10 ms", std::nullopt, ends[0], arrived), "");
+  EXPECT_EQ(asked, 3);
+  EXPECT_EQ(conductor.looks_answered(), 1U);
+  EXPECT_EQ(conductor.sleeps(), 0U);
+  close(ends[0]);
+  close(ends[1]);
+}
+
 TEST(Conductor, AProcessKilledWithoutAWordIsNoLongerWaitedFor) {
   ConductorOptions options;
   options.answer_limit = 5s;

@@ -297,6 +297,7 @@ class Broker {
       s.drops.store(0);
       s.received.store(0);
       s.sent.store(0);
+      s.taken.store(0);
       s.seq.fetch_add(2, std::memory_order_release);
       s.lock.unlock();
       s.in_use.store(1, std::memory_order_release);
@@ -353,7 +354,8 @@ class Broker {
         }
         RxRecord r{};
         r.error = removed ? ENODEV : ENETDOWN;
-        send(c.fd, &r, kRxHeader, MSG_DONTWAIT | MSG_NOSIGNAL);
+        if (send(c.fd, &r, kRxHeader, MSG_DONTWAIT | MSG_NOSIGNAL) > 0)
+          s.received.fetch_add(1, std::memory_order_release);
       }
     }
   }
@@ -511,7 +513,7 @@ class Broker {
         if (sent > 0) {
           done += static_cast<std::size_t>(sent);
           c.overrun = false;
-          s.received.fetch_add(static_cast<std::uint64_t>(sent), std::memory_order_relaxed);
+          s.received.fetch_add(static_cast<std::uint64_t>(sent), std::memory_order_release);
           continue;
         }
         if (sent < 0 && errno != EAGAIN) break;  // the program is going: its end is read next

@@ -92,6 +92,18 @@ unsigned long long canhil_userbus_rounds() {
   return state != nullptr ? state->rounds.load(std::memory_order_acquire) : 0;
 }
 
+/// How many records the broker has given bus socket `fd` that no read has
+/// taken yet (one being handed over shows once it is in the socket), or -1
+/// when `fd` is not a bus socket (canhil's lockstep asks before it reads,
+/// through dlsym).
+long long canhil_userbus_waiting(int fd) {
+  const canhil::userbus::Socket* s = bus::socket_of(fd);
+  if (s == nullptr) return -1;
+  const std::uint64_t taken = s->taken.load(std::memory_order_relaxed);
+  const std::uint64_t given = s->received.load(std::memory_order_acquire);
+  return given > taken ? static_cast<long long>(given - taken) : 0;
+}
+
 char* if_indextoname(unsigned int index, char* name) {
   if (bus::bus_state(false) != nullptr) {
     if (const auto* i = bus::interface_at(static_cast<int>(index))) {

@@ -137,6 +137,7 @@ ssize_t receive_frame(int fd, Socket& s, msghdr* m, int flags) {
   const ssize_t n = real_recvmsg(fd, &in, flags & (MSG_DONTWAIT | MSG_PEEK));
   if (n < 0) return -1;
   if (n == 0) return errno = ENODEV, -1;  // the broker went away with the bus
+  if ((flags & MSG_PEEK) == 0) s.taken.fetch_add(1, std::memory_order_relaxed);
   if (static_cast<std::size_t>(n) < kRxHeader) return errno = EIO, -1;
   if (r.error != 0) return errno = r.error, -1;
   std::size_t size = static_cast<std::size_t>(n) - kRxHeader;

@@ -53,6 +53,14 @@ struct SocketCanOptions {
   /// delivery fence waits for every frame sent): one system call an instant
   /// less, three on canhil's user-space bus. stats() still reads it.
   bool drops_when_empty = true;
+  /// On canhil's user-space bus, a receive() that the bus's counts say would
+  /// find the queue empty (waiting() false) returns at once, without the
+  /// system call (the lockstep's observers, read until empty at every
+  /// instant); a frame the broker is handing over at that moment is read by
+  /// a later call. Only for a socket canhil watches otherwise too: a bus
+  /// whose broker died reads as empty, not as gone. The kernel's SocketCAN:
+  /// no effect.
+  bool skips_empty_reads = false;
 };
 
 /// True when this process can open a CAN_RAW socket at all (the kernel's,
@@ -93,6 +101,13 @@ class SocketCanBus final : public Bus {
   std::uint64_t frames_sent() const noexcept { return stats_.sent; }
   /// The socket, for poll()/epoll in a real-time loop. Owned by this object.
   int fd() const { return fd_; }
+  /// On canhil's user-space bus, whether a frame (or an error) waits to be
+  /// read, from the bus's counts in memory (true: one is in the socket; false:
+  /// none, or one the broker is handing over right now). On the kernel's
+  /// SocketCAN, which does not say: nullopt.
+  std::optional<bool> waiting() const;
+  /// Empty reads skipped by skips_empty_reads, so far.
+  std::uint64_t empty_reads_skipped() const noexcept { return skipped_; }
   /// Waits up to `timeout` for a frame to be readable; true if one is.
   bool wait_readable(std::chrono::microseconds timeout) const;
   /// Re-reads the interface's state from the kernel (call when idle).
@@ -103,6 +118,8 @@ class SocketCanBus final : public Bus {
   void note_errno(int err);
   void note_drops(std::uint32_t absolute) const;
   void read_drop_counter() const;
+  /// A read found the queue empty (drops_when_empty).
+  void found_empty();
   std::optional<TimedFrame> take_fed();
   /// A frame given to the node: counted as an error frame or a received one.
   void count_received(const CanFrame& frame);
@@ -122,6 +139,8 @@ class SocketCanBus final : public Bus {
   std::vector<Filter> filters_;         // as set, for feed(); empty: every frame
   bool filters_set_empty_ = false;      // set_filters({}): no frame at all
   std::uint32_t error_mask_ = 0;
+  long long (*waiting_)(int) = nullptr;  // canhil_userbus_waiting, on the user-space bus
+  std::uint64_t skipped_ = 0;
 };
 
 }  // namespace canhil::can_nodes

@@ -12,6 +12,7 @@
 // Not thread-safe: one thread drives it.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -96,6 +97,10 @@ class ExternalDriver {
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
   int arrivals_ = -1;  // epoll: readable when a frame reaches an observer or the fence (wait_quiet's ready_fd)
+  // On the user-space bus: whether a frame waits at an observer, or the fence
+  // has what in_flight() last waited for, from the bus's counts (wait_quiet's arrived).
+  std::function<bool()> arrived_;
+  bool waiting_on_fence_ = false;  // in_flight() last waited for the fence
   BusWatch watch_;
   std::uint64_t observed_ = 0;
   std::uint64_t observed_at_settle_ = 0;

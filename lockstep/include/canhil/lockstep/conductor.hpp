@@ -121,9 +121,13 @@ class Conductor {
   /// `also()`'s answer may change (canhil's own sockets, where the frames in
   /// flight arrive): while the processes are quiet and `also()` is not
   /// satisfied, the wait is on it, not on the board, so canhil wakes as a
-  /// frame arrives instead of at the next millisecond.
+  /// frame arrives instead of at the next millisecond. `arrived`, when given,
+  /// says from memory whether something `also()` waits for may have come
+  /// (canhil's sockets on its user-space bus): the looks before sleeping ask
+  /// it instead of polling `ready_fd`, a system call each look.
   std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
-                         std::optional<Nanos> limit = std::nullopt, int ready_fd = -1);
+                         std::optional<Nanos> limit = std::nullopt, int ready_fd = -1,
+                         const std::function<bool()>& arrived = {});
 
   /// CAN frames the processes wrote (counted by the shim), over the run.
   std::uint64_t frames_sent() const noexcept;
@@ -156,7 +160,7 @@ class Conductor {
   /// Looks for up to ConductorOptions::spin for a change on the board since
   /// `seen`, a semaphore posted by a process, or `ready_fd` (when >= 0) to be
   /// readable: whether one came.
-  bool look_briefly(std::uint32_t seen, int ready_fd) const;
+  bool look_briefly(std::uint32_t seen, int ready_fd, const std::function<bool()>& arrived) const;
 
   ConductorOptions options_;
   std::string name_;

@@ -114,8 +114,14 @@ struct Socket {
   std::atomic<std::int32_t> pending_error;  ///< an errno a read or write reports once (SO_ERROR)
   std::atomic<std::int64_t> last_stamp_ns;  ///< the last frame read's time (SIOCGSTAMP), -1 before any
   std::atomic<std::uint32_t> drops;         ///< copies dropped at this socket (SO_RXQ_OVFL)
+  /// Records (frames and errors) the broker has given the socket, counted
+  /// once they are in it: `received - taken` is what waits there, a record
+  /// being handed over at that moment aside.
   std::atomic<std::uint64_t> received;
   std::atomic<std::uint64_t> sent;
+  /// Records the processes holding the socket have read from it (the
+  /// preload counts each one).
+  std::atomic<std::uint64_t> taken;
 };
 
 struct State {
