@@ -168,6 +168,7 @@ int run_external(emulator::Session& session, const ExternalRun& run, const std::
     expected = run.wait_for > 0 ? run.wait_for : 2 * robots;
     std::printf("  start your handler and agent (AGENT=N) with:\n   ");
     for (const std::string& e : environment) std::printf(" %s", e.c_str());
+    if (scenario.external.syslog == "system") std::printf(" CANHIL_SYSLOG=system");
     std::printf("\n  waiting for %zu process(es), %g s at most\n", expected, attach_limit);
   }
   std::fflush(stdout);

@@ -53,9 +53,10 @@ std::string program_of(const std::string& command) {
 }
 
 // `second_set`: a process of the second team (its RTDB set: SECOND_RTDB=1).
+// `syslog`: where its syslog messages go (ExternalSide::syslog, for the shim).
 // `log`: its standard output and error (2: canhil's stderr for both), or -1 to keep canhil's.
 pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent, bool second_set,
-            const std::string& path, int log) {
+            const std::string& syslog, const std::string& path, int log) {
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid != 0) return pid;
@@ -68,6 +69,7 @@ pid_t start(const std::string& command, const std::vector<std::string>& environm
     setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
   }
   setenv("AGENT", std::to_string(agent).c_str(), 1);
+  setenv("CANHIL_SYSLOG", syslog.c_str(), 1);
   if (second_set) {
     setenv("SECOND_RTDB", "1", 1);
   } else {
@@ -211,7 +213,8 @@ std::size_t TeamProcesses::start_all(const emulator::Session& session) {
         log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
         if (log < 0) throw SetupError("cannot write the process log " + log_path + ": " + std::strerror(errno));
       }
-      s.pid = start(s.command, environment_, s.agent, team > 0, path, log >= 0 ? log : (output_.onto_stderr ? 2 : -1));
+      s.pid = start(s.command, environment_, s.agent, team > 0, scenario.external_of(team).syslog, path,
+                    log >= 0 ? log : (output_.onto_stderr ? 2 : -1));
       if (log >= 0) close(log);
       std::fprintf(say_, "  started `%s` for agent %d%s (pid %d)%s%s\n", s.command.c_str(), s.agent,
                    scenario.teams.size() > 1 ? (" of team " + scenario.teams[team].name).c_str() : "", s.pid,

@@ -175,6 +175,13 @@ void read_external(const TableReader& r, ExternalSide& e) {
   if (const auto v = r.number("busy_limit_s", 0.1, 3600.0)) e.busy_limit_s = *v;
   if (const auto v = r.number("spin_us", 0.0, 100000.0)) e.spin_us = *v;
   if (const auto v = r.number("bus_spin_us", 0.0, 100000.0)) e.bus_spin_us = *v;
+  if (const auto v = r.text("syslog", "\"log\" (to each process's own log) or \"system\" (the machine's syslog)")) {
+    if (*v != "log" && *v != "system") {
+      r.fail(*r.get("syslog"), "syslog",
+             "must be \"log\" (each process's messages to its own log) or \"system\" (to the machine's syslog)");
+    }
+    e.syslog = *v;
+  }
 }
 
 const std::vector<std::string>& laptop_fields() {
@@ -184,8 +191,8 @@ const std::vector<std::string>& laptop_fields() {
   return fields;
 }
 const std::vector<std::string>& external_fields() {
-  static const std::vector<std::string> fields = {"processes",    "answer_limit_s", "attach_limit_s",
-                                                  "busy_limit_s", "spin_us",        "bus_spin_us"};
+  static const std::vector<std::string> fields = {"processes", "answer_limit_s", "attach_limit_s", "busy_limit_s",
+                                                  "spin_us",   "bus_spin_us",    "syslog"};
   return fields;
 }
 

@@ -110,10 +110,17 @@ TEST(Scenarios, TheExternalTableGivesTheTeamsProcessesAndTheirLimits) {
   EXPECT_DOUBLE_EQ(none.external.answer_limit_s, 1.0);
   EXPECT_DOUBLE_EQ(none.external.spin_us, 50);
   EXPECT_DOUBLE_EQ(none.external.bus_spin_us, 200);
+  EXPECT_EQ(none.external.syslog, "log") << "syslog messages go to each process's own log";
   const Scenario s = parse_scenario(
       "[external]\nprocesses = [\"./hwcomm --iface {iface}\", \"./agent\"]\nanswer_limit_s = 2.5\n"
-      "attach_limit_s = 10\nspin_us = 0\nbus_spin_us = 0\n",
+      "attach_limit_s = 10\nspin_us = 0\nbus_spin_us = 0\nsyslog = \"system\"\n",
       "s.toml");
+  EXPECT_EQ(s.external.syslog, "system");
+  EXPECT_NE(error_of("[external]\nsyslog = \"journal\"\n")
+                .find("bad.toml:2: external.syslog: must be \"log\" (each process's messages to its own log) or "
+                      "\"system\""),
+            std::string::npos)
+      << error_of("[external]\nsyslog = \"journal\"\n");
   EXPECT_EQ(s.external.processes, (std::vector<std::string>{"./hwcomm --iface {iface}", "./agent"}));
   EXPECT_DOUBLE_EQ(s.external.answer_limit_s, 2.5);
   EXPECT_DOUBLE_EQ(s.external.attach_limit_s, 10);

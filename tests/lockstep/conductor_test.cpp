@@ -380,6 +380,31 @@ TEST(Conductor, ItsLooksAskWhatArrivedInMemoryInsteadOfPollingWhenTold) {
   close(ends[1]);
 }
 
+TEST(Conductor, ATeamsSyslogGoesToItsOwnLogInLockstepUnlessItAsksForTheSystems) {
+  for (const bool system : {false, true}) {
+    Conductor conductor;
+    const std::string log = "/tmp/canhil_lockstep_syslog_" + std::to_string(getpid()) + ".log";
+    ChildProcess client(std::string(system ? "env CANHIL_SYSLOG=system " : "") + command(conductor, "syslog"), log);
+    const std::string pid = std::to_string(client.pid());
+    ASSERT_EQ(conductor.wait_attached(1, 10s), 1u) << client.output();
+    ASSERT_EQ(drive(conductor, 1s), "") << client.output();
+    ASSERT_TRUE(client.wait_end(10s).has_value()) << client.output();
+    const std::string out = client.output();
+    EXPECT_EQ(at(said(out), "logged"), 100'000'000) << out;
+    if (system) {
+      EXPECT_EQ(out.find("cycle 42"), std::string::npos) << "to the machine's syslog, not the log\n" << out;
+      continue;
+    }
+    // glibc's LOG_PERROR lines: openlog's ident and, with LOG_PID, the pid.
+    EXPECT_NE(out.find("teamlog[" + pid + "]: cycle 42\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("teamlog[" + pid + "]: no map: No such file or directory\n"), std::string::npos) << out;
+    EXPECT_EQ(out.find("hidden by the mask"), std::string::npos) << out;
+    EXPECT_NE(out.find("teamlog[" + pid + "]: fortified too\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("lockstep_client: after closelog\n"), std::string::npos) << "closelog forgets the ident\n"
+                                                                                << out;
+  }
+}
+
 TEST(Conductor, AProcessKilledWithoutAWordIsNoLongerWaitedFor) {
   ConductorOptions options;
   options.answer_limit = 5s;

@@ -1,7 +1,7 @@
 // A program that plays a team's external process under the time shim: it
 // reads the clocks, sleeps, polls, reads a timerfd, starts a thread, spins
-// without ever waiting, waits on or posts a semaphore, or plays a second
-// preload through the shim's hooks,
+// without ever waiting, waits on or posts a semaphore, logs through syslog,
+// or plays a second preload through the shim's hooks,
 // and prints what its clocks said at each point
 // (lines "<what> <CLOCK_MONOTONIC in ns>"). tests/lockstep/conductor_test.cpp
 // moves the virtual clock and checks the lines.
@@ -13,6 +13,7 @@
 #include <sys/syscall.h>
 #include <sys/time.h>
 #include <sys/timerfd.h>
+#include <syslog.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -26,6 +27,11 @@
 
 #include "canhil/base/preload.hpp"
 #include "canhil/lockstep/shim_hook.h"
+
+// glibc's fortified syslog, which a program built with _FORTIFY_SOURCE calls
+// instead of syslog(); declared here to call it without that.
+// NOLINTNEXTLINE(bugprone-reserved-identifier)
+extern "C" void __syslog_chk(int priority, int flag, const char* format, ...);
 
 namespace {
 
@@ -232,6 +238,26 @@ int semaphore_post(const char* name) {
   return 0;
 }
 
+// A team's logging through syslog(3): plain, with %m, under a mask, the
+// fortified form, after closelog; then a sleep, so that the messages are
+// logged in lockstep, at a virtual instant.
+int logs() {
+  const timespec a_while{0, 100'000'000};
+  nanosleep(&a_while, nullptr);
+  openlog("teamlog", LOG_PID, LOG_USER);
+  syslog(LOG_INFO, "cycle %d", 42);
+  errno = ENOENT;
+  syslog(LOG_WARNING, "no map: %m");
+  setlogmask(LOG_UPTO(LOG_NOTICE));
+  syslog(LOG_DEBUG, "hidden by the mask");
+  __syslog_chk(LOG_ERR, 1, "fortified %s", "too");
+  setlogmask(LOG_UPTO(LOG_DEBUG));
+  closelog();
+  syslog(LOG_NOTICE, "after closelog");
+  say("logged");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -249,8 +275,9 @@ int main(int argc, char** argv) {
   if (mode == "sleeper") return sleeper();
   if (mode == "sem-wait" && argc > 2) return semaphore_wait(argv[2]);
   if (mode == "sem-post" && argc > 2) return semaphore_post(argv[2]);
+  if (mode == "syslog") return logs();
   std::fprintf(stderr,
                "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient|hook|"
-               "sigtimedwait|sleeper|sem-wait NAME|sem-post NAME\n");
+               "sigtimedwait|sleeper|sem-wait NAME|sem-post NAME|syslog\n");
   return 2;
 }

@@ -107,6 +107,10 @@ struct ExternalSide {
   /// On canhil's user-space bus, run alone: how long its broker keeps looking
   /// for the next frame before it sleeps (userbus::BrokerSpin); 0: at once.
   double bus_spin_us = 200;
+  /// Where the processes' syslog(3) messages go: "log", each process's own
+  /// standard error (its log with --logs), one line a message as LOG_PERROR
+  /// writes it; "system", the machine's syslog, as without canhil.
+  std::string syslog = "log";
 };
 
 /// Robots that play together: one goal to attack, one RTDB set (the first
