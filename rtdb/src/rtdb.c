@@ -23,15 +23,10 @@
 #include "canhil/base/second_set.h"
 
 #include "rtdb_internal.h"
+#include "rtdb_slot.h"
 
 #define RTDB_MAGIC 0x43484C52u /* "CHLR" */
 #define RTDB_VERSION 2u        /* 2: the configuration hash leaves names out */
-
-typedef struct {
-  _Atomic uint32_t seq; /* odd while a write is in progress */
-  uint32_t size;
-  int64_t stamp_ns; /* CLOCK_MONOTONIC time the value describes */
-} slot_header;
 
 typedef struct {
   _Atomic uint32_t magic; /* set last by the creator */
@@ -61,7 +56,9 @@ static void* g_seg[SETS * CANHIL_RTDB_MAX_AGENTS]; /* attached segments, by memo
 static int g_shmid[SETS * CANHIL_RTDB_MAX_AGENTS];
 static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
 static uint64_t g_sizes[CANHIL_RTDB_MAX_AGENTS];
-static sem_t* g_frame_sem = NULL;
+static sem_t* g_frame_sem = NULL; /* DB_wait_frame's, of g_me */
+/* DB_signal_frame's, by memory space, opened once (threads may signal at once). */
+static sem_t* _Atomic g_signal_sem[SETS * CANHIL_RTDB_MAX_AGENTS];
 
 static int verbose(void) {
   const char* v = getenv("RTDB_VERBOSE");
@@ -316,6 +313,8 @@ static void frame_sem_name(int space, char* name, size_t size) {
 }
 
 static void detach(int space) {
+  sem_t* signal_sem = atomic_exchange(&g_signal_sem[space], NULL);
+  if (signal_sem != NULL) sem_close(signal_sem);
   if (g_seg[space] == NULL) return;
   shmdt(g_seg[space]);
   g_seg[space] = NULL;
@@ -336,114 +335,10 @@ static slot_header* slot(int space, int owner, int item) {
   return off < 0 ? NULL : (slot_header*)(void*)((char*)g_seg[space] + off);
 }
 
-/* The payload moves in relaxed atomic 8-byte words (slots are 8-aligned and
- * padded to whole words): a reader racing a writer is the sequence lock's
- * normal case, and with plain memcpy that race is undefined behaviour (and
- * what ThreadSanitizer reports). On x86-64 these are ordinary moves. */
-static void store_words(slot_header* s, const void* value) {
-  uint64_t* dst = (uint64_t*)(void*)(s + 1);
-  const char* src = (const char*)value;
-  const uint32_t size = s->size;
-  uint32_t i = 0;
-  for (; i + 8 <= size; i += 8) {
-    uint64_t w;
-    memcpy(&w, src + i, 8);
-    __atomic_store_n(dst + i / 8, w, __ATOMIC_RELAXED);
-  }
-  if (i < size) {
-    uint64_t w = 0;
-    memcpy(&w, src + i, size - i);
-    __atomic_store_n(dst + i / 8, w, __ATOMIC_RELAXED);
-  }
-}
-
-static void load_words(const slot_header* s, void* value) {
-  const uint64_t* src = (const uint64_t*)(const void*)(s + 1);
-  char* dst = (char*)value;
-  const uint32_t size = s->size;
-  uint32_t i = 0;
-  for (; i + 8 <= size; i += 8) {
-    const uint64_t w = __atomic_load_n(src + i / 8, __ATOMIC_RELAXED);
-    memcpy(dst + i, &w, 8);
-  }
-  if (i < size) {
-    const uint64_t w = __atomic_load_n(src + i / 8, __ATOMIC_RELAXED);
-    memcpy(dst + i, &w, size - i);
-  }
-}
-
-/* Bytes [offset, offset + size) of the slot's value, by the words that hold them. */
-static void load_range(const slot_header* s, size_t offset, size_t size, void* value) {
-  const uint64_t* src = (const uint64_t*)(const void*)(s + 1);
-  char* dst = (char*)value;
-  size_t at = offset;
-  const size_t end = offset + size;
-  while (at < end) {
-    const uint64_t w = __atomic_load_n(src + at / 8, __ATOMIC_RELAXED);
-    const size_t from = at % 8;
-    const size_t n = (8 - from < end - at) ? 8 - from : end - at;
-    memcpy(dst + (at - offset), (const char*)&w + from, n);
-    at += n;
-  }
-}
-
-/* The words of the slot's value that hold bytes [offset, offset + size), from
- * the whole image `value` (bytes past the item's end in its last word: zero,
- * as store_words leaves them). */
-static void store_word_range(slot_header* s, const void* value, size_t offset, size_t size) {
-  uint64_t* dst = (uint64_t*)(void*)(s + 1);
-  const char* src = (const char*)value;
-  const size_t end = offset + size;
-  if (size == 0) return;
-  for (size_t i = offset - offset % 8; i < end; i += 8) {
-    uint64_t w = 0;
-    memcpy(&w, src + i, i + 8 <= s->size ? 8 : s->size - i);
-    __atomic_store_n(dst + i / 8, w, __ATOMIC_RELAXED);
-  }
-}
-
-/* Takes the slot (even -> odd: one writer at a time); returns the even sequence it had. */
-static uint32_t take_slot(slot_header* s) {
-  uint32_t seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
-  for (;;) {
-    if ((seq & 1u) == 0 &&
-        atomic_compare_exchange_weak_explicit(&s->seq, &seq, seq + 1, memory_order_acquire, memory_order_relaxed)) {
-      break;
-    }
-    seq = atomic_load_explicit(&s->seq, memory_order_relaxed);
-  }
-  atomic_thread_fence(memory_order_release);
-  return seq;
-}
-
-static void release_slot(slot_header* s, uint32_t seq, int64_t stamp) {
-  __atomic_store_n(&s->stamp_ns, stamp, __ATOMIC_RELAXED);
-  atomic_store_explicit(&s->seq, seq + 2, memory_order_release);
-}
-
-static void write_slot(slot_header* s, const void* value, int64_t stamp) {
-  const uint32_t seq = take_slot(s);
-  store_words(s, value);
-  release_slot(s, seq, stamp);
-}
-
-/* The whole value (size = s->size, offset 0) or a part of it. */
+/* The whole value (size = s->size, offset 0) or a part of it; its age in ms. */
 static int read_slot_range(const slot_header* s, size_t offset, size_t size, void* value) {
-  for (;;) {
-    const uint32_t before = atomic_load_explicit(&s->seq, memory_order_acquire);
-    if (before & 1u) continue;
-    if (offset == 0 && size == s->size) {
-      load_words(s, value);
-    } else {
-      load_range(s, offset, size, value);
-    }
-    const int64_t stamp = __atomic_load_n(&s->stamp_ns, __ATOMIC_RELAXED);
-    atomic_thread_fence(memory_order_acquire);
-    if (atomic_load_explicit(&s->seq, memory_order_relaxed) == before) {
-      const int64_t age = (now_ns() - stamp) / 1000000;
-      return age < 0 ? 0 : (age > INT_MAX ? INT_MAX : (int)age);
-    }
-  }
+  const int64_t age = (now_ns() - read_slot_stamped(s, offset, size, value)) / 1000000;
+  return age < 0 ? 0 : (age > INT_MAX ? INT_MAX : (int)age);
 }
 
 static int parse_agent(void) {
@@ -663,11 +558,22 @@ static sem_t* frame_sem(int space) {
 RTDB_EXPORT int DB_signal_frame(int space) {
   const canhil_rtdb_table* t = table(0);
   if (t == NULL || space < 0 || space >= SETS * (int)t->n_agents) return -1;
-  sem_t* s = frame_sem(space);
-  if (s == NULL) return -1;
+  /* Opened once while this process has the space: its frame semaphore is
+   * removed only when the last process leaves the space (detach). */
+  const int kept = g_seg[space] != NULL;
+  sem_t* s = kept ? atomic_load(&g_signal_sem[space]) : NULL;
+  if (s == NULL) {
+    s = frame_sem(space);
+    if (s == NULL) return -1;
+    sem_t* none = NULL;
+    if (kept && !atomic_compare_exchange_strong(&g_signal_sem[space], &none, s)) {
+      sem_close(s); /* another thread kept its own first */
+      s = none;
+    }
+  }
   int value = 0;
   if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);
-  sem_close(s);
+  if (!kept) sem_close(s);
   return 0;
 }
 

@@ -485,4 +485,17 @@ TEST_F(Rtdb, VisionWakesTheAgent) {
   EXPECT_EQ(DB_wait_frame(20), 1);
 }
 
+TEST_F(Rtdb, AFrameSignalReachesAnAgentThatLeftAndCameBack) {
+  // The signalling side keeps its semaphore open while it has the space; the
+  // last one out of a space removes it, and a later agent gets a new one.
+  ASSERT_EQ(DB_init(), 0);
+  for (int i = 0; i < 3; ++i) DB_signal_frame(CAMBADA_1);
+  EXPECT_EQ(DB_wait_frame(20), 0);
+  EXPECT_EQ(DB_wait_frame(20), 1) << "three signals while busy wake once";
+  DB_free();
+  ASSERT_EQ(DB_init(), 0);
+  DB_signal_frame(CAMBADA_1);
+  EXPECT_EQ(DB_wait_frame(2000), 0) << "the new semaphore, not the one removed";
+}
+
 }  // namespace
