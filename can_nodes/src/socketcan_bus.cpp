@@ -259,7 +259,12 @@ void SocketCanBus::found_empty() {
 
 void SocketCanBus::note_drops(std::uint32_t absolute) const {
   // The kernel's per-socket drop counter (sk_drops) only grows, modulo 2^32.
-  stats_.rx_overflow += static_cast<std::uint32_t>(absolute - last_drop_count_);
+  // A frame's SO_RXQ_OVFL is the count when it was queued: one queued before
+  // drops that SO_MEMINFO has already told carries an older count, which
+  // adds nothing (read as new, it would add 2^32 less what it lags by).
+  const auto ahead = static_cast<std::int32_t>(absolute - last_drop_count_);
+  if (ahead <= 0) return;
+  stats_.rx_overflow += static_cast<std::uint32_t>(ahead);
   last_drop_count_ = absolute;
 }
 
