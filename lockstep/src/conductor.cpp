@@ -358,7 +358,10 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
       continue;
     }
     ++sleeps_;
-    const timespec a_while{0, 1'000'000};  // canhil's own condition may change without a board change
+    // canhil's own condition may change without a board change; what only
+    // `arrived` tells (the user-space bus's rounds) has no descriptor to wake
+    // the sleep, so it is asked again sooner.
+    const timespec a_while{0, arrived && fd_to_watch >= 0 ? 50'000 : 1'000'000};
     if (fd_to_watch >= 0) {
       // Only canhil's own condition is missing: it changes when a frame
       // arrives on canhil's sockets. The system call itself, not poll(): a
@@ -374,7 +377,7 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
 }
 
 bool Conductor::look_briefly(std::uint32_t seen, int ready_fd, const std::function<bool()>& arrived) const {
-  if (options_.spin <= Nanos{0}) return false;
+  if (options_.spin <= Nanos{0}) return ready_fd >= 0 && arrived && arrived();  // one look, in memory
   const Nanos until = wall_now() + options_.spin;
   const timespec at_once{0, 0};
   pollfd p{ready_fd, POLLIN, 0};

@@ -5,8 +5,9 @@
 // machine without a syslog daemon (most containers and CI runners) glibc
 // would try /dev/log at every message and, with LOG_CONS, write to the
 // console: a slow device shared by every process, and messages nobody reads.
-// With CANHIL_SYSLOG=system (`[external] syslog = "system"`), or in real
-// time (no lockstep), every call goes on to libc unchanged.
+// With CANHIL_SYSLOG=system (`[external] syslog = "system"`), in real time
+// (no lockstep) and in canhil's own process, messages go on to libc
+// unchanged; openlog, closelog and setlogmask always do too.
 #include <errno.h>
 #include <sys/syscall.h>
 #include <syslog.h>
@@ -30,20 +31,20 @@ const char* g_ident = nullptr;  // openlog's pointer, kept as glibc keeps it (th
 int g_options = 0;
 int g_mask = 0xff;
 
-// Whether syslog goes to the process's stderr: in lockstep, unless
-// CANHIL_SYSLOG says "system". Read once.
+// Whether syslog goes to the process's stderr: in a team's process in
+// lockstep (not canhil's own, where the shim conducts), unless CANHIL_SYSLOG
+// says "system". Read once.
 bool to_stderr() noexcept {
   static const bool system = [] {
     const char* v = std::getenv("CANHIL_SYSLOG");
     return v != nullptr && std::strcmp(v, "system") == 0;
   }();
-  return !system && shim::active();
+  return !system && shim::active() && !shim::conducting();
 }
 
-// One message, formatted with the caller's errno for %m, on stderr in one
-// write(2) past every preload's write().
-void to_log(int priority, const char* format, va_list arguments) noexcept {
-  const int saved = errno;
+// One message, formatted with the caller's errno (`saved`) for %m, on stderr
+// in one write(2) past every preload's write().
+void to_log(int priority, const char* format, va_list arguments, int saved) noexcept {
   const char* ident = nullptr;
   int options = 0;
   {
@@ -72,14 +73,16 @@ void to_log(int priority, const char* format, va_list arguments) noexcept {
 #pragma GCC visibility push(default)
 extern "C" {
 
+// openlog, closelog and setlogmask are kept here and passed on to libc too,
+// so that a process the run lets go on in real time logs as it asked.
 void openlog(const char* ident, int options, int facility) {
   CANHIL_REAL(openlog);
   {
     const shim::SpinLocked held(g_lock);
-    g_ident = ident;
+    if (ident != nullptr) g_ident = ident;  // glibc keeps the ident it had
     g_options = options;
   }
-  if (!to_stderr()) real_openlog(ident, options, facility);
+  real_openlog(ident, options, facility);
 }
 
 void closelog() {
@@ -89,27 +92,26 @@ void closelog() {
     g_ident = nullptr;
     g_options = 0;
   }
-  if (!to_stderr()) real_closelog();
+  real_closelog();
 }
 
 int setlogmask(int mask) {
   CANHIL_REAL(setlogmask);
-  int old = 0;
   {
     const shim::SpinLocked held(g_lock);
-    old = g_mask;
     if (mask != 0) g_mask = mask;
   }
-  if (!to_stderr()) return real_setlogmask(mask);
-  return old;
+  return real_setlogmask(mask);
 }
 
 void vsyslog(int priority, const char* format, va_list arguments) {
+  const int saved = errno;  // before anything the shim does may change it
   if (to_stderr()) {
-    to_log(priority, format, arguments);
+    to_log(priority, format, arguments, saved);
     return;
   }
   CANHIL_REAL(vsyslog);
+  errno = saved;
   real_vsyslog(priority, format, arguments);
 }
 
@@ -123,12 +125,14 @@ void syslog(int priority, const char* format, ...) {
 // glibc's fortified forms (_FORTIFY_SOURCE), which a program built so calls instead.
 // NOLINTNEXTLINE(bugprone-reserved-identifier)
 void __vsyslog_chk(int priority, int flag, const char* format, va_list arguments) {
+  const int saved = errno;
   if (to_stderr()) {
-    to_log(priority, format, arguments);
+    to_log(priority, format, arguments, saved);
     return;
   }
   using Real = void (*)(int, int, const char*, va_list);
   static const auto real = canhil::preload::next_symbol<Real>("__vsyslog_chk");
+  errno = saved;
   real(priority, flag, format, arguments);
 }
 

@@ -57,7 +57,9 @@ static int g_shmid[SETS * CANHIL_RTDB_MAX_AGENTS];
 static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
 static uint64_t g_sizes[CANHIL_RTDB_MAX_AGENTS];
 static sem_t* g_frame_sem = NULL; /* DB_wait_frame's, of g_me */
-/* DB_signal_frame's, by memory space, opened once (threads may signal at once). */
+/* DB_signal_frame's, by memory space, opened once (threads may signal at
+ * once; as every call, none may overlap the DB_free or DB_free_all that
+ * leaves the space, which closes it). */
 static sem_t* _Atomic g_signal_sem[SETS * CANHIL_RTDB_MAX_AGENTS];
 
 static int verbose(void) {

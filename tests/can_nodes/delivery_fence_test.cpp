@@ -69,7 +69,6 @@ TEST(DeliveryFence, OnTheKernelItCountsItsOwnInterfaceOnTheUserSpaceBusTheBusTel
   EXPECT_EQ(fenced, 3u) << "ids 0x000, 0x7FF and 0x200, each once";
   fence.drain();
   EXPECT_TRUE(fence.reached(0, 3));
-  EXPECT_TRUE(fence.reached(1, 0)) << "vcan1 carried nothing";
   // On the kernel's, the fence counts what its sockets read: a fourth frame
   // it never saw has not reached it (the bus's tells of rounds, not counts).
   if (!bus_tells) {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <thread>
 
 #include "canhil/can_nodes/clock.hpp"
@@ -268,6 +269,10 @@ TEST(SocketCan, OnTheUserSpaceBusAReadItsCountsSayIsEmptyMakesNoSystemCall) {
       return ::ioctl(tx->fd(), SIOCSIFFLAGS, &r);
     };
     ASSERT_EQ(set_up(false), 0);
+    struct BackUp {  // vcan1 up again however this test ends: the suite goes on on it
+      std::function<int(bool)> set;
+      ~BackUp() { set(true); }
+    } back_up{set_up};
     while (rx->waiting() != std::optional<bool>(true) && std::chrono::steady_clock::now() < give_up) {
       std::this_thread::yield();
     }
@@ -275,7 +280,6 @@ TEST(SocketCan, OnTheUserSpaceBusAReadItsCountsSayIsEmptyMakesNoSystemCall) {
     EXPECT_FALSE(rx->receive());
     EXPECT_EQ(rx->state(), BusState::kDown);
     EXPECT_EQ(rx->waiting(), std::optional<bool>(false));
-    ASSERT_EQ(set_up(true), 0);
   }
 }
 

@@ -239,12 +239,13 @@ int semaphore_post(const char* name) {
 }
 
 // A team's logging through syslog(3): plain, with %m, under a mask, the
-// fortified form, after closelog; then a sleep, so that the messages are
-// logged in lockstep, at a virtual instant.
-int logs() {
+// fortified form, after closelog; after a sleep, so that the messages are
+// logged in lockstep, at a virtual instant. `perror`: LOG_PERROR too (glibc
+// then also writes each message it gets on stderr).
+int logs(bool perror) {
   const timespec a_while{0, 100'000'000};
   nanosleep(&a_while, nullptr);
-  openlog("teamlog", LOG_PID, LOG_USER);
+  openlog("teamlog", LOG_PID | (perror ? LOG_PERROR : 0), LOG_USER);
   syslog(LOG_INFO, "cycle %d", 42);
   errno = ENOENT;
   syslog(LOG_WARNING, "no map: %m");
@@ -275,9 +276,9 @@ int main(int argc, char** argv) {
   if (mode == "sleeper") return sleeper();
   if (mode == "sem-wait" && argc > 2) return semaphore_wait(argv[2]);
   if (mode == "sem-post" && argc > 2) return semaphore_post(argv[2]);
-  if (mode == "syslog") return logs();
+  if (mode == "syslog") return logs(argc > 2 && std::strcmp(argv[2], "perror") == 0);
   std::fprintf(stderr,
                "usage: lockstep_client clocks|fifo PATH|timerfd|thread|spin|compute MS|blocked|patient|hook|"
-               "sigtimedwait|sleeper|sem-wait NAME|sem-post NAME|syslog\n");
+               "sigtimedwait|sleeper|sem-wait NAME|sem-post NAME|syslog [perror]\n");
   return 2;
 }

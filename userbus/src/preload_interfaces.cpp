@@ -86,10 +86,11 @@ int canhil_userbus_interface(const char* name) {
 }
 
 /// The broker's rounds (State::rounds) on the bus this process runs on, or
-/// 0 without one (canhil's delivery fence asks, through dlsym).
+/// 1, a round that never ends, without one (canhil's delivery fence asks,
+/// through dlsym: a bus gone delivers nothing).
 unsigned long long canhil_userbus_rounds() {
   const canhil::userbus::State* state = bus::bus_state(false);
-  return state != nullptr ? state->rounds.load(std::memory_order_acquire) : 0;
+  return state != nullptr ? state->rounds.load(std::memory_order_acquire) : 1;
 }
 
 /// How many records the broker has given bus socket `fd` that no read has

@@ -50,7 +50,8 @@ class DeliveryFence {
   /// The sockets fencing interface `index`: four on the kernel's SocketCAN,
   /// none where the bus says when frames are delivered.
   std::size_t sockets(std::size_t index) const { return interfaces_.at(index).sockets.size(); }
-  /// A descriptor readable while a frame waits at the fence (for poll).
+  /// A descriptor readable while a frame waits at the kernel's fence (for
+  /// poll); on the user-space bus never readable (reached() asks the bus).
   int descriptor() const noexcept { return epoll_; }
   /// Whether the fence can tell about `frame` (a standard-id data frame).
   static bool counts(const frames::CanFrame& frame) noexcept;

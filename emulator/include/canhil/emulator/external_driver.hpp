@@ -96,7 +96,8 @@ class ExternalDriver {
   can_nodes::DeliveryFence fence_;                                   // opened before any other socket
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
-  int arrivals_ = -1;  // epoll: readable when a frame reaches an observer or the fence (wait_quiet's ready_fd)
+  // epoll: readable when a frame reaches an observer or the kernel's fence (wait_quiet's ready_fd)
+  int arrivals_ = -1;
   // On the user-space bus: whether a frame waits at an observer, or the fence
   // has what in_flight() last waited for, from the bus's counts (wait_quiet's arrived).
   std::function<bool()> arrived_;

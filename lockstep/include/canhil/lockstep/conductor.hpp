@@ -124,7 +124,9 @@ class Conductor {
   /// frame arrives instead of at the next millisecond. `arrived`, when given,
   /// says from memory whether something `also()` waits for may have come
   /// (canhil's sockets on its user-space bus): the looks before sleeping ask
-  /// it instead of polling `ready_fd`, a system call each look.
+  /// it instead of polling `ready_fd`, a system call each look (once with no
+  /// looks, ConductorOptions::spin 0), and a sleep on `ready_fd` lasts 50 us
+  /// at most, since what only `arrived` tells makes nothing readable.
   std::string wait_quiet(const std::function<std::string()>& also, const std::string& waiting_for,
                          std::optional<Nanos> limit = std::nullopt, int ready_fd = -1,
                          const std::function<bool()>& arrived = {});
