@@ -65,6 +65,10 @@ Alone physics_alone(const emulator::Scenario& s, double seconds, Robots robots =
 struct Split {
   double total_s = 0;
   emulator::StepTiming timing;
+
+  double physics_s() const { return to_seconds(timing.physics.cpu); }
+  double vision_s() const { return to_seconds(timing.vision); }
+  double rest_s() const { return total_s - physics_s() - vision_s(); }
 };
 
 // One robot set in virtual time, everything on, as `canhil run` without
@@ -110,9 +114,9 @@ double match_half(const emulator::Scenario& s, double seconds,
 // robots standing and then driving.
 void print_split(const char* label, const Split& split, const Alone& standing, const Alone& driving, double seconds) {
   const emulator::PhysicsTiming& physics = split.timing.physics;
-  const double physics_s = to_seconds(physics.cpu);
-  const double vision_s = to_seconds(split.timing.vision);
-  const double rest = split.total_s - physics_s - vision_s;
+  const double physics_s = split.physics_s();
+  const double vision_s = split.vision_s();
+  const double rest = split.rest_s();
   const auto steps = static_cast<double>(std::max<std::uint64_t>(1, physics.steps));
   const auto percent = [&split](double s) { return 100 * s / split.total_s; };
   const auto per_step = [&](const Alone& a) { return seconds / a.factor / steps * 1e6; };
@@ -127,11 +131,9 @@ void print_split(const char* label, const Split& split, const Alone& standing, c
 // What a target leaves of the run for everything but its physics (the
 // physics as it ran), next to what the vision and the rest took.
 void print_budget(const char* label, const Split& split, const Alone& alone, double seconds, double target) {
-  const double physics_s = to_seconds(split.timing.physics.cpu);
-  const double vision_s = to_seconds(split.timing.vision);
-  const double left = seconds / alone.factor / target - physics_s;
-  std::printf("    %-30s %6.3f s; its vision took %.3f s and the rest %.3f s (target %.2f)\n", label, left, vision_s,
-              split.total_s - physics_s - vision_s, target);
+  const double left = seconds / alone.factor / target - split.physics_s();
+  std::printf("    %-30s %6.3f s; its vision took %.3f s and the rest %.3f s (target %.2f)\n", label, left,
+              split.vision_s(), split.rest_s(), target);
 }
 
 // The most a run could reach of its physics alone if nothing cost anything
@@ -140,8 +142,8 @@ void print_budget(const char* label, const Split& split, const Alone& alone, dou
 // cannot do without.
 void print_ceiling(const char* label, const Split& split, const Alone& alone, double seconds, double target) {
   const double alone_s = seconds / alone.factor;  // the same world's CPU time alone
-  const double physics_s = to_seconds(split.timing.physics.cpu);
-  const double with_vision_s = physics_s + to_seconds(split.timing.vision);
+  const double physics_s = split.physics_s();
+  const double with_vision_s = physics_s + split.vision_s();
   std::printf(
       "    %-30s its physics %.2f times its world alone's: %.2f of physics alone; with its vision, %.2f "
       "(target %.2f)\n",
@@ -187,15 +189,14 @@ bool bench_match(const std::optional<std::string>& config, double seconds,
   const auto keep_fastest = [](Split& best, const Split& next) {
     if (best.timing.physics.steps == 0 || next.total_s < best.total_s) best = next;
   };
+  const auto keep_faster = [](Alone& best, const Alone& next) {
+    if (next.factor > best.factor) best = next;
+  };
   for (int round = 0; round < kRounds; ++round) {
-    const Alone five_alone = physics_alone(five, seconds);
-    if (five_alone.factor > reference.factor) reference = five_alone;
-    const Alone ten_alone = physics_alone(ten, seconds);
-    if (ten_alone.factor > reference_ten.factor) reference_ten = ten_alone;
-    const Alone five_drives = physics_alone(five, seconds, Robots::kDriving);
-    if (five_drives.factor > five_driving.factor) five_driving = five_drives;
-    const Alone ten_drives = physics_alone(ten, seconds, Robots::kDriving);
-    if (ten_drives.factor > ten_driving.factor) ten_driving = ten_drives;
+    keep_faster(reference, physics_alone(five, seconds));
+    keep_faster(reference_ten, physics_alone(ten, seconds));
+    keep_faster(five_driving, physics_alone(five, seconds, Robots::kDriving));
+    keep_faster(ten_driving, physics_alone(ten, seconds, Robots::kDriving));
     five_on = std::max(five_on, everything_on(five, seconds, messages));
     ten_on = std::max(ten_on, match_half(ten, seconds, messages));
     Split timed;

@@ -1,6 +1,5 @@
 #include "canhil/can_nodes/delivery_fence.hpp"
 
-#include <dlfcn.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
@@ -8,11 +7,13 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
 
 #include "canhil/base/errno_text.hpp"
+#include "canhil/base/preload.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
@@ -79,8 +80,7 @@ std::size_t DeliveryFence::add(const std::string& iface) {
   const std::size_t index = interfaces_.size();
   if (on_user_space_bus(iface)) {
     // The bus's preload, in this process; canhil does not link it.
-    using Rounds = unsigned long long (*)();
-    rounds_ = reinterpret_cast<Rounds>(dlsym(RTLD_DEFAULT, "canhil_userbus_rounds"));
+    rounds_ = preload::any_symbol<unsigned long long (*)()>("canhil_userbus_rounds");
     if (rounds_ == nullptr) {
       throw SetupError(iface +
                        " is on canhil's user-space bus, but its preload cannot tell when frames are "
@@ -90,7 +90,6 @@ std::size_t DeliveryFence::add(const std::string& iface) {
     return index;
   }
   Interface& added = interfaces_.emplace_back();
-  has_sockets_ = true;
   for (std::uint32_t first = 0; first < kStandardIds; first += kIdsPerSocket) {
     const int fd = open_fence_socket(iface, ifindex, first);
     added.sockets.push_back(fd);
@@ -106,7 +105,8 @@ std::size_t DeliveryFence::add(const std::string& iface) {
 }
 
 void DeliveryFence::drain() {
-  if (!has_sockets_) return;  // only interfaces of the user-space bus, whose reached() asks the bus
+  // Only interfaces of the user-space bus, whose reached() asks the bus: nothing to read.
+  if (std::all_of(interfaces_.begin(), interfaces_.end(), [](const Interface& i) { return i.sockets.empty(); })) return;
   std::array<epoll_event, 16> ready{};
   // Only counts matter: the frames are read in batches and forgotten.
   std::array<can_frame, 64> frames{};

@@ -113,11 +113,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       for (const auto& o : observers_) {
         if (o->waiting() == true) return true;
       }
-      if (!waiting_on_fence_) return false;
-      for (std::size_t r = 0; r < fenced_.size(); ++r) {
-        if (!fence_.reached(r, fenced_[r])) return false;
-      }
-      return true;
+      return waiting_on_fence_ && !unfenced();
     };
   }
   lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
@@ -171,13 +167,18 @@ std::string ExternalDriver::in_flight(std::uint64_t sent) {
   if (observed_ < sent) return "the frames sent to reach the bus";
   // The observer may have a frame that later sockets have not yet: the fence says when all have it.
   fence_.drain();
-  for (std::size_t r = 0; r < fenced_.size(); ++r) {
-    if (!fence_.reached(r, fenced_[r])) {
-      waiting_on_fence_ = true;
-      return "the frames on " + session_.rig(r).interface + " to reach every socket";
-    }
+  if (const auto r = unfenced()) {
+    waiting_on_fence_ = true;
+    return "the frames on " + session_.rig(*r).interface + " to reach every socket";
   }
   return {};
+}
+
+std::optional<std::size_t> ExternalDriver::unfenced() {
+  for (std::size_t r = 0; r < fenced_.size(); ++r) {
+    if (!fence_.reached(r, fenced_[r])) return r;
+  }
+  return std::nullopt;
 }
 
 std::size_t ExternalDriver::settle() {

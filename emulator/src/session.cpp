@@ -250,10 +250,13 @@ void Session::after_step(Nanos now) {
     if (rig.shared != nullptr) rig.shared->publish();
     world_->robot(rig.index).drain(rig.faults->battery_drain_until(now));
   }
-  if (vision_ && options_.time_steps) {
-    step_timing_.vision += thread_cpu_of([this] { vision_->on_step(*world_); });
-  } else if (vision_) {
-    vision_->on_step(*world_);
+  if (vision_) {
+    const auto see = [this] { vision_->on_step(*world_); };
+    if (options_.time_steps) {
+      step_timing_.vision += thread_cpu_of(see);
+    } else {
+      see();
+    }
   }
   for (std::size_t t = 0; t < laptops_.size(); ++t) laptops_[t]->step(now, team_coaches_[t]);
   log_world(now);

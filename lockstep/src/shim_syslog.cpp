@@ -68,6 +68,18 @@ void to_log(int priority, const char* format, va_list arguments, int saved) noex
   errno = saved;
 }
 
+// A message of vsyslog or __vsyslog_chk: written here when it goes to the
+// process's stderr (true); else false, errno as the caller left it, for libc.
+bool logged_here(int priority, const char* format, va_list arguments) noexcept {
+  const int saved = errno;  // before anything the shim does may change it
+  if (to_stderr()) {
+    to_log(priority, format, arguments, saved);
+    return true;
+  }
+  errno = saved;
+  return false;
+}
+
 }  // namespace
 
 #pragma GCC visibility push(default)
@@ -105,13 +117,8 @@ int setlogmask(int mask) {
 }
 
 void vsyslog(int priority, const char* format, va_list arguments) {
-  const int saved = errno;  // before anything the shim does may change it
-  if (to_stderr()) {
-    to_log(priority, format, arguments, saved);
-    return;
-  }
+  if (logged_here(priority, format, arguments)) return;
   CANHIL_REAL(vsyslog);
-  errno = saved;
   real_vsyslog(priority, format, arguments);
 }
 
@@ -125,14 +132,9 @@ void syslog(int priority, const char* format, ...) {
 // glibc's fortified forms (_FORTIFY_SOURCE), which a program built so calls instead.
 // NOLINTNEXTLINE(bugprone-reserved-identifier)
 void __vsyslog_chk(int priority, int flag, const char* format, va_list arguments) {
-  const int saved = errno;
-  if (to_stderr()) {
-    to_log(priority, format, arguments, saved);
-    return;
-  }
+  if (logged_here(priority, format, arguments)) return;
   using Real = void (*)(int, int, const char*, va_list);
   static const auto real = canhil::preload::next_symbol<Real>("__vsyslog_chk");
-  errno = saved;
   real(priority, flag, format, arguments);
 }
 

@@ -56,11 +56,11 @@ static void* g_seg[SETS * CANHIL_RTDB_MAX_AGENTS]; /* attached segments, by memo
 static int g_shmid[SETS * CANHIL_RTDB_MAX_AGENTS];
 static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
 static uint64_t g_sizes[CANHIL_RTDB_MAX_AGENTS];
-static sem_t* g_frame_sem = NULL; /* DB_wait_frame's, of g_me */
-/* DB_signal_frame's, by memory space, opened once (threads may signal at
- * once; as every call, none may overlap the DB_free or DB_free_all that
- * leaves the space, which closes it). */
-static sem_t* _Atomic g_signal_sem[SETS * CANHIL_RTDB_MAX_AGENTS];
+/* The frame semaphores of the spaces this process has, by memory space,
+ * opened once (kept_frame_sem; threads may signal at once; as every call,
+ * none may overlap the DB_free or DB_free_all that leaves the space, which
+ * closes it). */
+static sem_t* _Atomic g_frame_sems[SETS * CANHIL_RTDB_MAX_AGENTS];
 
 static int verbose(void) {
   const char* v = getenv("RTDB_VERBOSE");
@@ -315,8 +315,8 @@ static void frame_sem_name(int space, char* name, size_t size) {
 }
 
 static void detach(int space) {
-  sem_t* signal_sem = atomic_exchange(&g_signal_sem[space], NULL);
-  if (signal_sem != NULL) sem_close(signal_sem);
+  sem_t* frames = atomic_exchange(&g_frame_sems[space], NULL);
+  if (frames != NULL) sem_close(frames);
   if (g_seg[space] == NULL) return;
   shmdt(g_seg[space]);
   g_seg[space] = NULL;
@@ -377,10 +377,6 @@ RTDB_EXPORT int DB_init(void) {
 
 RTDB_EXPORT void DB_free(void) {
   if (g_me < 0 || --g_me_nesting > 0) return;
-  if (g_frame_sem != NULL) {
-    sem_close(g_frame_sem);
-    g_frame_sem = NULL;
-  }
   if (g_all[set_of(g_me)] == 0) detach(g_me);
   g_me = -1;
 }
@@ -557,22 +553,27 @@ static sem_t* frame_sem(int space) {
   return s == SEM_FAILED ? NULL : s;
 }
 
+/* The frame semaphore of a space this process has, opened once: it is
+ * removed only when the last process leaves the space (detach). */
+static sem_t* kept_frame_sem(int space) {
+  sem_t* s = atomic_load(&g_frame_sems[space]);
+  if (s != NULL) return s;
+  s = frame_sem(space);
+  if (s == NULL) return NULL;
+  sem_t* none = NULL;
+  if (!atomic_compare_exchange_strong(&g_frame_sems[space], &none, s)) {
+    sem_close(s); /* another thread kept its own first */
+    s = none;
+  }
+  return s;
+}
+
 RTDB_EXPORT int DB_signal_frame(int space) {
   const canhil_rtdb_table* t = table(0);
   if (t == NULL || space < 0 || space >= SETS * (int)t->n_agents) return -1;
-  /* Opened once while this process has the space: its frame semaphore is
-   * removed only when the last process leaves the space (detach). */
   const int kept = g_seg[space] != NULL;
-  sem_t* s = kept ? atomic_load(&g_signal_sem[space]) : NULL;
-  if (s == NULL) {
-    s = frame_sem(space);
-    if (s == NULL) return -1;
-    sem_t* none = NULL;
-    if (kept && !atomic_compare_exchange_strong(&g_signal_sem[space], &none, s)) {
-      sem_close(s); /* another thread kept its own first */
-      s = none;
-    }
-  }
+  sem_t* s = kept ? kept_frame_sem(space) : frame_sem(space);
+  if (s == NULL) return -1;
   int value = 0;
   if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);
   if (!kept) sem_close(s);
@@ -581,11 +582,12 @@ RTDB_EXPORT int DB_signal_frame(int space) {
 
 RTDB_EXPORT int DB_wait_frame(int timeout_ms) {
   if (g_me < 0) return -1;
-  if (g_frame_sem == NULL && (g_frame_sem = frame_sem(g_me)) == NULL) return -1;
+  sem_t* const frames = kept_frame_sem(g_me);
+  if (frames == NULL) return -1;
   int r;
   if (timeout_ms < 0) {
     do {
-      r = sem_wait(g_frame_sem);
+      r = sem_wait(frames);
     } while (r < 0 && errno == EINTR);
   } else {
     struct timespec deadline;
@@ -597,12 +599,12 @@ RTDB_EXPORT int DB_wait_frame(int timeout_ms) {
       deadline.tv_nsec -= 1000000000L;
     }
     do {
-      r = sem_timedwait(g_frame_sem, &deadline);
+      r = sem_timedwait(frames, &deadline);
     } while (r < 0 && errno == EINTR);
     if (r < 0 && errno == ETIMEDOUT) return 1;
   }
   if (r < 0) return -1;
-  while (sem_trywait(g_frame_sem) == 0) {
+  while (sem_trywait(frames) == 0) {
   } /* several posts wake once */
   return 0;
 }

@@ -322,29 +322,43 @@ TEST(Conductor, CanhilsOwnConditionIsWaitedForAndNamed) {
       "on something canhil will not give)");
 }
 
+// canhil's own socket in the waits below (two connected datagram sockets,
+// closed with it), and a conductor that looks for `spin` before it sleeps.
+struct SocketPair {
+  int ends[2] = {-1, -1};
+  SocketPair() { EXPECT_EQ(socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, ends), 0); }
+  ~SocketPair() {
+    close(ends[0]);
+    close(ends[1]);
+  }
+  SocketPair(const SocketPair&) = delete;
+  SocketPair& operator=(const SocketPair&) = delete;
+};
+
+ConductorOptions looking_for(Nanos spin, Nanos answer_limit) {
+  ConductorOptions options;
+  options.answer_limit = answer_limit;
+  options.spin = spin;
+  return options;
+}
+
 TEST(Conductor, ItLooksForAFrameOnItsSocketBeforeItSleeps) {
   // canhil's own condition: a frame in flight, written 20 ms into the wait.
   const auto wait_for_a_frame = [](Nanos spin, std::uint64_t* answered, std::uint64_t* slept) {
-    int ends[2];
-    ASSERT_EQ(socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, ends), 0);
-    ConductorOptions options;
-    options.answer_limit = 30s;
-    options.spin = spin;
-    Conductor conductor(options);
+    const SocketPair socket;
+    Conductor conductor(looking_for(spin, 30s));
     std::thread writer([&] {
       std::this_thread::sleep_for(20ms);
-      ASSERT_EQ(write(ends[1], "x", 1), 1);
+      ASSERT_EQ(write(socket.ends[1], "x", 1), 1);
     });
     const auto frame_here = [&] {
-      pollfd p{ends[0], POLLIN, 0};
+      pollfd p{socket.ends[0], POLLIN, 0};
       return poll(&p, 1, 0) > 0 ? std::string() : std::string("the frame");
     };
-    EXPECT_EQ(conductor.wait_quiet(frame_here, "the frame at 10 ms", std::nullopt, ends[0]), "");
+    EXPECT_EQ(conductor.wait_quiet(frame_here, "the frame at 10 ms", std::nullopt, socket.ends[0]), "");
     writer.join();
     *answered = conductor.looks_answered();
     *slept = conductor.sleeps();
-    close(ends[0]);
-    close(ends[1]);
   };
   std::uint64_t answered = 0;
   std::uint64_t slept = 0;
@@ -365,21 +379,15 @@ TEST(Conductor, ItsLooksAskWhatArrivedInMemoryInsteadOfPollingWhenTold) {
   // limit with canhil still waiting. Looking, the third look answers; not
   // looking (spin 0), each turn asks once and sleeps a short while.
   for (const Nanos spin : {Nanos(10s), Nanos{0}}) {
-    int ends[2];
-    ASSERT_EQ(socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, ends), 0);
-    ConductorOptions options;
-    options.answer_limit = 2s;
-    options.spin = spin;
-    Conductor conductor(options);
+    const SocketPair socket;
+    Conductor conductor(looking_for(spin, 2s));
     int asked = 0;
     const auto arrived = [&] { return ++asked >= 3; };
     const auto here = [&] { return asked >= 3 ? std::string() : std::string("the frame"); };
-    EXPECT_EQ(conductor.wait_quiet(here, "the frame at 10 ms", std::nullopt, ends[0], arrived), "");
+    EXPECT_EQ(conductor.wait_quiet(here, "the frame at 10 ms", std::nullopt, socket.ends[0], arrived), "");
     EXPECT_EQ(asked, 3);
     EXPECT_EQ(conductor.looks_answered(), 1U);
     EXPECT_EQ(conductor.sleeps(), spin > Nanos{0} ? 0U : 2U);
-    close(ends[0]);
-    close(ends[1]);
   }
 }
 

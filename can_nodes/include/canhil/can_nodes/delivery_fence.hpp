@@ -67,7 +67,6 @@ class DeliveryFence {
   };
   std::vector<Interface> interfaces_;
   int epoll_ = -1;
-  bool has_sockets_ = false;  // some interface is the kernel's
   // The user-space bus's rounds (canhil_userbus_rounds in its preload), once
   // an interface is on it.
   unsigned long long (*rounds_)() = nullptr;

@@ -14,6 +14,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -80,6 +81,9 @@ class ExternalDriver {
   /// What is still on its way: empty once every frame sent so far has reached
   /// every socket (the observers and the fence agree).
   std::string in_flight(std::uint64_t sent);
+  /// The first robot whose observed frames the fence does not yet say are
+  /// in every socket of its interface; none when every one's are.
+  std::optional<std::size_t> unfenced();
   std::uint64_t canhil_sent() const;
   /// Lets the processes see this instant and waits until they are done with
   /// it; returns how many frames they sent since the last time.
