@@ -28,17 +28,17 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
   std::int32_t ifindex = s.ifindex;
   if (to != nullptr) {
     sockaddr_can a{};
-    if (to_size < kMinName) return errno = EINVAL, -1;
-    if (!copy_in(&a, to, kMinName)) return errno = EFAULT, -1;
-    if (a.can_family != AF_CAN) return errno = EINVAL, -1;
+    if (to_size < kMinName) return fail(EINVAL);
+    if (!copy_in(&a, to, kMinName)) return fail(EFAULT);
+    if (a.can_family != AF_CAN) return fail(EINVAL);
     ifindex = a.can_ifindex;
   }
   Interface* iface = interface_at(ifindex);
-  if (iface == nullptr) return errno = ENXIO, -1;
+  if (iface == nullptr) return fail(ENXIO);
   std::size_t size = 0;
   for (std::size_t k = 0; k < iovcnt; ++k) size += iov[k].iov_len;
   const bool fd_frames = (s.flags & kFdFrames) != 0 && iface->mtu.load(std::memory_order_relaxed) == CANFD_MTU;
-  if (size != CAN_MTU && !(fd_frames && size == CANFD_MTU)) return errno = EINVAL, -1;
+  if (size != CAN_MTU && !(fd_frames && size == CANFD_MTU)) return fail(EINVAL);
   TxRecord r{};
   r.ifindex = ifindex;
   r.size = static_cast<std::uint32_t>(size);
@@ -56,11 +56,11 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     // Copied here first: a downed interface answers a bad length first (can_send's order).
     std::size_t at = 0;
     for (std::size_t k = 0; k < iovcnt; ++k) {
-      if (!copy_in(r.frame + at, iov[k].iov_base, iov[k].iov_len)) return errno = EFAULT, -1;
+      if (!copy_in(r.frame + at, iov[k].iov_base, iov[k].iov_len)) return fail(EFAULT);
       at += iov[k].iov_len;
     }
-    if (r.frame[offsetof(can_frame, len)] > max_length) return errno = EINVAL, -1;
-    if (iface->up.load(std::memory_order_relaxed) == 0) return errno = ENETDOWN, -1;
+    if (r.frame[offsetof(can_frame, len)] > max_length) return fail(EINVAL);
+    if (iface->up.load(std::memory_order_relaxed) == 0) return fail(ENETDOWN);
     parts[0] = {&r, kTxHeader + size};
     m.msg_iovlen = 1;
   }
@@ -87,7 +87,7 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     std::size_t at = offsetof(can_frame, len);
     for (std::size_t k = 0; k < iovcnt; ++k) {
       if (at < iov[k].iov_len) {
-        if (static_cast<const unsigned char*>(iov[k].iov_base)[at] > max_length) return errno = EINVAL, -1;
+        if (static_cast<const unsigned char*>(iov[k].iov_base)[at] > max_length) return fail(EINVAL);
         break;
       }
       at -= iov[k].iov_len;
@@ -116,8 +116,8 @@ void put_cmsg(msghdr* m, cmsghdr*& at, int level, int type, const void* data, st
 /// raw_recvmsg for a bus socket: one frame into `m`'s buffers, its interface,
 /// flags, time and drops.
 ssize_t receive_frame(int fd, Socket& s, msghdr* m, int flags) {
-  if ((flags & MSG_ERRQUEUE) != 0) return errno = EAGAIN, -1;  // nothing is ever on it (no transmit stamps)
-  if (const int e = s.pending_error.exchange(0)) return errno = e, -1;
+  if ((flags & MSG_ERRQUEUE) != 0) return fail(EAGAIN);  // nothing is ever on it (no transmit stamps)
+  if (const int e = s.pending_error.exchange(0)) return fail(e);
   // The record's header here, its frame straight into the program's buffers
   // (the kernel's copy: a bad buffer is its EFAULT, a short one MSG_TRUNC).
   RxRecord r{};
@@ -136,10 +136,10 @@ ssize_t receive_frame(int fd, Socket& s, msghdr* m, int flags) {
   CANHIL_REAL(recvmsg);
   const ssize_t n = real_recvmsg(fd, &in, flags & (MSG_DONTWAIT | MSG_PEEK));
   if (n < 0) return -1;
-  if (n == 0) return errno = ENODEV, -1;  // the broker went away with the bus
+  if (n == 0) return fail(ENODEV);  // the broker went away with the bus
   if ((flags & MSG_PEEK) == 0) s.taken.fetch_add(1, std::memory_order_relaxed);
-  if (static_cast<std::size_t>(n) < kRxHeader) return errno = EIO, -1;
-  if (r.error != 0) return errno = r.error, -1;
+  if (static_cast<std::size_t>(n) < kRxHeader) return fail(EIO);
+  if (r.error != 0) return fail(r.error);
   std::size_t size = static_cast<std::size_t>(n) - kRxHeader;
   m->msg_flags = (in.msg_flags & MSG_TRUNC) != 0 ? MSG_TRUNC : 0;
   if (!direct) {
@@ -152,7 +152,7 @@ ssize_t receive_frame(int fd, Socket& s, msghdr* m, int flags) {
     std::size_t at = 0;
     for (std::size_t k = 0; k < static_cast<std::size_t>(m->msg_iovlen) && at < size; ++k) {
       const std::size_t part = std::min(m->msg_iov[k].iov_len, size - at);
-      if (!copy_out(m->msg_iov[k].iov_base, r.frame + at, part)) return errno = EFAULT, -1;
+      if (!copy_out(m->msg_iov[k].iov_base, r.frame + at, part)) return fail(EFAULT);
       at += part;
     }
   }
@@ -266,7 +266,7 @@ int sendmmsg(int fd, mmsghdr* v, unsigned int n, int flags) {
 
 ssize_t writev(int fd, const iovec* iov, int iovcnt) {
   if (auto* s = bus::socket_of(fd)) {
-    if (iovcnt < 0) return errno = EINVAL, -1;
+    if (iovcnt < 0) return bus::fail(EINVAL);
     return bus::send_frame(fd, *s, iov, static_cast<std::size_t>(iovcnt), nullptr, 0, 0);
   }
   CANHIL_REAL(writev);
@@ -359,7 +359,7 @@ int recvmmsg(int fd, mmsghdr* v, unsigned int n, int flags, timespec* timeout) {
 
 ssize_t readv(int fd, const iovec* iov, int iovcnt) {
   if (auto* s = bus::socket_of(fd)) {
-    if (iovcnt < 0) return errno = EINVAL, -1;
+    if (iovcnt < 0) return bus::fail(EINVAL);
     msghdr m{};
     m.msg_iov = const_cast<iovec*>(iov);
     m.msg_iovlen = static_cast<std::size_t>(iovcnt);
