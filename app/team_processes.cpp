@@ -52,11 +52,17 @@ std::string program_of(const std::string& command) {
   return word.empty() ? std::string("process") : word;
 }
 
-// `second_set`: a process of the second team (its RTDB set: SECOND_RTDB=1).
-// `syslog`: where its syslog messages go (ExternalSide::syslog, for the shim).
-// `log`: its standard output and error (2: canhil's stderr for both), or -1 to keep canhil's.
-pid_t start(const std::string& command, const std::vector<std::string>& environment, int agent, bool second_set,
-            const std::string& syslog, const std::string& path, int log) {
+// What one of a team's processes is started with, beyond what all share.
+struct Launch {
+  const std::string& command;
+  int agent;                  // AGENT
+  bool second_set;            // of the second team (its RTDB set: SECOND_RTDB=1)
+  const std::string& syslog;  // where its syslog messages go (ExternalSide::syslog, for the shim)
+  int log;                    // its stdout and stderr (2: canhil's stderr for both), or -1 to keep canhil's
+};
+
+// Starts `launch` with `environment` (NAME=value each) and the search `path`.
+pid_t start(const Launch& launch, const std::vector<std::string>& environment, const std::string& path) {
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid != 0) return pid;
@@ -68,9 +74,9 @@ pid_t start(const std::string& command, const std::vector<std::string>& environm
     const auto eq = e.find('=');
     setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
   }
-  setenv("AGENT", std::to_string(agent).c_str(), 1);
-  setenv("CANHIL_SYSLOG", syslog.c_str(), 1);
-  if (second_set) {
+  setenv("AGENT", std::to_string(launch.agent).c_str(), 1);
+  setenv("CANHIL_SYSLOG", launch.syslog.c_str(), 1);
+  if (launch.second_set) {
     setenv("SECOND_RTDB", "1", 1);
   } else {
     unsetenv("SECOND_RTDB");
@@ -78,13 +84,13 @@ pid_t start(const std::string& command, const std::vector<std::string>& environm
   setenv("PATH", path.c_str(), 1);
   signal(SIGINT, SIG_DFL);
   signal(SIGTERM, SIG_DFL);
-  if (log >= 0) {
-    dup2(log, STDOUT_FILENO);
-    if (log != STDERR_FILENO) dup2(log, STDERR_FILENO);
+  if (launch.log >= 0) {
+    dup2(launch.log, STDOUT_FILENO);
+    if (launch.log != STDERR_FILENO) dup2(launch.log, STDERR_FILENO);
   }
   // exec: the process is the command's program itself (its signals reach it,
   // and no shell stays behind in the lockstep).
-  const std::string line = "exec " + command;
+  const std::string line = "exec " + launch.command;
   execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
   _exit(127);
 }
@@ -213,8 +219,9 @@ std::size_t TeamProcesses::start_all(const emulator::Session& session) {
         log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
         if (log < 0) throw SetupError("cannot write the process log " + log_path + ": " + std::strerror(errno));
       }
-      s.pid = start(s.command, environment_, s.agent, team > 0, scenario.external_of(team).syslog, path,
-                    log >= 0 ? log : (output_.onto_stderr ? 2 : -1));
+      const Launch launch{s.command, s.agent, team > 0, scenario.external_of(team).syslog,
+                          log >= 0 ? log : (output_.onto_stderr ? STDERR_FILENO : -1)};
+      s.pid = start(launch, environment_, path);
       if (log >= 0) close(log);
       std::fprintf(say_, "  started `%s` for agent %d%s (pid %d)%s%s\n", s.command.c_str(), s.agent,
                    scenario.teams.size() > 1 ? (" of team " + scenario.teams[team].name).c_str() : "", s.pid,
