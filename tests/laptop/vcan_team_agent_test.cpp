@@ -14,7 +14,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -177,17 +179,25 @@ TEST(VcanTeamAgent, TheTeamsAgentOnItsOwnLibrariesDrivesToTheBallAndStopsWhenThe
   EXPECT_TRUE(has(handler.output(), "layout cambada")) << handler.output();
 }
 
+// The run script's log folder and the script's own output, once a test passed
+// (named by the test's pid: two suites at once write apart).
+void remove_logs(const std::string& logs) {
+  std::error_code ignored;
+  std::filesystem::remove_all(logs, ignored);
+  std::filesystem::remove(logs + ".log", ignored);
+}
+
 TEST(VcanTeamAgent, TheRunScriptStartsAllThreeAndStopsThemTogether) {
   setenv("AGENT", "1", 1);
   setenv("TEAM_RTDB_KEY", std::to_string(0x7E100000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
   const std::string src = canhil::test::source_dir();
   const std::string team = src + "/tests/support/cambada_like/";
-  const std::string logs = "/tmp/canhil_vcan_own_software";
+  const std::string logs = "/tmp/canhil_vcan_own_software_" + std::to_string(getpid());
   ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() +
                           " --logs " + logs + " --rtdb-lib " + CANHIL_TEST_TEAM_RTDB + " --rtdb-items " + team +
                           "rtdb_user.h --rtdb-ini " + team + "config/rtdb.ini --layout cambada --pman-lib " +
                           CANHIL_TEST_LIBPMAN + " -- " + CANHIL_TEST_TEAM_AGENT + " --ini " + team + "config/rtdb.ini",
-                      "/tmp/canhil_vcan_own_software.log");
+                      logs + ".log");
   ASSERT_TRUE(wait_for(script, 60s, [](const std::string& o) { return has(o, "== running"); })) << script.output();
   std::this_thread::sleep_for(5s);
   script.stop();  // Ctrl-C
@@ -205,13 +215,15 @@ TEST(VcanTeamAgent, TheRunScriptStartsAllThreeAndStopsThemTogether) {
   while (std::fgets(buf, sizeof buf, f) != nullptr) agent_log += buf;
   std::fclose(f);
   EXPECT_TRUE(has(agent_log, "team_agent: cycles")) << "the agent ended when the run closed its table\n" << agent_log;
+  if (!HasFailure()) remove_logs(logs);
 }
 
 TEST(VcanTeamAgent, TheRunScriptRefusesAnInterfaceTheScenarioDoesNotUse) {
   const std::string src = canhil::test::source_dir();
+  const std::string logs = "/tmp/canhil_vcan_own_software_wrong_" + std::to_string(getpid());
   ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() +
-                          " --iface vcan7 --logs /tmp/canhil_vcan_own_software_wrong -- /bin/sleep 30",
-                      "/tmp/canhil_vcan_own_software_wrong.log");
+                          " --iface vcan7 --logs " + logs + " -- /bin/sleep 30",
+                      logs + ".log");
   ASSERT_TRUE(wait_for(script, 60s, [](const std::string& o) { return has(o, "no robot on vcan7"); }))
       << script.output();
   const int status = script.stop();
@@ -220,6 +232,7 @@ TEST(VcanTeamAgent, TheRunScriptRefusesAnInterfaceTheScenarioDoesNotUse) {
       << "what the run does use\n"
       << script.output();
   EXPECT_FALSE(has(script.output(), "== the agent")) << "nothing else was started\n" << script.output();
+  if (!HasFailure()) remove_logs(logs);
 }
 
 }  // namespace
