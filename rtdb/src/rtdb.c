@@ -6,7 +6,6 @@
 #include "canhil/rtdb/rtdb.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <limits.h>
 #include <semaphore.h>
 #include <signal.h>
@@ -48,7 +47,7 @@ static int g_table_failed = 0;                  /* reading it failed; only an in
  * DB_init_all(1) and SECOND_RTDB). The second set's keys and semaphores are
  * the first's plus CANHIL_RTDB_SET_STRIDE: a process of the second team may
  * equally set RTDB_KEY to the first's base plus the stride. */
-#define SETS 2
+#define SETS CANHIL_RTDB_SETS
 static int g_me = -1;                              /* this process's memory space (DB_init) */
 static int g_me_nesting = 0;                       /* DB_init calls not yet freed */
 static int g_all[SETS] = {0, 0};                   /* DB_init_all calls not yet freed, per set */
@@ -56,11 +55,6 @@ static void* g_seg[SETS * CANHIL_RTDB_MAX_AGENTS]; /* attached segments, by memo
 static int g_shmid[SETS * CANHIL_RTDB_MAX_AGENTS];
 static int64_t* g_offsets = NULL; /* [segment agent][owner agent][item] -> byte offset, or -1 */
 static uint64_t g_sizes[CANHIL_RTDB_MAX_AGENTS];
-/* The frame semaphores of the spaces this process has, by memory space,
- * opened once (kept_frame_sem; threads may signal at once; as every call,
- * none may overlap the DB_free or DB_free_all that leaves the space, which
- * closes it). */
-static sem_t* _Atomic g_frame_sems[SETS * CANHIL_RTDB_MAX_AGENTS];
 
 static int verbose(void) {
   const char* v = getenv("RTDB_VERBOSE");
@@ -315,8 +309,7 @@ static void frame_sem_name(int space, char* name, size_t size) {
 }
 
 static void detach(int space) {
-  sem_t* frames = atomic_exchange(&g_frame_sems[space], NULL);
-  if (frames != NULL) sem_close(frames);
+  canhil_rtdb_frames_forget(space);
   if (g_seg[space] == NULL) return;
   shmdt(g_seg[space]);
   g_seg[space] = NULL;
@@ -546,65 +539,17 @@ RTDB_EXPORT const char* DB_config_source(void) {
   return t != NULL ? t->source : NULL;
 }
 
-static sem_t* frame_sem(int space) {
-  char name[64];
-  frame_sem_name(space, name, sizeof name);
-  sem_t* s = sem_open(name, O_CREAT, 0600, 0);
-  return s == SEM_FAILED ? NULL : s;
-}
-
-/* The frame semaphore of a space this process has, opened once: it is
- * removed only when the last process leaves the space (detach). */
-static sem_t* kept_frame_sem(int space) {
-  sem_t* s = atomic_load(&g_frame_sems[space]);
-  if (s != NULL) return s;
-  s = frame_sem(space);
-  if (s == NULL) return NULL;
-  sem_t* none = NULL;
-  if (!atomic_compare_exchange_strong(&g_frame_sems[space], &none, s)) {
-    sem_close(s); /* another thread kept its own first */
-    s = none;
-  }
-  return s;
-}
-
 RTDB_EXPORT int DB_signal_frame(int space) {
   const canhil_rtdb_table* t = table(0);
   if (t == NULL || space < 0 || space >= SETS * (int)t->n_agents) return -1;
-  const int kept = g_seg[space] != NULL;
-  sem_t* s = kept ? kept_frame_sem(space) : frame_sem(space);
-  if (s == NULL) return -1;
-  int value = 0;
-  if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);
-  if (!kept) sem_close(s);
-  return 0;
+  char name[64];
+  frame_sem_name(space, name, sizeof name);
+  return canhil_rtdb_frames_post(space, name, g_seg[space] != NULL);
 }
 
 RTDB_EXPORT int DB_wait_frame(int timeout_ms) {
   if (g_me < 0) return -1;
-  sem_t* const frames = kept_frame_sem(g_me);
-  if (frames == NULL) return -1;
-  int r;
-  if (timeout_ms < 0) {
-    do {
-      r = sem_wait(frames);
-    } while (r < 0 && errno == EINTR);
-  } else {
-    struct timespec deadline;
-    clock_gettime(CLOCK_REALTIME, &deadline);
-    deadline.tv_sec += timeout_ms / 1000;
-    deadline.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
-    if (deadline.tv_nsec >= 1000000000L) {
-      deadline.tv_sec += 1;
-      deadline.tv_nsec -= 1000000000L;
-    }
-    do {
-      r = sem_timedwait(frames, &deadline);
-    } while (r < 0 && errno == EINTR);
-    if (r < 0 && errno == ETIMEDOUT) return 1;
-  }
-  if (r < 0) return -1;
-  while (sem_trywait(frames) == 0) {
-  } /* several posts wake once */
-  return 0;
+  char name[64];
+  frame_sem_name(g_me, name, sizeof name);
+  return canhil_rtdb_frames_wait(g_me, name, timeout_ms);
 }
