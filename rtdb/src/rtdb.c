@@ -542,14 +542,10 @@ RTDB_EXPORT const char* DB_config_source(void) {
 RTDB_EXPORT int DB_signal_frame(int space) {
   const canhil_rtdb_table* t = table(0);
   if (t == NULL || space < 0 || space >= SETS * (int)t->n_agents) return -1;
-  char name[64];
-  frame_sem_name(space, name, sizeof name);
-  return canhil_rtdb_frames_post(space, name, g_seg[space] != NULL);
+  return canhil_rtdb_frames_post(space, frame_sem_name, g_seg[space] != NULL);
 }
 
 RTDB_EXPORT int DB_wait_frame(int timeout_ms) {
   if (g_me < 0) return -1;
-  char name[64];
-  frame_sem_name(g_me, name, sizeof name);
-  return canhil_rtdb_frames_wait(g_me, name, timeout_ms);
+  return canhil_rtdb_frames_wait(g_me, frame_sem_name, timeout_ms);
 }

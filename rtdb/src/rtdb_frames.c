@@ -14,18 +14,20 @@
 
 /* The kept semaphores, by memory space (SETS sets of agents): opened at a
  * space's first signal or wait, closed when the process leaves it. */
-static sem_t* _Atomic g_kept[2 * CANHIL_RTDB_MAX_AGENTS];
+static sem_t* _Atomic g_kept[CANHIL_RTDB_SPACES];
 
-static sem_t* open_frames(const char* name) {
+static sem_t* open_frames(int space, canhil_rtdb_frames_name name_of) {
+  char name[64];
+  name_of(space, name, sizeof name);
   sem_t* s = sem_open(name, O_CREAT, 0600, 0);
   return s == SEM_FAILED ? NULL : s;
 }
 
 /* Space `space`'s semaphore, opened once; another thread's, when it kept its first. */
-static sem_t* kept(int space, const char* name) {
+static sem_t* kept(int space, canhil_rtdb_frames_name name_of) {
   sem_t* s = atomic_load(&g_kept[space]);
   if (s != NULL) return s;
-  s = open_frames(name);
+  s = open_frames(space, name_of);
   if (s == NULL) return NULL;
   sem_t* none = NULL;
   if (!atomic_compare_exchange_strong(&g_kept[space], &none, s)) {
@@ -40,8 +42,8 @@ void canhil_rtdb_frames_forget(int space) {
   if (s != NULL) sem_close(s);
 }
 
-int canhil_rtdb_frames_post(int space, const char* name, int keep) {
-  sem_t* s = keep ? kept(space, name) : open_frames(name);
+int canhil_rtdb_frames_post(int space, canhil_rtdb_frames_name name_of, int keep) {
+  sem_t* s = keep ? kept(space, name_of) : open_frames(space, name_of);
   if (s == NULL) return -1;
   int value = 0;
   if (sem_getvalue(s, &value) == 0 && value == 0) sem_post(s);
@@ -49,8 +51,8 @@ int canhil_rtdb_frames_post(int space, const char* name, int keep) {
   return 0;
 }
 
-int canhil_rtdb_frames_wait(int space, const char* name, int timeout_ms) {
-  sem_t* const frames = kept(space, name);
+int canhil_rtdb_frames_wait(int space, canhil_rtdb_frames_name name_of, int timeout_ms) {
+  sem_t* const frames = kept(space, name_of);
   if (frames == NULL) return -1;
   int r;
   if (timeout_ms < 0) {

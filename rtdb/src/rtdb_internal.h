@@ -2,6 +2,8 @@
 #ifndef CANHIL_RTDB_INTERNAL_H
 #define CANHIL_RTDB_INTERNAL_H
 
+#include <stddef.h>
+
 #include "canhil/rtdb/rtdb_table.h"
 
 /* Agents one table may have (CAMBADA's MAX_AGENTS, in rtdbdefs.h, is 7). */
@@ -23,16 +25,17 @@
  * (rtdb_runtime_table.c, librtdb.so). */
 const canhil_rtdb_table* canhil_rtdb_linked_table(void);
 
-/* The frame signal of a memory space (rtdb_frames.c): the named semaphore
- * `name`, which rtdb.c gives for `space` (0 <= space < CANHIL_RTDB_SPACES).
- * Posts it unless already posted, keeping it open when `keep` (a space this
- * process has; threads may post at once) or closing it again; 0, or -1 when
- * it cannot be opened. */
-int canhil_rtdb_frames_post(int space, const char* name, int keep);
+/* The frame signal of a memory space (rtdb_frames.c): a named semaphore,
+ * whose name `name_of` writes for `space` (0 <= space < CANHIL_RTDB_SPACES);
+ * it is asked only when the semaphore is opened. Posts it unless already
+ * posted, keeping it open when `keep` (a space this process has; threads may
+ * post at once) or closing it again; 0, or -1 when it cannot be opened. */
+typedef void (*canhil_rtdb_frames_name)(int space, char* name, size_t size);
+int canhil_rtdb_frames_post(int space, canhil_rtdb_frames_name name_of, int keep);
 /* Waits up to `timeout_ms` (< 0: for ever) for a post, keeping the semaphore
  * open, and takes every post made meanwhile: 0 when woken, 1 on timeout, -1
  * on error. */
-int canhil_rtdb_frames_wait(int space, const char* name, int timeout_ms);
+int canhil_rtdb_frames_wait(int space, canhil_rtdb_frames_name name_of, int timeout_ms);
 /* Closes the semaphore kept for `space`, if any: the process leaves the
  * space (no call on the space may overlap it). */
 void canhil_rtdb_frames_forget(int space);
