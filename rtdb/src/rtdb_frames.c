@@ -12,7 +12,7 @@
 
 #include "rtdb_internal.h"
 
-/* The kept semaphores, by memory space (SETS sets of agents): opened at a
+/* The kept semaphores, by memory space (either set's agents): opened at a
  * space's first signal or wait, closed when the process leaves it. */
 static sem_t* _Atomic g_kept[CANHIL_RTDB_SPACES];
 
