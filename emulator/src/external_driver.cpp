@@ -3,6 +3,7 @@
 #include <sys/epoll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <optional>
 
@@ -106,14 +107,11 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   session_.on_vision_frame([this](std::size_t r, Nanos) { woken_[r] = true; });
   // On the user-space bus canhil's looks ask the bus's counts in memory
   // whether a frame reached an observer, or the fence, instead of polling.
-  bool counted = true;
-  for (const auto& o : observers_) counted = counted && o->waiting().has_value();
-  if (counted) {
+  if (std::all_of(observers_.begin(), observers_.end(), [](const auto& o) { return o->waiting().has_value(); })) {
     arrived_ = [this] {
-      for (const auto& o : observers_) {
-        if (o->waiting() == true) return true;
-      }
-      return waiting_on_fence_ && !unfenced();
+      const bool at_an_observer =
+          std::any_of(observers_.begin(), observers_.end(), [](const auto& o) { return o->waiting() == true; });
+      return at_an_observer || (waiting_on_fence_ && !unfenced());
     };
   }
   lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
