@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -32,11 +33,41 @@ std::vector<std::string> split_names(const std::string& list) {
   return names;
 }
 
-std::uint32_t grace_us(Args& args) {
-  const auto ms = optional_number(args, "--grace-ms");
-  if (!ms) return ub::BrokerOptions{}.grace_us;
-  if (*ms < 0 || *ms > 10000) throw UsageError("--grace-ms takes 0 to 10000 milliseconds, got " + std::to_string(*ms));
-  return static_cast<std::uint32_t>(*ms * 1000.0);
+/// The broker's options from --grace-ms, --patience-ms and --rt-priority.
+ub::BrokerOptions broker_options(Args& args) {
+  ub::BrokerOptions options;
+  const auto milliseconds = [&args](const std::string& name, std::uint32_t fallback_us) {
+    const auto ms = optional_number(args, name);
+    if (!ms) return fallback_us;
+    if (*ms < 0 || *ms > 10000) throw UsageError(name + " takes 0 to 10000 milliseconds, got " + std::to_string(*ms));
+    return static_cast<std::uint32_t>(*ms * 1000.0);
+  };
+  options.grace_us = milliseconds("--grace-ms", options.grace_us);
+  options.patience_us = milliseconds("--patience-ms", options.patience_us);
+  if (const auto p = optional_number(args, "--rt-priority")) {
+    if (*p < 0 || *p > 99 || *p != static_cast<int>(*p))
+      throw UsageError("--rt-priority takes a SCHED_FIFO priority 1..99, or 0 for the normal scheduler");
+    options.rt_priority = static_cast<int>(*p);
+  }
+  return options;
+}
+
+/// Every frame the command's receivers lost on the interfaces it used, said
+/// once at its end (each loss was also counted on its socket: SO_RXQ_OVFL).
+void report_drops(const ub::BusPaths& paths, const std::vector<std::string>& names,
+                  const std::vector<ub::InterfaceCounts>& before) {
+  for (const ub::InterfaceCounts& now : ub::interface_counts(paths)) {
+    if (std::find(names.begin(), names.end(), now.name) == names.end()) continue;
+    std::uint64_t dropped = now.dropped;
+    for (const ub::InterfaceCounts& b : before) {
+      if (b.name == now.name) dropped -= std::min(dropped, b.dropped);
+    }
+    if (dropped == 0) continue;
+    std::fprintf(stderr,
+                 "canhil bus exec: %llu frame(s) dropped on %s for receivers whose buffer was full and that read "
+                 "nothing for the bus's grace (each counted on its socket, SO_RXQ_OVFL; canhil bus up --grace-ms)\n",
+                 static_cast<unsigned long long>(dropped), now.name.c_str());
+  }
 }
 
 /// Starts a broker when none runs; true when this call started it.
@@ -73,8 +104,7 @@ bool ensure_bus(const ub::BusPaths& paths, ub::BrokerOptions options, bool detac
 }
 
 int bus_up(Args& args, const ub::BusPaths& paths) {
-  ub::BrokerOptions options;
-  options.grace_us = grace_us(args);
+  ub::BrokerOptions options = broker_options(args);
   std::vector<std::string> names = args.positionals();
   names.erase(names.begin(), names.begin() + 2);  // "bus up"
   if (names.empty()) names.push_back("vcan0");
@@ -88,8 +118,7 @@ int bus_up(Args& args, const ub::BusPaths& paths) {
 }
 
 int bus_exec(Args& args, const ub::BusPaths& paths) {
-  ub::BrokerOptions options;
-  options.grace_us = grace_us(args);
+  ub::BrokerOptions options = broker_options(args);
   const auto ifaces = args.option("--ifaces");
   std::vector<std::string> rest = args.positionals();
   if (rest.size() > 2) throw UsageError("`canhil bus exec` takes the command after --, not \"" + rest[2] + "\"");
@@ -102,6 +131,9 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   options.owner = getpid();
   const bool started = ensure_bus(paths, options, false);
   const std::vector<std::string> created = ub::add_interfaces(paths, names);
+  if (started)
+    std::fprintf(stderr, "canhil bus exec: a bus of its own, its broker at %s\n", ub::broker_scheduling(paths).c_str());
+  const std::vector<ub::InterfaceCounts> counts_before = ub::interface_counts(paths);
 
   std::string ld = preload;
   if (const char* before = std::getenv("LD_PRELOAD"); before != nullptr && *before != '\0') {
@@ -126,6 +158,7 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   int status = 0;
   while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
+  report_drops(paths, names, counts_before);
   if (started) {
     ub::stop_broker(paths);
   } else if (!created.empty()) {

@@ -184,8 +184,8 @@ const Command kCommands[] = {
 )",
      run_pman},
     {"bus", "a user-space CAN bus for machines whose kernel has no CAN",
-     R"(  canhil bus up [IFACE...] [--grace-ms 10]     start the bus (if none runs) with interfaces (default vcan0)
-  canhil bus exec [--ifaces vcan0,...] -- COMMAND...
+     R"(  canhil bus up [IFACE...] [broker options]   start the bus (if none runs) with interfaces (default vcan0)
+  canhil bus exec [--ifaces vcan0,...] [broker options] -- COMMAND...
                                               run COMMAND and everything it starts on the bus (preloading
                                               libcanhil-bus.so), creating the interfaces it names; a bus
                                               this starts ends with COMMAND
@@ -194,6 +194,11 @@ const Command kCommands[] = {
   canhil bus link IFACE up|down               bring an interface up or down (ip link set)
   canhil bus preload                          print the path of libcanhil-bus.so (for LD_PRELOAD)
                                               (docs/vcan.md: the bus, its limits, how to choose)
+  broker options, for a bus that up or exec starts:
+    --grace-ms 10                             how long a receiver whose buffer is full may read nothing
+                                              while it could, before frames drop for it (0: at once)
+    --patience-ms 250                         the longest the bus waits for one full receiver in all
+    --rt-priority 45                          the broker's SCHED_FIFO priority (0: normal scheduler)
 )",
      canhil::app::run_bus},
     {"experiment", "physics calibration experiments and a vision frame",

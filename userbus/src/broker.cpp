@@ -18,6 +18,7 @@
 #include <cstring>
 #include <vector>
 
+#include "broker_system.hpp"
 #include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
 #include "canhil/userbus/bus.hpp"
@@ -149,7 +150,14 @@ class Broker {
   int spin(epoll_event* events) {
     const std::uint64_t word = state_.spin.load(std::memory_order_acquire);
     const std::uint32_t us = spin_us(word);
-    if (us == 0 || !asker_alive(spin_pid(word))) return 0;
+    const bool asked = us != 0 && asker_alive(spin_pid(word));
+    // At SCHED_FIFO, sched_yield gives way to no normal process: the broker
+    // looks on at the normal scheduler, and is real-time again once no run asks.
+    if (state_.rt_priority > 0 && asked == fifo_) {
+      fifo_ = !asked;
+      set_fifo(fifo_, state_.rt_priority);
+    }
+    if (!asked) return 0;
     state_.spins.fetch_add(1, std::memory_order_relaxed);
     const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(us) * 1000;
     for (;;) {
@@ -498,7 +506,6 @@ class Broker {
       if (c.fd < 0 || c.slot < 0) continue;
       Socket& s = state_.sockets[c.slot];
       std::size_t done = 0;
-      bool waited = false;
       while (done < c.queued.size()) {
         const std::size_t count = std::min<std::size_t>(c.queued.size() - done, 64);
         mmsghdr out[64] = {};
@@ -517,11 +524,7 @@ class Broker {
           continue;
         }
         if (sent < 0 && errno != EAGAIN) break;  // the program is going: its end is read next
-        if (!c.overrun && !waited && options_.grace_us > 0) {
-          waited = true;
-          pollfd p{c.fd, POLLOUT, 0};
-          if (poll(&p, 1, static_cast<int>((options_.grace_us + 999) / 1000)) > 0) continue;
-        }
+        if (!c.overrun && room_came(c.fd, s.pid, s.taken, options_.grace_us, options_.patience_us)) continue;
         c.overrun = true;
         const auto lost = static_cast<std::uint32_t>(c.queued.size() - done);
         s.drops.fetch_add(lost, std::memory_order_relaxed);
@@ -543,6 +546,7 @@ class Broker {
   int asker_fd_ = -1;
   bool asker_gone_ = true;
   bool stop_ = false;
+  bool fifo_ = true;  // at its SCHED_FIFO priority now (when it has one: State::rt_priority)
   bool up_[kMaxInterfaces] = {};
   bool known_[kMaxInterfaces] = {};
   std::vector<Connection> connections_;

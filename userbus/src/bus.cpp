@@ -13,12 +13,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
 
+#include "broker_system.hpp"
 #include "canhil/base/errno_text.hpp"
 #include "canhil/userbus/state.hpp"
 
@@ -186,6 +188,7 @@ pid_t start_broker(const BusPaths& paths, const BrokerOptions& options) {
   auto* state = static_cast<State*>(p);
   state->version = kVersion;
   state->grace_us = options.grace_us;
+  state->patience_us = std::max(options.patience_us, options.grace_us);
 
   const int listen_fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   sockaddr_un a{};
@@ -212,6 +215,9 @@ pid_t start_broker(const BusPaths& paths, const BrokerOptions& options) {
     signal(SIGINT, SIG_IGN);
     signal(SIGPIPE, SIG_IGN);
     state->broker_pid = getpid();
+    const Scheduling got = take_scheduling(options.rt_priority);
+    state->rt_priority = got.rt_priority;
+    state->memory_locked = got.memory_locked ? 1 : 0;
     std::atomic_thread_fence(std::memory_order_release);
     state->magic = kMagic;
     run_broker(listen_fd, *state, options);
@@ -310,7 +316,8 @@ std::string describe(const BusPaths& paths) {
   auto mapped = require_state(paths);
   State& s = mapped->state();
   std::ostringstream out;
-  out << "bus " << paths.folder << " (broker pid " << s.broker_pid << ", grace " << s.grace_us / 1000.0 << " ms)\n";
+  out << "bus " << paths.folder << " (broker pid " << s.broker_pid << ", " << scheduling_text(s) << ", grace "
+      << s.grace_us / 1000.0 << " ms, patience " << s.patience_us / 1000.0 << " ms)\n";
   bool any = false;
   for (const Interface& i : s.interfaces) {
     if (i.in_use.load() == 0) continue;
@@ -342,6 +349,18 @@ std::string describe(const BusPaths& paths) {
   }
   return out.str();
 }
+
+std::vector<InterfaceCounts> interface_counts(const BusPaths& paths) {
+  auto mapped = require_state(paths);
+  std::vector<InterfaceCounts> counts;
+  for (const Interface& i : mapped->state().interfaces) {
+    if (i.in_use.load() == 0) continue;
+    counts.push_back({i.name, i.frames.load(), i.dropped.load()});
+  }
+  return counts;
+}
+
+std::string broker_scheduling(const BusPaths& paths) { return scheduling_text(require_state(paths)->state()); }
 
 std::string find_preload() {
   std::string built = CANHIL_BUILD_BUS_PRELOAD;

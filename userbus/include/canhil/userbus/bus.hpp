@@ -32,10 +32,27 @@ struct BusPaths {
 };
 
 struct BrokerOptions {
-  /// How long the broker waits for a receiver whose buffer is full before it
-  /// drops frames for it (the kernel drops at once: 0). A receiver that let
-  /// the wait pass has frames dropped at once until it reads again.
+  /// How long a receiver whose buffer is full may read nothing while it
+  /// could before the broker drops frames for it (the kernel drops at once:
+  /// 0). The wait follows the receiver: each read it makes renews the grace,
+  /// and while one of its threads is runnable but not running (a busy
+  /// machine) it is waiting for a CPU, not stuck, and the wait goes on. A
+  /// receiver that let the wait pass has frames dropped at once, counted,
+  /// until it reads again: a stuck receiver costs the bus one grace.
   std::uint32_t grace_us = 10000;
+  /// The longest the broker waits for one full receiver in all, however it
+  /// reads or waits for a CPU: what a receiver that is always runnable but
+  /// never reads (a busy loop holding a socket) can cost the bus, once.
+  std::uint32_t patience_us = 250000;
+  /// The broker's SCHED_FIFO priority (0: the normal scheduler): above the
+  /// emulated nodes' (40, their masters 41), since every frame's delivery and
+  /// receive stamp is the broker's. Where the system refuses it (no root or
+  /// CAP_SYS_NICE) the broker runs on the normal scheduler and says so in
+  /// State::rt_priority. With it, the broker locks its memory. While a
+  /// lockstep run asks it to look for frames before it sleeps (State::spin),
+  /// it runs on the normal scheduler, so that its looking gives way to
+  /// every other process.
+  int rt_priority = 45;
   /// A process the broker lives no longer than (0: until `stop`).
   pid_t owner = 0;
 };
@@ -101,6 +118,20 @@ void stop_broker(const BusPaths& paths);
 /// One line per interface and per socket: name, index, state, counters; each
 /// socket's process, binding, filters and counters.
 std::string describe(const BusPaths& paths);
+
+/// What the bus's interfaces have carried: per interface, frames sent on it
+/// and copies dropped at a full receiver (drops are also each socket's, and
+/// reach its program as SO_RXQ_OVFL).
+struct InterfaceCounts {
+  std::string name;
+  std::uint64_t frames = 0;
+  std::uint64_t dropped = 0;
+};
+std::vector<InterfaceCounts> interface_counts(const BusPaths& paths);
+
+/// How the bus's broker is scheduled: "SCHED_FIFO 45, memory locked", or
+/// "normal scheduler" where the system refused a real-time priority.
+std::string broker_scheduling(const BusPaths& paths);
 
 /// A valid interface name (1 to 15 characters, no '/', ':' or white space), or
 /// BusError naming what is wrong.

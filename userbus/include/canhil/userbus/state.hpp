@@ -31,7 +31,7 @@
 namespace canhil::userbus {
 
 inline constexpr std::uint32_t kMagic = 0x43414e42;  // "CANB"
-inline constexpr std::uint32_t kVersion = 3;
+inline constexpr std::uint32_t kVersion = 4;
 inline constexpr int kMaxInterfaces = 32;
 inline constexpr int kMaxSockets = 1024;
 inline constexpr int kMaxFilters = 512;  // CAN_RAW_FILTER_MAX, as the kernel
@@ -128,8 +128,13 @@ struct State {
   std::uint32_t magic;
   std::uint32_t version;
   std::int32_t broker_pid;
-  std::uint32_t grace_us;  ///< how long the broker waits for a full receiver before it drops
-  SharedLock lock;         ///< held to add or remove an interface
+  std::uint32_t grace_us;     ///< how long a full receiver may read nothing while it could before frames drop for it
+  std::uint32_t patience_us;  ///< the longest the broker waits for one full receiver in all
+  /// The broker's scheduling as it got it: SCHED_FIFO priority (0: the
+  /// normal scheduler) and whether its memory is locked (BrokerOptions).
+  std::int32_t rt_priority;
+  std::uint32_t memory_locked;
+  SharedLock lock;  ///< held to add or remove an interface
   std::atomic<std::uint32_t> interfaces_seq;
   /// How long the broker keeps looking for the next frame after each batch
   /// before it sleeps, giving way to any other runnable thread meanwhile,

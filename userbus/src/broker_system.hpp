@@ -1,0 +1,52 @@
+// What the broker asks of the system: its own scheduling, and whether a
+// receiver that has not read is waiting for a CPU or for something else.
+#pragma once
+
+#include <sys/types.h>
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+namespace canhil::userbus {
+
+struct State;
+
+/// The scheduling the calling process got.
+struct Scheduling {
+  int rt_priority = 0;  ///< SCHED_FIFO priority, 0: the normal scheduler
+  bool memory_locked = false;
+};
+
+/// Asks SCHED_FIFO at `priority` for the calling process and, with it, its
+/// memory locked (mlockall); nothing for 0. What the system refuses (no root
+/// or CAP_SYS_NICE, a locked-memory limit) is left as it was.
+Scheduling take_scheduling(int priority);
+
+/// Back to the normal scheduler (`fifo` false) or to SCHED_FIFO at
+/// `priority` (true), for the calling process.
+void set_fifo(bool fifo, int priority);
+
+/// "SCHED_FIFO 45, memory locked", or "normal scheduler" (State's record).
+std::string scheduling_text(const State& s);
+
+/// Whether any thread of process `pid` is runnable (state R in
+/// /proc/PID/task/TID/stat): waiting for a CPU, or running. False for a
+/// process that sleeps, is stopped or traced, or is gone.
+bool process_runnable(pid_t pid);
+
+/// Waits for room in a full receiver's buffer (the broker's end `fd` of its
+/// connection, its process `pid`, the records it has read so far `taken`:
+/// Socket::taken, which the preload counts); true once there is some (the
+/// kernel's AF_UNIX rule: once the receiver has read three quarters of what
+/// its buffer held), or once the connection ends (its end is read next). The
+/// receiver has `grace_us` to read; each record it reads renews the grace;
+/// while one of its threads is runnable but not running (a busy machine) it
+/// waits for a CPU, and the grace starts again; `patience_us` bounds the wait
+/// in all. False for a receiver that read nothing for the grace while it
+/// could have (stuck), or past the patience; at once for a grace of 0 (the
+/// kernel's immediate drop). Reads the monotonic clock past any time shim.
+bool room_came(int fd, pid_t pid, const std::atomic<std::uint64_t>& taken, std::uint32_t grace_us,
+               std::uint32_t patience_us);
+
+}  // namespace canhil::userbus
