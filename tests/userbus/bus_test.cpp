@@ -134,6 +134,25 @@ TEST_F(OwnBus, ReclaimsTheFilesOfABrokerThatDied) {
   EXPECT_NE(ub::describe(paths_).find("vcan0"), std::string::npos);
 }
 
+TEST_F(OwnBus, ABrokerKilledAndNotReapedIsNoBus) {
+  // As in a container whose first process reaps nobody: the dead broker is a
+  // zombie, its pid still answers kill(), its files are still there. A
+  // preloaded program gets the kernel's answer, as without a bus (docs/vcan.md),
+  // not ENOBUFS from a socket nobody listens on.
+  start({"vcan0"});
+  ASSERT_EQ(kill(broker_, SIGKILL), 0);
+  for (int k = 0; k < 500 && ub::broker_alive(paths_); ++k) usleep(2000);
+  ASSERT_EQ(kill(broker_, 0), 0) << "a zombie still";
+  int with = -1;
+  int without = -1;
+  const std::string preloaded = on_bus("cansend vcan0 123#11", &with);
+  const std::string plain = shell("cansend vcan0 123#11", &without);
+  EXPECT_EQ(preloaded.find("No buffer space"), std::string::npos) << preloaded;
+  EXPECT_EQ(with, without);
+  EXPECT_EQ(preloaded, plain);
+  waitpid(broker_, nullptr, 0);
+}
+
 TEST_F(OwnBus, EndsWithItsOwner) {
   const pid_t owner = fork();
   if (owner == 0) {

@@ -200,8 +200,15 @@ int open_socket(int extra) noexcept {
   std::memcpy(a.sun_path, p.socket, sizeof a.sun_path);
   const Hello h{kHelloSocket, static_cast<std::int32_t>(getpid())};
   Welcome w{-EIO};
-  if (real_connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
-      real_send(fd, &h, sizeof h, MSG_NOSIGNAL) != static_cast<ssize_t>(sizeof h) ||
+  const bool connected = real_connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  if (!connected && (errno == ECONNREFUSED || errno == ENOENT)) {
+    // Nobody listens: the broker died, perhaps a zombie nobody reaped (a
+    // container whose first process reaps none), so its pid still answers
+    // kill(). No bus runs: the kernel answers, as without one.
+    real_close(fd);
+    return -2;
+  }
+  if (!connected || real_send(fd, &h, sizeof h, MSG_NOSIGNAL) != static_cast<ssize_t>(sizeof h) ||
       real_recv(fd, &w, sizeof w, 0) != static_cast<ssize_t>(sizeof w) || w.slot < 0 || w.slot >= kMaxSockets) {
     const int e = w.slot < 0 && w.slot != -EIO ? -w.slot : ENOBUFS;
     real_close(fd);
