@@ -21,14 +21,17 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <string>
 
+#include "canhil/base/preload.hpp"
 #include "canhil/frames/messages.hpp"
 #include "canhil/laptop/hwcomm.hpp"
 #include "canhil/laptop/raw_can.hpp"
+#include "canhil/lockstep/shim_hook.h"
 #include "canhil/rtdb/database.hpp"
 #include "canhil/rtdb/layout.hpp"
 #include "canhil/userbus/bus.hpp"
@@ -43,6 +46,25 @@ canhil::Nanos wall_now() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
   return std::chrono::seconds(ts.tv_sec) + canhil::Nanos(ts.tv_nsec);
+}
+
+/// Hardware in the loop: run before ordinary work and never page out, where
+/// the system allows it (root or CAP_SYS_NICE). Not in a lockstep run (the
+/// time shim loaded): there virtual time is the clock and a real-time
+/// priority would only keep others from their turn. What it used, in words.
+std::string take_rt_priority(int priority) {
+  if (priority == 0) return "normal scheduler (--rt-priority 0)";
+  if (canhil::preload::any_symbol<canhil_shim_frames_sent_fn>("canhil_shim_frames_sent") != nullptr)
+    return "normal scheduler (virtual time: a lockstep run)";
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+    return "normal scheduler (SCHED_FIFO " + std::to_string(priority) + " refused: " + std::strerror(errno) +
+           "; it needs root or CAP_SYS_NICE)";
+  }
+  const bool locked = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  return "SCHED_FIFO " + std::to_string(priority) +
+         (locked ? ", memory locked" : ", memory not locked (RLIMIT_MEMLOCK)");
 }
 
 int usage(const char* why) {
@@ -66,7 +88,8 @@ int main(int argc, char** argv) {
   double ec_ms = 10;
   double bit_rate = 1'000'000;  // the TM's wire time: the asynchronous window opens when it has left the wire
   double duration_s = 0;
-  int rt_priority = 0;
+  // Above the team's ordinary processes, below the emulated nodes (40) and the user-space bus's broker (45).
+  int rt_priority = 35;
   bool busy_poll = false;
   double slow_ms = 0;
   std::string rtdb_lib, rtdb_items, rtdb_ini, layout_name;
@@ -117,14 +140,8 @@ int main(int argc, char** argv) {
     return usage("--rtdb-lib needs the team's --rtdb-items (its generated rtdb_user.h) and --rtdb-ini");
   }
   if (layout_name.empty()) layout_name = rtdb_lib.empty() ? "canhil" : "cambada";
-  if (rt_priority > 0) {
-    // Hardware in the loop: run before ordinary work and never page out.
-    sched_param sp{};
-    sp.sched_priority = rt_priority;
-    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0 || mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-      std::fprintf(stderr, "canhil-hwcomm: --rt-priority needs CAP_SYS_NICE (run as root); going on without it\n");
-    }
-  }
+  if (rt_priority < 0 || rt_priority > 99) return usage("--rt-priority takes 1..99, or 0 for the normal scheduler");
+  std::fputs(("canhil-hwcomm: " + take_rt_priority(rt_priority) + "\n").c_str(), stderr);
   try {
     auto set = canhil::frames::MessageSet::load(dbc);
     canhil::laptop::RawCan can(iface);
