@@ -4,7 +4,10 @@
 # libraries and layout, `canhil-hwcomm` as the robot's handler on the same
 # RTDB, and the team's agent. Ctrl-C (or the agent ending) stops them in
 # order: the handler, then the run (which closes the PMan tables: the agent
-# gets SIGINT), and prints the run's summary. The run lasts until then, or
+# gets SIGINT), and prints the run's summary; each by SIGTERM, and SIGKILL
+# if it has not ended within 10 s, so the script ends whatever state they
+# are in. An agent that fails (ends by itself with a non-zero status) ends
+# the script with status 1, after the end of its log. The run lasts until then, or
 # --duration S seconds (the scenario's duration_s is not used here). Logs go to --logs (default
 # ./canhil-own-software/).
 #
@@ -57,6 +60,27 @@ run_args+=(--duration "$duration")  # 0: until Ctrl-C
 run_args+=("${laptop[@]}")
 [[ -n "$pman_lib" ]] && run_args+=(--pman-lib "$pman_lib")
 
+# Ends one process of ours and waits for it, whatever its start-up state:
+# SIGTERM, which canhil and canhil-hwcomm take as Ctrl-C (a background job of
+# a script starts with SIGINT ignored, so a SIGINT sent before the program
+# installs its handler would be lost), then SIGKILL if it has not ended
+# within $2 seconds (default 10). Never hangs.
+end_process() {
+  kill -TERM "$1" 2>/dev/null || true
+  wait_end "$1" "${2:-10}"
+  kill -KILL "$1" 2>/dev/null || true
+  wait "$1" 2>/dev/null || true
+}
+# Waits up to $2 seconds for process $1 to end (gone, or a zombie not yet reaped).
+wait_end() {
+  local k state
+  for ((k = 0; k < $2 * 10; k++)); do
+    state=$(sed 's/.*) \(.\).*/\1/' "/proc/$1/stat" 2>/dev/null) || return 0
+    [[ "$state" == Z ]] && return 0
+    sleep 0.1
+  done
+}
+
 mkdir -p "$logs"
 export AGENT=$agent
 echo "== canhil run (log: $logs/run.log)"
@@ -71,8 +95,7 @@ done
 # The scenario decides the run's interfaces and agent numbers: the handler and
 # the agent must be started on the ones it uses.
 if [[ -z "$started" ]] || ! grep -qE "on $iface( \([^)]*\))? for agent $agent " "$logs/run.log"; then
-  kill -INT "$run_pid" 2>/dev/null || true
-  wait "$run_pid" 2>/dev/null || true
+  end_process "$run_pid"
   grep "robot [0-9]* on " "$logs/run.log" >&2 || cat "$logs/run.log" >&2
   die "canhil run has no robot on $iface for agent $agent (above: what it runs); give --iface and --agent-number as its scenario says, or a --config whose [run] interfaces and agents say so"
 fi
@@ -91,17 +114,22 @@ stop() {
   [[ $stopped == 0 ]] || return 0
   stopped=1
   trap - INT TERM
-  kill -INT "$hw_pid" 2>/dev/null || true
-  wait "$hw_pid" 2>/dev/null || true
-  kill -INT "$run_pid" 2>/dev/null || true
-  wait "$run_pid" 2>/dev/null || true
-  sleep 0.5
-  kill "$agent_pid" 2>/dev/null || true
-  wait "$agent_pid" 2>/dev/null || true
+  end_process "$hw_pid"
+  end_process "$run_pid"  # it closes the PMan tables: the agent gets SIGINT
+  wait_end "$agent_pid" 2
+  end_process "$agent_pid" 2
   echo "== canhil run's summary"
   sed -n '/^canhil run: \(done\|stopped\) after/,$p' "$logs/run.log"
 }
 trap stop INT TERM
 echo "== running; Ctrl-C stops all three (canhil coach stop|start, canhil pman list meanwhile)"
-wait "$agent_pid" || true
+agent_status=0
+wait "$agent_pid" || agent_status=$?
+if [[ $stopped == 0 && $agent_status -ne 0 ]]; then
+  # The agent ended by itself, failing: say so, stop the rest, and end as it did.
+  echo "== the agent ended with status $agent_status; the end of its log ($logs/agent.log):"
+  tail -n 5 "$logs/agent.log" | sed 's/^/   /'
+  stop
+  exit 1
+fi
 stop

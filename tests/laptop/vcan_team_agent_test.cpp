@@ -218,6 +218,30 @@ TEST(VcanTeamAgent, TheRunScriptStartsAllThreeAndStopsThemTogether) {
   if (!HasFailure()) remove_logs(logs);
 }
 
+TEST(VcanTeamAgent, TheRunScriptEndsWhenTheAgentFailsAtOnce) {
+  // The agent fails while the handler is still starting: the script stops the
+  // handler and the run whatever their start-up state, and says why it ended
+  // (it hung for good when a SIGINT reached the handler before its handler
+  // of SIGINT was installed: a script's background job starts with SIGINT
+  // ignored). Twice, since the race is in the start-up.
+  const std::string src = canhil::test::source_dir();
+  for (int round = 0; round < 2; ++round) {
+    const std::string logs = "/tmp/canhil_vcan_own_software_fails_" + std::to_string(getpid());
+    ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() +
+                            " --logs " + logs + " -- sh -c 'echo the agent gives up; exit 3'",
+                        logs + ".log");
+    const std::optional<int> status = script.wait_end(120s);
+    ASSERT_TRUE(status.has_value()) << "the script ended by itself (round " << round << ")\n" << script.output();
+    EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 1) << script.output();
+    const std::string out = script.output();
+    EXPECT_TRUE(has(out, "== the agent ended with status 3")) << out;
+    EXPECT_TRUE(has(out, "the agent gives up")) << "the end of its log\n" << out;
+    EXPECT_TRUE(has(out, "== canhil run's summary")) << out;
+    if (HasFailure()) break;
+    remove_logs(logs);
+  }
+}
+
 TEST(VcanTeamAgent, TheRunScriptRefusesAnInterfaceTheScenarioDoesNotUse) {
   const std::string src = canhil::test::source_dir();
   const std::string logs = "/tmp/canhil_vcan_own_software_wrong_" + std::to_string(getpid());
