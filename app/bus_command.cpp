@@ -33,7 +33,7 @@ std::vector<std::string> split_names(const std::string& list) {
   return names;
 }
 
-/// The broker's options from --grace-ms, --patience-ms and --rt-priority.
+/// The broker's options from --backlog, --grace-ms, --patience-ms and --rt-priority.
 ub::BrokerOptions broker_options(Args& args) {
   ub::BrokerOptions options;
   const auto milliseconds = [&args](const std::string& name, std::uint32_t fallback_us) {
@@ -44,6 +44,11 @@ ub::BrokerOptions broker_options(Args& args) {
   };
   options.grace_us = milliseconds("--grace-ms", options.grace_us);
   options.patience_us = milliseconds("--patience-ms", options.patience_us);
+  if (const auto n = optional_number(args, "--backlog")) {
+    if (*n < 1 || *n > 1000000 || *n != static_cast<std::uint32_t>(*n))
+      throw UsageError("--backlog takes 1 to 1000000 frames, got " + std::to_string(*n));
+    options.backlog_frames = static_cast<std::uint32_t>(*n);
+  }
   if (const auto p = optional_number(args, "--rt-priority")) {
     if (*p < 0 || *p > 99 || *p != static_cast<int>(*p))
       throw UsageError("--rt-priority takes a SCHED_FIFO priority 1..99, or 0 for the normal scheduler");
@@ -159,6 +164,15 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
   report_drops(paths, names, counts_before);
+  if (started) {
+    if (const ub::BusWaits w = ub::broker_waits(paths); w.count > 0) {
+      std::fprintf(stderr,
+                   "canhil bus exec: the bus waited %llu time(s) for receivers whose backlog was full, %.1f ms in "
+                   "all, longest %.1f ms\n",
+                   static_cast<unsigned long long>(w.count), static_cast<double>(w.total_us) / 1000.0,
+                   static_cast<double>(w.longest_us) / 1000.0);
+    }
+  }
   if (started) {
     ub::stop_broker(paths);
   } else if (!created.empty()) {

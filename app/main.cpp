@@ -195,7 +195,9 @@ const Command kCommands[] = {
   canhil bus preload                          print the path of libcanhil-bus.so (for LD_PRELOAD)
                                               (docs/vcan.md: the bus, its limits, how to choose)
   broker options, for a bus that up or exec starts:
-    --grace-ms 10                             how long a receiver whose buffer is full may read nothing
+    --backlog 4096                            frames that wait in the bus for a receiver whose buffer
+                                              is full, while the bus goes on for the others
+    --grace-ms 10                             how long a receiver whose backlog is full may read nothing
                                               while it could, before frames drop for it (0: at once)
     --patience-ms 250                         the longest the bus waits for one full receiver in all
     --rt-priority 45                          the broker's SCHED_FIFO priority (0: normal scheduler)

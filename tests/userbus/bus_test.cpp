@@ -280,6 +280,44 @@ TEST_F(OwnBus, CangenIntoCandumpLosesNothing) {
   EXPECT_TRUE(in_order);
 }
 
+/// The lines of file `name` in the test's bus folder.
+std::size_t lines_of(const fs::path& folder, const std::string& name) {
+  std::ifstream in(folder / name);
+  std::size_t n = 0;
+  std::string line;
+  while (std::getline(in, line)) ++n;
+  return n;
+}
+
+TEST_F(OwnBus, AReceiverStoppedForAWhileLosesNothingAndStallsNobody) {
+  // Two candumps; one is stopped (SIGSTOP: not runnable, so not waited for)
+  // while 2000 frames pass, more than its buffer holds: they wait in the
+  // broker's backlog for it, and the bus never waits (a real-time run's
+  // observer, starved for a while on a busy machine, slows nobody). With a
+  // grace alone the stopped one lost frames after 10 ms.
+  start({"vcan0"});
+  const std::string out = on_bus(
+      "candump -L vcan0 > a.log & a=$!; candump -L vcan0 > b.log & b=$!; sleep 0.3; "
+      "kill -STOP $b; cangen vcan0 -g 0.25 -n 2000 -I i -L 8 -D i; sleep 0.2; kill -CONT $b; sleep 0.5; "
+      "kill -INT $a $b; wait");
+  EXPECT_EQ(lines_of(folder_, "a.log"), 2000U) << out;
+  EXPECT_EQ(lines_of(folder_, "b.log"), 2000U) << out;
+  EXPECT_EQ(ub::broker_waits(paths_).count, 0U);
+  EXPECT_EQ(ub::interface_counts(paths_).at(0).dropped, 0U);
+}
+
+TEST_F(OwnBus, ASocketThatNeverReadsCostsTheBusNoWait) {
+  // A program that binds a socket taking every frame and never reads it:
+  // flooded by cangen, frames are dropped for it, counted, without the bus
+  // waiting for it as for a reader.
+  start({"vcan0"});
+  const std::string out = on_bus(
+      "/usr/bin/python3 -c \"import socket, time; s = socket.socket(socket.PF_CAN, socket.SOCK_RAW, socket.CAN_RAW); "
+      "s.bind((\\\"vcan0\\\",)); time.sleep(3)\" & q=$!; sleep 0.6; cangen vcan0 -g 0 -n 8000 -L 8; wait $q");
+  EXPECT_EQ(ub::broker_waits(paths_).count, 0U) << out;
+  EXPECT_GT(ub::interface_counts(paths_).at(0).dropped, 0U) << "the quiet cangen's buffer and backlog overflowed";
+}
+
 TEST_F(OwnBus, CansendSeenByCandumpOnEveryInterfaceAndCanbusloadMeasures) {
   start();
   const std::string out = on_bus(

@@ -16,8 +16,10 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <deque>
 #include <vector>
 
+#include "broker_filters.hpp"
 #include "broker_system.hpp"
 #include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
@@ -27,54 +29,17 @@
 namespace canhil::userbus {
 namespace {
 
-/// A filter as the kernel registers it (af_can.c, can_rcv_list_find): the
-/// mask reduced, the id masked, and its list (error, inverted or plain).
-struct Registered {
-  canid_t id;
-  canid_t mask;
-  bool error;
-  bool inverted;
-};
-
-Registered register_filter(canid_t id, canid_t mask) {
-  const bool inverted = (id & CAN_INV_FILTER) != 0;
-  if ((mask & CAN_ERR_FLAG) != 0) return {id, mask & CAN_ERR_MASK, true, false};
-  if ((mask & CAN_EFF_FLAG) != 0 && (id & CAN_EFF_FLAG) == 0) mask &= (CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG);
-  return {id & mask, mask, false, inverted};
-}
-
-bool matches(const Registered& r, canid_t can_id) {
-  if ((can_id & CAN_ERR_FLAG) != 0) return r.error && (can_id & r.mask) != 0;
-  if (r.error) return false;
-  const bool equal = (can_id & r.mask) == r.id;
-  return r.inverted ? !equal : equal;
-}
-
-/// What the broker keeps of a socket's options, refreshed when its seq moves.
-struct Options {
-  std::uint32_t seq = ~0U;
-  std::int32_t ifindex = 0;
-  bool bound = false;
-  std::uint32_t flags = 0;
-  std::int32_t rcvbuf = 0;
-  std::uint32_t count = 0;          // the user's filters (joined filters must all match)
-  bool single_ids = false;          // every filter takes one standard or extended id (the kernel serves those last)
-  std::vector<Registered> filters;  // the user's, then the error filter if any
-  // single_ids: the filters' ids, sorted, standard and extended apart (a
-  // delivery fence's 512 filters a socket are a search, not 512 tests a frame).
-  std::vector<canid_t> standard_ids;
-  std::vector<canid_t> extended_ids;
-};
-
 struct Connection {
   int fd = -1;
   int slot = -1;  // -1 until its hello, and for a control connection
   bool control = false;
   bool hello = false;
-  bool overrun = false;  // its buffer was full past the grace: drop at once until it reads
+  bool overrun = false;  // stuck with a full backlog past the grace: drop at once until it reads
   std::int32_t applied_rcvbuf = 0;
   Options options;
   std::vector<RxRecord> queued;  // routed in this round, sent together at its end
+  std::deque<RxRecord> backlog;  // routed, but its buffer was full: sent, in order, as it reads
+  bool backlogged = false;       // backlog not empty (EPOLLOUT watched)
   std::uint64_t opened = 0;      // the order connections were opened in
 };
 
@@ -216,6 +181,10 @@ class Broker {
   }
 
   void drop(Connection& c) {
+    if (c.backlogged) {
+      --backlogged_;  // what it had not read is nobody's now
+      close_round_if_delivered();
+    }
     epoll_ctl(epoll_, EPOLL_CTL_DEL, c.fd, nullptr);
     close(c.fd);
     if (c.slot >= 0) {
@@ -235,6 +204,11 @@ class Broker {
     if (c.control) {
       control(c);
       return;
+    }
+    if ((events & EPOLLOUT) != 0 && c.backlogged) {  // its reader made room
+      send_backlog(c);
+      close_round_if_delivered();
+      if ((events & (EPOLLIN | EPOLLHUP | EPOLLERR)) == 0) return;
     }
     // Up to a batch of frames in one call, then the other connections get their turn.
     constexpr unsigned kBatch = 64;
@@ -264,7 +238,7 @@ class Broker {
     }
     flush();
     if (ended) drop(c);
-    (void)events;  // a hang-up is read as the end of the connection, once its frames are routed
+    // A hang-up is read as the end of the connection, once its frames are routed.
   }
 
   void hello(Connection& c) {
@@ -382,34 +356,7 @@ class Broker {
     for (;;) {
       const std::uint32_t before = s.seq.load(std::memory_order_acquire);
       if ((before & 1U) != 0) continue;
-      Options o;
-      o.seq = before;
-      o.ifindex = s.ifindex;
-      o.bound = s.bound != 0;
-      o.flags = s.flags;
-      o.rcvbuf = s.rcvbuf;
-      o.count = std::min<std::uint32_t>(s.filter_count, kMaxFilters);
-      o.filters.reserve(o.count + 1);
-      for (std::uint32_t f = 0; f < o.count; ++f)
-        o.filters.push_back(register_filter(s.filters[f].can_id, s.filters[f].can_mask));
-      o.single_ids = o.count > 0;
-      for (std::uint32_t f = 0; f < o.count; ++f) {
-        const canid_t id = s.filters[f].can_id;
-        const canid_t mask = s.filters[f].can_mask;
-        const canid_t flags = CAN_EFF_FLAG | CAN_RTR_FLAG;
-        const bool one =
-            (id & (CAN_INV_FILTER | CAN_RTR_FLAG)) == 0 &&
-            (mask == (CAN_SFF_MASK | flags) || ((id & CAN_EFF_FLAG) != 0 && mask == (CAN_EFF_MASK | flags)));
-        o.single_ids = o.single_ids && one;
-      }
-      if (o.single_ids) {
-        for (const Registered& r : o.filters)
-          ((r.id & CAN_EFF_FLAG) != 0 ? o.extended_ids : o.standard_ids).push_back(r.id);
-        std::sort(o.standard_ids.begin(), o.standard_ids.end());
-        std::sort(o.extended_ids.begin(), o.extended_ids.end());
-      }
-      if ((s.err_mask & CAN_ERR_MASK) != 0)
-        o.filters.push_back(register_filter(0, (s.err_mask & CAN_ERR_MASK) | CAN_ERR_FLAG));
+      Options o = options_of(s, before);
       std::atomic_thread_fence(std::memory_order_acquire);
       if (s.seq.load(std::memory_order_relaxed) != before) continue;
       c.options = std::move(o);
@@ -422,26 +369,6 @@ class Broker {
       c.applied_rcvbuf = c.options.rcvbuf;
     }
     return c.options;
-  }
-
-  /// Whether socket options `o` take a frame of `can_id` (raw_rcv's rules:
-  /// any filter, or every filter when they are joined).
-  static bool wants(const Options& o, canid_t can_id) {
-    const bool joined = (o.flags & kJoinFilters) != 0 && o.count > 1;
-    if (!joined && o.single_ids && (can_id & CAN_ERR_FLAG) == 0) {
-      // A single-id filter's mask keeps the id, the EFF and the RTR flags (11
-      // bits of the id for a standard one, 29 for an extended one).
-      constexpr canid_t kFlags = CAN_EFF_FLAG | CAN_RTR_FLAG;
-      return std::binary_search(o.standard_ids.begin(), o.standard_ids.end(), can_id & (CAN_SFF_MASK | kFlags)) ||
-             std::binary_search(o.extended_ids.begin(), o.extended_ids.end(), can_id & (CAN_EFF_MASK | kFlags));
-    }
-    std::uint32_t hits = 0;
-    for (const Registered& r : o.filters) {
-      if (!matches(r, can_id)) continue;
-      if (!joined) return true;
-      ++hits;
-    }
-    return hits > 0 && hits >= o.count;
   }
 
   void route(Connection& sender, const TxRecord& record) {
@@ -479,16 +406,26 @@ class Broker {
   }
 
   /// One round: what route() queued handed to its sockets, State::rounds odd
-  /// meanwhile.
+  /// meanwhile and for as long as a receiver's backlog holds frames (a frame
+  /// is in every socket that takes it only once no backlog holds one).
   void flush() {
     if (dirty_.empty()) return;
-    state_.rounds.fetch_add(1, std::memory_order_acq_rel);
+    if (!round_open_) {
+      state_.rounds.fetch_add(1, std::memory_order_acq_rel);
+      round_open_ = true;
+    }
     hand_over();
+    close_round_if_delivered();
+  }
+
+  void close_round_if_delivered() {
+    if (!round_open_ || backlogged_ > 0) return;
     state_.rounds.fetch_add(1, std::memory_order_release);
+    round_open_ = false;
   }
 
   /// Sends every connection what this round routed to it, in one call each;
-  /// a receiver whose buffer is full gets the grace once, then drops.
+  /// what does not fit in a receiver's buffer waits in its backlog (keep).
   void hand_over() {
     // In the kernel's order of serving (af_can.c, can_rcv_filter): sockets
     // with no filter, mask or inverted filters first, those whose filters all
@@ -504,37 +441,114 @@ class Broker {
     for (const int fd : dirty_) {
       Connection& c = connections_[static_cast<std::size_t>(fd)];
       if (c.fd < 0 || c.slot < 0) continue;
-      Socket& s = state_.sockets[c.slot];
-      std::size_t done = 0;
-      while (done < c.queued.size()) {
-        const std::size_t count = std::min<std::size_t>(c.queued.size() - done, 64);
-        mmsghdr out[64] = {};
-        iovec parts[64];
-        for (std::size_t k = 0; k < count; ++k) {
-          RxRecord& r = c.queued[done + k];
-          parts[k] = {&r, kRxHeader + r.size};
-          out[k].msg_hdr.msg_iov = &parts[k];
-          out[k].msg_hdr.msg_iovlen = 1;
-        }
-        const int sent = sendmmsg(c.fd, out, static_cast<unsigned>(count), MSG_DONTWAIT | MSG_NOSIGNAL);
-        if (sent > 0) {
-          done += static_cast<std::size_t>(sent);
-          c.overrun = false;
-          s.received.fetch_add(static_cast<std::uint64_t>(sent), std::memory_order_release);
-          continue;
-        }
-        if (sent < 0 && errno != EAGAIN) break;  // the program is going: its end is read next
-        if (!c.overrun && room_came(c.fd, s.pid, s.taken, options_.grace_us, options_.patience_us)) continue;
-        c.overrun = true;
-        const auto lost = static_cast<std::uint32_t>(c.queued.size() - done);
-        s.drops.fetch_add(lost, std::memory_order_relaxed);
-        if (Interface* i = find_interface(state_, c.queued[done].ifindex))
-          i->dropped.fetch_add(lost, std::memory_order_relaxed);
-        break;
-      }
+      // Behind a backlog, new frames wait their turn.
+      const std::size_t done =
+          c.backlog.empty() ? send_records(c, c.queued.size(), [&c](std::size_t k) -> RxRecord& { return c.queued[k]; })
+                            : 0;
+      if (done < c.queued.size()) keep(c, done);
       c.queued.clear();
     }
     dirty_.clear();
+  }
+
+  /// Sends up to `count` records, `at(0)` first, to c's socket without
+  /// waiting: how many went (all when the program is going: its end is read
+  /// next, and what it did not take is nobody's).
+  template <typename At>
+  std::size_t send_records(Connection& c, std::size_t count, At at) {
+    Socket& s = state_.sockets[c.slot];
+    std::size_t done = 0;
+    while (done < count) {
+      const std::size_t n = std::min<std::size_t>(count - done, 64);
+      mmsghdr out[64] = {};
+      iovec parts[64];
+      for (std::size_t k = 0; k < n; ++k) {
+        RxRecord& r = at(done + k);
+        parts[k] = {&r, kRxHeader + r.size};
+        out[k].msg_hdr.msg_iov = &parts[k];
+        out[k].msg_hdr.msg_iovlen = 1;
+      }
+      const int sent = sendmmsg(c.fd, out, static_cast<unsigned>(n), MSG_DONTWAIT | MSG_NOSIGNAL);
+      if (sent > 0) {
+        done += static_cast<std::size_t>(sent);
+        c.overrun = false;
+        s.received.fetch_add(static_cast<std::uint64_t>(sent), std::memory_order_release);
+        continue;
+      }
+      if (sent < 0 && errno != EAGAIN) return count;
+      break;
+    }
+    return done;
+  }
+
+  /// What did not fit in c's buffer, c.queued from `from` on, waits in its
+  /// backlog, sent as the receiver reads (EPOLLOUT), while the bus goes on
+  /// for everyone else. Only a full backlog makes the broker wait for a
+  /// receiver (room_came: while it reads or waits for a CPU, up to the
+  /// patience): the one way a flood is slowed to its slowest reader. A
+  /// receiver that lets the grace pass while it could read is stuck: its
+  /// backlog and these frames are dropped, counted, and so is what comes for
+  /// it until it reads again.
+  void keep(Connection& c, std::size_t from) {
+    Socket& s = state_.sockets[c.slot];
+    // A program that sized its buffer (SO_RCVBUF) has what it asked for, as
+    // on the kernel: a backlog of one frame, no more.
+    const std::size_t cap = c.options.rcvbuf > 0 ? 1 : std::max<std::size_t>(options_.backlog_frames, 1);
+    for (std::size_t k = from; k < c.queued.size(); ++k) {
+      if (!c.overrun && c.backlog.size() >= cap) {
+        // A socket that has never read a frame (one a program only sends on)
+        // is no reader to wait for: the kernel's treatment, dropped when full.
+        if (s.taken.load(std::memory_order_acquire) != 0) {
+          const std::int64_t waited_from = monotonic_ns();
+          while (c.backlog.size() >= cap && room_came(c.fd, s.pid, s.taken, options_.grace_us, options_.patience_us))
+            send_backlog(c);
+          count_wait(monotonic_ns() - waited_from);
+        }
+        if (c.backlog.size() >= cap) {
+          c.overrun = true;
+          for (const RxRecord& r : c.backlog) lose(s, r);
+          c.backlog.clear();
+        }
+      }
+      if (c.overrun) {
+        lose(s, c.queued[k]);
+        continue;
+      }
+      c.backlog.push_back(c.queued[k]);
+    }
+    set_backlogged(c, !c.backlog.empty());
+  }
+
+  void count_wait(std::int64_t ns) {
+    const auto us = static_cast<std::uint64_t>(ns / 1000);
+    state_.waits.fetch_add(1, std::memory_order_relaxed);
+    state_.waited_us.fetch_add(us, std::memory_order_relaxed);
+    if (us > state_.longest_wait_us.load(std::memory_order_relaxed))
+      state_.longest_wait_us.store(us, std::memory_order_relaxed);
+  }
+
+  void send_backlog(Connection& c) {
+    const std::size_t sent =
+        send_records(c, c.backlog.size(), [&c](std::size_t k) -> RxRecord& { return c.backlog[k]; });
+    c.backlog.erase(c.backlog.begin(), c.backlog.begin() + static_cast<std::ptrdiff_t>(sent));
+    set_backlogged(c, !c.backlog.empty());
+  }
+
+  /// Whether c waits for room (EPOLLOUT watched) with frames in its backlog.
+  void set_backlogged(Connection& c, bool backlogged) {
+    if (c.backlogged == backlogged) return;
+    c.backlogged = backlogged;
+    backlogged_ += backlogged ? 1 : -1;
+    epoll_event e{};
+    e.events = EPOLLIN | (backlogged ? EPOLLOUT : 0U);
+    e.data.fd = c.fd;
+    epoll_ctl(epoll_, EPOLL_CTL_MOD, c.fd, &e);
+  }
+
+  /// A frame `r` lost for socket `s`: counted on the socket (SO_RXQ_OVFL) and its interface.
+  void lose(Socket& s, const RxRecord& r) {
+    s.drops.fetch_add(1, std::memory_order_relaxed);
+    if (Interface* i = find_interface(state_, r.ifindex)) i->dropped.fetch_add(1, std::memory_order_relaxed);
   }
 
   int listen_fd_;
@@ -546,7 +560,9 @@ class Broker {
   int asker_fd_ = -1;
   bool asker_gone_ = true;
   bool stop_ = false;
-  bool fifo_ = true;  // at its SCHED_FIFO priority now (when it has one: State::rt_priority)
+  bool fifo_ = true;         // at its SCHED_FIFO priority now (when it has one: State::rt_priority)
+  bool round_open_ = false;  // State::rounds is odd: a round under way, or a backlog not yet delivered
+  int backlogged_ = 0;       // connections with frames in their backlog
   bool up_[kMaxInterfaces] = {};
   bool known_[kMaxInterfaces] = {};
   std::vector<Connection> connections_;

@@ -189,6 +189,7 @@ pid_t start_broker(const BusPaths& paths, const BrokerOptions& options) {
   state->version = kVersion;
   state->grace_us = options.grace_us;
   state->patience_us = std::max(options.patience_us, options.grace_us);
+  state->backlog_frames = options.backlog_frames;
 
   const int listen_fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   sockaddr_un a{};
@@ -317,7 +318,8 @@ std::string describe(const BusPaths& paths) {
   State& s = mapped->state();
   std::ostringstream out;
   out << "bus " << paths.folder << " (broker pid " << s.broker_pid << ", " << scheduling_text(s) << ", grace "
-      << s.grace_us / 1000.0 << " ms, patience " << s.patience_us / 1000.0 << " ms)\n";
+      << s.grace_us / 1000.0 << " ms, patience " << s.patience_us / 1000.0 << " ms, backlog " << s.backlog_frames
+      << " frames)\n";
   bool any = false;
   for (const Interface& i : s.interfaces) {
     if (i.in_use.load() == 0) continue;
@@ -326,6 +328,9 @@ std::string describe(const BusPaths& paths) {
         << i.mtu.load() << "  frames " << i.frames.load() << "  dropped " << i.dropped.load() << '\n';
   }
   if (!any) out << "  no interfaces (add one: canhil bus up vcan0)\n";
+  out << "  waited for full receivers " << s.waits.load() << " time(s), "
+      << static_cast<double>(s.waited_us.load()) / 1000.0 << " ms in all, longest "
+      << static_cast<double>(s.longest_wait_us.load()) / 1000.0 << " ms\n";
   for (int k = 0; k < kMaxSockets; ++k) {
     const Socket& sk = s.sockets[k];
     if (sk.in_use.load() == 0) continue;
@@ -358,6 +363,12 @@ std::vector<InterfaceCounts> interface_counts(const BusPaths& paths) {
     counts.push_back({i.name, i.frames.load(), i.dropped.load()});
   }
   return counts;
+}
+
+BusWaits broker_waits(const BusPaths& paths) {
+  auto mapped = require_state(paths);
+  const State& s = mapped->state();
+  return {s.waits.load(), s.waited_us.load(), s.longest_wait_us.load()};
 }
 
 std::string broker_scheduling(const BusPaths& paths) { return scheduling_text(require_state(paths)->state()); }

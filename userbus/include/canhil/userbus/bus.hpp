@@ -32,14 +32,21 @@ struct BusPaths {
 };
 
 struct BrokerOptions {
-  /// How long a receiver whose buffer is full may read nothing while it
-  /// could before the broker drops frames for it (the kernel drops at once:
+  /// How long a receiver whose buffer and backlog are full may read nothing
+  /// while it could before the broker drops frames for it (the kernel drops at once:
   /// 0). The wait follows the receiver: each read it makes renews the grace,
   /// and while one of its threads is runnable but not running (a busy
   /// machine) it is waiting for a CPU, not stuck, and the wait goes on. A
   /// receiver that let the wait pass has frames dropped at once, counted,
   /// until it reads again: a stuck receiver costs the bus one grace.
   std::uint32_t grace_us = 10000;
+  /// How many frames wait in the broker for a receiver whose buffer is full
+  /// while the bus goes on for everyone else (about 100 bytes each): a slow
+  /// or briefly starved reader (a normal-priority `candump` or `canhil
+  /// timing` beside a real-time run) loses nothing and slows nobody. Only a
+  /// full backlog makes the broker wait for its receiver, with the grace
+  /// and patience below.
+  std::uint32_t backlog_frames = 4096;
   /// The longest the broker waits for one full receiver in all, however it
   /// reads or waits for a CPU: what a receiver that is always runnable but
   /// never reads (a busy loop holding a socket) can cost the bus, once.
@@ -128,6 +135,15 @@ struct InterfaceCounts {
   std::uint64_t dropped = 0;
 };
 std::vector<InterfaceCounts> interface_counts(const BusPaths& paths);
+
+/// How often and how long the whole bus waited for a receiver whose
+/// backlog was full (BrokerOptions::backlog_frames).
+struct BusWaits {
+  std::uint64_t count = 0;
+  std::uint64_t total_us = 0;
+  std::uint64_t longest_us = 0;
+};
+BusWaits broker_waits(const BusPaths& paths);
 
 /// How the bus's broker is scheduled: "SCHED_FIFO 45, memory locked", or
 /// "normal scheduler" where the system refused a real-time priority.

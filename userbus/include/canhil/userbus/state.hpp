@@ -128,8 +128,15 @@ struct State {
   std::uint32_t magic;
   std::uint32_t version;
   std::int32_t broker_pid;
-  std::uint32_t grace_us;     ///< how long a full receiver may read nothing while it could before frames drop for it
-  std::uint32_t patience_us;  ///< the longest the broker waits for one full receiver in all
+  std::uint32_t grace_us;        ///< how long a full receiver may read nothing while it could before frames drop for it
+  std::uint32_t patience_us;     ///< the longest the broker waits for one full receiver in all
+  std::uint32_t backlog_frames;  ///< frames that wait in the broker for a full receiver
+  /// The times the broker waited for a receiver whose backlog was full (the
+  /// whole bus waits meanwhile), the time it waited in all and the longest
+  /// wait, counted by the broker: `canhil bus list` and `bus exec` show them.
+  std::atomic<std::uint64_t> waits;
+  std::atomic<std::uint64_t> waited_us;
+  std::atomic<std::uint64_t> longest_wait_us;
   /// The broker's scheduling as it got it: SCHED_FIFO priority (0: the
   /// normal scheduler) and whether its memory is locked (BrokerOptions).
   std::int32_t rt_priority;
@@ -144,7 +151,8 @@ struct State {
   std::atomic<std::uint64_t> spin;
   std::atomic<std::uint64_t> spins;  ///< how many times the broker looked on so, counted by it
   /// The broker's rounds of handing frames to their sockets: odd while one
-  /// is under way, even between them. A program that has read a frame on one
+  /// is under way, or while a receiver's backlog still holds frames (its
+  /// buffer was full), even between them. A program that has read a frame on one
   /// socket and then finds this even, or past the odd value it saw after
   /// that read, knows the frame is in every socket that takes it (canhil's
   /// lockstep: can_nodes::DeliveryFence, through canhil_userbus_rounds).
