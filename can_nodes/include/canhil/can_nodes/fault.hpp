@@ -30,6 +30,7 @@
 #include <string_view>
 #include <vector>
 
+#include "canhil/base/pi_mutex.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/node.hpp"
 
@@ -111,7 +112,7 @@ class FaultInjector final : public FaultHook {
   std::vector<FaultCount> counts_;
   std::uint64_t state_;
   std::uint32_t bit_rate_;
-  mutable std::mutex mutex_;  // on_send comes from the node threads, battery_drain_until from the physics
+  mutable PiMutex mutex_;  // on_send comes from the node threads (SCHED_FIFO), battery_drain_until from the physics
   Nanos start_{0};
   Nanos drained_until_{0};
 };

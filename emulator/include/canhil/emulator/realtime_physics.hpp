@@ -16,6 +16,7 @@
 #include <mutex>
 #include <thread>
 
+#include "canhil/base/pi_mutex.hpp"
 #include "canhil/emulator/session.hpp"
 
 namespace canhil::emulator {
@@ -53,7 +54,7 @@ class RealtimePhysics {
   Nanos max_behind_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
-  mutable std::mutex mutex_;  // guards stats_
+  mutable PiMutex mutex_;  // guards stats_ (read by the node thread, SCHED_FIFO)
   RealtimeStats stats_;
 };
 

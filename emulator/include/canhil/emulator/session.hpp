@@ -34,6 +34,7 @@
 #include <variant>
 #include <vector>
 
+#include "canhil/base/pi_mutex.hpp"
 #include "canhil/can_nodes/fault.hpp"
 #include "canhil/can_nodes/robot_nodes.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
@@ -282,7 +283,7 @@ class Session {
   std::uint64_t steps_ = 0;
   Nanos now_{0};  // the time of the step in progress (the vision's frame time)
 
-  mutable std::mutex snapshot_mutex_;
+  mutable PiMutex snapshot_mutex_;  // PiMutex: shared with a real-time run's node thread
   WorldSnapshot snapshot_;
   mutable std::atomic<bool> detail_asked_{false};
   std::atomic<std::size_t> vision_watched_{kNoRobot};  // kNoRobot: none
@@ -290,7 +291,7 @@ class Session {
   std::optional<VisionDetail> vision_seen_;  // the stepping thread's copy
   struct StateRequests;
   std::unique_ptr<StateRequests> state_requests_;
-  std::mutex changes_mutex_;
+  PiMutex changes_mutex_;
   std::vector<Change> world_changes_, bus_changes_;
   std::atomic<bool> any_world_change_{false}, any_bus_change_{false};  // set under the mutex; read first without it
 };

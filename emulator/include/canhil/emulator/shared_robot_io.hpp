@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "canhil/base/pi_mutex.hpp"
 #include "canhil/can_nodes/robot_io.hpp"
 #include "canhil/physics/world.hpp"
 
@@ -55,7 +56,7 @@ class SharedRobotIo final : public can_nodes::RobotIo {
   };
   physics::Robot& robot_;
   const physics::KickerParams kicker_;
-  mutable std::mutex mutex_;
+  mutable PiMutex mutex_;  // the node thread is SCHED_FIFO, the physics thread is not
   Sensors sensors_;
   std::array<std::optional<double>, 3> wheel_;
   std::optional<int> grabber_;
