@@ -1,11 +1,13 @@
 // app/log_file.hpp — a candump log file, entry by entry, for the commands that
-// judge one (`canhil timing`, `canhil timing --analyse`).
+// judge one (`canhil timing`, `canhil timing --analyse`); and a run's logs
+// written out (`canhil run`'s trace and world log, `canhil match --logs`).
 #pragma once
 
 #include <fstream>
 #include <functional>
 #include <string>
 
+#include "args.hpp"
 #include "canhil/base/located_error.hpp"
 #include "canhil/frames/candump.hpp"
 
@@ -27,6 +29,14 @@ inline void for_each_log_entry(const std::string& path, const std::function<void
     if (!frames::parse_log_line(line, e, &error)) throw LocatedError(path, n, "", error);
     each(e);
   }
+}
+
+/// Writes `text` (a trace, a world log) to `path`; a UsageError naming
+/// `what` and the path when it cannot.
+inline void write_file(const std::string& path, const std::string& text, const char* what) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw UsageError("cannot write the " + std::string(what) + " to " + path);
 }
 
 }  // namespace canhil::app

@@ -88,13 +88,14 @@ const Command kCommands[] = {
      canhil::app::run_run},
     {"match", "whole matches of two teams in virtual time, with a table of results",
      R"(  canhil match SCENARIO.toml [--halves 2] [--half-minutes 10] [--seeds 1..200 | --repeat 1 [--seed N]]
-               [--jobs CORES] [--records FILE.jsonl | --no-records] [--json] [--quiet]
+               [--jobs CORES] [--records FILE.jsonl | --no-records] [--json] [--quiet] [--logs DIR]
                                               two teams ([[teams]]) play whole matches in virtual time,
                                               ends changed at half time, the referee on, --jobs at a time
                                               (worker processes); per match and in total: score,
                                               possession, shots, kicks, faults and FTT violations per
                                               team; one record per match appended to FILE
-                                              (match-records.jsonl) (docs/teams.md)
+                                              (match-records.jsonl); --logs DIR keeps every half's
+                                              trace and world log (docs/teams.md)
   canhil match --report RECORDS.jsonl... [--json] [--svg FILE]
                                               records from any files merged: wins, draws, losses, goal
                                               difference with its 95 % interval, win rate (Wilson),

@@ -1,5 +1,5 @@
 // `canhil match SCENARIO [--halves 2] [--half-minutes 10] [--repeat N]
-// [--seed S] [--json] [--quiet] [--external [--process CMD]... [--logs DIR]
+// [--seed S] [--json] [--quiet] [--logs DIR] [--external [--process CMD]...
 // [--answer-limit S]]`: whole matches of a two-team scenario in virtual time
 // (emulator/match.hpp), one seed per match (S, S+1, ...), and a table per
 // match and over all of them: score, possession, shots, kicks, faults and FTT
@@ -29,6 +29,7 @@
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "external_worker.hpp"
+#include "log_file.hpp"
 #include "match_external.hpp"
 #include "match_jobs.hpp"
 #include "match_records.hpp"
@@ -229,8 +230,8 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
       throw UsageError(path + ": " + e.what());
     }
   }();
-  if (!external && (!processes.empty() || logs || answer_limit)) {
-    throw UsageError("--process, --logs and --answer-limit are for matches with --external");
+  if (!external && (!processes.empty() || answer_limit)) {
+    throw UsageError("--process and --answer-limit are for matches with --external");
   }
   try {
     emulator::apply_external_overrides(scenario, processes, answer_limit);
@@ -268,6 +269,18 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   emulator::SessionOptions options;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   use_private_rtdb_keys(kRunKeyPrefix);  // keys of this process, never a live robot's database
+  if (logs) {
+    // Every half's trace and world log, to look at with `canhil view` (docs/teams.md).
+    std::error_code made;
+    std::filesystem::create_directories(*logs, made);
+    match.keep_logs = true;
+    match.half_ended = [dir = *logs](const emulator::Session& session, const emulator::HalfDriver& driver,
+                                     std::uint64_t match_seed, int half) {
+      const std::string name = dir + "/seed" + std::to_string(match_seed) + "-half" + std::to_string(half + 1);
+      write_file(name + ".log", driver.trace(), "half's trace");
+      write_file(name + ".csv", session.world_log(), "half's world log");
+    };
+  }
   int match_number = 0;
   // With the teams' processes, one match at a time unless --jobs says more:
   // each worker then has its own bus and IPC namespace (external_worker.hpp).

@@ -10,10 +10,10 @@
 namespace canhil::app {
 namespace {
 
-emulator::ExternalOptions driver_options(const emulator::Session& session) {
+emulator::ExternalOptions driver_options(const emulator::Session& session, bool keep_trace) {
   emulator::ExternalOptions o;
   o.start_limit = from_seconds(attach_limit_s(session.scenario()));
-  o.record_trace = false;  // a match keeps its figures, not its frames
+  o.record_trace = keep_trace;  // a match keeps its figures, its frames only with --logs
   o.check_timing = true;
   return o;
 }
@@ -27,7 +27,7 @@ class ExternalHalf final : public emulator::HalfDriver {
                const std::string& file_prefix)
       : name_(name),
         conductor_(conductor_options(session.scenario())),
-        driver_(session, conductor_, driver_options(session)),
+        driver_(session, conductor_, driver_options(session, how.logs.has_value())),
         processes_(conductor_.environment(how.shim, how.team_preload.empty() ? nullptr : how.team_preload.c_str()),
                    stderr, ProcessOutput{how.logs, file_prefix, true}),
         spin_(how.alone ? spin_the_bus(session) : nullptr) {
@@ -70,6 +70,7 @@ class ExternalHalf final : public emulator::HalfDriver {
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t robot) const override { return driver_.ftt_violations(robot); }
   std::uint64_t trace_hash() const override { return driver_.trace_hash(); }
+  std::string trace() const override { return driver_.trace(); }
 
  private:
   std::string name_;

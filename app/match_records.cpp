@@ -61,6 +61,15 @@ nlohmann::json match_record(const emulator::MatchResult& r, const RecordContext&
   out["winner"] = winner ? nlohmann::json(c.teams.at(*winner)) : nlohmann::json(nullptr);
   out["goals"] = goals;
   out["referee_calls"] = r.referee_calls;
+  nlohmann::json calls = nlohmann::json::array();
+  for (const emulator::MatchCall& x : r.calls) {
+    calls.push_back({{"half", x.half + 1},
+                     {"time_s", x.time_s},
+                     {"restart", x.restart},
+                     {"team", x.team ? nlohmann::json(c.teams.at(*x.team)) : nlohmann::json(nullptr)},
+                     {"text", x.text}});
+  }
+  out["referee"] = calls;
   nlohmann::json first = nlohmann::json::array();
   for (const physics::SolverReport& x : r.solver.first) {
     first.push_back(
@@ -104,6 +113,13 @@ emulator::MatchResult result_of(const nlohmann::json& j) {
     r.goals.push_back({g.at("half").get<int>() - 1, g.at("time_s").get<double>(), team});
   }
   r.referee_calls = j.at("referee_calls").get<std::size_t>();
+  for (const nlohmann::json& x : j.value("referee", nlohmann::json::array())) {  // records before 2026-11-28 have none
+    std::optional<std::size_t> team;
+    if (!x.at("team").is_null())
+      team = x.at("team").get<std::string>() == j.at("teams").at(0).at("team").get<std::string>() ? 0 : 1;
+    r.calls.push_back({x.at("half").get<int>() - 1, x.at("time_s").get<double>(), x.at("restart").get<std::string>(),
+                       team, x.at("text").get<std::string>()});
+  }
   r.solver.messages = j.at("solver").at("messages").get<std::uint64_t>();
   r.solver.internal_errors = j.at("solver").at("internal_errors").get<std::uint64_t>();
   r.solver.errors = j.at("solver").at("errors").get<std::uint64_t>();

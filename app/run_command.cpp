@@ -22,6 +22,7 @@
 #include "canhil/viewer/live_feed.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
+#include "log_file.hpp"
 #include "play_summary.hpp"
 #include "private_rtdb.hpp"
 #include "run_external.hpp"
@@ -33,12 +34,6 @@
 
 namespace canhil::app {
 namespace {
-
-void write_file(const std::string& path, const std::string& text, const char* what) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw UsageError("cannot write the " + std::string(what) + " to " + path);
-}
 
 // A saved world (--restore-world), or a usage error naming the file and what is wrong.
 physics::WorldState load_world(const std::string& path) {

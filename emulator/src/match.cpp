@@ -86,16 +86,17 @@ class HalfTally {
 // canhil's in-process reference handler and agent, the FTT check on.
 class ReferenceHalf final : public HalfDriver {
  public:
-  explicit ReferenceHalf(Session& session) : driver_(session, options()) {}
+  ReferenceHalf(Session& session, bool keep_trace) : driver_(session, options(keep_trace)) {}
   void run_until(Nanos end) override { driver_.run_until(end); }
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t robot) const override { return driver_.ftt_violations(robot); }
   std::uint64_t trace_hash() const override { return driver_.trace_hash(); }
+  std::string trace() const override { return driver_.trace(); }
 
  private:
-  static VirtualOptions options() {
+  static VirtualOptions options(bool keep_trace) {
     VirtualOptions o;
-    o.record_trace = false;
+    o.record_trace = keep_trace;
     o.check_timing = true;
     return o;
   }
@@ -154,13 +155,16 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
   result.teams.resize(2);
   const auto wall_start = std::chrono::steady_clock::now();
   double played = 0;
+  SessionOptions half_options = options;
+  if (match.keep_logs) half_options.world_log_period = match.world_log_period;
   for (int half = 0; half < match.halves && !result.stopped; ++half) {
     Scenario s = half_scenario(scenario, half);
     s.seed = half_seed(scenario.seed, half);
     s.duration_s = match.half_s;
-    Session session(s, options);
-    const std::unique_ptr<HalfDriver> driving =
-        match.driver ? match.driver(session, scenario.seed, half) : std::make_unique<ReferenceHalf>(session);
+    Session session(s, half_options);
+    const std::unique_ptr<HalfDriver> driving = match.driver
+                                                    ? match.driver(session, scenario.seed, half)
+                                                    : std::make_unique<ReferenceHalf>(session, match.keep_logs);
     HalfDriver& driver = *driving;
     HalfTally tally(session, match);
     session.on_step([&](Nanos now) { tally.step(now, session.step_period()); });
@@ -181,7 +185,12 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
       ++half_tally[team].goals;
       result.goals.push_back({half, to_seconds(g.time), team});
     }
-    if (const Referee* referee = session.referee()) result.referee_calls += referee->calls().size();
+    if (const Referee* referee = session.referee()) {
+      for (const RefereeCall& c : referee->calls())
+        result.calls.push_back({half, to_seconds(c.time), std::string(restart_name(c.restart)), c.team, c.text});
+      result.referee_calls += referee->calls().size();
+    }
+    if (match.half_ended) match.half_ended(session, driver, scenario.seed, half);
     result.solver.add(session.world().solver_health());
     result.timing += session.step_timing();
     for (std::size_t r = 0; r < s.robot_count(); ++r) {

@@ -523,9 +523,9 @@ TEST(CanhilMatch, RefusesWhatIsNoMatch) {
 }
 
 TEST(CanhilMatch, ExternalOptionsNeedExternalAndExternalNeedsProcesses) {
-  const CliRun logs = canhil("match emulator/scenarios/two_teams.toml --logs /tmp/nowhere");
-  EXPECT_EQ(logs.status, 2);
-  EXPECT_TRUE(has(logs, "--process, --logs and --answer-limit are for matches with --external")) << logs.out;
+  const CliRun process = canhil("match emulator/scenarios/two_teams.toml --process agent");
+  EXPECT_EQ(process.status, 2);
+  EXPECT_TRUE(has(process, "--process and --answer-limit are for matches with --external")) << process.out;
   const CliRun bare = canhil("match emulator/scenarios/two_teams.toml --external");
   EXPECT_EQ(bare.status, 2);
   EXPECT_TRUE(has(bare, "this scenario gives none; add them, or give --process")) << bare.out;

@@ -61,6 +61,36 @@ TEST(MatchBatch, TwoWorkersGiveTheRecordsOfOneTraceHashesIncluded) {
   EXPECT_EQ(table(a.out), table(b.out));
 }
 
+TEST(MatchBatch, JsonGivesTheRefereesCallsAndLogsKeepEveryHalfsTraceAndWorldLog) {
+  const std::string dir = scratch("logs");
+  fs::remove_all(dir);
+  const CliRun run = canhil(
+      "match emulator/scenarios/two_teams.toml --halves 2 --half-minutes 0.4 --seed 3 --jobs 1 --json --logs " + dir);
+  ASSERT_EQ(run.status, 0) << run.out;
+  const nlohmann::json match = nlohmann::json::parse(run.out).at("matches").at(0);
+  const nlohmann::json& calls = match.at("referee");
+  EXPECT_EQ(calls.size(), match.at("referee_calls").get<std::size_t>()) << "the calls themselves, not their count";
+  ASSERT_GT(calls.size(), 0u) << "24 s of play give the referee something to call";
+  for (int half = 1; half <= 2; ++half) {
+    const std::string name = dir + "/seed3-half" + std::to_string(half);
+    std::ifstream trace(name + ".log");
+    std::string first;
+    ASSERT_TRUE(std::getline(trace, first)) << name << ".log";
+    EXPECT_TRUE(std::regex_search(first, std::regex(R"(^\([0-9]+\.[0-9]{6}\) vcan[0-9]+ [0-9A-F]{3}#)"))) << first;
+    // The world log's call lines are the calls the JSON gives for that half.
+    std::ifstream world(name + ".csv");
+    std::size_t in_log = 0;
+    for (std::string line; std::getline(world, line);) in_log += line.rfind("#referee,", 0) == 0 ? 1U : 0U;
+    std::size_t in_json = 0;
+    for (const nlohmann::json& c : calls) {
+      in_json += c.at("half") == half ? 1U : 0U;
+      EXPECT_FALSE(c.at("restart").get<std::string>().empty()) << c;
+    }
+    EXPECT_EQ(in_log, in_json) << "half " << half;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(MatchBatch, AMatchWhoseProcessDiesIsRecordedAsFailedAndTheBatchGoesOn) {
   const std::string path = scratch("killed.jsonl");
   const CliRun r = canhil(std::string(kShort) + " --seeds 1..4 --jobs 2 --records " + path, "CANHIL_MATCH_KILL_SEED=2");

@@ -156,6 +156,7 @@ class SeenHalf final : public HalfDriver {
   Nanos now() const override { return driver_.now(); }
   std::uint64_t ftt_violations(std::size_t) const override { return 7; }
   std::uint64_t trace_hash() const override { return driver_.trace_hash(); }
+  std::string trace() const override { return driver_.trace(); }
 
  private:
   static VirtualOptions options() {

@@ -37,6 +37,9 @@ class HalfDriver {
   virtual std::uint64_t ftt_violations(std::size_t robot) const = 0;
   /// A hash of every frame on the half's buses so far (BusWatch::trace_hash).
   virtual std::uint64_t trace_hash() const = 0;
+  /// Every frame on the half's buses so far as a candump -l log, when the
+  /// match keeps its logs (MatchOptions::keep_logs); else empty.
+  virtual std::string trace() const = 0;
 };
 
 /// Makes the driver of half `half` (0-based) of the match with seed `seed`,
@@ -54,6 +57,24 @@ struct MatchOptions {
   double shot_check_s = 0.05;
   /// None: the in-process reference handler and agent on every robot.
   HalfDriverMaker driver;
+  /// Each half keeps its frames (HalfDriver::trace) and a world log (one row
+  /// every world_log_period), for half_ended: what `canhil match --logs`
+  /// writes, so that a half can be looked at (`canhil view`) without
+  /// playing it again. Off, a match keeps its figures only.
+  bool keep_logs = false;
+  Nanos world_log_period = std::chrono::milliseconds(50);
+  /// Called at the end of each half (0-based) of the match with seed `seed`,
+  /// its session and driver still there.
+  std::function<void(const Session&, const HalfDriver&, std::uint64_t seed, int half)> half_ended;
+};
+
+/// One of the referee's calls in a match.
+struct MatchCall {
+  int half = 0;
+  double time_s = 0;                ///< into the half
+  std::string restart;              ///< restart_name()'s words: "kickoff", "goalkick", ...
+  std::optional<std::size_t> team;  ///< the team that takes it; none: a dropped ball
+  std::string text;                 ///< for people: "goal for new (+x), kick-off old"
 };
 
 /// A team's figures over a match (or a half).
@@ -78,6 +99,7 @@ struct MatchResult {
   std::vector<TeamTally> teams;  ///< in the scenario's order
   std::vector<MatchGoal> goals;
   std::size_t referee_calls = 0;
+  std::vector<MatchCall> calls;  ///< every call, in order (a record read back may have only the count)
   physics::SolverHealth solver;  ///< what ODE reported over every half
   double virtual_s = 0;
   double wall_s = 0;
