@@ -47,8 +47,8 @@ constexpr std::array<std::string_view, 4> kColors{"blue", "yellow", "magenta", "
 constexpr std::array<std::string_view, 2> kEnds{"positive_x", "negative_x"};
 
 constexpr QuantityInfo number(std::string_view item, std::string_view name, std::string_view unit,
-                              std::string_view meaning) {
-  return {item, name, QuantityKind::kNumber, unit, false, false, {}, meaning};
+                              std::string_view meaning, bool per_agent = false) {
+  return {item, name, QuantityKind::kNumber, unit, per_agent, false, {}, meaning};
 }
 constexpr QuantityInfo boolean(std::string_view item, std::string_view name, std::string_view meaning,
                                bool per_agent = false) {
@@ -68,7 +68,7 @@ constexpr QuantityInfo enumerated(std::string_view item, std::string_view name,
 }
 
 // Items in the order of docs/layouts.md; the quantities of one item together.
-constexpr std::array<QuantityInfo, 52> kContract{{
+constexpr std::array<QuantityInfo, 53> kContract{{
     points("VISION_INFO", "obstacles", "obstacle points, robot frame (x right, y forward)"),
     count("VISION_INFO", "obstacles.count", "obstacle points written (at most the capacity)"),
     points("VISION_INFO", "lines", "white field-line points, robot frame"),
@@ -124,6 +124,10 @@ constexpr std::array<QuantityInfo, 52> kContract{{
     enumerated("COACH_INFO", "team_color", kColors, "the team's colour", true),
     enumerated("COACH_INFO", "attacks", kEnds,
                "the goal the robot's team attacks (this half): the one at world +x or at -x", true),
+    number("COACH_INFO", "relocations", "1",
+           "times canhil moved the robot (referee, viewer, control), each counted a relocation delay after the "
+           "move: a new value says \"find yourself again\"",
+           true),
     number("CMD_SETPOSE", "x", "m", "pose to set"),
     number("CMD_SETPOSE", "y", "m", "pose to set"),
     number("CMD_SETPOSE", "heading", "rad", "pose to set, counter-clockwise"),

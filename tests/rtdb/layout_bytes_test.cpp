@@ -217,6 +217,22 @@ TEST_F(CambadaLayout, CoachInfoPerRobot) {
   EXPECT_EQ(as<facts::CoachInfo>(coach).gameState, 3) << "a refused name writes nothing";
 }
 
+// CAMBADA's agent relocalises from scratch when its changePositionSN changes
+// (its Integrator: "Reloc by baseReloc"): canhil's count of the robot's moves.
+TEST_F(CambadaLayout, RelocationsAreEachRobotsChangePositionSerial) {
+  ItemBuffer coach = buffer("COACH_INFO");
+  const Quantity relocations = coach.quantity("relocations");
+  ASSERT_TRUE(relocations) << "COACH_INFO.changePositionSN carries relocations";
+  coach.set(relocations, 3, 2);
+  coach.set(relocations, 1, 6);
+  const auto c = as<facts::CoachInfo>(coach);
+  EXPECT_EQ(c.changePositionSN[0], 0);
+  EXPECT_EQ(c.changePositionSN[1], 3) << "agent 2's";
+  EXPECT_EQ(c.changePositionSN[5], 1) << "agent 6's";
+  for (const facts::PlayerInfo& p : c.playerInfo) EXPECT_EQ(p.number, 0) << "nothing else written";
+  EXPECT_EQ(coach.get(relocations, 2), 3.0);
+}
+
 // canhil's layout writes exactly what canhil-hwcomm and the vision write today
 // (laptop/src/hwcomm.cpp, vision_emu/src/runner.cpp), computed here their way.
 class CanhilLayout : public CambadaLayout {

@@ -334,7 +334,7 @@ double sample(const QuantityInfo& q) {
       {"dy", -0.004},        {"dheading", 0.05},  {"v_logic", 12.34}, {"v_power12", 24.1}, {"v_power24", 25.2},
       {"v_kicker", 380.5},   {"raw", -321},       {"bad_frames", 17}, {"alive", 0x3F},     {"node_state", 2},
       {"wrong_length", 3},   {"out_of_range", 4}, {"unknown_id", 5},  {"missed_tms", 6},   {"send_failed", 7},
-      {"command", 1}};
+      {"command", 1},        {"relocations", 12}};
   if (q.kind == QuantityKind::kBool) return 1;
   if (q.kind == QuantityKind::kCount) return 3;
   if (q.name == "heading") return q.clockwise ? 123.4 : 2.0;  // CMD_IMU in deg; CMD_POS, CMD_SETPOSE in rad
