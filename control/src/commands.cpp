@@ -95,7 +95,8 @@ json to_json(const emulator::WorldSnapshot& s) {
     goals.push_back({{"time_s", to_seconds(g.time)}, {"positive_x", g.positive_x}});
   json players = json::array();
   for (const emulator::CoachPlayer& p : s.coach.players) {
-    players.push_back({{"running", p.running}, {"role", p.role}, {"role_auto", p.role_auto}});
+    players.push_back(
+        {{"running", p.running}, {"role", p.role}, {"role_auto", p.role_auto}, {"relocations", p.relocations}});
   }
   json out = {{"time_s", s.time_s},
               {"steps", s.steps},

@@ -103,6 +103,7 @@ LaptopLink::LaptopLink(const LaptopSide& side, const std::vector<int>& agents, c
       c.role_auto = c.buffer->quantity("role_auto");
       c.role = c.buffer->quantity("role");
       c.attacks = c.buffer->quantity("attacks");
+      c.relocations = c.buffer->quantity("relocations");
     }
     const rtdb::ItemTable& table = db_->items();
     const auto id = table.id(name);
@@ -224,6 +225,7 @@ void LaptopLink::write_coach(const CoachState& coach) {
       b.set(c.role_auto, p.role_auto ? 1.0 : 0.0, agent);
       set_name(c.role, p.role, agent);
       set_name(c.attacks, coach.attacks_positive_x ? "positive_x" : "negative_x", agent);
+      b.set(c.relocations, static_cast<double>(p.relocations), agent);
     }
     for (const auto& [space, owner] : c.targets) db_->put(space, owner, c.id, b.bytes(), 0);
   }

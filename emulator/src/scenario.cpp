@@ -144,6 +144,7 @@ void read_laptop(const TableReader& r, LaptopSide& l) {
     l.pman = (*v == "builtin" || *v == "none") ? *v : beside(r.file(), *v);
   }
   if (const auto v = r.number("coach_period_s", 0.001, 10.0)) l.coach_period_s = *v;
+  if (const auto v = r.number("relocation_delay_s", 0.0, 10.0)) l.relocation_delay_s = *v;
   if (const auto v = r.boolean("replicate")) l.replicate = *v;
   if (const auto v = r.number("replicate_period_s", 0.001, 10.0)) l.replicate_period_s = *v;
   if (const toml::array* a = r.array("pman_processes")) {
@@ -185,9 +186,9 @@ void read_external(const TableReader& r, ExternalSide& e) {
 }
 
 const std::vector<std::string>& laptop_fields() {
-  static const std::vector<std::string> fields = {"rtdb_lib",       "rtdb_items", "rtdb_ini",
-                                                  "layout",         "pman",       "pman_processes",
-                                                  "coach_period_s", "replicate",  "replicate_period_s"};
+  static const std::vector<std::string> fields = {
+      "rtdb_lib",       "rtdb_items",     "rtdb_ini",           "layout",    "pman",
+      "pman_processes", "coach_period_s", "relocation_delay_s", "replicate", "replicate_period_s"};
   return fields;
 }
 const std::vector<std::string>& external_fields() {

@@ -74,6 +74,7 @@ std::string scenario_toml(const Scenario& sc, const WorldSnapshot& now) {
   for (const auto& p : l.pman_processes) processes.push_back(p);
   laptop.insert("pman_processes", std::move(processes));
   laptop.insert("coach_period_s", l.coach_period_s);
+  laptop.insert("relocation_delay_s", l.relocation_delay_s);
   if (l.replicate) laptop.insert("replicate", *l.replicate);
   laptop.insert("replicate_period_s", l.replicate_period_s);
   root.insert("laptop", std::move(laptop));

@@ -50,6 +50,12 @@ Session::Session(RunPlan plan)
   if (scenario_.referee.enabled.value_or(scenario_.teams.size() > 1))
     referee_ = std::make_unique<RefereeDesk>(scenario_);
   const std::size_t n = scenario_.robot_count();
+  for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
+    relocation_delay_.push_back(from_seconds(scenario_.laptop_of(t).relocation_delay_s));
+  }
+  relocation_due_.resize(n);
+  moved_.assign(n, 0);
+  placements_seen_.assign(n, 0);
   rigs_.resize(n);
   for (std::size_t r = 0; r < n; ++r) {
     Rig& rig = rigs_[r];
@@ -228,6 +234,9 @@ void Session::referee_step(Nanos now, bool scored) {
       for (const int goals : referee.score()) logged.score.push_back(std::to_string(goals));
       world_log_->call(logged);
     }
+    for (std::size_t r = 0; r < placements_seen_.size(); ++r) {
+      for (; placements_seen_[r] < referee_->placements(r); ++placements_seen_[r]) relocate_later(r, now);
+    }
     if (referee_hook_) referee_hook_(*out.call);
   } else if (out.resume) {
     set_team_states(std::vector<std::string>(scenario_.teams.size(), "start"));
@@ -262,8 +271,39 @@ void Session::after_step(Nanos now) {
   log_world(now);
   const bool scored = goals_.step(*world_, now);
   if (referee_) referee_step(now, scored);
+  if (any_moved_) {
+    for (std::size_t r = 0; r < moved_.size(); ++r) {
+      if (moved_[r] != 0) relocate_later(r, now);
+      moved_[r] = 0;
+    }
+    any_moved_ = false;
+  }
+  if (relocations_waiting_ > 0) count_relocations(now);
   if (step_hook_) step_hook_(now);
   publish(steps_);
+}
+
+void Session::relocate_later(std::size_t robot, Nanos now) {
+  relocation_due_[robot].push_back(now + relocation_delay_[rigs_[robot].team]);
+  ++relocations_waiting_;
+}
+
+// The relocations due by now into the coach's orders, written at once (a
+// team's agent relocalises when the count changes; it must not wait for the
+// next coach period).
+void Session::count_relocations(Nanos now) {
+  bool counted = false;
+  for (std::size_t r = 0; r < relocation_due_.size(); ++r) {
+    std::deque<Nanos>& due = relocation_due_[r];
+    for (; !due.empty() && due.front() <= now; due.pop_front()) {
+      ++coach_.players.at(r).relocations;
+      --relocations_waiting_;
+      counted = true;
+    }
+  }
+  if (!counted) return;
+  write_coaches();
+  if (coach_hook_) coach_hook_(coach_);
 }
 
 void Session::apply_bus_changes() {
@@ -345,6 +385,8 @@ void Session::refuse_error_frames(std::string why) {
 void Session::apply_now(const Change& change) {
   if (const auto* m = std::get_if<MoveRobot>(&change)) {
     world_->robot(m->robot).place(m->to);
+    moved_[m->robot] = 1;
+    any_moved_ = true;
   } else if (const auto* b = std::get_if<MoveBall>(&change)) {
     world_->place_ball(b->position, b->velocity);
   } else if (const auto* o = std::get_if<MoveObstacle>(&change)) {
@@ -360,6 +402,8 @@ void Session::apply_now(const Change& change) {
       if (r.last_kick_time_s >= 0) r.last_kick_time_s += shift;
     }
     world_->restore(state);
+    std::fill(moved_.begin(), moved_.end(), 1);  // every robot put where it was saved
+    any_moved_ = true;
   } else if (const auto* c = std::get_if<SetCoach>(&change)) {
     CoachState next = coach_;
     if (c->game_state && c->team) {

@@ -127,7 +127,8 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
 
 // The reference agent knows where it is only from the odometry: a robot the
 // referee carried is told its new place, as at the start (a team's own agent
-// localises itself from what its camera sees).
+// is told to find itself again from what its camera sees: COACH_INFO's
+// relocations, Session).
 void VirtualDriver::set_pose_of_carried_robots() {
   for (std::size_t r = 0; r < stacks_.size(); ++r) {
     ReferenceStack& l = *stacks_[r];

@@ -87,7 +87,8 @@ TEST(Scenarios, ARunLastsTheFlagsTimeElseTheScenariosElseTwentySecondsOrUntilCtr
 TEST(Scenarios, TheLaptopTableNamesTheTeamsSoftwareRelativeToTheFile) {
   const Scenario s = parse_scenario(
       "[laptop]\nrtdb_lib = \"lib/librtdb.so\"\nrtdb_items = \"rtdb_user.h\"\nrtdb_ini = \"/abs/rtdb.ini\"\n"
-      "layout = \"cambada\"\npman = \"none\"\ncoach_period_s = 0.5\nreplicate = false\nreplicate_period_s = 0.2\n",
+      "layout = \"cambada\"\npman = \"none\"\ncoach_period_s = 0.5\nreplicate = false\nreplicate_period_s = 0.2\n"
+      "relocation_delay_s = 0.25\n",
       "/team/scenarios/s.toml");
   EXPECT_EQ(s.laptop.rtdb_lib, "/team/scenarios/lib/librtdb.so");
   EXPECT_EQ(s.laptop.rtdb_items, "/team/scenarios/rtdb_user.h");
@@ -97,6 +98,10 @@ TEST(Scenarios, TheLaptopTableNamesTheTeamsSoftwareRelativeToTheFile) {
   EXPECT_DOUBLE_EQ(s.laptop.coach_period_s, 0.5);
   EXPECT_EQ(s.laptop.replicate, std::optional<bool>(false));
   EXPECT_DOUBLE_EQ(s.laptop.replicate_period_s, 0.2);
+  EXPECT_DOUBLE_EQ(s.laptop.relocation_delay_s, 0.25);
+  EXPECT_DOUBLE_EQ(parse_scenario("", "s.toml").laptop.relocation_delay_s, kRelocationDelayS);
+  EXPECT_NE(error_of("[laptop]\nrelocation_delay_s = -1\n").find("laptop.relocation_delay_s: must be a number"),
+            std::string::npos);
   EXPECT_NE(error_of("[laptop]\ncoach_period_s = 0\n").find("bad.toml:2: laptop.coach_period_s: must be a number"),
             std::string::npos)
       << error_of("[laptop]\ncoach_period_s = 0\n");

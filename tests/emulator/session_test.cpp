@@ -1,6 +1,8 @@
 // A session's one narrow surface, driven in virtual time: a consistent
 // snapshot to read, and changes (a robot, the ball or an obstacle moved, a
-// fault injected) that take effect at the next step, checked when asked.
+// fault injected) that take effect at the next step, checked when asked; and
+// what a team's agent is told of a robot canhil moved (COACH_INFO's
+// relocations).
 #include "canhil/emulator/session.hpp"
 
 #include <gtest/gtest.h>
@@ -9,11 +11,15 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <optional>
 #include <sstream>
 #include <thread>
 
+#include "canhil/emulator/laptop_link.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "support/counter_watch.hpp"
+#include "support/team_rtdb.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::emulator {
@@ -182,6 +188,112 @@ TEST_F(SessionTest, TimedStepsWithoutVisionCountNoVision) {
   driver.run_for(200ms);
   EXPECT_EQ(session.step_timing().physics.steps, session.snapshot().steps);
   EXPECT_EQ(session.step_timing().vision, Nanos{0});
+}
+
+// A team's own agent is told when canhil moved its robot: COACH_INFO's
+// relocations, in CAMBADA's layout the robot's changePositionSN, on which
+// CAMBADA's agent relocalises from scratch. Read back through the team's RTDB
+// library (the stand-in, a CAMBADA-like table), as the agent reads it.
+class RelocationTest : public test::WatchedTest {
+ protected:
+  RelocationTest() {
+    const std::string team = test::source_dir() + "/tests/support/cambada_like/";
+    scenario_.world.robots = {physics::Placement{-3.0, 0.0, -90}, physics::Placement{3.0, 2.0, 90}};
+    scenario_.referee.enabled = true;
+    scenario_.referee.restart_pause_s = 0.5;
+    scenario_.laptop.rtdb_lib = test::team_rtdb_library();
+    scenario_.laptop.rtdb_items = team + "rtdb_user.h";
+    scenario_.laptop.rtdb_ini = team + "config/rtdb.ini";
+    scenario_.laptop.layout = "cambada";
+    options_.messages = frames::MessageSet::load(test::shipped_dbc());
+    no_laptop_.reference_laptop = false;  // canhil's agent wants CMD_SETPOSE, which CAMBADA has not
+  }
+  // changePositionSN[agent - 1] of the base station's COACH_INFO in the
+  // agent's database (CAMBADA's CoachInfo: six ints from byte 192).
+  static std::int32_t serial(Session& session, int agent) {
+    rtdb::Database& db = session.laptop()->database();
+    std::vector<std::byte> coach(260);
+    EXPECT_TRUE(db.get(agent, 0, *db.items().id("COACH_INFO"), coach));
+    std::int32_t v = 0;
+    std::memcpy(&v, coach.data() + 192 + 4 * (agent - 1), sizeof v);
+    return v;
+  }
+  // Steps until the referee calls; the call's time.
+  static Nanos run_to_a_call(Session& session, VirtualDriver& driver) {
+    std::optional<Nanos> called;
+    session.on_referee_call([&](const RefereeCall& c) { called = c.time; });
+    for (int step = 0; step < 200 && !called; ++step) driver.run_for(session.step_period());
+    session.on_referee_call(nullptr);
+    EXPECT_TRUE(called.has_value()) << "no call within 2 s";
+    return called.value_or(Nanos{0});
+  }
+  // A goal in the +x goal: a kick-off, both robots carried to their places.
+  void score(Session& session) const {
+    session.apply(MoveBall{{scenario_.world.field.length_m / 2 - 0.3, 0.0, 0.11}, {3.0, 0.0, 0.0}});
+  }
+  test::RtdbKeys keys_;
+  Scenario scenario_;
+  SessionOptions options_;
+  VirtualOptions no_laptop_;
+};
+
+TEST_F(RelocationTest, EachCarryChangesTheRobotsSerialOnceTheDelayAfterIt) {
+  Session session(scenario_, options_);
+  VirtualDriver driver(session, no_laptop_);
+  const Nanos delay = from_seconds(kRelocationDelayS);
+  const Nanos step = session.step_period();
+  ASSERT_EQ(delay % step, Nanos{0}) << "the delay ends on a step";
+  driver.run_for(300ms);
+  EXPECT_EQ(serial(session, 1), 0);
+  EXPECT_EQ(serial(session, 2), 0);
+  score(session);
+  const Nanos carried = run_to_a_call(session, driver);
+  ASSERT_EQ(session.referee()->calls().size(), 1u);
+  ASSERT_EQ(session.referee()->calls()[0].restart, Restart::kKickoff);
+  ASSERT_EQ(session.referee_placements(0), 1u);
+  ASSERT_EQ(session.referee_placements(1), 1u);
+  // Not in the carry's cycle, nor before the delay: what the agent would see is from before.
+  driver.run_until(carried + delay - step);
+  EXPECT_EQ(serial(session, 1), 0) << "one step before the delay";
+  EXPECT_EQ(serial(session, 2), 0);
+  EXPECT_EQ(session.coach().players[0].relocations, 0u);
+  driver.run_until(carried + delay);
+  EXPECT_EQ(serial(session, 1), 1) << "at the delay";
+  EXPECT_EQ(serial(session, 2), 1);
+  EXPECT_EQ(session.coach().players[1].relocations, 1u);
+  EXPECT_EQ(session.snapshot().coach.players[0].relocations, 1u);
+  driver.run_for(600ms);  // past the restart's pause, the coach written again and again
+  EXPECT_EQ(serial(session, 1), 1) << "once per carry";
+  EXPECT_EQ(serial(session, 2), 1);
+  // A second carry: the second change, again the delay after it.
+  score(session);
+  const Nanos again = run_to_a_call(session, driver);
+  ASSERT_EQ(session.referee_placements(0), 2u);
+  driver.run_until(again + delay - step);
+  EXPECT_EQ(serial(session, 1), 1);
+  driver.run_until(again + delay);
+  EXPECT_EQ(serial(session, 1), 2);
+  EXPECT_EQ(serial(session, 2), 2);
+  driver.run_for(300ms);
+  EXPECT_EQ(serial(session, 1), 2);
+}
+
+TEST_F(RelocationTest, ARobotMovedFromOutsideChangesOnlyItsSerialTheDelayAfterTheStepThatMovedIt) {
+  scenario_.referee.enabled = false;
+  scenario_.laptop.relocation_delay_s = 0.2;  // the scenario's own delay
+  Session session(scenario_, options_);
+  VirtualDriver driver(session, no_laptop_);
+  const Nanos step = session.step_period();
+  driver.run_for(200ms);
+  session.apply(MoveRobot{1, physics::Placement{5.0, -4.0, 30}});  // the viewer's drag, a control command
+  const Nanos moved = driver.now() + step;                         // at the next step
+  driver.run_until(moved + 200ms - step);
+  EXPECT_EQ(serial(session, 2), 0);
+  driver.run_until(moved + 200ms);
+  EXPECT_EQ(serial(session, 2), 1) << "the scenario's relocation_delay_s after the move";
+  EXPECT_EQ(serial(session, 1), 0) << "the robot that stayed is not told";
+  driver.run_for(500ms);
+  EXPECT_EQ(serial(session, 2), 1);
 }
 
 }  // namespace

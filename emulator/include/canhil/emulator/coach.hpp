@@ -1,12 +1,14 @@
 // canhil/emulator/coach.hpp — the base station's orders to the robots: the
 // game state (the referee's signal as the coach relays it) and, per robot,
-// whether it plays and in which role. A scenario sets them ([coach]); a
-// running session changes them (SetCoach: canhil coach, the viewer, the
-// referee); the coach writer puts them into every robot's RTDB as the team's
+// whether it plays, in which role and how often canhil has moved it. A
+// scenario sets them ([coach]); a running session changes them (SetCoach:
+// canhil coach, the viewer, the referee; a robot carried or moved counts a
+// relocation); the coach writer puts them into every robot's RTDB as the team's
 // base station does (COACH_INFO, FORMATION_INFO in the team's layout).
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -27,6 +29,13 @@ struct CoachPlayer {
   bool running = true;           ///< the base station lets it play
   std::string role = "striker";  ///< a role the team's layout names
   bool role_auto = true;         ///< the agent picks its role itself
+  /// How many times the robot was moved by canhil (the referee's placements,
+  /// a robot moved by the viewer or a control command), each counted
+  /// LaptopSide::relocation_delay_s after the move: a new value tells the
+  /// team's agent to find itself again (COACH_INFO `relocations`; CAMBADA's
+  /// changePositionSN, which its base station bumps when a robot is moved by
+  /// hand). The run's, never a scenario's: it starts at 0.
+  std::uint32_t relocations = 0;
   friend bool operator==(const CoachPlayer&, const CoachPlayer&) = default;
 };
 

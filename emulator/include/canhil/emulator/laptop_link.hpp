@@ -117,8 +117,9 @@ class LaptopLink {
   struct CoachItem {
     int id = -1;
     std::unique_ptr<rtdb::ItemBuffer> buffer;
-    std::vector<std::pair<int, int>> targets;                      // (space, owner) of every copy written
-    rtdb::Quantity game_state, running, role_auto, role, attacks;  // COACH_INFO's (FORMATION_INFO: zeros)
+    std::vector<std::pair<int, int>> targets;  // (space, owner) of every copy written
+    // COACH_INFO's (FORMATION_INFO: zeros)
+    rtdb::Quantity game_state, running, role_auto, role, attacks, relocations;
   };
   std::unique_ptr<rtdb::Database> db_;
   rtdb::Layout layout_;

@@ -27,6 +27,7 @@
 //   pman = "builtin"                 # "builtin", "none" or the team's libpman.so
 //   pman_processes = ["agent"]       # registered per robot as NAME<agent>
 //   coach_period_s = 0.1             # COACH_INFO written again this often
+//   relocation_delay_s = 0.1         # a moved robot's COACH_INFO relocations count this much later
 //   replicate = true                 # the wireless: shared items copied between agents
 //   replicate_period_s = 0.1
 //
@@ -77,6 +78,10 @@ inline constexpr int kLastAgent = 6;
 /// centre spot, facing the opponent goal (+x).
 inline constexpr physics::Placement kDefaultPlacement{-3.0, 0.0, -90.0};
 
+/// LaptopSide::relocation_delay_s's default: a vision frame (33 ms) and a
+/// compass message (M8, every 50 ms) after the move, with room to spare.
+inline constexpr double kRelocationDelayS = 0.1;
+
 /// The team's laptop side: which RTDB and PMan libraries canhil writes
 /// through, and in which layout. Empty: the command line's or the defaults.
 struct LaptopSide {
@@ -86,7 +91,14 @@ struct LaptopSide {
   std::string layout;      ///< "canhil", "cambada" or a layout description file
   std::string pman;        ///< "builtin", "none" or a path to the team's libpman.so
   std::vector<std::string> pman_processes = {"agent"};  ///< registered per robot as NAME<agent>
-  double coach_period_s = 0.1;      ///< COACH_INFO / FORMATION_INFO written again this often (and at changes)
+  double coach_period_s = 0.1;  ///< COACH_INFO / FORMATION_INFO written again this often (and at changes)
+  /// A robot canhil moves (the referee's placements, the viewer, a control
+  /// command) counts one relocation in COACH_INFO this long after the move
+  /// (CoachPlayer::relocations). At least one vision frame and one compass
+  /// message (M8, 50 ms) must come between: an agent that relocalises at
+  /// once uses what it saw before the move (CAMBADA's did, bumped in the
+  /// move's own cycle; 67 ms and 0.33 s later it found itself).
+  double relocation_delay_s = kRelocationDelayS;
   std::optional<bool> replicate;    ///< copy shared items between agents (default: with more than one robot)
   double replicate_period_s = 0.1;  ///< the replicator's cycle
 };

@@ -18,6 +18,13 @@
 // effect at the next step (world changes) or the nodes' next pass (bus
 // changes), in either driver.
 //
+// A robot canhil moves (the referee's placements, MoveRobot, RestoreWorld)
+// counts one relocation in the coach's orders (CoachPlayer::relocations) its
+// team's relocation_delay_s after the step that moved it, on the nodes'
+// clock: virtual time and real time alike, and the same in every run of a
+// seed. The laptop link writes it into COACH_INFO, where a team's agent
+// learns to find itself again (CAMBADA's changePositionSN).
+//
 // Vision writes each robot's VISION_INFO into its agent's RTDB through the
 // LaptopLink (the team's RTDB and layout, or canhil's; set RTDB_KEY to keep
 // runs on canhil's RTDB apart), ticks its PMan table, then calls the frame hook.
@@ -26,6 +33,7 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -267,6 +275,16 @@ class Session {
   GoalWatcher goals_;
   std::unique_ptr<RefereeDesk> referee_;  // when the scenario's referee is on
   void referee_step(Nanos now, bool scored);
+  // Relocations (CoachPlayer::relocations): per robot, when the ones still to
+  // count are due (in order: one delay per team, the steps' times rise).
+  std::vector<Nanos> relocation_delay_;            // per team
+  std::vector<std::deque<Nanos>> relocation_due_;  // per robot
+  std::vector<char> moved_;                        // per robot: MoveRobot / RestoreWorld since the last step
+  std::vector<std::uint32_t> placements_seen_;     // per robot: the referee's, relocations already due for
+  bool any_moved_ = false;
+  std::size_t relocations_waiting_ = 0;
+  void relocate_later(std::size_t robot, Nanos now);
+  void count_relocations(Nanos now);
   void set_team_states(std::vector<std::string> states);
   CoachState coach_;
   std::function<void(const CoachState&)> coach_hook_;
