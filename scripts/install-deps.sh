@@ -32,6 +32,8 @@ if [[ "$set_of" == all ]]; then
     chromium
     # canhil match split over hosts, as docs/teams.md shows (tests/app/parallel_shards_test.sh)
     parallel
+    # a busy machine beside the tests (CANHIL_TEST_LOAD=1 scripts/test.sh, docs/testing.md)
+    stress-ng
   )
 fi
 

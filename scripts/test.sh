@@ -7,6 +7,14 @@
 # inside the VM runner; they never skip.
 #   scripts/test.sh            every flavour, then the lint step
 #   scripts/test.sh plain      one flavour (also: sanitize, tsan, lint)
+#   CANHIL_TEST_LOAD=1 scripts/test.sh [FLAVOUR...]
+#                              the same with a busy machine beside it: Debian's
+#                              stress-ng --cpu 4 --vm 1 --vm-bytes 256M (about
+#                              what a parallel build does to a 2-core machine)
+#                              runs from the first build to the end, so that a
+#                              test that holds only on an idle machine shows
+#                              here and not on a shared CI runner; any other
+#                              value is stress-ng's arguments (docs/testing.md)
 # With lint and a flavour asked for, the lint step starts after the first
 # build, at idle priority (SCHED_IDLE), and runs while the tests run (they
 # wait on the VM runner and on wall-clock timeouts much of their time, and
@@ -25,7 +33,6 @@ lint_pid=""
 stop_lint() { [[ -z "$lint_pid" ]] || kill -CONT -- "-$lint_pid" 2>/dev/null; [[ -z "$lint_pid" ]] || kill -- "-$lint_pid" 2>/dev/null || true; }
 pause_lint() { [[ -z "$lint_pid" ]] || kill -STOP -- "-$lint_pid" 2>/dev/null || true; }
 resume_lint() { [[ -z "$lint_pid" ]] || kill -CONT -- "-$lint_pid" 2>/dev/null || true; }
-trap stop_lint EXIT
 start_lint() {
   local idle=(nice -n 19)
   chrt --idle 0 true 2>/dev/null && idle=(chrt --idle 0)
@@ -37,6 +44,16 @@ start_lint() {
   lint_pid=$!
   echo "== canhil lint: started at idle priority beside the tests, paused during builds (its verdict comes last)"
 }
+load_pid=""
+stop_load() { [[ -z "$load_pid" ]] || kill -- "-$load_pid" 2>/dev/null || true; }
+trap 'stop_lint; stop_load' EXIT
+if [[ -n "${CANHIL_TEST_LOAD:-}" ]]; then
+  load_args=(--cpu 4 --vm 1 --vm-bytes 256M)
+  [[ "$CANHIL_TEST_LOAD" == 1 ]] || read -r -a load_args <<< "$CANHIL_TEST_LOAD"
+  setsid stress-ng "${load_args[@]}" --timeout 0 > /dev/null 2>&1 &
+  load_pid=$!
+  echo "== canhil tests: with stress-ng ${load_args[*]} beside them (CANHIL_TEST_LOAD)"
+fi
 total_start=$(date +%s)
 SECONDS=0
 for flavour in "${flavours[@]}"; do
