@@ -17,8 +17,9 @@ export RTDB_KEY="${RTDB_KEY:-$((0x5E000000 + (($$ & 0xFFF) << 8)))}"
 log=$(mktemp -d /tmp/canhil-demo.XXXXXX)
 pids=()
 cleanup() {
-  # Ctrl-C to each, as a user would; they print their summaries.
-  for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
+  # SIGTERM to each (they take it as Ctrl-C and print their summaries; a SIGINT
+  # could be lost: a script's background job starts with SIGINT ignored).
+  for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
 trap cleanup EXIT
 
 "$bin/app/canhil" run --config emulator/scenarios/one_robot.toml --duration "$seconds" --quiet > "$log/run.txt" 2>&1 &
