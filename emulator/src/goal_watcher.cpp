@@ -11,13 +11,14 @@ bool ball_in_goal(const physics::WorldParams& world, const Eigen::Vector3d& b) n
          std::fabs(b.x()) < f.length_m / 2 + f.goal.depth_m + r;
 }
 
-bool GoalWatcher::step(const physics::World& world, Nanos now) {
+std::optional<bool> GoalWatcher::step(const physics::World& world, Nanos now, bool in_play) {
   const Eigen::Vector3d b = world.ball_position();
   const bool in = ball_in_goal(params_, b);
-  const bool scored = in && !in_;
-  if (scored) goals_.push_back(Goal{now, b.x() > 0});
+  const bool entered = in && !in_;
   in_ = in;
-  return scored;
+  if (!entered) return std::nullopt;
+  if (in_play) goals_.push_back(Goal{now, b.x() > 0});
+  return b.x() > 0;
 }
 
 }  // namespace canhil::emulator

@@ -5,6 +5,26 @@
 #include <cstdio>
 
 namespace canhil::emulator {
+namespace {
+
+// A restart as the calls' texts say it.
+const char* restart_words(Restart r) noexcept {
+  switch (r) {
+    case Restart::kKickoff:
+      return "kick-off";
+    case Restart::kThrowIn:
+      return "throw-in";
+    case Restart::kCorner:
+      return "corner";
+    case Restart::kGoalKick:
+      return "goal kick";
+    case Restart::kDroppedBall:
+      return "dropped ball";
+  }
+  return "?";
+}
+
+}  // namespace
 
 std::string_view restart_name(Restart r) noexcept {
   switch (r) {
@@ -64,14 +84,37 @@ RefereeCall& Referee::call(RefereeCall c, Nanos now) {
   c.time = now;
   calls_.push_back(std::move(c));
   resume_at_ = now + from_seconds(rules_.restart_pause_s);
+  taken_from_.reset();
   still_ = false;
   return calls_.back();
+}
+
+bool Referee::ball_in_play_at(const Eigen::Vector2d& ball) const noexcept {
+  if (resume_at_) return false;
+  return !taken_from_ || (ball - *taken_from_).norm() >= rules_.in_play_distance_m;
 }
 
 bool Referee::resume_due(Nanos now) {
   if (!resume_at_ || now < *resume_at_) return false;
   resume_at_.reset();
+  taken_from_ = ball_;
   return true;
+}
+
+// The ball entered a goal before the restart was taken (it was not in play):
+// no goal; the same restart again, the ball back on its spot.
+RefereeCall& Referee::retake(bool goal_positive_x, Nanos now) {
+  RefereeCall c = calls_.back();  // there is one: the ball is out of play only after a call
+  c.scorer.reset();
+  c.goal_positive_x = false;
+  const char* restart = restart_words(c.restart);
+  std::string taker;  // a dropped ball is nobody's
+  if (c.restart != Restart::kDroppedBall) taker = " " + (c.team ? teams_[*c.team].name : std::string("the opponent"));
+  char text[160];
+  std::snprintf(text, sizeof text, "ball into the %s goal before the %s was taken: no goal, %s%s again at (%.2f, %.2f)",
+                goal_positive_x ? "+x" : "-x", restart, restart, taker.c_str(), c.spot.x(), c.spot.y());
+  c.text = text;
+  return call(std::move(c), now);
 }
 
 std::optional<RefereeCall> Referee::step(const RefereeView& view, Nanos now, std::optional<bool> goal_positive_x) {
@@ -90,7 +133,10 @@ std::optional<RefereeCall> Referee::step(const RefereeView& view, Nanos now, std
       }
     }
   }
+  ball_ = view.ball.head<2>();
+  if (taken_from_ && ball_in_play_at(ball_)) taken_from_.reset();  // the restart is taken: the ball in play
   if (goal_positive_x) {
+    if (!ball_in_play()) return retake(*goal_positive_x, now);
     const std::optional<std::size_t> scorer = attacking(*goal_positive_x);
     if (scorer) ++score_[*scorer];
     if (!rules_.kickoff_after_goal) return std::nullopt;

@@ -232,7 +232,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   if (const toml::table* referee = root["referee"].as_table()) {
     const TableReader r(*referee, "referee", file_name,
                         {"enabled", "kickoff_after_goal", "out_of_play", "dropped_ball", "stuck_s", "stuck_radius_m",
-                         "restart_pause_s", "touch_distance_m", "restart_distance_m"});
+                         "restart_pause_s", "touch_distance_m", "restart_distance_m", "in_play_distance_m"});
     RefereeRules& rules = s.referee;
     if (const auto v = r.boolean("enabled")) rules.enabled = *v;
     if (const auto v = r.boolean("kickoff_after_goal")) rules.kickoff_after_goal = *v;
@@ -243,6 +243,7 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
     if (const auto v = r.number("restart_pause_s", 0.0, 60.0)) rules.restart_pause_s = *v;
     if (const auto v = r.number("touch_distance_m", 0.0, 2.0)) rules.touch_distance_m = *v;
     if (const auto v = r.number("restart_distance_m", 0.0, 5.0)) rules.restart_distance_m = *v;
+    if (const auto v = r.number("in_play_distance_m", 0.0, 5.0)) rules.in_play_distance_m = *v;
   }
   if (const toml::table* vision = root["vision"].as_table()) {
     const TableReader r(*vision, "vision", file_name,

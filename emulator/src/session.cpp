@@ -216,9 +216,8 @@ void Session::write_coaches() {
   }
 }
 
-void Session::referee_step(Nanos now, bool scored) {
-  const auto goal = scored ? std::optional<bool>(goals_.goals().back().positive_x) : std::nullopt;
-  const RefereeDesk::Outcome out = referee_->step(*world_, now, goal);
+void Session::referee_step(Nanos now, std::optional<bool> goal_positive_x) {
+  const RefereeDesk::Outcome out = referee_->step(*world_, now, goal_positive_x);
   if (out.call) {
     const Referee& referee = referee_->referee();
     std::vector<std::string> states;
@@ -269,8 +268,10 @@ void Session::after_step(Nanos now) {
   }
   for (std::size_t t = 0; t < laptops_.size(); ++t) laptops_[t]->step(now, team_coaches_[t]);
   log_world(now);
-  const bool scored = goals_.step(*world_, now);
-  if (referee_) referee_step(now, scored);
+  // A ball into a goal before the referee's restart is taken scores nothing (the referee retakes it).
+  const Eigen::Vector2d ball = world_->ball_position().head<2>();
+  const std::optional<bool> entered = goals_.step(*world_, now, !referee_ || referee_->referee().ball_in_play_at(ball));
+  if (referee_) referee_step(now, entered);
   if (any_moved_) {
     for (std::size_t r = 0; r < moved_.size(); ++r) {
       if (moved_[r] != 0) relocate_later(r, now);

@@ -6,6 +6,17 @@
 
 namespace canhil::laptop {
 
+namespace {
+
+// A ball seen at (x right, y forward) of a robot at its odometry pose, in the world frame.
+std::array<double, 2> ball_in_world(const AgentInput& in) {
+  const double c = std::cos(in.heading_rad);
+  const double s = std::sin(in.heading_rad);
+  return {in.x_m + c * in.ball_x_m - s * in.ball_y_m, in.y_m + s * in.ball_x_m + c * in.ball_y_m};
+}
+
+}  // namespace
+
 const char* state_name(AgentState s) noexcept {
   switch (s) {
     case AgentState::kSearch:
@@ -16,8 +27,26 @@ const char* state_name(AgentState s) noexcept {
       return "aim";
     case AgentState::kCooldown:
       return "cooldown";
+    case AgentState::kWait:
+      return "wait";
   }
   return "?";
+}
+
+// The other team's restart is taken when the ball, as this robot sees it
+// (robot frame, turned into the world's by its odometry), has moved
+// restart_moved_m from where it first saw it after "start"; or after
+// restart_wait_s, taken or not.
+bool Agent::restart_taken(const AgentInput& in) {
+  waited_s_ += in.dt_s;
+  if (waited_s_ >= config_.restart_wait_s) return true;
+  if (!in.ball_seen) return false;
+  const std::array<double, 2> ball = ball_in_world(in);
+  if (!restart_ball_) {
+    restart_ball_ = ball;
+    return false;
+  }
+  return std::hypot(ball[0] - (*restart_ball_)[0], ball[1] - (*restart_ball_)[1]) >= config_.restart_moved_m;
 }
 
 AgentOutput Agent::decide(const AgentInput& in) {
@@ -26,8 +55,21 @@ AgentOutput Agent::decide(const AgentInput& in) {
   if (!in.play) {
     // Waits for "start": still, grabber off, no aim carried over into the game.
     aimed_ = 0;
-    if (state_ == AgentState::kAim || state_ == AgentState::kApproach) state_ = AgentState::kSearch;
+    if (state_ != AgentState::kCooldown) state_ = AgentState::kSearch;
+    their_restart_ = in.their_restart;  // the last state before "start" decides
+    waited_s_ = 0;
+    restart_ball_.reset();
     return out;
+  }
+  if (their_restart_) {
+    if (!restart_taken(in)) {
+      // Theirs to take: off the ball, turning while it does not see it (to see it move).
+      state_ = AgentState::kWait;
+      if (!in.ball_seen) out.va_radps = 1.0;
+      return out;
+    }
+    their_restart_ = false;
+    state_ = AgentState::kSearch;
   }
   if (state_ == AgentState::kCooldown) {
     cooldown_left_ -= in.dt_s;
@@ -81,6 +123,7 @@ AgentOutput Agent::decide(const AgentInput& in) {
       break;
     }
     case AgentState::kCooldown:
+    case AgentState::kWait:
       break;
   }
   return out;

@@ -71,6 +71,7 @@ AgentInput AgentIo::read(double dt_s) {
   i.get(i.coach, i.coach_owner);
   const std::string_view state = i.coach.buf->get_enum(i.game_state);
   in.play = i.coach.buf->get(i.game_state) == 0 || state == "start";
+  in.their_restart = state.starts_with("their_") && state != "their_goal";  // their_goal: they scored
   return in;
 }
 

@@ -1,7 +1,8 @@
 // The referee on what it is shown: goals per team and the kick-off for who
 // conceded, throw-ins, corners and goal kicks for the right team at the right
-// spot, a stuck game's dropped ball, the pause before play goes on, rules
-// switched off, and the seeded draw when nobody touched the ball.
+// spot, a stuck game's dropped ball, the pause before play goes on, no goal
+// before a restart is taken, rules switched off, and the seeded draw when
+// nobody touched the ball.
 #include "canhil/emulator/referee.hpp"
 
 #include <gtest/gtest.h>
@@ -151,6 +152,41 @@ TEST_F(RefereeTest, NoOutOfPlayCallWhileARestartIsTaken) {
   EXPECT_FALSE(ref.step(view({0, 6.5}), Nanos{2s}, std::nullopt)) << "within the pause";
   EXPECT_TRUE(ref.resume_due(Nanos{3s}));
   EXPECT_TRUE(ref.step(view({0, 6.5}), Nanos{3s} + 10ms, std::nullopt)) << "after it";
+}
+
+TEST_F(RefereeTest, ABallIntoAGoalBeforeTheRestartIsTakenIsNoGoalTheRestartIsTakenAgain) {
+  Referee ref = referee();
+  ref.step(view({8.5, -3}, {8.5, -2.6}), Nanos{1s}, std::nullopt);  // new touches it
+  const auto kick = ref.step(view({9.2, -4}), Nanos{2s}, std::nullopt);
+  ASSERT_TRUE(kick);
+  ASSERT_EQ(kick->restart, Restart::kGoalKick);
+  EXPECT_FALSE(ref.ball_in_play());
+  // 1.3 s into the pause a team that plays in every state but stop puts the ball into the goal.
+  const auto again = ref.step(view({9.3, 0}), Nanos{3300ms}, true);
+  ASSERT_TRUE(again) << "the goal kick again";
+  EXPECT_EQ(ref.score(), (std::vector<int>{0, 0})) << "no goal";
+  EXPECT_EQ(again->restart, Restart::kGoalKick);
+  EXPECT_EQ(again->team, 1u);
+  EXPECT_EQ(again->spot, kick->spot);
+  EXPECT_FALSE(again->scorer);
+  EXPECT_NE(again->text.find("before the goal kick was taken: no goal"), std::string::npos) << again->text;
+  EXPECT_FALSE(ref.resume_due(Nanos{5s})) << "a new pause";
+  // After "start": nudged in from the goal line, where it was left, it is still not in play.
+  ref.step(view({8.95, 0.3}), Nanos{5300ms}, std::nullopt);
+  ASSERT_TRUE(ref.resume_due(Nanos{5300ms}));
+  EXPECT_FALSE(ref.ball_in_play()) << "not yet taken";
+  EXPECT_FALSE(ref.ball_in_play_at({9.3, 0.3}));
+  ASSERT_TRUE(ref.step(view({9.3, 0.3}), Nanos{5400ms}, true));
+  EXPECT_EQ(ref.score(), (std::vector<int>{0, 0}));
+  // Taken (moved 0.5 m after "start"): the ball is in play and a goal counts.
+  ref.step(view({8.25, -1.75}), Nanos{7400ms}, std::nullopt);  // back on its spot
+  ASSERT_TRUE(ref.resume_due(Nanos{7400ms}));
+  EXPECT_FALSE(ref.step(view({7.7, -1.6}), Nanos{7500ms}, std::nullopt));
+  EXPECT_TRUE(ref.ball_in_play());
+  const auto goal = ref.step(view({9.3, 0}), Nanos{8s}, true);
+  ASSERT_TRUE(goal);
+  EXPECT_EQ(goal->restart, Restart::kKickoff);
+  EXPECT_EQ(ref.score(), (std::vector<int>{1, 0}));
 }
 
 }  // namespace

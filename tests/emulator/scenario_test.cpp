@@ -194,6 +194,9 @@ TEST(Scenarios, TheShippedScenariosLoad) {
   EXPECT_EQ(five.world.obstacles.size(), 5u);
   EXPECT_EQ(five.interfaces.size(), 5u);
   EXPECT_TRUE(std::filesystem::exists(shipped_scenario("one_robot.toml")));
+  EXPECT_TRUE(five.referee.enabled.value_or(false)) << "play goes on after a goal: a kick-off";
+  const Scenario strict = parse_scenario("[referee]\nin_play_distance_m = 0.2\n", "strict.toml");
+  EXPECT_EQ(strict.referee.in_play_distance_m, 0.2);
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 // Two teams on one computer, in virtual time: both teams' loops closed on
 // their own RTDB sets (both use agents 1..5 and never see each other's
-// items), the second team attacks -x and scores there, and a [[teams]] file's
-// mistakes are named.
+// items), the second team attacks -x and scores there, after a goal the team
+// that conceded takes its kick-off, a ball into a goal during a restart's
+// pause is no goal, and a [[teams]] file's mistakes are named.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -218,6 +219,75 @@ TEST_F(TwoTeams, AfterAKickOffEveryReferenceAgentsOdometryKnowsWhereTheRefereePu
   }
   DB_free_all(1);
   DB_free_all(0);
+}
+
+TEST_F(TwoTeams, AfterAGoalTheTeamThatConcededTakesItsKickOff) {
+  // The reference agents of both teams used to drive at the ball on "start",
+  // clamp it between new's and old's front robots and kick into each other:
+  // the kick-off was never taken, the referee dropped the ball 12 s later.
+  Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  s.vision = {};  // an exact camera: one game
+  Session session(s, options());
+  VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
+  session.apply(MoveBall{{s.world.field.length_m / 2 - 0.3, 0.7, 0.11}, {3.0, 0.0, 0.0}});  // new scores
+  driver.run_for(500ms);
+  ASSERT_NE(session.referee(), nullptr);
+  ASSERT_EQ(session.referee()->calls().size(), 1u);
+  const RefereeCall kickoff = session.referee()->calls().front();
+  ASSERT_EQ(kickoff.restart, Restart::kKickoff);
+  ASSERT_EQ(kickoff.team, 1u) << "old conceded";
+  // From "start" on: old's robots alone at the ball until it is in play; it leaves the centre circle.
+  const Nanos start = kickoff.time + from_seconds(s.referee.restart_pause_s);
+  double farthest = 0;
+  double new_nearest = 1e9;  // new's robots to the ball, until it is in play
+  session.on_step([&](Nanos) {
+    const auto& w = session.world();
+    const Eigen::Vector2d ball = w.ball_position().head<2>();
+    farthest = std::max(farthest, ball.norm());
+    if (farthest > 0.5) return;
+    for (std::size_t r = 0; r < 5; ++r) {
+      const auto p = w.robot(r).pose();
+      new_nearest = std::min(new_nearest, (Eigen::Vector2d(p.x_m, p.y_m) - ball).norm());
+    }
+  });
+  driver.run_until(start + 8s);
+  session.on_step(nullptr);
+  EXPECT_GT(farthest, 2.0) << "the kick-off was taken: the ball left the centre circle";
+  EXPECT_GT(new_nearest, 1.0) << "new kept off the ball until old had played it";
+  for (const RefereeCall& c : session.referee()->calls()) {
+    EXPECT_NE(c.restart, Restart::kDroppedBall) << c.text;
+  }
+}
+
+TEST_F(TwoTeams, ABallIntoAGoalDuringARestartsPauseIsNoGoalTheRestartIsTakenAgain) {
+  Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
+  s.vision = {};
+  Session session(s, options());
+  VirtualDriver driver(session, {});
+  const auto watching = counters.watch_session(session);
+  const double line = s.world.field.length_m / 2;
+  session.apply(MoveBall{{line - 0.4, -3.0, 0.11}, {3.0, 0.0, 0.0}});  // out beside the goal, untouched
+  driver.run_for(500ms);
+  ASSERT_NE(session.referee(), nullptr);
+  ASSERT_EQ(session.referee()->calls().size(), 1u);
+  const RefereeCall kick = session.referee()->calls().front();
+  ASSERT_EQ(kick.restart, Restart::kGoalKick) << kick.text;
+  // 1.3 s into the pause the ball goes into the +x goal (a team's agent that plays in every state but stop).
+  driver.run_until(kick.time + 1300ms);
+  session.apply(MoveBall{{line - 0.3, 0.3, 0.11}, {3.0, 0.0, 0.0}});
+  driver.run_for(300ms);
+  EXPECT_TRUE(session.goals().empty()) << "not in play: no goal";
+  EXPECT_EQ(session.referee()->score(), (std::vector<int>{0, 0}));
+  ASSERT_EQ(session.referee()->calls().size(), 2u);
+  const RefereeCall& again = session.referee()->calls().back();
+  EXPECT_EQ(again.restart, Restart::kGoalKick) << again.text;
+  EXPECT_EQ(again.team, kick.team);
+  EXPECT_EQ(again.spot, kick.spot);
+  const Eigen::Vector3d ball = session.world().ball_position();
+  EXPECT_NEAR(ball.x(), kick.spot.x(), 1e-3) << "back on its spot";
+  EXPECT_NEAR(ball.y(), kick.spot.y(), 1e-3);
+  EXPECT_EQ(session.coach().state_of(*kick.team), "our_goalkick");
 }
 
 TEST_F(TwoTeams, TheWorldLogSaysWhoPlaysForWhomAndOneTeamsLogDoesNot) {

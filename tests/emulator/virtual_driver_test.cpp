@@ -281,6 +281,23 @@ TEST_F(VirtualRunTest, TheFiveRobotScenarioRunsWithEveryLoopClosed) {
   }
 }
 
+TEST_F(VirtualRunTest, TheFiveRobotScenarioPlaysOnAfterAGoal) {
+  // Its referee restarts play with a kick-off. Without one, the ball lay where
+  // the net threw it back, (8.60, 0.00), 8.8 m from the nearest robot and
+  // beyond every camera's 5 m: the five robots turned on the spot to the end.
+  Config c = one_robot();
+  c.scenario = load_scenario(test::source_dir() + "/emulator/scenarios/five_robots.toml");
+  Loop run(c, &counters);
+  run.run_for(20s);
+  ASSERT_GE(run.goals().size(), 2u) << "a goal, the kick-off, and another goal";
+  const Referee* referee = run.session().referee();
+  ASSERT_NE(referee, nullptr);
+  ASSERT_FALSE(referee->calls().empty());
+  EXPECT_EQ(referee->calls().front().restart, Restart::kKickoff);
+  EXPECT_EQ(referee->calls().front().time, run.goals().front().time);
+  EXPECT_GE(run.outcomes()[0].kicks, 2) << "robot 0 played the ball again";
+}
+
 TEST_F(VirtualRunTest, FaultsHaveTheirEffectAndTheSameSeedRepeatsThem) {
   Config c = one_robot();
   c.scenario.faults = {can_nodes::parse_fault("drop:M4_1:0.5"), can_nodes::parse_fault("silence:Motor2:1")};

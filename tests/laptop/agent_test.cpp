@@ -88,5 +88,57 @@ TEST(Agent, StandsStillWhileTheCoachDoesNotSayStart) {
   EXPECT_EQ(kicks, 1) << "on start it aims afresh, then kicks";
 }
 
+TEST(Agent, AfterTheOtherTeamsRestartItKeepsOffTheBallUntilItMoves) {
+  Agent a;
+  AgentInput in;
+  in.play = false;
+  in.their_restart = true;  // "their_kickoff": the other team kicks off
+  in.ball_seen = true;
+  in.ball_y_m = 2.0;  // straight ahead, 2 m
+  a.decide(in);
+  in.play = true;  // "start"
+  in.their_restart = false;
+  for (int i = 0; i < 10; ++i) {
+    const AgentOutput out = a.decide(in);
+    EXPECT_EQ(a.state(), AgentState::kWait);
+    EXPECT_EQ(out.vx_mps, 0);
+    EXPECT_EQ(out.vy_mps, 0);
+    EXPECT_EQ(out.grabber, 0);
+  }
+  in.ball_y_m = 1.4;  // played: 0.6 m towards it
+  const AgentOutput out = a.decide(in);
+  EXPECT_EQ(a.state(), AgentState::kApproach);
+  EXPECT_GT(out.vy_mps, 0.5);
+}
+
+TEST(Agent, ARestartTheOtherTeamLeavesIsInPlayAfterTheWait) {
+  AgentConfig cfg;
+  cfg.restart_wait_s = 2.0;
+  Agent a(cfg);
+  AgentInput in;
+  in.play = false;
+  in.their_restart = true;
+  in.ball_seen = true;
+  in.ball_y_m = 2.0;
+  a.decide(in);
+  in.play = true;
+  in.their_restart = false;
+  in.dt_s = 0.5;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.decide(in).vy_mps, 0) << "waiting, " << 0.5 * (i + 1) << " s";
+  EXPECT_GT(a.decide(in).vy_mps, 0.5) << "2 s: it plays";
+}
+
+TEST(Agent, AfterItsOwnRestartOrADroppedBallItPlaysAtOnce) {
+  Agent a;
+  AgentInput in;
+  in.play = false;  // "our_goalkick", "drop_ball", "stop": not the other team's
+  in.ball_seen = true;
+  in.ball_y_m = 2.0;
+  a.decide(in);
+  in.play = true;
+  EXPECT_GT(a.decide(in).vy_mps, 0.5);
+  EXPECT_EQ(a.state(), AgentState::kApproach);
+}
+
 }  // namespace
 }  // namespace canhil::laptop

@@ -1,6 +1,7 @@
 // canhil/emulator/goal_watcher.hpp — goals, step by step (real or virtual time).
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "canhil/base/time.hpp"
@@ -22,8 +23,10 @@ bool ball_in_goal(const physics::WorldParams& world, const Eigen::Vector3d& ball
 class GoalWatcher {
  public:
   explicit GoalWatcher(const physics::WorldParams& world) : params_(world) {}
-  /// After a step at `now`; true when a goal was scored in it.
-  bool step(const physics::World& world, Nanos now);
+  /// After a step at `now`: the goal the ball entered in it, if it did (true:
+  /// the +x one). The entry is a goal, and counted, only when `in_play` (the
+  /// referee's word: no restart is waiting to be taken).
+  std::optional<bool> step(const physics::World& world, Nanos now, bool in_play = true);
   const std::vector<Goal>& goals() const noexcept { return goals_; }
 
  private:

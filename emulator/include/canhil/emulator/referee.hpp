@@ -5,6 +5,9 @@
 // what the world shows after each step and calls; Session carries the call
 // out (the ball to the spot, the robots back to their places at a kick-off,
 // each team's coach state "our_X" / "their_X", then "start" after the pause).
+// The ball is in play again only once the restart is taken: after "start",
+// the ball moved in_play_distance_m from where it lay. A ball that enters a
+// goal before (in the pause, say) scores nothing: the restart is taken again.
 // Seeded: where it cannot tell who touched the ball last, a draw decides.
 //
 // Thread-compatible: used by the thread that steps the world.
@@ -34,6 +37,7 @@ struct RefereeRules {
   double restart_pause_s = 2.0;     ///< the restart's states held this long (robots take their places), then "start"
   double touch_distance_m = 0.05;   ///< a robot this close to the ball (beyond both radii) touches it
   double restart_distance_m = 1.0;  ///< at a restart other than a kick-off, robots nearer the spot step back this far
+  double in_play_distance_m = 0.5;  ///< after "start", the ball moved this far: the restart is taken, the ball in play
 };
 
 enum class Restart { kKickoff, kThrowIn, kCorner, kGoalKick, kDroppedBall };
@@ -71,14 +75,22 @@ class Referee {
  public:
   Referee(const physics::WorldParams& world, std::vector<RefereeTeam> teams, RefereeRules rules, std::uint64_t seed);
 
-  /// After a step at `now`; `goal` when a goal was scored in it (and on
-  /// which side). The call made, if any.
+  /// After a step at `now`; `goal` when the ball entered a goal in it (and
+  /// on which side): a goal if the ball is in play (ball_in_play_at the
+  /// view's ball), else the last restart taken again. The call made, if any.
   std::optional<RefereeCall> step(const RefereeView& view, Nanos now, std::optional<bool> goal_positive_x);
-  /// True once, at the first step after a call's pause is over: play on ("start").
+  /// True once, at the first step after a call's pause is over: play on
+  /// ("start"); the restart is taken once the ball moves from where it lies.
   bool resume_due(Nanos now);
 
-  /// The ball is in play: no restart's pause is running.
+  /// No restart's pause is running (play goes on, the restart taken or not).
   bool in_play() const noexcept { return !resume_at_.has_value(); }
+  /// The ball is in play: no call yet, or the last one's restart was taken
+  /// (after "start", the ball moved in_play_distance_m). Only then does a ball
+  /// entering a goal score.
+  bool ball_in_play() const noexcept { return !resume_at_ && !taken_from_; }
+  /// Whether the ball is in play once it is at `ball`: it was, or the move there takes the restart.
+  bool ball_in_play_at(const Eigen::Vector2d& ball) const noexcept;
   /// Goals per team (a goal in a goal no team attacks counts for nobody).
   const std::vector<int>& score() const noexcept { return score_; }
   const std::vector<RefereeCall>& calls() const noexcept { return calls_; }
@@ -94,6 +106,7 @@ class Referee {
   std::optional<std::size_t> attacking(bool positive_x) const;
   std::optional<std::size_t> defending(bool positive_x) const;
   std::optional<RefereeCall> out_of_play(const RefereeView& view, Nanos now);
+  RefereeCall& retake(bool goal_positive_x, Nanos now);
   RefereeCall& call(RefereeCall c, Nanos now);
 
   physics::WorldParams world_;
@@ -107,6 +120,8 @@ class Referee {
   bool still_ = false;
   Eigen::Vector2d still_at_ = Eigen::Vector2d::Zero();
   std::optional<Nanos> resume_at_;
+  Eigen::Vector2d ball_ = Eigen::Vector2d::Zero();  // where the last step saw it
+  std::optional<Eigen::Vector2d> taken_from_;       // after "start": where the ball lay, until the restart is taken
 };
 
 }  // namespace canhil::emulator

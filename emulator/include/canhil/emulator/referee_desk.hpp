@@ -26,7 +26,8 @@ class RefereeDesk {
     std::optional<RefereeCall> call;  ///< a call, already carried out in the world
     bool resume = false;              ///< a call's pause is over: play on
   };
-  /// After a step at `now` (`goal`: one was scored in it, on which side).
+  /// After a step at `now` (`goal`: the ball entered a goal in it, on which side;
+  /// a goal only when the ball was in play, Referee::step).
   Outcome step(physics::World& world, Nanos now, std::optional<bool> goal_positive_x);
 
   const Referee& referee() const noexcept { return referee_; }

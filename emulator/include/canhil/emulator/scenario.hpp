@@ -39,7 +39,8 @@
 //   [referee]                        # goals, kick-offs, throw-ins, corners, dropped balls
 //   enabled = true                   #   (default: with two teams); each rule can be off:
 //   kickoff_after_goal = true        #   out_of_play, dropped_ball; stuck_s = 10,
-//   restart_pause_s = 2              #   stuck_radius_m = 0.5, touch_distance_m = 0.05
+//   restart_pause_s = 2              #   stuck_radius_m = 0.5, touch_distance_m = 0.05,
+//   in_play_distance_m = 0.5         #   restart_distance_m = 1; the restart taken: in play
 //
 //   [[teams]]                        # two teams on one computer (docs/teams.md); instead
 //   name = "new"                     #   of [[robots]], run.interfaces/agents and the

@@ -240,6 +240,7 @@ class Session {
   void on_coach_change(std::function<void(const CoachState&)> hook) { coach_hook_ = std::move(hook); }
 
   // --- results (after the run, or from the stepping thread) -------------------
+  /// The goals scored (a ball into a goal before a referee's restart was taken is none).
   const std::vector<Goal>& goals() const noexcept { return goals_.goals(); }
   /// The referee, when the scenario's is on (its score and calls), else nullptr.
   const Referee* referee() const noexcept { return referee_ ? &referee_->referee() : nullptr; }
@@ -274,7 +275,7 @@ class Session {
   std::function<void(std::size_t, Nanos)> frame_hook_;
   GoalWatcher goals_;
   std::unique_ptr<RefereeDesk> referee_;  // when the scenario's referee is on
-  void referee_step(Nanos now, bool scored);
+  void referee_step(Nanos now, std::optional<bool> goal_positive_x);
   // Relocations (CoachPlayer::relocations): per robot, when the ones still to
   // count are due (in order: one delay per team, the steps' times rise).
   std::vector<Nanos> relocation_delay_;            // per team
