@@ -108,6 +108,25 @@ TEST_F(OwnBus, StartsListsAndStops) {
   EXPECT_FALSE(fs::exists(paths_.state));
 }
 
+TEST_F(OwnBus, BusUpSaysItsBrokersSchedulingAndOptionsAndRefusesBadOnes) {
+  const std::string canhil = "CANHIL_BUS_DIR='" + folder_.string() + "' " + canhil::test::canhil_binary();
+  int status = -1;
+  const std::string up = shell(canhil + " bus up vcan0 --backlog 100 --grace-ms 5 --patience-ms 50", &status);
+  EXPECT_EQ(status, 0) << up;
+  EXPECT_NE(up.find("grace 5 ms, patience 50 ms, backlog 100 frames"), std::string::npos) << up;
+  // Root or CAP_SYS_NICE gets the real-time priority, others the normal scheduler: either is said.
+  EXPECT_TRUE(up.find("SCHED_FIFO 45, memory locked") != std::string::npos ||
+              up.find("normal scheduler") != std::string::npos)
+      << up;
+  EXPECT_NE(up.find("waited for full receivers 0 time(s)"), std::string::npos) << up;
+  shell(canhil + " bus down");
+  for (const char* bad : {"--rt-priority 120", "--backlog 0", "--grace-ms -1", "--patience-ms 20000"}) {
+    const std::string out = shell(canhil + " bus up vcan0 " + bad, &status);
+    EXPECT_EQ(status, 2) << bad << "\n" << out;
+    EXPECT_FALSE(ub::broker_alive(paths_)) << bad << ": no bus started";
+  }
+}
+
 TEST_F(OwnBus, RefusesBadNamesAndAFolderOthersCanOpen) {
   EXPECT_THROW(ub::check_interface_name(""), ub::BusError);
   EXPECT_THROW(ub::check_interface_name("a_name_of_16_chr"), ub::BusError);
