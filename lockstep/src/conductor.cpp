@@ -72,6 +72,16 @@ bool running_thread(int pid, int tid) {
   return state != 'Z' && state != 'X';
 }
 
+// Whether the slot's thread is runnable (state R: on a CPU, or waiting for
+// one on a busy machine), not blocked.
+bool runnable(const Slot& s) {
+  const int pid = s.pid.load();
+  const int tid = s.tid.load();
+  if (pid <= 0 || tid <= 0) return false;
+  const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/stat");
+  return fields && fields->size() >= 3 && (*fields)[2] == 'R';
+}
+
 bool alive(const Slot& s) {
   const int pid = s.pid.load();
   const int tid = s.tid.load();
@@ -337,7 +347,9 @@ std::string Conductor::wait_quiet(const std::function<std::string()>& also, cons
         continue;
       }
       const Nanos cpu_now = processes_cpu();
-      computing = (cpu_now - *cpu_then) * 10 >= now - cpu_seen_at;
+      // On the CPU a tenth of the window, or runnable now: a busy machine
+      // (a build beside the run) may give a computing process less.
+      computing = (cpu_now - *cpu_then) * 10 >= now - cpu_seen_at || any_runnable();
       if (computing && now < busy_until) {
         cpu_then = cpu_now;
         cpu_seen_at = now;
@@ -409,6 +421,11 @@ std::optional<Nanos> cpu_time_of(int pid) {
   const unsigned long long system = end != nullptr ? std::strtoull(end, nullptr, 10) : 0;
   static const long kTicks = sysconf(_SC_CLK_TCK);
   return Nanos(kTicks > 0 ? static_cast<long long>(user + system) * (1'000'000'000LL / kTicks) : 0);
+}
+
+bool Conductor::any_runnable() const {
+  return std::any_of(std::begin(board_->slots), std::end(board_->slots),
+                     [](const Slot& s) { return state_of(s) != SlotState::kFree && runnable(s); });
 }
 
 Nanos Conductor::processes_cpu() const {

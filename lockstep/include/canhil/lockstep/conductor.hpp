@@ -158,6 +158,8 @@ class Conductor {
   void sweep_dead();
   /// User and system CPU time of every process on the board, summed.
   Nanos processes_cpu() const;
+  /// Whether a thread of the run is runnable (on a CPU or waiting for one).
+  bool any_runnable() const;
   void retire(Slot& slot);
   /// Looks for up to ConductorOptions::spin for a change on the board since
   /// `seen`, a semaphore posted by a process, or `ready_fd` (when >= 0) to be
