@@ -65,11 +65,8 @@ std::optional<std::string> stat_fields(const std::string& path) {
 // zombie until its parent reaps it, and a zombie runs no more.
 bool running_thread(int pid, int tid) {
   if (syscall(SYS_tgkill, pid, tid, 0) != 0 && errno == ESRCH) return false;
-  const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/stat");
-  if (!fields) return false;
-  if (fields->size() < 3) return true;
-  const char state = (*fields)[2];
-  return state != 'Z' && state != 'X';
+  const char state = thread_state(pid, tid);
+  return state != '?' && state != 'Z' && state != 'X';
 }
 
 // Whether the slot's thread is runnable (state R: on a CPU, or waiting for
@@ -77,9 +74,7 @@ bool running_thread(int pid, int tid) {
 bool runnable(const Slot& s) {
   const int pid = s.pid.load();
   const int tid = s.tid.load();
-  if (pid <= 0 || tid <= 0) return false;
-  const auto fields = stat_fields("/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/stat");
-  return fields && fields->size() >= 3 && (*fields)[2] == 'R';
+  return pid > 0 && tid > 0 && thread_state(pid, tid) == 'R';
 }
 
 bool alive(const Slot& s) {

@@ -1,8 +1,6 @@
 // What the broker asks of the system (broker_system.hpp).
 #include "broker_system.hpp"
 
-#include <dirent.h>
-#include <fcntl.h>
 #include <poll.h>
 #include <sched.h>
 #include <sys/mman.h>
@@ -10,10 +8,9 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdio>
-#include <cstring>
 
 #include "canhil/base/preload.hpp"
+#include "canhil/base/process.hpp"
 #include "canhil/userbus/state.hpp"
 
 namespace canhil::userbus {
@@ -40,60 +37,17 @@ std::string scheduling_text(const State& s) {
   return "SCHED_FIFO " + std::to_string(s.rt_priority) + (s.memory_locked != 0 ? ", memory locked" : "");
 }
 
-namespace {
-
-/// The state letter of /proc/.../stat at `path` ('?' when unreadable): the
-/// first field after the command's closing parenthesis (a command may hold
-/// one itself, so the last).
-char state_of(const char* path) {
-  const int fd = open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return '?';
-  char buffer[512];
-  const ssize_t n = read(fd, buffer, sizeof buffer - 1);
-  close(fd);
-  if (n <= 0) return '?';
-  buffer[n] = '\0';
-  const char* close_paren = std::strrchr(buffer, ')');
-  return close_paren != nullptr && close_paren[1] == ' ' ? close_paren[2] : '?';
-}
-
-}  // namespace
-
-bool process_runnable(pid_t pid) {
-  if (pid <= 0) return false;
-  char folder[64];
-  std::snprintf(folder, sizeof folder, "/proc/%d/task", static_cast<int>(pid));
-  DIR* tasks = opendir(folder);
-  if (tasks == nullptr) return false;
-  bool runnable = false;
-  while (const dirent* t = readdir(tasks)) {
-    if (t->d_name[0] < '0' || t->d_name[0] > '9') continue;
-    char path[384];
-    std::snprintf(path, sizeof path, "%s/%s/stat", folder, t->d_name);
-    if (state_of(path) == 'R') {
-      runnable = true;
-      break;
-    }
-  }
-  closedir(tasks);
-  return runnable;
-}
-
 bool room_came(int fd, pid_t pid, const std::atomic<std::uint64_t>& taken, std::uint32_t grace_us,
                std::uint32_t patience_us) {
   if (grace_us == 0) return false;
-  const auto now_ns = [] {
-    const timespec t = ::canhil::preload::real_monotonic();
-    return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
-  };
   constexpr std::int64_t kLook_ns = 1000000;  // how often the receiver's reads are looked at
   const std::int64_t grace_ns = static_cast<std::int64_t>(grace_us) * 1000;
-  const std::int64_t start = now_ns();
+  const std::int64_t start = ::canhil::preload::real_monotonic_ns();
   const std::int64_t give_up = start + std::max(grace_ns, static_cast<std::int64_t>(patience_us) * 1000);
   std::int64_t until = start + grace_ns;
   std::uint64_t read_so_far = taken.load(std::memory_order_acquire);
   for (;;) {
-    const std::int64_t now = now_ns();
+    const std::int64_t now = ::canhil::preload::real_monotonic_ns();
     if (const std::uint64_t read_now = taken.load(std::memory_order_acquire); read_now != read_so_far) {
       read_so_far = read_now;
       until = std::min(now + grace_ns, give_up);

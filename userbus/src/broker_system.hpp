@@ -1,5 +1,6 @@
-// What the broker asks of the system: its own scheduling, and whether a
-// receiver that has not read is waiting for a CPU or for something else.
+// What the broker asks of the system: its own scheduling, and room in a
+// receiver's buffer (whether a receiver that has not read is waiting for a
+// CPU or for something else: canhil::process_runnable, base/process.hpp).
 #pragma once
 
 #include <sys/types.h>
@@ -29,11 +30,6 @@ void set_fifo(bool fifo, int priority);
 
 /// "SCHED_FIFO 45, memory locked", or "normal scheduler" (State's record).
 std::string scheduling_text(const State& s);
-
-/// Whether any thread of process `pid` is runnable (state R in
-/// /proc/PID/task/TID/stat): waiting for a CPU, or running. False for a
-/// process that sleeps, is stopped or traced, or is gone.
-bool process_runnable(pid_t pid);
 
 /// Waits for room in a full receiver's buffer (the broker's end `fd` of its
 /// connection, its process `pid`, the records it has read so far `taken`:

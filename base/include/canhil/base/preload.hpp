@@ -18,6 +18,7 @@
 #include <cerrno>
 #include <cstdarg>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <ctime>
 
@@ -69,6 +70,12 @@ inline timespec real_monotonic() noexcept {
     syscall(SYS_clock_gettime, CLOCK_MONOTONIC, &ts);
   }
   return ts;
+}
+
+/// real_monotonic() in nanoseconds.
+inline std::int64_t real_monotonic_ns() noexcept {
+  const timespec t = real_monotonic();
+  return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 
 /// The first definition of `name` in the process, in whichever loaded object:
