@@ -13,21 +13,19 @@
 // (by the system call itself, which canhil's time shim does not see), so that
 // a lockstep run can show its outcome does not depend on the machine's speed.
 #include <poll.h>
-#include <sched.h>
-#include <sys/mman.h>
 #include <sys/syscall.h>
 #include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <atomic>
-#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <string>
 
 #include "canhil/base/preload.hpp"
+#include "canhil/base/realtime.hpp"
 #include "canhil/frames/messages.hpp"
 #include "canhil/laptop/hwcomm.hpp"
 #include "canhil/laptop/raw_can.hpp"
@@ -56,15 +54,13 @@ std::string take_rt_priority(int priority) {
   if (priority == 0) return "normal scheduler (--rt-priority 0)";
   if (canhil::preload::any_symbol<canhil_shim_frames_sent_fn>("canhil_shim_frames_sent") != nullptr)
     return "normal scheduler (virtual time: a lockstep run)";
-  sched_param sp{};
-  sp.sched_priority = priority;
-  if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
-    return "normal scheduler (SCHED_FIFO " + std::to_string(priority) + " refused: " + std::strerror(errno) +
+  const canhil::RealtimeGot got = canhil::take_realtime(priority);
+  if (got.priority == 0) {
+    return "normal scheduler (SCHED_FIFO " + std::to_string(priority) + " refused: " + std::strerror(got.refused) +
            "; it needs root or CAP_SYS_NICE)";
   }
-  const bool locked = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
   return "SCHED_FIFO " + std::to_string(priority) +
-         (locked ? ", memory locked" : ", memory not locked (RLIMIT_MEMLOCK)");
+         (got.memory_locked ? ", memory locked" : ", memory not locked (RLIMIT_MEMLOCK)");
 }
 
 int usage(const char* why) {

@@ -3,7 +3,6 @@
 
 #include <poll.h>
 #include <sched.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,17 +13,6 @@
 #include "canhil/userbus/state.hpp"
 
 namespace canhil::userbus {
-
-Scheduling take_scheduling(int priority) {
-  Scheduling got;
-  if (priority <= 0) return got;
-  sched_param p{};
-  p.sched_priority = priority;
-  if (sched_setscheduler(0, SCHED_FIFO, &p) != 0) return got;
-  got.rt_priority = priority;
-  got.memory_locked = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
-  return got;
-}
 
 void set_fifo(bool fifo, int priority) {
   sched_param p{};

@@ -1,4 +1,5 @@
-// What the broker asks of the system: its own scheduling, and room in a
+// What the broker asks of the system: its own scheduling (taken with
+// canhil::take_realtime, base/realtime.hpp; switched here), and room in a
 // receiver's buffer (whether a receiver that has not read is waiting for a
 // CPU or for something else: canhil::process_runnable, base/process.hpp).
 #pragma once
@@ -12,17 +13,6 @@
 namespace canhil::userbus {
 
 struct State;
-
-/// The scheduling the calling process got.
-struct Scheduling {
-  int rt_priority = 0;  ///< SCHED_FIFO priority, 0: the normal scheduler
-  bool memory_locked = false;
-};
-
-/// Asks SCHED_FIFO at `priority` for the calling process and, with it, its
-/// memory locked (mlockall); nothing for 0. What the system refuses (no root
-/// or CAP_SYS_NICE, a locked-memory limit) is left as it was.
-Scheduling take_scheduling(int priority);
 
 /// Back to the normal scheduler (`fifo` false) or to SCHED_FIFO at
 /// `priority` (true), for the calling process.

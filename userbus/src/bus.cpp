@@ -22,6 +22,7 @@
 
 #include "broker_system.hpp"
 #include "canhil/base/errno_text.hpp"
+#include "canhil/base/realtime.hpp"
 #include "canhil/userbus/state.hpp"
 
 namespace canhil::userbus {
@@ -216,8 +217,8 @@ pid_t start_broker(const BusPaths& paths, const BrokerOptions& options) {
     signal(SIGINT, SIG_IGN);
     signal(SIGPIPE, SIG_IGN);
     state->broker_pid = getpid();
-    const Scheduling got = take_scheduling(options.rt_priority);
-    state->rt_priority = got.rt_priority;
+    const RealtimeGot got = take_realtime(options.rt_priority);
+    state->rt_priority = got.priority;
     state->memory_locked = got.memory_locked ? 1 : 0;
     std::atomic_thread_fence(std::memory_order_release);
     state->magic = kMagic;
