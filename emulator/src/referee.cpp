@@ -3,44 +3,29 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 
 namespace canhil::emulator {
 namespace {
 
-// A restart as the calls' texts say it.
-const char* restart_words(Restart r) noexcept {
-  switch (r) {
-    case Restart::kKickoff:
-      return "kick-off";
-    case Restart::kThrowIn:
-      return "throw-in";
-    case Restart::kCorner:
-      return "corner";
-    case Restart::kGoalKick:
-      return "goal kick";
-    case Restart::kDroppedBall:
-      return "dropped ball";
-  }
-  return "?";
-}
+// Each restart's name in the game states, and in the calls' texts, in the
+// order of Restart.
+struct RestartNames {
+  std::string_view name;
+  const char* words;
+};
+constexpr RestartNames kRestartNames[] = {{"kickoff", "kick-off"},
+                                          {"throwin", "throw-in"},
+                                          {"corner", "corner"},
+                                          {"goalkick", "goal kick"},
+                                          {"drop_ball", "dropped ball"}};
+static_assert(std::size(kRestartNames) == static_cast<std::size_t>(Restart::kDroppedBall) + 1, "a name per restart");
+
+const char* restart_words(Restart r) noexcept { return kRestartNames[static_cast<std::size_t>(r)].words; }
 
 }  // namespace
 
-std::string_view restart_name(Restart r) noexcept {
-  switch (r) {
-    case Restart::kKickoff:
-      return "kickoff";
-    case Restart::kThrowIn:
-      return "throwin";
-    case Restart::kCorner:
-      return "corner";
-    case Restart::kGoalKick:
-      return "goalkick";
-    case Restart::kDroppedBall:
-      return "drop_ball";
-  }
-  return "?";
-}
+std::string_view restart_name(Restart r) noexcept { return kRestartNames[static_cast<std::size_t>(r)].name; }
 
 Referee::Referee(const physics::WorldParams& world, std::vector<RefereeTeam> teams, RefereeRules rules,
                  std::uint64_t seed)

@@ -53,8 +53,6 @@ Session::Session(RunPlan plan)
   for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
     relocation_delay_.push_back(from_seconds(scenario_.laptop_of(t).relocation_delay_s));
   }
-  relocation_due_.resize(n);
-  moved_.assign(n, 0);
   placements_seen_.assign(n, 0);
   rigs_.resize(n);
   for (std::size_t r = 0; r < n; ++r) {
@@ -272,36 +270,33 @@ void Session::after_step(Nanos now) {
   const Eigen::Vector2d ball = world_->ball_position().head<2>();
   const std::optional<bool> entered = goals_.step(*world_, now, !referee_ || referee_->referee().ball_in_play_at(ball));
   if (referee_) referee_step(now, entered);
-  if (any_moved_) {
-    for (std::size_t r = 0; r < moved_.size(); ++r) {
-      if (moved_[r] != 0) relocate_later(r, now);
-      moved_[r] = 0;
-    }
-    any_moved_ = false;
-  }
-  if (relocations_waiting_ > 0) count_relocations(now);
+  for (const std::size_t r : moved_) relocate_later(r, now);
+  moved_.clear();
+  if (!relocations_due_.empty()) count_relocations(now);
   if (step_hook_) step_hook_(now);
   publish(steps_);
 }
 
 void Session::relocate_later(std::size_t robot, Nanos now) {
-  relocation_due_[robot].push_back(now + relocation_delay_[rigs_[robot].team]);
-  ++relocations_waiting_;
+  relocations_due_.emplace_back(now + relocation_delay_[rigs_[robot].team], robot);
+}
+
+void Session::mark_moved(std::size_t robot) {
+  if (std::find(moved_.begin(), moved_.end(), robot) == moved_.end()) moved_.push_back(robot);
 }
 
 // The relocations due by now into the coach's orders, written at once (a
 // team's agent relocalises when the count changes; it must not wait for the
 // next coach period).
 void Session::count_relocations(Nanos now) {
+  const auto due = [now](const std::pair<Nanos, std::size_t>& d) { return d.first <= now; };
   bool counted = false;
-  for (std::size_t r = 0; r < relocation_due_.size(); ++r) {
-    std::deque<Nanos>& due = relocation_due_[r];
-    for (; !due.empty() && due.front() <= now; due.pop_front()) {
-      ++coach_.players.at(r).relocations;
-      --relocations_waiting_;
-      counted = true;
-    }
+  for (const auto& [when, robot] : relocations_due_) {
+    if (when > now) continue;
+    ++coach_.players.at(robot).relocations;
+    counted = true;
   }
+  std::erase_if(relocations_due_, due);
   if (!counted) return;
   write_coaches();
   if (coach_hook_) coach_hook_(coach_);
@@ -386,8 +381,7 @@ void Session::refuse_error_frames(std::string why) {
 void Session::apply_now(const Change& change) {
   if (const auto* m = std::get_if<MoveRobot>(&change)) {
     world_->robot(m->robot).place(m->to);
-    moved_[m->robot] = 1;
-    any_moved_ = true;
+    mark_moved(m->robot);
   } else if (const auto* b = std::get_if<MoveBall>(&change)) {
     world_->place_ball(b->position, b->velocity);
   } else if (const auto* o = std::get_if<MoveObstacle>(&change)) {
@@ -403,8 +397,7 @@ void Session::apply_now(const Change& change) {
       if (r.last_kick_time_s >= 0) r.last_kick_time_s += shift;
     }
     world_->restore(state);
-    std::fill(moved_.begin(), moved_.end(), 1);  // every robot put where it was saved
-    any_moved_ = true;
+    for (std::size_t r = 0; r < rigs_.size(); ++r) mark_moved(r);  // every robot put where it was saved
   } else if (const auto* c = std::get_if<SetCoach>(&change)) {
     CoachState next = coach_;
     if (c->game_state && c->team) {

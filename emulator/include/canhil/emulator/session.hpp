@@ -33,7 +33,6 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <chrono>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -276,14 +275,12 @@ class Session {
   GoalWatcher goals_;
   std::unique_ptr<RefereeDesk> referee_;  // when the scenario's referee is on
   void referee_step(Nanos now, std::optional<bool> goal_positive_x);
-  // Relocations (CoachPlayer::relocations): per robot, when the ones still to
-  // count are due (in order: one delay per team, the steps' times rise).
-  std::vector<Nanos> relocation_delay_;            // per team
-  std::vector<std::deque<Nanos>> relocation_due_;  // per robot
-  std::vector<char> moved_;                        // per robot: MoveRobot / RestoreWorld since the last step
-  std::vector<std::uint32_t> placements_seen_;     // per robot: the referee's, relocations already due for
-  bool any_moved_ = false;
-  std::size_t relocations_waiting_ = 0;
+  // Relocations (CoachPlayer::relocations): each one due to be counted, with its robot.
+  std::vector<Nanos> relocation_delay_;                         // per team
+  std::vector<std::pair<Nanos, std::size_t>> relocations_due_;  // (when, robot)
+  std::vector<std::size_t> moved_;              // MoveRobot / RestoreWorld since the last step, once each
+  std::vector<std::uint32_t> placements_seen_;  // per robot: the referee's, relocations already due for
+  void mark_moved(std::size_t robot);
   void relocate_later(std::size_t robot, Nanos now);
   void count_relocations(Nanos now);
   void set_team_states(std::vector<std::string> states);
