@@ -12,7 +12,7 @@ trap 'rm -rf "$out"' EXIT
 run() {
   local mode="$1"
   PATH="$build/laptop:$build/app:$PATH" CANHIL_BIN="$build/app/canhil" \
-    "$source/vcan_setup/with-vcan.sh" --mode "$mode" -- \
+    "$source/vcan_setup/with-vcan.sh" --mode "$mode" --own-ipc -- \
     "$build/app/canhil" run --no-control --quiet --config "$source/emulator/scenarios/one_robot.toml" --seed 3 \
     --external --duration 3 --process "canhil-hwcomm --iface {iface}" --process "canhil-agent --pose -3,0,-90" \
     --trace "$out/$mode.log" --world-log "$out/$mode.csv" > "$out/$mode.out" 2>&1 ||
