@@ -79,29 +79,7 @@ void report_drops(const ub::BusPaths& paths, const std::vector<std::string>& nam
 bool ensure_bus(const ub::BusPaths& paths, ub::BrokerOptions options, bool detached) {
   if (ub::broker_alive(paths)) return false;
   if (detached) {
-    // `bus up`: the broker outlives this command; it must not hold the caller's terminal or pipes.
-    const pid_t middle = fork();
-    if (middle < 0) throw ub::BusError("cannot start the bus's broker");
-    if (middle == 0) {
-      std::fflush(nullptr);
-      if (std::freopen("/dev/null", "r", stdin) == nullptr || std::freopen("/dev/null", "w", stdout) == nullptr ||
-          std::freopen("/dev/null", "w", stderr) == nullptr) {
-        _exit(1);
-      }
-      try {
-        ub::start_broker(paths, options);
-      } catch (const ub::BusError&) {
-        _exit(1);
-      }
-      _exit(0);
-    }
-    int status = 0;
-    waitpid(middle, &status, 0);
-    for (int k = 0; k < 400 && !ub::broker_alive(paths); ++k) usleep(5000);
-    if (!ub::broker_alive(paths)) {
-      // Once more in this process, for its message.
-      ub::start_broker(paths, options);
-    }
+    ub::start_broker_detached(paths, options);  // `bus up`: the broker outlives this command
     return true;
   }
   ub::start_broker(paths, options);
@@ -131,7 +109,7 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   if (command.empty()) throw UsageError("`canhil bus exec` needs a command after --: canhil bus exec -- candump vcan0");
   const std::vector<std::string> names = split_names(ifaces.value_or("vcan0"));
   for (const std::string& n : names) ub::check_interface_name(n);
-  const std::string preload = ub::find_preload();
+  ub::find_preload();  // before a bus is started: none, no command
 
   options.owner = getpid();
   const bool started = ensure_bus(paths, options, false);
@@ -140,29 +118,7 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
     std::fprintf(stderr, "canhil bus exec: a bus of its own, its broker at %s\n", ub::broker_scheduling(paths).c_str());
   const std::vector<ub::InterfaceCounts> counts_before = ub::interface_counts(paths);
 
-  std::string ld = preload;
-  if (const char* before = std::getenv("LD_PRELOAD"); before != nullptr && *before != '\0') {
-    if (std::string(before).find(preload) == std::string::npos) ld += ":" + std::string(before);
-  }
-  const pid_t child = fork();
-  if (child < 0) throw ub::BusError("cannot start " + command.front());
-  if (child == 0) {
-    setenv("LD_PRELOAD", ld.c_str(), 1);
-    setenv("CANHIL_BUS_DIR", paths.folder.c_str(), 1);
-    std::vector<char*> argv;
-    argv.reserve(command.size() + 1);
-    for (const std::string& w : command) argv.push_back(const_cast<char*>(w.c_str()));
-    argv.push_back(nullptr);
-    execvp(argv[0], argv.data());
-    std::fprintf(stderr, "canhil bus exec: cannot run %s: %s\n", argv[0], std::strerror(errno));
-    _exit(127);
-  }
-  // The command's signals are its own; this process waits for it.
-  signal(SIGINT, SIG_IGN);
-  signal(SIGTERM, SIG_IGN);
-  int status = 0;
-  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
-  }
+  const int status = ub::run_on_bus(paths, command);
   report_drops(paths, names, counts_before);
   if (started) {
     if (const ub::BusWaits w = ub::broker_waits(paths); w.count > 0) {

@@ -13,10 +13,10 @@
 #include <cstring>
 
 #include "canhil/base/errno_text.hpp"
-#include "canhil/base/preload.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
+#include "canhil/userbus/bus_hook.h"
 
 namespace canhil::can_nodes {
 namespace {
@@ -80,7 +80,7 @@ std::size_t DeliveryFence::add(const std::string& iface) {
   const std::size_t index = interfaces_.size();
   if (on_user_space_bus(iface)) {
     // The bus's preload, in this process; canhil does not link it.
-    rounds_ = preload::any_symbol<unsigned long long (*)()>("canhil_userbus_rounds");
+    rounds_ = userbus::hooks().rounds;
     if (rounds_ == nullptr) {
       throw SetupError(iface +
                        " is on canhil's user-space bus, but its preload cannot tell when frames are "

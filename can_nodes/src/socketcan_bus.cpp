@@ -1,6 +1,6 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/base/errno_text.hpp"
-#include "canhil/base/preload.hpp"
+#include "canhil/userbus/bus_hook.h"
 
 #include <fcntl.h>
 #include <linux/can.h>
@@ -69,7 +69,7 @@ bool kernel_has_can() {
 
 bool on_user_space_bus(const std::string& iface) {
   // The bus's preload says so itself; canhil does not link it.
-  const auto has = preload::any_symbol<int (*)(const char*)>("canhil_userbus_interface");
+  const auto has = userbus::hooks().interface;
   return has != nullptr && has(iface.c_str()) != 0;
 }
 
@@ -137,7 +137,7 @@ std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const
 SocketCanBus::SocketCanBus(int fd, std::string iface, int ifindex, const SocketCanOptions& options)
     : fd_(fd), iface_(std::move(iface)), ifindex_(ifindex), options_(options) {
   // The bus's preload, in this process when it runs on the bus (canhil does not link it).
-  if (on_user_space_bus(iface_)) waiting_ = preload::any_symbol<long long (*)(int)>("canhil_userbus_waiting");
+  if (on_user_space_bus(iface_)) waiting_ = userbus::hooks().waiting;
 }
 
 std::optional<bool> SocketCanBus::waiting() const {

@@ -26,15 +26,12 @@
 #include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/lockstep/shim_hook.h"
 
 namespace canhil::lockstep {
 namespace {
 
 std::atomic<int> g_boards{0};
-
-long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const timespec* timeout) noexcept {
-  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
-}
 
 Nanos wall_now() noexcept { return wall_clock(); }
 
@@ -126,7 +123,7 @@ Conductor::Conductor(ConductorOptions options) : options_(options) {
   std::atomic_thread_fence(std::memory_order_release);
   board_->magic = kMagic;
   // The shim preloaded into canhil itself: this process's clocks follow the board too.
-  if (auto* conduct = reinterpret_cast<int (*)(void*)>(dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct"))) {
+  if (const auto conduct = preload::any_symbol<canhil_timeshim_conduct_fn>(CANHIL_TIMESHIM_CONDUCT)) {
     conduct(board_);
     clocks_here_ = true;
   }
@@ -136,7 +133,7 @@ Conductor::~Conductor() {
   if (board_ == nullptr) return;
   release();
   if (clocks_here_) {
-    reinterpret_cast<int (*)(void*)>(dlsym(RTLD_DEFAULT, "canhil_timeshim_conduct"))(nullptr);
+    preload::any_symbol<canhil_timeshim_conduct_fn>(CANHIL_TIMESHIM_CONDUCT)(nullptr);
   }
   // Anyone still waiting learns at its next check that canhil is gone.
   munmap(board_, sizeof(Board));

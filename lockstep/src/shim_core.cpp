@@ -39,10 +39,6 @@ std::int64_t wall_ns() noexcept {
   return ts.tv_sec * kSecond + ts.tv_nsec;
 }
 
-long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const timespec* timeout) noexcept {
-  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
-}
-
 void announce_change() noexcept {
   g_board->changes.fetch_add(1, std::memory_order_release);
   futex(&g_board->changes, FUTEX_WAKE, INT_MAX, nullptr);

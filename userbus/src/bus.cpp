@@ -21,8 +21,11 @@
 #include <sstream>
 
 #include "broker_system.hpp"
+#include "canhil/base/assets.hpp"
 #include "canhil/base/errno_text.hpp"
 #include "canhil/base/realtime.hpp"
+#include "canhil/base/start_again.hpp"
+#include "canhil/userbus/bus_hook.h"
 #include "canhil/userbus/state.hpp"
 
 namespace canhil::userbus {
@@ -374,28 +377,72 @@ BusWaits broker_waits(const BusPaths& paths) {
 
 std::string broker_scheduling(const BusPaths& paths) { return scheduling_text(require_state(paths)->state()); }
 
+void start_broker_detached(const BusPaths& paths, const BrokerOptions& options) {
+  const pid_t middle = fork();
+  if (middle < 0) throw BusError("cannot start the bus's broker: " + errno_text(errno));
+  if (middle == 0) {
+    std::fflush(nullptr);
+    if (std::freopen("/dev/null", "r", stdin) == nullptr || std::freopen("/dev/null", "w", stdout) == nullptr ||
+        std::freopen("/dev/null", "w", stderr) == nullptr) {
+      _exit(1);
+    }
+    try {
+      start_broker(paths, options);
+    } catch (const BusError&) {
+      _exit(1);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(middle, &status, 0);
+  for (int k = 0; k < 400 && !broker_alive(paths); ++k) usleep(5000);
+  if (!broker_alive(paths)) start_broker(paths, options);  // once more in this process, for its message
+}
+
+int run_on_bus(const BusPaths& paths, const std::vector<std::string>& command) {
+  if (command.empty()) throw BusError("no command to run on the bus");
+  const std::string preload = find_preload();
+  const pid_t child = fork();
+  if (child < 0) throw BusError("cannot start " + command.front() + ": " + errno_text(errno));
+  if (child == 0) {
+    preload_first(preload);
+    setenv("CANHIL_BUS_DIR", paths.folder.c_str(), 1);
+    std::vector<char*> argv;
+    argv.reserve(command.size() + 1);
+    for (const std::string& w : command) argv.push_back(const_cast<char*>(w.c_str()));
+    argv.push_back(nullptr);
+    execvp(argv[0], argv.data());
+    std::fprintf(stderr, "canhil bus exec: cannot run %s: %s\n", argv[0], std::strerror(errno));
+    _exit(127);
+  }
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  struct sigaction old_int {
+  }, old_term{};
+  sigaction(SIGINT, &ignore, &old_int);
+  sigaction(SIGTERM, &ignore, &old_term);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  sigaction(SIGINT, &old_int, nullptr);
+  sigaction(SIGTERM, &old_term, nullptr);
+  return status;
+}
+
 std::string find_preload() {
-  std::string built = CANHIL_BUILD_BUS_PRELOAD;
-  if (const char* given = std::getenv("CANHIL_BUS_PRELOAD"); given != nullptr && *given != '\0') {
-    if (access(given, R_OK) != 0) throw BusError(std::string("CANHIL_BUS_PRELOAD=") + given + ": no such file");
-    return given;
+  try {
+    return find_asset("CANHIL_BUS_PRELOAD", "the bus's preload",
+                      {std::filesystem::path("..") / CANHIL_INSTALL_LIBDIR / "libcanhil-bus.so"},
+                      CANHIL_BUILD_BUS_PRELOAD, "canhil_bus_preload")
+        .string();
+  } catch (const SetupError& e) {
+    throw BusError(e.what());
   }
-  char exe[4096] = {};
-  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (n > 0) {
-    std::string folder(exe, static_cast<std::size_t>(n));
-    folder = folder.substr(0, folder.rfind('/'));
-    std::string installed = folder + "/../" CANHIL_INSTALL_LIBDIR "/libcanhil-bus.so";
-    if (access(installed.c_str(), R_OK) == 0) return installed;
-  }
-  if (access(built.c_str(), R_OK) == 0) return built;
-  throw BusError("the bus's preload libcanhil-bus.so is not at " + built +
-                 ": build it (target canhil_bus_preload) or set CANHIL_BUS_PRELOAD=/path/to/libcanhil-bus.so");
 }
 
 void join_bus_if_needed(char** argv) {
-  if (dlsym(RTLD_DEFAULT, "canhil_userbus_interface") != nullptr) return;  // on it already
-  if (std::getenv("CANHIL_BUS_JOINED") != nullptr) return;                 // tried once: the kernel answers
+  if (hooks().loaded()) return;                             // on it already
+  if (std::getenv("CANHIL_BUS_JOINED") != nullptr) return;  // tried once: the kernel answers
   const int probe = socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
   if (probe >= 0) {
     close(probe);
@@ -414,15 +461,21 @@ void join_bus_if_needed(char** argv) {
   } catch (const BusError&) {
     return;  // no preload built or installed: the kernel answers, as without a bus
   }
-  const char* before = std::getenv("LD_PRELOAD");
-  const std::string ld = before != nullptr && *before != '\0' ? preload + ":" + before : preload;
-  setenv("LD_PRELOAD", ld.c_str(), 1);
+  const std::string before = current_preload();
+  preload_first(preload);
   setenv("CANHIL_BUS_JOINED", "1", 1);
   setenv("CANHIL_BUS_DIR", paths.folder.c_str(), 1);
   std::fprintf(stderr, "%s: this kernel has no CAN; running on canhil's user-space bus at %s\n", argv[0],
                paths.folder.c_str());
-  execv("/proc/self/exe", argv);
+  std::vector<std::string> arguments;
+  for (char** a = argv; *a != nullptr; ++a) arguments.emplace_back(*a);
+  start_again(std::move(arguments));
   unsetenv("CANHIL_BUS_JOINED");  // it could not start again: go on without the bus
+  if (before.empty()) {
+    unsetenv("LD_PRELOAD");
+  } else {
+    setenv("LD_PRELOAD", before.c_str(), 1);
+  }
 }
 
 }  // namespace canhil::userbus

@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "canhil/base/preload.hpp"
+#include "canhil/userbus/bus_hook.h"
 #include "preload_core.hpp"
 
 namespace canhil::userbus::preload {
@@ -79,24 +80,16 @@ unsigned int if_nametoindex(const char* name) {
   return real_if_nametoindex(name);
 }
 
-/// Whether interface `name` is on the user-space bus this process runs on
-/// (canhil's reports ask, through dlsym: can_nodes::bus_of).
+// canhil's side of the bus (canhil/userbus/bus_hook.h says what each tells).
 int canhil_userbus_interface(const char* name) {
   return name != nullptr && bus::bus_state(false) != nullptr && bus::interface_named(name) != nullptr ? 1 : 0;
 }
 
-/// The broker's rounds (State::rounds) on the bus this process runs on, or
-/// 1, a round that never ends, without one (canhil's delivery fence asks,
-/// through dlsym: a bus gone delivers nothing).
 unsigned long long canhil_userbus_rounds() {
   const canhil::userbus::State* state = bus::bus_state(false);
   return state != nullptr ? state->rounds.load(std::memory_order_acquire) : 1;
 }
 
-/// How many records the broker has given bus socket `fd` that no read has
-/// taken yet (one being handed over shows once it is in the socket), or -1
-/// when `fd` is not a bus socket (canhil's lockstep asks before it reads,
-/// through dlsym).
 long long canhil_userbus_waiting(int fd) {
   const canhil::userbus::Socket* s = bus::socket_of(fd);
   if (s == nullptr) return -1;

@@ -11,7 +11,10 @@
 #include <functional>
 #include <initializer_list>
 #include <optional>
+#include <string>
 #include <system_error>
+
+#include "canhil/base/setup_error.hpp"
 
 namespace canhil {
 
@@ -45,6 +48,34 @@ inline std::filesystem::path installed_or_built(std::initializer_list<std::files
     }
   }
   return built;
+}
+
+/// A file that must be there, by the same rule: $`variable` when set (it must
+/// exist: the user named it), else the first of `installed` (relative to the
+/// running program's folder) that exists, else `built` when it exists.
+/// SetupError naming the places looked at, the build target that makes the
+/// file (`target`) and the variable to set; `what` names the file in it ("the
+/// time shim"). For the libraries canhil preloads (the time shim, the bus's
+/// preload), whose copy must exist to be used.
+inline std::filesystem::path find_asset(const char* variable, const char* what,
+                                        std::initializer_list<std::filesystem::path> installed,
+                                        const std::filesystem::path& built, const char* target) {
+  if (const auto given = path_from_environment(variable)) {
+    std::error_code ec;
+    if (!std::filesystem::exists(*given, ec))
+      throw SetupError(std::string(variable) + "=" + given->string() + ": no such file");
+    return std::filesystem::absolute(*given, ec);
+  }
+  std::filesystem::path found = installed_or_built(installed, built);
+  std::error_code ec;
+  if (std::filesystem::exists(found, ec)) return found;
+  std::string looked;
+  const std::filesystem::path folder = program_folder();
+  for (const std::filesystem::path& relative : installed)
+    looked += (folder / relative).lexically_normal().string() + ", ";
+  looked += built.string();
+  throw SetupError(std::string(what) + " " + built.filename().string() + " is not at " + looked +
+                   ": build it (target " + target + ") or set " + variable + "=/path/to/" + built.filename().string());
 }
 
 }  // namespace canhil

@@ -27,9 +27,13 @@
 // across processes in shared memory on Linux); bump kVersion on any change.
 #pragma once
 
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <ctime>
 
 namespace canhil::lockstep {
 
@@ -105,5 +109,15 @@ struct Board {
 static_assert(std::atomic<std::int64_t>::is_always_lock_free);
 static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
 static_assert(sizeof(std::atomic<std::uint32_t>) == 4, "futex words are 32-bit");
+
+/// futex(2) on a word of the board (or any 32-bit word shared between
+/// processes): FUTEX_WAIT while it holds `value`, up to `timeout` (nullptr:
+/// no limit), or FUTEX_WAKE of `value` waiters. The conductor, the shim and
+/// the bench's bare round trip wait and wake through it.
+inline long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value,
+                  const timespec* timeout = nullptr) noexcept {
+  static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t), "a futex word is 32 bits");
+  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
+}
 
 }  // namespace canhil::lockstep

@@ -50,6 +50,14 @@ typedef void (*canhil_shim_frames_sent_fn)(long long frames);
 void canhil_shim_descriptor_readable(int fd);
 typedef void (*canhil_shim_descriptor_readable_fn)(int fd);
 
+/* canhil's own side (lockstep::Conductor), when the shim is preloaded into
+ * canhil itself: from then on the process's clocks read `board` (the
+ * conductor's board), while its waits stay real; NULL ends it. Returns 0.
+ * Its presence also tells canhil that it runs under the shim. */
+int canhil_timeshim_conduct(void* board);
+typedef int (*canhil_timeshim_conduct_fn)(void* board);
+#define CANHIL_TIMESHIM_CONDUCT "canhil_timeshim_conduct"
+
 #ifdef __cplusplus
 }
 #endif

@@ -114,6 +114,20 @@ std::vector<std::string> add_interfaces(const BusPaths& paths, const std::vector
 /// Brings interface `name` up or down, as `ip link set dev NAME up|down`.
 void set_interface_up(const BusPaths& paths, const std::string& name, bool up);
 
+/// start_broker() for a broker that outlives the caller (`canhil bus up`):
+/// started from a process of its own whose standard streams are /dev/null, so
+/// that it holds none of the caller's terminal or pipes. BusError as
+/// start_broker's.
+void start_broker_detached(const BusPaths& paths, const BrokerOptions& options);
+
+/// Runs `command` (a program, found on the PATH, and its arguments) on the bus
+/// at `paths`: the bus's preload first in its LD_PRELOAD, CANHIL_BUS_DIR set;
+/// waits for it, SIGINT and SIGTERM ignored meanwhile (the command's are its
+/// own). Returns its wait status (waitpid's). BusError when no preload is
+/// found or no process can be started; a program that cannot be run ends
+/// with status 127, saying why on stderr.
+int run_on_bus(const BusPaths& paths, const std::vector<std::string>& command);
+
 /// Removes the interfaces `names` (their bound sockets get ENODEV, as when a
 /// kernel interface is deleted).
 void remove_interfaces(const BusPaths& paths, const std::vector<std::string>& names);

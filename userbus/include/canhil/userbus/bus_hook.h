@@ -1,0 +1,69 @@
+/* canhil/userbus/bus_hook.h — what the user-space bus's preload
+ * (libcanhil-bus.so) tells the process it is loaded into, beyond the sockets
+ * it serves: whether an interface is on the bus, when a frame has reached
+ * every socket, and what a socket has waiting. canhil's lockstep and reports
+ * ask (can_nodes: on_user_space_bus, DeliveryFence, SocketCanBus::waiting).
+ *
+ * The preload exports these functions with C linkage. canhil does not link
+ * the preload: it looks them up once with dlsym(RTLD_DEFAULT, name)
+ * (canhil::preload::any_symbol in canhil/base/preload.hpp, or
+ * canhil::userbus::hooks() in C++), and a null pointer means the process is
+ * not on a user-space bus: the kernel's SocketCAN serves it.
+ *
+ * Every function may be called from any thread at any time; none blocks. */
+#ifndef CANHIL_USERBUS_BUS_HOOK_H
+#define CANHIL_USERBUS_BUS_HOOK_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* 1 when interface `name` is on the user-space bus this process runs on, else 0. */
+int canhil_userbus_interface(const char* name);
+typedef int (*canhil_userbus_interface_fn)(const char* name);
+#define CANHIL_USERBUS_INTERFACE "canhil_userbus_interface"
+
+/* The broker's rounds (userbus::State::rounds) on the bus this process runs
+ * on: odd while the broker hands a round of frames to their sockets, so a
+ * frame read on one socket is in every socket once the count is even, or past
+ * the odd value it had after the read. Without a bus 1, a round that never
+ * ends: a bus gone delivers nothing. */
+unsigned long long canhil_userbus_rounds(void);
+typedef unsigned long long (*canhil_userbus_rounds_fn)(void);
+#define CANHIL_USERBUS_ROUNDS "canhil_userbus_rounds"
+
+/* How many frames the broker has given bus socket `fd` that no read has taken
+ * yet (one being handed over shows once it is in the socket), or -1 when `fd`
+ * is not a bus socket. */
+long long canhil_userbus_waiting(int fd);
+typedef long long (*canhil_userbus_waiting_fn)(int fd);
+#define CANHIL_USERBUS_WAITING "canhil_userbus_waiting"
+
+#ifdef __cplusplus
+}
+
+#include "canhil/base/preload.hpp"
+
+namespace canhil::userbus {
+
+/// The preload's exports in this process, looked up once (the first call);
+/// all null when the process is not on a user-space bus.
+struct Hooks {
+  canhil_userbus_interface_fn interface = nullptr;
+  canhil_userbus_rounds_fn rounds = nullptr;
+  canhil_userbus_waiting_fn waiting = nullptr;
+  bool loaded() const noexcept { return interface != nullptr; }
+};
+
+/// This process's hooks (the preload is loaded before main() or never).
+inline const Hooks& hooks() {
+  static const Hooks found{::canhil::preload::any_symbol<canhil_userbus_interface_fn>(CANHIL_USERBUS_INTERFACE),
+                           ::canhil::preload::any_symbol<canhil_userbus_rounds_fn>(CANHIL_USERBUS_ROUNDS),
+                           ::canhil::preload::any_symbol<canhil_userbus_waiting_fn>(CANHIL_USERBUS_WAITING)};
+  return found;
+}
+
+}  // namespace canhil::userbus
+#endif
+
+#endif /* CANHIL_USERBUS_BUS_HOOK_H */
