@@ -42,10 +42,11 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/external/private_rtdb.hpp"
+#include "canhil/external/time_shim.hpp"
 #include "canhil/frames/ftt.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
-#include "private_rtdb.hpp"
 #include "run_external.hpp"
 
 namespace canhil::app {
@@ -197,10 +198,10 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   ExternalBench external;
   if (want_external && can_nodes::kernel_has_can()) {
     // Before anything is measured: canhil may start itself again, with the time shim preloaded.
-    external.shim = find_timeshim();
-    external.team_preload = preload_shim_into_self(external.shim);
+    external.shim = external::find_timeshim();
+    external.team_preload = external::preload_shim_into_self(external.shim);
   }
-  use_private_rtdb_keys(kBenchKeyPrefix);
+  external::use_private_rtdb_keys(external::kBenchKeyPrefix);
   const auto messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   bool all_met = true;
   if (want_virtual) all_met = bench_virtual(config, seconds, messages) && all_met;

@@ -21,6 +21,7 @@
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/lockstep/conductor.hpp"
+#include "canhil/lockstep/round_trip.hpp"
 #include "canhil/userbus/bus.hpp"
 #include "canhil/userbus/state.hpp"
 #include "run_external.hpp"
@@ -54,70 +55,6 @@ class PinnedToCore {
 };
 
 constexpr int kRoundTrips = 20000;
-
-long futex(std::atomic<std::uint32_t>* word, int op, std::uint32_t value, const timespec* timeout = nullptr) {
-  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word), op, value, timeout, nullptr, 0);
-}
-
-// Waits until `word` is `wanted` (it is `other` until then), looking every
-// 100 ms whether `partner_gone()` says there is nobody left to change it.
-// False when there is not.
-template <typename Gone>
-bool await(std::atomic<std::uint32_t>* word, std::uint32_t wanted, std::uint32_t other, Gone&& partner_gone) {
-  const timespec look{0, 100'000'000};
-  while (word->load(std::memory_order_acquire) != wanted) {
-    if (futex(word, FUTEX_WAIT, other, &look) < 0 && errno == ETIMEDOUT && partner_gone()) return false;
-  }
-  return true;
-}
-
-// The floor under every hand-over of the lockstep: a second process (this
-// one's child, on the same cores as this thread) woken through a futex word
-// in shared memory, which wakes this one back, `rounds` times. The mean wall
-// time of one round trip, or nothing if the child could not be started or
-// died on the way.
-std::optional<Nanos> bare_round_trip(int rounds) {
-  static_assert(std::atomic<std::uint32_t>::is_always_lock_free, "a futex word shared between processes");
-  void* shared =
-      ::mmap(nullptr, sizeof(std::atomic<std::uint32_t>), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
-  if (shared == MAP_FAILED) return std::nullopt;
-  auto* turn = new (shared) std::atomic<std::uint32_t>(0);  // 0: this process's turn, 1: the child's
-  const pid_t parent = ::getpid();
-  const pid_t child = ::fork();
-  if (child == 0) {
-    // The child never outlives the bench (Ctrl-C, a crash): it goes with its parent.
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-    const auto parent_gone = [&] { return ::getppid() != parent; };
-    for (int i = 0; i < rounds; ++i) {  // (the parent is looked for only when a wait times out)
-      if (!await(turn, 1, 0, parent_gone)) break;
-      turn->store(0, std::memory_order_release);
-      futex(turn, FUTEX_WAKE, 1);
-    }
-    ::_exit(0);
-  }
-  std::optional<Nanos> mean;
-  if (child > 0) {
-    bool reaped = false;
-    const auto child_gone = [&] {
-      reaped = ::waitpid(child, nullptr, WNOHANG) == child;
-      return reaped;
-    };
-    const Nanos start = lockstep::wall_clock();
-    bool answered = true;
-    for (int i = 0; i < rounds && answered; ++i) {
-      turn->store(1, std::memory_order_release);
-      futex(turn, FUTEX_WAKE, 1);
-      answered = await(turn, 0, 1, child_gone);
-    }
-    if (answered) mean = (lockstep::wall_clock() - start) / rounds;  // a child that died measured nothing
-    if (!reaped) {
-      while (::waitpid(child, nullptr, 0) < 0 && errno == EINTR) {
-      }
-    }
-  }
-  ::munmap(shared, sizeof(std::atomic<std::uint32_t>));
-  return mean;
-}
 
 // The user-space bus's broker, when this process runs on that bus: its pid
 // (else 0) and how many times it has looked for a next frame before sleeping.
@@ -172,7 +109,7 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   options.messages = messages;
   options.external = true;
   emulator::Session session(sc, options);
-  ExternalRun run;
+  ExternalRequest run;
   run.length = {bench.seconds, "the bench"};
   run.quiet = true;
   ExternalFigures fig;
@@ -234,7 +171,7 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   // one bare round trip between two processes.
   std::uint64_t waits = 0;
   for (const lockstep::ProcessReport& p : fig.processes) waits += p.blocks;
-  if (const auto trip = bare_round_trip(kRoundTrips)) {
+  if (const auto trip = lockstep::bare_round_trip(kRoundTrips)) {
     const double floor = to_seconds(in_process) + static_cast<double>(waits) * to_seconds(*trip);
     std::printf(
         "  the floor on this machine: one bare hand-over between two processes (a futex, there and back, %s): "

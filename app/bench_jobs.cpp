@@ -5,11 +5,12 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 #include <thread>
 
 #include "canhil/emulator/match.hpp"
 #include "canhil/emulator/scenario.hpp"
-#include "match_jobs.hpp"
+#include "canhil/external/match_workers.hpp"
 
 namespace canhil::app {
 
@@ -33,20 +34,18 @@ bool bench_jobs(const std::optional<std::string>& config, double seconds,
               path.filename().c_str(), kHalves, match.half_s, std::min(2U, cores));
   std::atomic<bool> stop{false};
   auto rate = [&](int workers) {
-    MatchJobs jobs;
+    external::MatchJobs jobs;
     jobs.play = [&](int, std::uint64_t seed, const std::function<void(double)>&) {
       emulator::Scenario one = scenario;
       one.seed = seed;
       const emulator::MatchResult r = emulator::play_match(one, options, match);
-      return nlohmann::json{{"seed", seed}, {"virtual_s", r.virtual_s}};
+      return std::to_string(seed) + " played " + std::to_string(r.virtual_s);
     };
-    jobs.failed = [](std::uint64_t seed, const std::string& why) {
-      return nlohmann::json{{"seed", seed}, {"failed", why}};
-    };
+    jobs.failed = [](std::uint64_t seed, const std::string& why) { return std::to_string(seed) + " failed " + why; };
     int halves = 0;
-    jobs.done = [&](const nlohmann::json& r) { halves += r.contains("failed") ? 0 : 1; };
+    jobs.done = [&](const std::string& r) { halves += r.find(" failed ") == std::string::npos ? 1 : 0; };
     const auto t0 = std::chrono::steady_clock::now();
-    play_in_workers(seeds, workers, jobs, stop);
+    external::play_in_workers(seeds, workers, jobs, stop);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double per_minute = halves * 60 / wall;
     std::printf("  --jobs %d: %d halves in %6.1f s of wall time, %6.1f halves per minute\n", workers, halves, wall,

@@ -11,10 +11,10 @@
 
 #include "args.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/external/private_rtdb.hpp"
 #include "canhil/physics/solver_health.hpp"
 #include "canhil/userbus/bus.hpp"
 #include "commands.hpp"
-#include "private_rtdb.hpp"
 #include "stop_signals.hpp"
 
 namespace {
@@ -323,7 +323,7 @@ int run_command_line(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   const int status = run_command_line(argc, argv);
-  canhil::app::release_private_rtdb_keys();
+  canhil::external::release_private_rtdb_keys();
   canhil::app::end_by_sigpipe_if_seen();  // a command whose output's reader left ends by SIGPIPE
   return status;
 }

@@ -4,7 +4,7 @@
 // (emulator/match.hpp), one seed per match (S, S+1, ...), and a table per
 // match and over all of them: score, possession, shots, kicks, faults and FTT
 // violations per team. A progress bar on a terminal's stderr. With
-// --external the teams' own processes play (match_external.hpp).
+// --external the teams' own processes play (canhil/external/external_half.hpp).
 #include <unistd.h>
 
 #include <array>
@@ -26,18 +26,20 @@
 #include "canhil/emulator/match.hpp"
 #include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
+#include "canhil/external/external_half.hpp"
+#include "canhil/external/external_run.hpp"
+#include "canhil/external/match_workers.hpp"
+#include "canhil/external/private_rtdb.hpp"
+#include "canhil/external/team_processes.hpp"
+#include "canhil/external/time_shim.hpp"
+#include "canhil/external/worker.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
-#include "external_worker.hpp"
 #include "log_file.hpp"
-#include "match_external.hpp"
-#include "match_jobs.hpp"
 #include "match_records.hpp"
 #include "match_report.hpp"
-#include "private_rtdb.hpp"
 #include "run_external.hpp"
 #include "stop_signals.hpp"
-#include "team_processes.hpp"
 
 namespace canhil::app {
 namespace {
@@ -248,7 +250,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
                        "--process \"COMMAND\" for both teams (docs/teams.md)");
     }
     try {
-      require_told_goal(scenario, halves > 1, stderr);
+      external::require_told_goal(scenario, halves > 1, stderr);
     } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
       throw SetupError(path + ": " + e.what());
     }
@@ -268,7 +270,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   match.half_s = 60 * half_minutes.value_or(10);
   emulator::SessionOptions options;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
-  use_private_rtdb_keys(kRunKeyPrefix);  // keys of this process, never a live robot's database
+  external::use_private_rtdb_keys(external::kRunKeyPrefix);  // keys of this process, never a live robot's database
   if (logs) {
     // Every half's trace and world log, to look at with `canhil view` (docs/teams.md).
     std::error_code made;
@@ -283,20 +285,20 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   }
   int match_number = 0;
   // With the teams' processes, one match at a time unless --jobs says more:
-  // each worker then has its own bus and IPC namespace (external_worker.hpp).
+  // each worker then has its own bus and IPC namespace (canhil/external/worker.hpp).
   const long workers =
       std::min<long>(external && !jobs_given ? 1 : jobs, static_cast<long>(std::max<std::size_t>(1, seeds.size())));
   if (external) {
     // Before anything is printed: canhil may start itself again, with the shim preloaded.
-    if (workers > 1) prepare_external_workers();
-    ExternalMatch how;
-    how.shim = find_timeshim();
-    how.team_preload = preload_shim_into_self(how.shim);
+    if (workers > 1) external::prepare_external_workers();
+    external::ExternalMatch how;
+    how.shim = external::find_timeshim();
+    how.team_preload = external::preload_shim_into_self(how.shim);
     how.logs = logs;
     how.match = &match_number;
     how.alone = workers == 1;
     options.external = true;
-    match.driver = external_halves(how);
+    match.driver = external::external_halves(how);
   }
   stop_on_signals();
   const std::vector<std::string> names = {scenario.teams.at(0).name,
@@ -418,33 +420,35 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     return match_record(emulator::play_match(one, options, match, on_progress, &g_stop), context);
   };
   if (!external || workers > 1) {
-    MatchJobs jobs_of;
-    jobs_of.play = play;
+    external::MatchJobs jobs_of;
+    jobs_of.play = [&](int number, std::uint64_t s, const std::function<void(double)>& on_progress) {
+      return play(number, s, on_progress).dump();
+    };
     if (external) {
       // A process that stops answering fails its match; the other workers go on.
       jobs_of.play = [&](int number, std::uint64_t s, const std::function<void(double)>& on_progress) {
-        ExternalWorker::next_match();
+        external::ExternalWorker::next_match();
         try {
-          return play(number, s, on_progress);
+          return play(number, s, on_progress).dump();
         } catch (const emulator::ProcessStuck& e) {
-          return failed_record(s, std::string("stuck: ") + e.what(), context);
+          return failed_record(s, std::string("stuck: ") + e.what(), context).dump();
         }
       };
       jobs_of.enter = [&](int) -> std::shared_ptr<void> {
-        return std::make_shared<ExternalWorker>(scenario.interfaces);
+        return std::make_shared<external::ExternalWorker>(scenario.interfaces);
       };
     }
-    jobs_of.failed = [&](std::uint64_t s, const std::string& why) { return failed_record(s, why, context); };
-    jobs_of.done = done;
+    jobs_of.failed = [&](std::uint64_t s, const std::string& why) { return failed_record(s, why, context).dump(); };
+    jobs_of.done = [&](const std::string& record) { done(nlohmann::json::parse(record)); };
     jobs_of.progress = [&](std::uint64_t s, double played_s) { progress.update(s, played_s); };
     std::optional<std::string> failed_setup;
     try {
-      play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop);
+      external::play_in_workers(seeds, static_cast<int>(workers), jobs_of, g_stop);
     } catch (const SetupError& e) {
       failed_setup = path + ": " + e.what();
     }
     // Each worker ended in IPC namespaces of its own, away from its claim of keys.
-    if (external) remove_orphan_rtdb_keys(kRunKeyPrefix);
+    if (external) external::remove_orphan_rtdb_keys(external::kRunKeyPrefix);
     if (failed_setup) {
       progress.clear();
       // A worker's own bus or namespace is the machine's matter, not the command line's.
@@ -498,7 +502,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   if (!json && !records_path.empty() && played + failed > 0) {
     std::printf("records: %s (canhil match --report %s)\n", records_path.c_str(), records_path.c_str());
   }
-  if (stuck) return kProcessStuckStatus;
+  if (stuck) return external::kProcessStuckStatus;
   if (g_stop) return 130;
   return failed > 0 ? 1 : 0;  // a match that failed is canhil's fault: a batch's CI must see it
 }

@@ -19,17 +19,18 @@
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/external/private_rtdb.hpp"
+#include "canhil/external/team_processes.hpp"
+#include "canhil/external/time_shim.hpp"
 #include "canhil/viewer/live_feed.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "log_file.hpp"
 #include "play_summary.hpp"
-#include "private_rtdb.hpp"
 #include "run_external.hpp"
 #include "run_realtime.hpp"
 #include "run_view.hpp"
 #include "stop_signals.hpp"
-#include "team_processes.hpp"
 #include "virtual_loop.hpp"
 
 namespace canhil::app {
@@ -314,7 +315,7 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   const RunRequest q = read_request(args);
   const emulator::RunMode mode = q.overrides.mode;
   // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
-  if (mode != emulator::RunMode::kRealtime) use_private_rtdb_keys(kRunKeyPrefix);
+  if (mode != emulator::RunMode::kRealtime) external::use_private_rtdb_keys(external::kRunKeyPrefix);
   emulator::RunPlan plan = make_plan(q, dbc);
   if (mode == emulator::RunMode::kRealtime) {
     emulator::RealtimeOptions rt;
@@ -332,19 +333,19 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
   }
   if (mode == emulator::RunMode::kExternal) {
     try {
-      require_told_goal(plan.scenario, false, stderr);
+      external::require_told_goal(plan.scenario, false, stderr);
     } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
       throw SetupError((q.config ? *q.config + ": " : std::string()) + e.what());
     }
     // Before anything is set up: canhil may start itself again, with the shim preloaded.
-    const std::string shim = find_timeshim();
-    const std::string team_preload = preload_shim_into_self(shim);
+    const std::string shim = external::find_timeshim();
+    const std::string team_preload = external::preload_shim_into_self(shim);
     if (q.view.on) {
       std::printf(
           "canhil run: no viewer with --external yet (its server would run under the time shim); watch the "
           "run with --world-log and canhil view\n");
     }
-    ExternalRun run;
+    ExternalRequest run;
     run.length = plan.length;
     run.quiet = q.outputs.quiet;
     run.trace = q.outputs.trace;

@@ -1,10 +1,7 @@
 // app/run_external.hpp — `canhil run --external`: a session in virtual time
 // with the team's own handler and agent as processes in lockstep
-// (emulator::ExternalDriver, docs/lockstep.md). canhil preloads the time shim
-// into itself (it starts itself again once, with LD_PRELOAD), starts the
-// scenario's [external] processes per robot (or waits for processes started
-// by hand), runs, and reports the real-time factor and how the wall time
-// split between canhil and each process.
+// (external::ExternalRun, docs/lockstep.md), run and reported: the real-time
+// factor and how the wall time split between canhil and each process.
 #pragma once
 
 #include <optional>
@@ -16,7 +13,7 @@
 
 namespace canhil::app {
 
-struct ExternalRun {
+struct ExternalRequest {
   emulator::RunLength length{20, "the default"};
   bool quiet = false;
   std::optional<std::string> trace, world_log;
@@ -34,23 +31,9 @@ struct ExternalFigures {
   std::uint64_t sleeps = 0;          ///< and those that ended in a sleep
 };
 
-/// Exit status 3: a process stopped answering (named on stderr); the trace
-/// and the world log are still written.
-inline constexpr int kProcessStuckStatus = 3;
-
-/// The time shim's path: $CANHIL_TIMESHIM, next to an installed canhil, or
-/// the build tree's. SetupError naming the places looked at.
-std::string find_timeshim();
-
-/// Makes sure canhil's own clocks can follow the lockstep board: when the shim
-/// is not preloaded yet, starts canhil again (same arguments) with it; the
-/// process then goes on with the team's LD_PRELOAD restored for what it
-/// starts. Returns the preload the team's processes should keep after the shim
-/// (LD_PRELOAD as canhil was first given it). SetupError when it cannot.
-std::string preload_shim_into_self(const std::string& shim);
-
-/// Runs the session; returns the exit status (0, 130 after Ctrl-C, kProcessStuckStatus).
-int run_external(emulator::Session& session, const ExternalRun& run, const std::string& shim,
+/// Runs the session (canhil already under the time shim: external::preload_shim_into_self);
+/// returns the exit status (0, 130 after Ctrl-C, external::kProcessStuckStatus).
+int run_external(emulator::Session& session, const ExternalRequest& run, const std::string& shim,
                  const std::string& team_preload, ExternalFigures* figures = nullptr);
 
 }  // namespace canhil::app

@@ -1,5 +1,8 @@
 #include "canhil/emulator/run_plan.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
 #include "canhil/can_nodes/fault.hpp"
 #include "canhil/emulator/laptop_link.hpp"
 
@@ -27,7 +30,54 @@ std::vector<LaptopSide> resolve_laptops(Scenario& s, bool realtime) {
   return sides;
 }
 
+// The longest `field` the run's external sides give.
+double longest(const Scenario& s, double ExternalSide::*field) {
+  double most = s.external.*field;
+  if (!s.teams.empty()) most = 0;
+  for (std::size_t t = 0; t < s.teams.size(); ++t) most = std::max(most, s.external_of(t).*field);
+  return most;
+}
+
+ExternalPlan resolve_external(const Scenario& s) {
+  ExternalPlan e;
+  e.conductor.answer_limit = from_seconds(longest(s, &ExternalSide::answer_limit_s));
+  e.conductor.busy_limit = from_seconds(longest(s, &ExternalSide::busy_limit_s));
+  e.conductor.spin = from_seconds(longest(s, &ExternalSide::spin_us) * 1e-6);
+  e.attach_limit_s = longest(s, &ExternalSide::attach_limit_s);
+  e.bus_spin_us = longest(s, &ExternalSide::bus_spin_us);
+  e.syslog = s.external.syslog;
+  for (std::size_t r = 0; r < s.robot_count(); ++r) {
+    const std::size_t team = s.team_of(r);
+    const ExternalSide& side = s.external_of(team);
+    for (const std::string& c : side.processes)
+      e.launches.push_back({r, team, s.agents[r], expand_command(c, s, r), side.syslog});
+  }
+  return e;
+}
+
 }  // namespace
+
+std::string expand_command(std::string command, const Scenario& scenario, std::size_t robot) {
+  const auto replace = [&command](const std::string& key, const std::string& value) {
+    for (std::size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size())) {
+      command.replace(at, key.size(), value);
+    }
+  };
+  const auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v + 0.0);  // + 0.0: -0 prints as 0
+    return std::string(text);
+  };
+  const physics::Placement& at = scenario.world.robots.at(robot);
+  const double goal_x = scenario.world.field.length_m / 2;
+  replace("{agent}", std::to_string(scenario.agents.at(robot)));
+  replace("{iface}", scenario.interfaces.at(robot));
+  replace("{x}", number(at.x_m));
+  replace("{y}", number(at.y_m));
+  replace("{heading}", number(at.heading_deg));
+  replace("{goal_x}", number(scenario.teams.at(scenario.team_of(robot)).attacks_positive_x ? goal_x : -goal_x));
+  return command;
+}
 
 RunPlan plan_run(Scenario scenario, SessionOptions options) {
   if (!options.messages) throw SetupError("a run needs a message set");
@@ -35,6 +85,7 @@ RunPlan plan_run(Scenario scenario, SessionOptions options) {
   complete(scenario);
   if (options.vision_on) plan.laptops = resolve_laptops(scenario, options.realtime || options.external);
   plan.length = scenario.run_length(std::nullopt, options.realtime);
+  if (options.external) plan.external = resolve_external(scenario);
   plan.scenario = std::move(scenario);
   plan.options = std::move(options);
   return plan;

@@ -121,6 +121,33 @@ TEST_F(RunPlanTest, AnswerLimitIsEveryTeams) {
   EXPECT_EQ(test::error_of([&] { plan(o); }), "--answer-limit takes 0.01..3600 s");
 }
 
+TEST_F(RunPlanTest, AnExternalRunsProcessesAreEachRobotsLinesExpandedAndItsLimitsTheLongestAnyTeamGives) {
+  std::ofstream(file_)
+      << "[[teams]]\nname = \"a\"\n"
+         "[[teams.robots]]\nx_m = -1.0\ny_m = 2.0\nheading_deg = 90.0\n"
+         "[teams.external]\nprocesses = [\"handler --iface {iface}\", \"agent {agent} {x},{y},{heading} {goal_x}\"]\n"
+         "answer_limit_s = 2\nattach_limit_s = 5\nsyslog = \"system\"\n"
+         "[[teams]]\nname = \"b\"\n"
+         "[[teams.robots]]\nx_m = 3.0\ny_m = -0.5\nheading_deg = 0.0\n"
+         "[teams.external]\nprocesses = [\"theirs {agent} {goal_x}\"]\nanswer_limit_s = 3\nbusy_limit_s = 9\n";
+  RunOverrides o;
+  o.mode = RunMode::kExternal;
+  const RunPlan p = plan(o);
+  const ExternalPlan& e = p.external;
+  ASSERT_EQ(e.launches.size(), 3u);
+  EXPECT_EQ(e.launches[0].command, "handler --iface vcan0");
+  EXPECT_EQ(e.launches[1].command, "agent 1 -1,2,90 9");
+  EXPECT_EQ(e.launches[1].syslog, "system");
+  EXPECT_EQ(e.launches[2].command, "theirs 1 -9") << "the second team attacks -x";
+  EXPECT_EQ(e.launches[2].team, 1u);
+  EXPECT_EQ(e.launches[2].robot, 1u);
+  EXPECT_EQ(e.launches[2].syslog, "log");
+  EXPECT_EQ(e.conductor.answer_limit, from_seconds(3)) << "the longest: one virtual clock for all";
+  EXPECT_EQ(e.conductor.busy_limit, from_seconds(60)) << "team a's default is longer than b's 9 s";
+  EXPECT_EQ(e.attach_limit_s, 60) << "team b's default is longer than a's 5 s";
+  EXPECT_TRUE(plan().external.launches.empty()) << "a run without --external resolves no processes";
+}
+
 TEST_F(RunPlanTest, Layout) {
   RunOverrides o;
   o.layout = "cambada";

@@ -19,6 +19,7 @@
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session_options.hpp"
+#include "canhil/lockstep/conductor.hpp"
 
 namespace canhil::emulator {
 
@@ -51,12 +52,39 @@ class OverrideError : public SetupError {
   using SetupError::SetupError;
 };
 
+/// One of the team's processes as a run with them starts it: a command line
+/// of its team's [teams.external] (else [external]) for one robot, its
+/// placeholders filled in (expand_command).
+struct Launch {
+  std::size_t robot = 0;
+  std::size_t team = 0;
+  int agent = 0;        ///< AGENT
+  std::string command;  ///< the shell command line, expanded
+  std::string syslog;   ///< where its syslog(3) messages go (ExternalSide::syslog)
+};
+
+/// A run with the team's processes (RunMode::kExternal), resolved from every
+/// team's [teams.external], else the scenario's [external].
+struct ExternalPlan {
+  /// Every process waits on the one virtual clock, so each limit is the
+  /// longest any team gives (answer_limit_s, busy_limit_s, spin_us): a team's
+  /// processes get at least their own team's.
+  lockstep::ConductorOptions conductor;
+  double attach_limit_s = 0;  ///< the longest attach_limit_s of the teams
+  double bus_spin_us = 0;     ///< the longest bus_spin_us of the teams
+  /// Every robot's processes, robot by robot; none: the user starts them.
+  std::vector<Launch> launches;
+  /// Where processes the user starts send their syslog messages (the scenario's [external]).
+  std::string syslog;
+};
+
 struct RunPlan {
   std::filesystem::path source;     ///< the scenario file as given; empty for a scenario built in code
   Scenario scenario;                ///< complete, the overrides applied, laptops resolved (with vision)
   std::vector<LaptopSide> laptops;  ///< per team, as its LaptopLink opens it (none without vision)
   SessionOptions options;
   RunLength length;
+  ExternalPlan external;  ///< with options.external; empty otherwise
   /// The mode, as the options say it (external, real time, else virtual).
   RunMode mode() const noexcept {
     return options.external ? RunMode::kExternal : options.realtime ? RunMode::kRealtime : RunMode::kVirtual;
@@ -68,6 +96,12 @@ struct RunPlan {
 /// defaults of a real-time run when options.realtime or options.external).
 /// SetupError saying what to change.
 RunPlan plan_run(Scenario scenario, SessionOptions options);
+
+/// A command line with robot `robot`'s values in place of "{agent}",
+/// "{iface}", "{x}", "{y}", "{heading}" (its start placement: metres,
+/// degrees) and "{goal_x}" (the x of the goal its team attacks, metres),
+/// numbers as "%g" prints them. `scenario`: complete().
+std::string expand_command(std::string command, const Scenario& scenario, std::size_t robot);
 
 /// `--process` and `--answer-limit` over a scenario's [external] sides (the
 /// limit is every team's). OverrideError for a limit outside 0.01..3600 s.

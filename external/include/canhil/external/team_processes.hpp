@@ -1,9 +1,9 @@
-// app/team_processes.hpp — the team's own processes for a session in virtual
-// time (`canhil run --external`, `canhil match --external`): per robot, each
-// command line of its team's [teams.external] (else [external]) started with
+// canhil/external/team_processes.hpp — the team's own processes for a session
+// in virtual time: the plan's launches (emulator::ExternalPlan, per robot each
+// command line of its team's [teams.external], else [external]) started with
 // the lockstep's environment, AGENT, SECOND_RTDB for the second team and
 // canhil's laptop programs on the PATH; reaped as they end; stopped with
-// SIGINT, then SIGKILL, when the session is over.
+// SIGINT, then SIGKILL, when the session is over. ExternalRun owns them.
 //
 // Not thread-safe: the thread that drives the session owns it.
 #pragma once
@@ -22,20 +22,7 @@
 #include "canhil/lockstep/conductor.hpp"
 #include "canhil/userbus/bus.hpp"
 
-namespace canhil::app {
-
-/// The external sides a run's processes come from: each team's
-/// [teams.external], else the scenario's [external].
-std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenario& scenario);
-
-/// The lockstep conductor's limits for a run: every process waits on the one
-/// virtual clock, so each limit is the longest any team gives (answer_limit_s,
-/// busy_limit_s, spin_us); a team's processes get at least their own team's.
-/// The attach limit is attach_limit_s().
-lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario);
-/// How long (wall time) the run waits for all its processes to attach: the
-/// longest attach_limit_s of the teams' sides.
-double attach_limit_s(const emulator::Scenario& scenario);
+namespace canhil::external {
 
 /// While it lives, the broker of canhil's user-space bus, when the session's
 /// robots are on it, looks for each next frame for the longest bus_spin_us of
@@ -53,12 +40,6 @@ std::unique_ptr<userbus::BrokerSpin> spin_the_bus(const emulator::Session& sessi
 /// both ways. A team whose processes the user starts (no command lines) gets
 /// a warning on `warn` instead: canhil cannot see what they are told.
 void require_told_goal(const emulator::Scenario& scenario, bool both_ends, FILE* warn);
-
-/// A command line with robot `robot`'s values in place of "{agent}",
-/// "{iface}", "{x}", "{y}", "{heading}" (its start placement in this run or
-/// half: metres, degrees) and "{goal_x}" (the x of the goal its team attacks
-/// in it, metres), numbers as "%g" prints them.
-std::string expand_command(std::string command, const emulator::Session& session, std::size_t robot);
 
 /// Where the processes' own output goes: one file per process under `folder`
 /// (PREFIX TEAM-agentN-PROGRAM.log), else canhil's stdout and stderr, or both
@@ -79,8 +60,8 @@ class TeamProcesses {
   TeamProcesses(const TeamProcesses&) = delete;
   TeamProcesses& operator=(const TeamProcesses&) = delete;
 
-  /// Starts every robot's processes; returns how many. SetupError when a log
-  /// file cannot be opened.
+  /// Starts the session's plan's launches; returns how many. SetupError when
+  /// a log file cannot be opened.
   std::size_t start_all(const emulator::Session& session);
   /// Reaps what ended; says so once per process, with the virtual time `now`.
   void reap(Nanos now);
@@ -92,6 +73,8 @@ class TeamProcesses {
   /// SIGINT (their Ctrl-C), then SIGKILL for any still there after five seconds.
   void stop_all();
   std::size_t started() const noexcept { return started_.size(); }
+  /// What every process is started with (NAME=VALUE each).
+  const std::vector<std::string>& environment() const noexcept { return environment_; }
 
  private:
   struct Started {
@@ -107,4 +90,4 @@ class TeamProcesses {
   std::vector<Started> started_;
 };
 
-}  // namespace canhil::app
+}  // namespace canhil::external

@@ -1,5 +1,5 @@
 // The team's own processes for a session in virtual time (team_processes.hpp).
-#include "team_processes.hpp"
+#include "canhil/external/team_processes.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -21,7 +21,7 @@
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/lockstep/conductor.hpp"
 
-namespace canhil::app {
+namespace canhil::external {
 
 namespace {
 
@@ -53,7 +53,7 @@ std::string program_of(const std::string& command) {
 }
 
 // What one of a team's processes is started with, beyond what all share.
-struct Launch {
+struct Spawn {
   const std::string& command;
   int agent;                  // AGENT
   bool second_set;            // of the second team (its RTDB set: SECOND_RTDB=1)
@@ -62,7 +62,7 @@ struct Launch {
 };
 
 // Starts `launch` with `environment` (NAME=value each) and the search `path`.
-pid_t start(const Launch& launch, const std::vector<std::string>& environment, const std::string& path) {
+pid_t start(const Spawn& launch, const std::vector<std::string>& environment, const std::string& path) {
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid != 0) return pid;
@@ -97,45 +97,14 @@ pid_t start(const Launch& launch, const std::vector<std::string>& environment, c
 
 }  // namespace
 
-std::vector<const emulator::ExternalSide*> external_sides(const emulator::Scenario& scenario) {
-  std::vector<const emulator::ExternalSide*> sides;
-  for (std::size_t t = 0; t < scenario.teams.size(); ++t) sides.push_back(&scenario.external_of(t));
-  if (sides.empty()) sides.push_back(&scenario.external);
-  return sides;
-}
-
-namespace {
-
-// The longest `field` the run's external sides give: the processes share one
-// virtual clock, so each team's processes get at least their own team's.
-double longest(const emulator::Scenario& scenario, double emulator::ExternalSide::*field) {
-  double most = 0;
-  for (const emulator::ExternalSide* side : external_sides(scenario)) most = std::max(most, side->*field);
-  return most;
-}
-
-}  // namespace
-
-lockstep::ConductorOptions conductor_options(const emulator::Scenario& scenario) {
-  lockstep::ConductorOptions o;
-  o.answer_limit = from_seconds(longest(scenario, &emulator::ExternalSide::answer_limit_s));
-  o.busy_limit = from_seconds(longest(scenario, &emulator::ExternalSide::busy_limit_s));
-  o.spin = from_seconds(longest(scenario, &emulator::ExternalSide::spin_us) * 1e-6);
-  return o;
-}
-
 std::unique_ptr<userbus::BrokerSpin> spin_the_bus(const emulator::Session& session) {
-  const double us = longest(session.scenario(), &emulator::ExternalSide::bus_spin_us);
+  const double us = session.plan().external.bus_spin_us;
   if (us <= 0 || session.robot_count() == 0 || !can_nodes::on_user_space_bus(session.rig(0).interface)) return nullptr;
   try {
     return std::make_unique<userbus::BrokerSpin>(userbus::BusPaths::current(), static_cast<std::uint32_t>(us));
   } catch (const userbus::BusError&) {
     return nullptr;  // a bus canhil's preload found but cannot map: the run goes on, its broker sleeping at once
   }
-}
-
-double attach_limit_s(const emulator::Scenario& scenario) {
-  return longest(scenario, &emulator::ExternalSide::attach_limit_s);
 }
 
 void require_told_goal(const emulator::Scenario& scenario, bool both_ends, FILE* warn) {
@@ -166,30 +135,6 @@ void require_told_goal(const emulator::Scenario& scenario, bool both_ends, FILE*
   }
 }
 
-std::string expand_command(std::string command, const emulator::Session& session, std::size_t robot) {
-  const auto replace = [&command](const std::string& key, const std::string& value) {
-    for (std::size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size())) {
-      command.replace(at, key.size(), value);
-    }
-  };
-  const auto number = [](double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", v + 0.0);  // + 0.0: -0 prints as 0
-    return std::string(text);
-  };
-  const emulator::Scenario& scenario = session.scenario();
-  const emulator::Rig& rig = session.rig(robot);
-  const physics::Placement& at = scenario.world.robots.at(robot);
-  const double goal_x = scenario.world.field.length_m / 2;
-  replace("{agent}", std::to_string(rig.agent));
-  replace("{iface}", rig.interface);
-  replace("{x}", number(at.x_m));
-  replace("{y}", number(at.y_m));
-  replace("{heading}", number(at.heading_deg));
-  replace("{goal_x}", number(scenario.teams.at(rig.team).attacks_positive_x ? goal_x : -goal_x));
-  return command;
-}
-
 TeamProcesses::TeamProcesses(std::vector<std::string> environment, FILE* say, ProcessOutput output)
     : environment_(std::move(environment)), say_(say), output_(std::move(output)) {}
 
@@ -203,31 +148,27 @@ std::size_t TeamProcesses::start_all(const emulator::Session& session) {
     fs::create_directories(*output_.folder, ec);
     if (ec) throw SetupError("cannot make the folder " + *output_.folder + " for the processes' logs: " + ec.message());
   }
-  for (std::size_t r = 0; r < session.robot_count(); ++r) {
-    const emulator::Rig& rig = session.rig(r);
-    const std::size_t team = rig.team;
-    for (const std::string& c : scenario.external_of(team).processes) {
-      Started s;
-      s.agent = rig.agent;
-      s.command = expand_command(c, session, r);
-      int log = -1;
-      std::string log_path;
-      if (output_.folder) {
-        log_path = (fs::path(*output_.folder) / (output_.prefix + scenario.teams[team].name + "-agent" +
-                                                 std::to_string(s.agent) + "-" + program_of(s.command) + ".log"))
-                       .string();
-        log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-        if (log < 0) throw SetupError("cannot write the process log " + log_path + ": " + std::strerror(errno));
-      }
-      const Launch launch{s.command, s.agent, team > 0, scenario.external_of(team).syslog,
-                          log >= 0 ? log : (output_.onto_stderr ? STDERR_FILENO : -1)};
-      s.pid = start(launch, environment_, path);
-      if (log >= 0) close(log);
-      std::fprintf(say_, "  started `%s` for agent %d%s (pid %d)%s%s\n", s.command.c_str(), s.agent,
-                   scenario.teams.size() > 1 ? (" of team " + scenario.teams[team].name).c_str() : "", s.pid,
-                   log_path.empty() ? "" : ", output in ", log_path.c_str());
-      started_.push_back(s);
+  for (const emulator::Launch& l : session.plan().external.launches) {
+    Started s;
+    s.agent = l.agent;
+    s.command = l.command;
+    int log = -1;
+    std::string log_path;
+    if (output_.folder) {
+      log_path = (fs::path(*output_.folder) / (output_.prefix + scenario.teams[l.team].name + "-agent" +
+                                               std::to_string(s.agent) + "-" + program_of(s.command) + ".log"))
+                     .string();
+      log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+      if (log < 0) throw SetupError("cannot write the process log " + log_path + ": " + std::strerror(errno));
     }
+    const Spawn launch{s.command, s.agent, l.team > 0, l.syslog,
+                       log >= 0 ? log : (output_.onto_stderr ? STDERR_FILENO : -1)};
+    s.pid = start(launch, environment_, path);
+    if (log >= 0) close(log);
+    std::fprintf(say_, "  started `%s` for agent %d%s (pid %d)%s%s\n", s.command.c_str(), s.agent,
+                 scenario.teams.size() > 1 ? (" of team " + scenario.teams[l.team].name).c_str() : "", s.pid,
+                 log_path.empty() ? "" : ", output in ", log_path.c_str());
+    started_.push_back(s);
   }
   std::fflush(say_);
   return started_.size();
@@ -280,4 +221,4 @@ void TeamProcesses::stop_all() {
   }
 }
 
-}  // namespace canhil::app
+}  // namespace canhil::external

@@ -1,5 +1,5 @@
 // A System V IPC namespace of one's own (own_ipc.hpp).
-#include "canhil/lockstep/own_ipc.hpp"
+#include "canhil/external/own_ipc.hpp"
 
 #include <fcntl.h>
 #include <sched.h>
@@ -12,7 +12,7 @@
 #include "canhil/base/errno_text.hpp"
 #include "canhil/base/setup_error.hpp"
 
-namespace canhil::lockstep {
+namespace canhil::external {
 namespace {
 
 // What a user can do where the kernel refuses a user namespace.
@@ -67,4 +67,4 @@ IpcWay enter_own_ipc_namespace() {
   return IpcWay::kUserNamespace;
 }
 
-}  // namespace canhil::lockstep
+}  // namespace canhil::external

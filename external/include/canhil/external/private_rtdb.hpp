@@ -1,4 +1,4 @@
-// app/private_rtdb.hpp — the RTDB keys of a canhil process that plays its own
+// canhil/external/private_rtdb.hpp — the RTDB keys of a canhil process that plays its own
 // robots (a run in virtual time, a match and its workers, a benchmark): keys
 // of this process, so that it never meets a live robot's database nor another
 // such process's, and the leftovers of earlier such processes removed. A
@@ -6,7 +6,7 @@
 // the next one does, for its own kind of key.
 #pragma once
 
-namespace canhil::app {
+namespace canhil::external {
 
 /// The first byte of the keys canhil's runs and matches use, and of the benchmark's.
 inline constexpr unsigned kRunKeyPrefix = 0x58;
@@ -39,4 +39,4 @@ void release_private_rtdb_keys();
 /// not give their claims back); returns how many.
 int remove_orphan_rtdb_keys(unsigned prefix);
 
-}  // namespace canhil::app
+}  // namespace canhil::external

@@ -1,7 +1,7 @@
 // An IPC namespace of one's own, both ways: what the parent made is not seen
 // inside, what the child makes inside is not seen outside (nor left behind),
 // and the child's user and group stay its own.
-#include "canhil/lockstep/own_ipc.hpp"
+#include "canhil/external/own_ipc.hpp"
 
 #include <gtest/gtest.h>
 #include <sched.h>
@@ -18,7 +18,7 @@
 #include "canhil/base/setup_error.hpp"
 #include "support/sanitizers.hpp"
 
-namespace canhil::lockstep {
+namespace canhil::external {
 namespace {
 
 // Keys of this test process only (the RTDB's and canhil's own are 0x5x......).
@@ -143,4 +143,4 @@ TEST(OwnIpc, TheChosenWayIsTheDirectOneWhenAllowed) {
 }
 
 }  // namespace
-}  // namespace canhil::lockstep
+}  // namespace canhil::external

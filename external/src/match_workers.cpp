@@ -1,4 +1,5 @@
-#include "match_jobs.hpp"
+// Matches in worker processes (match_workers.hpp).
+#include "canhil/external/match_workers.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -15,9 +16,9 @@
 #include <optional>
 
 #include "canhil/base/setup_error.hpp"
-#include "private_rtdb.hpp"
+#include "canhil/external/private_rtdb.hpp"
 
-namespace canhil::app {
+namespace canhil::external {
 namespace {
 
 // Lines from a worker: "p SEED SECONDS" (progress), "r JSON" (a record),
@@ -110,12 +111,12 @@ std::string error_line(const SetupError& e) {
     const int number = static_cast<int>(number_l);
     std::string reply;
     try {
-      const nlohmann::json record = jobs.play(number, seed, [&](double s) {
+      const std::string record = jobs.play(number, seed, [&](double s) {
         char p[64];
         std::snprintf(p, sizeof p, "p %llu %.3f\n", seed, s);
         write_all(out, p);
       });
-      reply = "r " + record.dump() + "\n";
+      reply = "r " + record + "\n";
     } catch (const SetupError& e) {
       reply = error_line(e);
     }
@@ -169,7 +170,7 @@ void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const
   std::vector<Worker> pool;
   std::size_t next = 0;     // the next seed to hand out
   std::size_t emitted = 0;  // records passed to done()
-  std::map<std::uint64_t, nlohmann::json> finished;
+  std::map<std::uint64_t, std::string> finished;
   std::map<std::uint64_t, int> number_of;
   for (std::size_t k = 0; k < seeds.size(); ++k) number_of[seeds[k]] = static_cast<int>(k + 1);
   std::string error;
@@ -226,7 +227,7 @@ void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const
             const double s = std::strtod(played, &end);
             if (end != played && jobs.progress) jobs.progress(seed, s);
           } else if (line.rfind("r ", 0) == 0 && w.playing) {
-            finished[*w.playing] = nlohmann::json::parse(line.substr(2));
+            finished[*w.playing] = line.substr(2);
             w.playing.reset();
             hand_out(w);
           } else if (line.rfind("e ", 0) == 0) {
@@ -269,4 +270,4 @@ void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const
   }
 }
 
-}  // namespace canhil::app
+}  // namespace canhil::external

@@ -1,4 +1,4 @@
-// canhil/lockstep/own_ipc.hpp — a System V IPC namespace of one's own, for a
+// canhil/external/own_ipc.hpp — a System V IPC namespace of one's own, for a
 // process that runs a team's processes beside another that runs the same
 // team's: a team's RTDB and PMan take fixed keys (its rtdb.conf, its agent
 // number), so two matches on one machine would meet in the same segments and
@@ -6,7 +6,7 @@
 // children create, is seen by them alone, and goes when the last of them ends.
 #pragma once
 
-namespace canhil::lockstep {
+namespace canhil::external {
 
 /// How the namespace is made: by the process itself (needs CAP_SYS_ADMIN, as
 /// root has), or inside a user namespace of its own that maps the process's
@@ -22,4 +22,4 @@ enum class IpcWay { kDirect, kUserNamespace };
 IpcWay enter_own_ipc_namespace();
 void enter_own_ipc_namespace(IpcWay way);
 
-}  // namespace canhil::lockstep
+}  // namespace canhil::external

@@ -1,30 +1,29 @@
-// app/match_jobs.hpp — matches in worker processes, one per core (`canhil
-// match --jobs N`): each worker is forked from canhil with everything loaded,
-// plays the seeds it is handed one at a time and sends back each match's
-// record; the records come out in the order of the seeds, whatever the order
-// they finish in, so that a batch gives the same records and the same table
-// with any number of workers. A worker that dies in a match gives that match a
-// failed record, and another takes its place: the batch goes on.
+// canhil/external/match_workers.hpp — matches in worker processes, one per
+// core (`canhil match --jobs N`): each worker is forked from canhil with
+// everything loaded, plays the seeds it is handed one at a time and sends back
+// each match's record (one line of text: the command's JSON); the records come out in the order of the seeds, whatever
+// the order they finish in, so that a batch gives the same records and the same table with any number of workers. A
+// worker that dies in a match gives that match a failed record, and another takes its place: the batch goes on.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-namespace canhil::app {
+namespace canhil::external {
 
 struct MatchJobs {
   /// Plays one match in a worker: its number in the batch (1-based) and seed;
-  /// `progress` with the virtual seconds played so far. Returns its record.
-  std::function<nlohmann::json(int number, std::uint64_t seed, const std::function<void(double)>& progress)> play;
+  /// `progress` with the virtual seconds played so far. Returns its record:
+  /// one line (no newline in it).
+  std::function<std::string(int number, std::uint64_t seed, const std::function<void(double)>& progress)> play;
   /// The record of a match whose worker died (`why`: how).
-  std::function<nlohmann::json(std::uint64_t seed, const std::string& why)> failed;
+  std::function<std::string(std::uint64_t seed, const std::string& why)> failed;
   /// Each record, in the order of the seeds.
-  std::function<void(const nlohmann::json& record)> done;
+  std::function<void(const std::string& record)> done;
   /// Progress as the workers report it: a match's seed and its virtual seconds so far.
   std::function<void(std::uint64_t seed, double played_s)> progress;
   /// When set: called in each worker, with its index, after it chose its
@@ -43,4 +42,4 @@ struct MatchJobs {
 void play_in_workers(const std::vector<std::uint64_t>& seeds, int workers, const MatchJobs& jobs,
                      const std::atomic<bool>& stop);
 
-}  // namespace canhil::app
+}  // namespace canhil::external

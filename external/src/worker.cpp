@@ -1,7 +1,6 @@
-// One worker of a parallel `canhil match --external` (external_worker.hpp).
-#include "external_worker.hpp"
+// One worker of a parallel `canhil match --external` (worker.hpp).
+#include "canhil/external/worker.hpp"
 
-#include <dlfcn.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -10,9 +9,11 @@
 
 #include "canhil/base/process.hpp"
 #include "canhil/base/setup_error.hpp"
-#include "canhil/lockstep/own_ipc.hpp"
+#include "canhil/base/start_again.hpp"
+#include "canhil/external/own_ipc.hpp"
+#include "canhil/userbus/bus_hook.h"
 
-namespace canhil::app {
+namespace canhil::external {
 
 namespace {
 
@@ -33,7 +34,7 @@ void remove_orphan_buses(const std::string& folder) {
 
 void prepare_external_workers() {
   remove_orphan_buses(userbus::BusPaths::current().folder);
-  if (dlsym(RTLD_DEFAULT, "canhil_userbus_interface") != nullptr) return;  // on the user-space bus already
+  if (userbus::hooks().loaded()) return;  // on the user-space bus already
   std::string preload;
   try {
     preload = userbus::find_preload();
@@ -41,13 +42,11 @@ void prepare_external_workers() {
     throw SetupError(std::string("--external with --jobs gives each match a user-space bus of its own, and ") +
                      e.what() + "; or leave --jobs out");
   }
-  const char* before = std::getenv("LD_PRELOAD");
-  const std::string ld = before != nullptr && *before != '\0' ? preload + ":" + before : preload;
-  setenv("LD_PRELOAD", ld.c_str(), 1);
+  preload_first(preload);
 }
 
 ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
-  const lockstep::IpcWay way = lockstep::enter_own_ipc_namespace();
+  const IpcWay way = enter_own_ipc_namespace();
   try {
     const std::string folder = userbus::BusPaths::current().folder + "-worker-" + std::to_string(getpid());
     setenv("CANHIL_BUS_DIR", folder.c_str(), 1);
@@ -71,10 +70,10 @@ ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
   std::fprintf(stderr,
                "canhil match: a worker (pid %d) on a bus of its own at %s, in an IPC namespace of its own (%s%s)\n",
                static_cast<int>(getpid()), paths_.folder.c_str(), ns.c_str(),
-               way == lockstep::IpcWay::kUserNamespace ? ", inside a user namespace" : "");
+               way == IpcWay::kUserNamespace ? ", inside a user namespace" : "");
 }
 
-void ExternalWorker::next_match() { lockstep::enter_own_ipc_namespace(); }
+void ExternalWorker::next_match() { enter_own_ipc_namespace(); }
 
 ExternalWorker::~ExternalWorker() {
   userbus::stop_broker(paths_);
@@ -82,4 +81,4 @@ ExternalWorker::~ExternalWorker() {
   std::filesystem::remove(paths_.folder, ignored);  // empty once the broker is gone
 }
 
-}  // namespace canhil::app
+}  // namespace canhil::external

@@ -1,4 +1,4 @@
-// app/external_worker.hpp — what one worker of `canhil match --external
+// canhil/external/worker.hpp — what one worker of `canhil match --external
 // --jobs N` keeps to itself, so that matches with the teams' own processes run
 // side by side on one machine: a System V IPC namespace of its own (a team's
 // RTDB and PMan take fixed keys) and a user-space CAN bus of its own with the
@@ -10,7 +10,7 @@
 
 #include "canhil/userbus/bus.hpp"
 
-namespace canhil::app {
+namespace canhil::external {
 
 /// Before the workers are forked: removes the buses of workers that were
 /// killed (their folders, `<folder>-worker-<pid>`, the pid gone), and makes
@@ -40,4 +40,4 @@ class ExternalWorker {
   userbus::BusPaths paths_;
 };
 
-}  // namespace canhil::app
+}  // namespace canhil::external

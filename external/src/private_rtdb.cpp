@@ -1,5 +1,5 @@
-// app/private_rtdb.cpp — private_rtdb.hpp.
-#include "private_rtdb.hpp"
+// RTDB keys of a run of its own (private_rtdb.hpp).
+#include "canhil/external/private_rtdb.hpp"
 
 #include <sys/ipc.h>
 #include <sys/shm.h>
@@ -13,7 +13,7 @@
 
 #include "canhil/base/process.hpp"
 
-namespace canhil::app {
+namespace canhil::external {
 namespace {
 
 constexpr unsigned kRange = 0x100;  // keys of one process: two sets of up to 64 agents, with room
@@ -143,4 +143,4 @@ void release_private_rtdb_keys() {
 
 int remove_orphan_rtdb_keys(unsigned prefix) { return sweep(prefix, true).removed; }
 
-}  // namespace canhil::app
+}  // namespace canhil::external

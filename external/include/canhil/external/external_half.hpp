@@ -1,8 +1,8 @@
-// app/match_external.hpp — `canhil match --external`: each half of a match
-// played by the teams' own processes in lockstep (emulator::ExternalDriver,
-// docs/lockstep.md), started afresh for every half from the scenario's
-// [teams.external] (else [external]) lines, the second team's with
-// SECOND_RTDB=1, and stopped when the half ends.
+// canhil/external/external_half.hpp — `canhil match --external`: each half
+// of a match played by the teams' own processes in lockstep, an ExternalRun
+// per half, started afresh from the half's plan ([teams.external], else
+// [external], the second team's with SECOND_RTDB=1) and stopped when the
+// half ends.
 #pragma once
 
 #include <optional>
@@ -10,7 +10,7 @@
 
 #include "canhil/emulator/match.hpp"
 
-namespace canhil::app {
+namespace canhil::external {
 
 struct ExternalMatch {
   std::string shim;          ///< the time shim (find_timeshim)
@@ -29,4 +29,4 @@ struct ExternalMatch {
 /// emulator::ProcessStuck naming the match, the half and the process.
 emulator::HalfDriverMaker external_halves(const ExternalMatch& how);
 
-}  // namespace canhil::app
+}  // namespace canhil::external
