@@ -70,7 +70,7 @@ bool bench_virtual(const std::optional<std::string>& config, double seconds,
   options.messages = messages;
   const double cpu0 = cpu_seconds();
   const auto wall0 = std::chrono::steady_clock::now();
-  emulator::Session session(sc, options);
+  emulator::Session session(emulator::plan_run(sc, options));
   emulator::VirtualOptions virtual_options;
   virtual_options.record_trace = false;  // as canhil run without --trace: frames counted
   emulator::VirtualDriver run(session, virtual_options);
@@ -101,7 +101,7 @@ bool bench_jitter(const std::string& iface, double seconds, int priority,
   emulator::RealtimeOptions opt;
   opt.priority = priority;
   const JitterFigures bare = bare_loop_jitter(iface, seconds, ec, priority);
-  const emulator::Scenario one = emulator::load_scenario(emulator::shipped_scenario("one_robot.toml"));
+  const emulator::Scenario one = emulator::read_scenario(emulator::shipped_scenario("one_robot.toml"));
   const JitterFigures emu = emulator_jitter(iface, seconds, one, session, opt);
   // The same bare loop while canhil run runs: what the machine itself does
   // under that load (a diagnostic, not the target's reference).

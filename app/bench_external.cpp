@@ -18,6 +18,7 @@
 #include <new>
 #include <optional>
 
+#include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/lockstep/conductor.hpp"
@@ -69,11 +70,11 @@ BrokerLook look_at_broker() {
 }
 
 // The same scenario in-process, virtual time, everything on: its wall time.
-Nanos in_process_wall(const emulator::Scenario& sc, double seconds,
+Nanos in_process_wall(const emulator::Scenario& sc, const emulator::RunOverrides& over, double seconds,
                       const std::shared_ptr<const frames::MessageSet>& messages) {
   emulator::SessionOptions options;
   options.messages = messages;
-  emulator::Session session(sc, options);
+  emulator::Session session(emulator::plan_run(sc, options, over));
   emulator::VirtualOptions virtual_options;
   virtual_options.record_trace = false;
   emulator::VirtualDriver run(session, virtual_options);
@@ -85,30 +86,29 @@ Nanos in_process_wall(const emulator::Scenario& sc, double seconds,
 }  // namespace
 
 bool bench_external(const ExternalBench& bench, const std::shared_ptr<const frames::MessageSet>& messages) {
-  emulator::Scenario sc = emulator::load_scenario(emulator::shipped_scenario("one_robot.toml"));
-  sc.interfaces = {bench.iface};
-  const physics::Placement& at = sc.world.robots.at(0);
-  char agent[96];
-  std::snprintf(agent, sizeof agent, "canhil-agent --pose %g,%g,%g", at.x_m, at.y_m, at.heading_deg);
-  sc.external.processes = {"canhil-hwcomm --iface {iface}", agent};
+  const emulator::Scenario sc = emulator::read_scenario(emulator::shipped_scenario("one_robot.toml"));
+  emulator::RunOverrides over;  // the bench's robot on its interface, with canhil's handler and agent
+  over.interfaces = {bench.iface};
+  over.processes = {"canhil-hwcomm --iface {iface}", "canhil-agent --pose {x},{y},{heading}"};
+  emulator::SessionOptions options;
+  options.messages = messages;
+  options.external = true;
+  const emulator::RunPlan planned = emulator::plan_run(sc, options, over);
   const PinnedToCore pin(bench.cpu);
   std::printf(
       "canhil bench: external processes: one robot on %s, %g s of virtual time each, %s: in-process, then "
       "`%s` and `%s` as processes in lockstep\n",
       bench.iface.c_str(), bench.seconds,
       pin.pinned() ? ("all on CPU " + std::to_string(bench.cpu)).c_str() : "not pinned to a core",
-      sc.external.processes[0].c_str(), sc.external.processes[1].c_str());
+      planned.external.launches.at(0).command.c_str(), planned.external.launches.at(1).command.c_str());
   std::fflush(stdout);
   // The fastest of three: a run of a few tens of milliseconds, which noise
   // only ever lengthens, is the yardstick of the share below.
-  Nanos in_process = in_process_wall(sc, bench.seconds, messages);
+  Nanos in_process = in_process_wall(sc, over, bench.seconds, messages);
   for (int k = 1; k < kInProcessRuns; ++k)
-    in_process = std::min(in_process, in_process_wall(sc, bench.seconds, messages));
+    in_process = std::min(in_process, in_process_wall(sc, over, bench.seconds, messages));
 
-  emulator::SessionOptions options;
-  options.messages = messages;
-  options.external = true;
-  emulator::Session session(sc, options);
+  emulator::Session session(planned);
   ExternalRequest run;
   run.length = {bench.seconds, "the bench"};
   run.quiet = true;
@@ -151,9 +151,9 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
   const double handover = to_seconds(fig.waited) - running;
   std::printf("    hand-overs (wake-ups, context switches):           %7.3f s %3.0f %%\n", handover, share(handover));
   std::printf(
-      "      canhil's looks before sleeping, up to %g us each ([external] spin_us): %llu answered, %llu ended in a "
+      "      canhil's looks before sleeping, up to %.0f us each ([external] spin_us): %llu answered, %llu ended in a "
       "sleep\n",
-      sc.external.spin_us, static_cast<unsigned long long>(fig.looks_answered),
+      to_seconds(session.plan().external.conductor.spin) * 1e6, static_cast<unsigned long long>(fig.looks_answered),
       static_cast<unsigned long long>(fig.sleeps));
   if (broker_before && broker_after) {
     // Another process, on any core: every frame passes it, so its time is on
@@ -165,7 +165,7 @@ bool bench_external(const ExternalBench& bench, const std::shared_ptr<const fram
     std::printf(
         "      (its looks included) it looked for a next frame %llu times, up to %g us each ([external] "
         "bus_spin_us)\n",
-        static_cast<unsigned long long>(spins), sc.external.bus_spin_us);
+        static_cast<unsigned long long>(spins), session.plan().external.bus_spin_us);
   }
   // What no lockstep can go below here: each wait of a process costs at least
   // one bare round trip between two processes.

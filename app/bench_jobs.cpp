@@ -36,9 +36,9 @@ bool bench_jobs(const std::optional<std::string>& config, double seconds,
   auto rate = [&](int workers) {
     external::MatchJobs jobs;
     jobs.play = [&](int, std::uint64_t seed, const std::function<void(double)>&) {
-      emulator::Scenario one = scenario;
-      one.seed = seed;
-      const emulator::MatchResult r = emulator::play_match(one, options, match);
+      emulator::MatchOptions this_match = match;
+      this_match.overrides.seed = seed;
+      const emulator::MatchResult r = emulator::play_match(scenario, options, this_match);
       return std::to_string(seed) + " played " + std::to_string(r.virtual_s);
     };
     jobs.failed = [](std::uint64_t seed, const std::string& why) { return std::to_string(seed) + " failed " + why; };

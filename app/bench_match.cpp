@@ -79,7 +79,7 @@ double everything_on(const emulator::Scenario& s, double seconds,
   options.messages = messages;
   options.time_steps = split != nullptr;
   const double cpu0 = cpu_now();
-  emulator::Session session(s, options);
+  emulator::Session session(emulator::plan_run(s, options));
   emulator::VirtualOptions driving;
   driving.record_trace = false;
   emulator::VirtualDriver driver(session, driving);

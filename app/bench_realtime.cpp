@@ -163,14 +163,16 @@ JitterFigures bare_loop_jitter(const std::string& iface, double seconds, Nanos p
   return jitter_of(std::move(releases), period);
 }
 
-JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator::Scenario scenario,
+JitterFigures emulator_jitter(const std::string& iface, double seconds, const emulator::Scenario& scenario,
                               const emulator::SessionOptions& session, const emulator::RealtimeOptions& options) {
   const frames::MessageSet& set = *session.messages;
   const can_nodes::Filter only[] = {can_nodes::Filter::exact(set.tm.message().id())};
-  scenario.interfaces.at(0) = iface;
+  emulator::RunOverrides alone_on_iface;
+  alone_on_iface.robots = 1;
+  alone_on_iface.interfaces = {iface};
   Listener listener(iface, only);
   {
-    emulator::Session run(scenario, session);
+    emulator::Session run(emulator::plan_run(scenario, session, alone_on_iface));
     struct Null {
       FILE* file = std::fopen("/dev/null", "w");
       ~Null() {

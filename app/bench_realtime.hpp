@@ -25,8 +25,8 @@ struct JitterFigures {
 /// A bare loop: clock_nanosleep to each absolute deadline, one frame sent; at
 /// SCHED_FIFO `priority` (0: normal scheduler), as canhil run's node loop.
 JitterFigures bare_loop_jitter(const std::string& iface, double seconds, std::chrono::nanoseconds period, int priority);
-/// `canhil run` of the scenario (its first robot on `iface`, everything on), its TMs.
-JitterFigures emulator_jitter(const std::string& iface, double seconds, emulator::Scenario scenario,
+/// `canhil run` of the scenario (its first robot alone, on `iface`, everything on), its TMs.
+JitterFigures emulator_jitter(const std::string& iface, double seconds, const emulator::Scenario& scenario,
                               const emulator::SessionOptions& session, const emulator::RealtimeOptions& options);
 
 struct RateFigures {

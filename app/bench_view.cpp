@@ -52,7 +52,7 @@ Round one_round(const emulator::Scenario& sc, const std::shared_ptr<const frames
                 bool watched) {
   emulator::SessionOptions options;
   options.messages = messages;
-  emulator::Session session(sc, options);
+  emulator::Session session(emulator::plan_run(sc, options));
   emulator::VirtualOptions vo;
   vo.record_trace = false;
   emulator::VirtualDriver driver(session, vo);

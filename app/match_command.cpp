@@ -235,14 +235,20 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   if (!external && (!processes.empty() || answer_limit)) {
     throw UsageError("--process and --answer-limit are for matches with --external");
   }
-  try {
-    emulator::apply_external_overrides(scenario, processes, answer_limit);
-  } catch (const emulator::OverrideError& e) {
-    throw UsageError(e.what());
-  }
+  emulator::RunOverrides over;  // what the command line says over the file, for every half
+  over.processes = processes;
+  over.answer_limit_s = answer_limit;
+  // What each half's plan will start: the file's [external] sides with the command line's over them.
+  const emulator::Scenario planned = [&] {
+    try {
+      return emulator::overridden(scenario, over);
+    } catch (const emulator::OverrideError& e) {
+      throw UsageError(e.what());
+    }
+  }();
   if (external) {
     bool any = false;
-    for (std::size_t t = 0; t < scenario.teams.size(); ++t) any |= !scenario.external_of(t).processes.empty();
+    for (std::size_t t = 0; t < planned.teams.size(); ++t) any |= !planned.external_of(t).processes.empty();
     if (!any) {
       throw UsageError(path +
                        ": --external starts each robot's processes from its team's [teams.external] (else "
@@ -250,7 +256,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
                        "--process \"COMMAND\" for both teams (docs/teams.md)");
     }
     try {
-      external::require_told_goal(scenario, halves > 1, stderr);
+      external::require_told_goal(planned, halves > 1, stderr);
     } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
       throw SetupError(path + ": " + e.what());
     }
@@ -266,6 +272,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     for (long k = 0; k < repeat; ++k) seeds.push_back(first_seed + static_cast<std::uint64_t>(k));
   }
   emulator::MatchOptions match;
+  match.overrides = over;
   match.halves = static_cast<int>(halves);
   match.half_s = 60 * half_minutes.value_or(10);
   emulator::SessionOptions options;
@@ -313,7 +320,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   context.teams = names;
   if (external) {
     for (std::size_t t = 0; t < 2 && t < scenario.teams.size(); ++t)
-      context.processes.push_back(scenario.external_of(t).processes);
+      context.processes.push_back(planned.external_of(t).processes);
   }
   const std::string records_path =
       no_records ? std::string()
@@ -414,10 +421,10 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
     if (const char* die = std::getenv("CANHIL_MATCH_KILL_SEED"); die != nullptr && std::to_string(s) == die) {
       std::raise(SIGKILL);
     }
-    emulator::Scenario one = scenario;
-    one.seed = s;
+    emulator::MatchOptions this_match = match;
+    this_match.overrides.seed = s;
     match_number = number;
-    return match_record(emulator::play_match(one, options, match, on_progress, &g_stop), context);
+    return match_record(emulator::play_match(scenario, options, this_match, on_progress, &g_stop), context);
   };
   if (!external || workers > 1) {
     external::MatchJobs jobs_of;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "canhil/emulator/realtime_driver.hpp"
+#include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
@@ -46,18 +47,18 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc) {
   if (!(ec_ms > 0)) throw UsageError("--ec-ms takes milliseconds above 0");
 
   // The world file's first robot (kDefaultPlacement without one) on the interface.
-  emulator::Scenario scenario = config ? emulator::load_scenario(*config) : emulator::Scenario{};
-  scenario.world.robots.resize(1, emulator::kDefaultPlacement);
-  scenario.interfaces = {*iface};
-  scenario.agents = {emulator::kFirstAgent};
-  scenario.emulate.resize(1, can_nodes::NodeSet::all());
-  if (emulate) scenario.emulate = {parse_emulate(*emulate)};
+  const emulator::Scenario scenario = config ? emulator::read_scenario(*config) : emulator::Scenario{};
+  emulator::RunOverrides one_robot;
+  one_robot.robots = 1;
+  one_robot.interfaces = {*iface};
+  one_robot.agents = {emulator::kFirstAgent};
+  if (emulate) one_robot.emulate = {parse_emulate(*emulate)};
   emulator::SessionOptions options;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   options.ftt.elementary_cycle = from_ms(ec_ms);
   options.ftt.bit_rate = static_cast<std::uint32_t>(bit_rate);
   options.vision_on = false;
-  emulator::Session session(scenario, options);
+  emulator::Session session(emulator::plan_run(scenario, options, one_robot));
   emulator::RealtimeOptions rt;
   rt.priority = 0;  // a bench tool: the normal scheduler unless canhil run is asked
   emulator::RealtimeDriver driver(session, rt);

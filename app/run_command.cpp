@@ -314,6 +314,13 @@ RunSetup set_up(emulator::RunPlan plan, const RunRequest& q, emulator::RunContro
 int run_run(Args& args, const std::optional<std::string>& dbc) {
   const RunRequest q = read_request(args);
   const emulator::RunMode mode = q.overrides.mode;
+  // With the team's processes: canhil under the time shim before anything is
+  // planned or set up (it may start itself again, and then plans once).
+  std::string shim, team_preload;
+  if (mode == emulator::RunMode::kExternal) {
+    shim = external::find_timeshim();
+    team_preload = external::preload_shim_into_self(shim);
+  }
   // A run of its own: RTDB keys of this process, so it never meets a live robot's database.
   if (mode != emulator::RunMode::kRealtime) external::use_private_rtdb_keys(external::kRunKeyPrefix);
   emulator::RunPlan plan = make_plan(q, dbc);
@@ -337,9 +344,6 @@ int run_run(Args& args, const std::optional<std::string>& dbc) {
     } catch (const SetupError& e) {  // the scenario to mend, not the command line: no usage
       throw SetupError((q.config ? *q.config + ": " : std::string()) + e.what());
     }
-    // Before anything is set up: canhil may start itself again, with the shim preloaded.
-    const std::string shim = external::find_timeshim();
-    const std::string team_preload = external::preload_shim_into_self(shim);
     if (q.view.on) {
       std::printf(
           "canhil run: no viewer with --external yet (its server would run under the time shim); watch the "

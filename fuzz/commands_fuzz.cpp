@@ -24,7 +24,7 @@ struct Target {
     sc.world.obstacles = {canhil::physics::ObstaclePlacement{{0, -3, 0}, {}}};
     canhil::emulator::SessionOptions o;
     o.messages = canhil::frames::MessageSet::load(CANHIL_FUZZ_DBC);
-    session = std::make_unique<canhil::emulator::Session>(sc, o);
+    session = std::make_unique<canhil::emulator::Session>(canhil::emulator::plan_run(sc, o));
     commands = std::make_unique<canhil::control::Commands>(*session);
     clock = std::make_unique<canhil::emulator::RunControl>(o.ftt.elementary_cycle, 0, true);
     canhil::control::add_run_commands(*commands, *clock);

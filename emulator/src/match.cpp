@@ -120,21 +120,6 @@ std::optional<std::size_t> MatchResult::winner() const {
   return teams[0].goals > teams[1].goals ? 0 : 1;
 }
 
-Scenario half_scenario(const Scenario& scenario, int half) {
-  Scenario s = scenario;
-  if (half % 2 == 0) return s;
-  for (physics::Placement& p : s.world.robots) {
-    p.x_m = -p.x_m;
-    p.y_m = -p.y_m;
-    p.heading_deg = std::remainder(p.heading_deg + 180.0, 360.0);
-  }
-  for (Team& t : s.teams) t.attacks_positive_x = !t.attacks_positive_x;
-  auto& states = s.coach.team_game_states;
-  if (states.size() == 2) std::swap(states[0], states[1]);
-  s.source_toml.clear();  // no longer the file's text
-  return s;
-}
-
 std::uint64_t half_seed(std::uint64_t seed, int half) noexcept {
   constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15;  // apart for every half, and 0 for the first
   return seed + static_cast<std::uint64_t>(half) * kGolden;
@@ -151,20 +136,21 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
   }
   if (match.halves < 1 || !(match.half_s > 0)) throw SetupError("a match has at least one half of more than 0 s");
   MatchResult result;
-  result.seed = scenario.seed;
+  const std::uint64_t seed = match.overrides.seed.value_or(scenario.seed);
+  result.seed = seed;
   result.teams.resize(2);
   const auto wall_start = std::chrono::steady_clock::now();
   double played = 0;
   SessionOptions half_options = options;
   if (match.keep_logs) half_options.world_log_period = match.world_log_period;
   for (int half = 0; half < match.halves && !result.stopped; ++half) {
-    Scenario s = half_scenario(scenario, half);
-    s.seed = half_seed(scenario.seed, half);
-    s.duration_s = match.half_s;
-    Session session(s, half_options);
-    const std::unique_ptr<HalfDriver> driving = match.driver
-                                                    ? match.driver(session, scenario.seed, half)
-                                                    : std::make_unique<ReferenceHalf>(session, match.keep_logs);
+    RunOverrides half_overrides = match.overrides;
+    half_overrides.half = half;
+    half_overrides.seed = half_seed(seed, half);
+    half_overrides.duration_s = match.half_s;
+    Session session(plan_run(scenario, half_options, half_overrides));
+    const std::unique_ptr<HalfDriver> driving =
+        match.driver ? match.driver(session, seed, half) : std::make_unique<ReferenceHalf>(session, match.keep_logs);
     HalfDriver& driver = *driving;
     HalfTally tally(session, match);
     session.on_step([&](Nanos now) { tally.step(now, session.step_period()); });
@@ -181,7 +167,7 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
     played += to_seconds(driver.now());
     std::vector<TeamTally>& half_tally = tally.tally();
     for (const Goal& g : session.goals()) {  // the team that attacks that goal scored
-      const std::size_t team = s.teams[0].attacks_positive_x == g.positive_x ? 0 : 1;
+      const std::size_t team = session.scenario().teams[0].attacks_positive_x == g.positive_x ? 0 : 1;
       ++half_tally[team].goals;
       result.goals.push_back({half, to_seconds(g.time), team});
     }
@@ -190,11 +176,11 @@ MatchResult play_match(const Scenario& scenario, const SessionOptions& options, 
         result.calls.push_back({half, to_seconds(c.time), std::string(restart_name(c.restart)), c.team, c.text});
       result.referee_calls += referee->calls().size();
     }
-    if (match.half_ended) match.half_ended(session, driver, scenario.seed, half);
+    if (match.half_ended) match.half_ended(session, driver, seed, half);
     result.solver.add(session.world().solver_health());
     result.timing += session.step_timing();
-    for (std::size_t r = 0; r < s.robot_count(); ++r) {
-      TeamTally& t = half_tally[s.team_of(r)];
+    for (std::size_t r = 0; r < session.robot_count(); ++r) {
+      TeamTally& t = half_tally[session.rig(r).team];
       for (const can_nodes::FaultCount& c : session.rig(r).faults->counts()) t.faults += c.applied;
       t.ftt_violations += driver.ftt_violations(r);
     }

@@ -1,6 +1,7 @@
 #include "canhil/emulator/run_plan.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "canhil/can_nodes/fault.hpp"
@@ -79,31 +80,23 @@ std::string expand_command(std::string command, const Scenario& scenario, std::s
   return command;
 }
 
-RunPlan plan_run(Scenario scenario, SessionOptions options) {
-  if (!options.messages) throw SetupError("a run needs a message set");
-  RunPlan plan;
-  complete(scenario);
-  if (options.vision_on) plan.laptops = resolve_laptops(scenario, options.realtime || options.external);
-  plan.length = scenario.run_length(std::nullopt, options.realtime);
-  if (options.external) plan.external = resolve_external(scenario);
-  plan.scenario = std::move(scenario);
-  plan.options = std::move(options);
-  return plan;
-}
-
-void apply_external_overrides(Scenario& scenario, const std::vector<std::string>& processes,
-                              const std::optional<double>& answer_limit_s) {
-  if (!processes.empty()) scenario.external.processes = processes;
-  if (!answer_limit_s) return;
-  if (!(*answer_limit_s >= 0.01 && *answer_limit_s <= 3600)) throw OverrideError("--answer-limit takes 0.01..3600 s");
-  scenario.external.answer_limit_s = *answer_limit_s;
-  for (Team& team : scenario.teams) {
-    if (team.external) team.external->answer_limit_s = *answer_limit_s;  // the flag is the whole run's
+Scenario half_scenario(const Scenario& scenario, int half) {
+  Scenario s = scenario;
+  if (half % 2 == 0) return s;
+  for (physics::Placement& p : s.world.robots) {
+    p.x_m = -p.x_m;
+    p.y_m = -p.y_m;
+    p.heading_deg = std::remainder(p.heading_deg + 180.0, 360.0);
   }
+  for (Team& t : s.teams) t.attacks_positive_x = !t.attacks_positive_x;
+  auto& states = s.coach.team_game_states;
+  if (states.size() == 2) std::swap(states[0], states[1]);
+  s.source_toml.clear();  // no longer the file's text
+  return s;
 }
 
-RunPlan plan_run(const std::optional<std::filesystem::path>& file, const RunOverrides& o, SessionOptions options) {
-  Scenario s = load_scenario(file ? *file : shipped_scenario("one_robot.toml"));
+Scenario overridden(Scenario s, const RunOverrides& o) {
+  if (o.half) s = half_scenario(s, *o.half);
   LaptopSide& side = s.laptop;
   if (o.rtdb_lib) side.rtdb_lib = *o.rtdb_lib;
   if (o.rtdb_items) side.rtdb_items = *o.rtdb_items;
@@ -112,12 +105,15 @@ RunPlan plan_run(const std::optional<std::filesystem::path>& file, const RunOver
   if (o.pman) side.pman = *o.pman;
   if (o.kick_power) s.kick_power = *o.kick_power;
   if (o.seed) s.seed = *o.seed;
-  apply_external_overrides(s, o.processes, o.answer_limit_s);
-  RunLength length;
-  try {
-    length = s.run_length(o.duration_s, o.mode == RunMode::kRealtime);
-  } catch (const SetupError& e) {
-    throw OverrideError(e.what());
+  if (!o.processes.empty()) s.external.processes = o.processes;
+  if (o.answer_limit_s) {
+    if (!(*o.answer_limit_s >= 0.01 && *o.answer_limit_s <= 3600)) {
+      throw OverrideError("--answer-limit takes 0.01..3600 s");
+    }
+    s.external.answer_limit_s = *o.answer_limit_s;
+    for (Team& team : s.teams) {
+      if (team.external) team.external->answer_limit_s = *o.answer_limit_s;  // the flag is the whole run's
+    }
   }
   for (const std::string& f : o.faults) {
     try {
@@ -126,16 +122,55 @@ RunPlan plan_run(const std::optional<std::filesystem::path>& file, const RunOver
       throw OverrideError(std::string("--fault: ") + e.what());
     }
   }
+  if (o.robots) {
+    if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);  // the file's first robot, or the default
+    s.world.robots.resize(*o.robots, kDefaultPlacement);
+    if (!s.emulate.empty()) s.emulate.resize(*o.robots, can_nodes::NodeSet::all());
+  }
+  if (!o.interfaces.empty()) s.interfaces = o.interfaces;
+  if (!o.agents.empty()) s.agents = o.agents;
+  if (!o.emulate.empty()) s.emulate = o.emulate;
+  return s;
+}
+
+RunPlan plan_run(Scenario scenario, SessionOptions options, const RunOverrides& o) {
+  if (!options.messages) throw SetupError("a run needs a message set");
+  scenario = overridden(std::move(scenario), o);
+  RunPlan plan;
+  try {
+    plan.length = scenario.run_length(o.duration_s, options.realtime);
+  } catch (const SetupError& e) {
+    throw OverrideError(e.what());
+  }
+  complete(scenario);
+  if (options.vision_on) plan.laptops = resolve_laptops(scenario, options.realtime || options.external);
+  // The scenario's camera imperfections over the options' (exact geometry by default).
+  vision_emu::VisionParams& vision = options.vision;
+  const VisionImperfections& imperfect = scenario.vision;
+  vision.point_noise_m = imperfect.point_noise_m.value_or(vision.point_noise_m);
+  vision.ball_noise_m = imperfect.ball_noise_m.value_or(vision.ball_noise_m);
+  vision.detection_probability = imperfect.detection_probability.value_or(vision.detection_probability);
+  vision.latency_s = imperfect.latency_s.value_or(vision.latency_s);
+  if (options.external) plan.external = resolve_external(scenario);
+  plan.scenario = std::move(scenario);
+  plan.options = std::move(options);
+  return plan;
+}
+
+RunPlan plan_run(const std::optional<std::filesystem::path>& file, const RunOverrides& o, SessionOptions options) {
+  const std::filesystem::path path = file ? *file : shipped_scenario("one_robot.toml");
+  Scenario s = read_scenario(path);
   options.realtime = o.mode == RunMode::kRealtime;
   options.external = o.mode == RunMode::kExternal;
   RunPlan plan;
   try {
-    plan = plan_run(std::move(s), std::move(options));
-  } catch (const SetupError& e) {  // a laptop side the file (or an override) leaves incomplete
+    plan = plan_run(std::move(s), std::move(options), o);
+  } catch (const OverrideError&) {
+    throw;
+  } catch (const SetupError& e) {  // what the file (or an override) leaves wrong or incomplete
     throw SetupError((file ? file->string() + ": " : std::string()) + e.what());
   }
   plan.source = file.value_or(std::filesystem::path());
-  plan.length = length;
   return plan;
 }
 

@@ -203,7 +203,10 @@ bool is_game_state(std::string_view name) noexcept {
   return std::find(kGameStates.begin(), kGameStates.end(), name) != kGameStates.end();
 }
 
-Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
+namespace {
+
+// The file's values, not yet complete.
+Scenario read_text(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
   const toml::table root = physics::parse_toml(toml_text, file_name);  // parsed once, for the world and the run
   s.world =
@@ -256,9 +259,20 @@ Scenario parse_scenario(std::string_view toml_text, const std::string& file_name
   if (const toml::table* external = root["external"].as_table()) {
     detail::read_external(TableReader(*external, "external", file_name, detail::external_fields()), s.external);
   }
-  complete(s);
   s.source_toml = std::string(toml_text);
   return s;
+}
+
+}  // namespace
+
+Scenario parse_scenario(std::string_view toml_text, const std::string& file_name) {
+  Scenario s = read_text(toml_text, file_name);
+  complete(s);
+  return s;
+}
+
+Scenario read_scenario(const std::filesystem::path& path) {
+  return read_text(physics::read_config_file(path), path.string());
 }
 
 void complete(Scenario& s) {

@@ -28,9 +28,6 @@ struct Session::StateRequests {
   physics::WorldState state;
 };
 
-Session::Session(Scenario scenario, SessionOptions options)
-    : Session(plan_run(std::move(scenario), std::move(options))) {}
-
 Session::Session(RunPlan plan)
     : plan_(std::move(plan)),
       scenario_(plan_.scenario),
@@ -77,12 +74,7 @@ Session::Session(RunPlan plan)
           std::make_unique<LaptopLink>(plan_.laptops.at(t), agents, team_coaches_.back(), static_cast<int>(t)));
     }
     std::vector<vision_emu::Vision> vision;
-    vision_emu::VisionParams params = options_.vision;
-    const VisionImperfections& imperfect = scenario_.vision;
-    params.point_noise_m = imperfect.point_noise_m.value_or(params.point_noise_m);
-    params.ball_noise_m = imperfect.ball_noise_m.value_or(params.ball_noise_m);
-    params.detection_probability = imperfect.detection_probability.value_or(params.detection_probability);
-    params.latency_s = imperfect.latency_s.value_or(params.latency_s);
+    const vision_emu::VisionParams& params = options_.vision;  // the scenario's [vision] merged in by the plan
     for (std::size_t r = 0; r < n; ++r) {
       // Robot r's camera draws from the run's seed: another seed, another match.
       vision_emu::VisionParams mine = params;

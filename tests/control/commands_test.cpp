@@ -25,7 +25,7 @@ class CommandsTest : public ::testing::Test {
     scenario_.world.robots = {physics::Placement{-3.0, 0.0, -90}, physics::Placement{2.0, 2.0, 0}};
     scenario_.world.obstacles = {physics::ObstaclePlacement{{0, -3, 0}, {}}};
     options_.messages = frames::MessageSet::load(test::shipped_dbc());
-    session_ = std::make_unique<emulator::Session>(scenario_, options_);
+    session_ = std::make_unique<emulator::Session>(emulator::plan_run(scenario_, options_));
     driver_ = std::make_unique<emulator::VirtualDriver>(*session_);
     commands_ = std::make_unique<Commands>(*session_);
   }

@@ -22,7 +22,7 @@ class UnixServerTest : public ::testing::Test {
     setenv("RTDB_KEY", std::to_string(0x5E200000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
     options_.messages = frames::MessageSet::load(test::shipped_dbc());
     options_.vision_on = false;
-    session_ = std::make_unique<emulator::Session>(emulator::Scenario{}, options_);
+    session_ = std::make_unique<emulator::Session>(emulator::plan_run(emulator::Scenario{}, options_));
     commands_ = std::make_unique<Commands>(*session_);
     folder_ = std::filesystem::path(test::build_dir()) / ("control-test-" + std::to_string(getpid()));
     std::filesystem::remove_all(folder_);

@@ -35,7 +35,7 @@ class BusWatchTest : public test::WatchedTest {
 };
 
 TEST_F(BusWatchTest, OneTraceByTimeThenRobotThenArrival) {
-  const Session session(scenario_, options_);
+  const Session session(plan_run(scenario_, options_));
   BusWatch watch(session, {});
   watch.add(1, frame(0x10, Nanos{1ms}));
   watch.add(0, frame(0x20, Nanos{2ms}));
@@ -54,7 +54,7 @@ TEST_F(BusWatchTest, OneTraceByTimeThenRobotThenArrival) {
 }
 
 TEST_F(BusWatchTest, NoTraceUnlessAskedAndTheMeasuresForAWatcher) {
-  const Session session(scenario_, options_);
+  const Session session(plan_run(scenario_, options_));
   BusWatch watch(session, {.record_trace = false, .check_timing = false});
   for (int k = 0; k < 100; ++k) watch.add(0, frame(0x10, Nanos{std::chrono::milliseconds(k)}));
   EXPECT_EQ(watch.trace(), "");

@@ -85,12 +85,12 @@ x_m = 2
   EXPECT_EQ(teams.emulate[2], teams.emulate[1]);
 
   // Saved and read again, a run keeps which boards are real.
-  Session session(one, [] {
+  Session session(plan_run(one, [] {
     SessionOptions o;
     o.messages = frames::MessageSet::load(test::shipped_dbc());
     o.vision_on = false;
     return o;
-  }());
+  }()));
   EXPECT_EQ(parse_scenario(scenario_toml(one, session.snapshot()), "saved.toml").emulate, one.emulate);
 }
 
@@ -121,12 +121,12 @@ TEST_F(Emulate, CanhilsNodesFollowARealMasterAndARealPicBaseClosesTheLoop) {
   const Scenario s = parse_scenario(kBench, "bench.toml");
   SessionOptions o;
   o.messages = frames::MessageSet::load(test::shipped_dbc());
-  Session refused(s, o);
+  Session refused(plan_run(s, o));
   EXPECT_NE(test::error_of([&] { VirtualDriver d(refused, {}); }).find("run that scenario in real time"),
             std::string::npos)
       << "without someone to play the real boards, virtual time refuses the scenario";
 
-  Session session(s, o);
+  Session session(plan_run(s, o));
   VirtualOptions v;
   v.caller_plays_real_boards = true;
   v.check_timing = true;

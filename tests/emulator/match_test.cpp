@@ -61,7 +61,7 @@ TEST_F(MatchTest, InTheSecondHalfTheTeamsChangeEndsAndTheOtherKicksOff) {
 
 TEST_F(MatchTest, AGoalInTheSecondHalfCountsForTheTeamNowAttackingThatGoal) {
   Scenario s = half_scenario(load_scenario(shipped_scenario("two_teams.toml")), 1);
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   VirtualDriver driver(session, {});
   const auto watching = counters.watch_session(session);
   const double goal_x = s.world.field.length_m / 2 + 0.3;

@@ -17,7 +17,7 @@ using namespace std::chrono_literals;
 
 TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
   const SessionOptions options = test::without_vision();
-  Session session(test::one_robot_on_vcan0(), options);
+  Session session(plan_run(test::one_robot_on_vcan0(), options));
   RealtimeOptions rt;
   rt.priority = 0;
   RealtimeDriver driver(session, rt);

@@ -148,6 +148,36 @@ TEST_F(RunPlanTest, AnExternalRunsProcessesAreEachRobotsLinesExpandedAndItsLimit
   EXPECT_TRUE(plan().external.launches.empty()) << "a run without --external resolves no processes";
 }
 
+TEST_F(RunPlanTest, ACommandsOwnOverridesArePlannedAndTheScenarioItHoldsStaysAsLoaded) {
+  Scenario three;  // one team of three
+  three.world.robots = {{-1, 0, 0}, {-2, 1, 0}, {-2, -1, 0}};
+  SessionOptions options;
+  options.messages = frames::MessageSet::load(test::shipped_dbc());
+  RunOverrides one;  // canhil nodes: one robot on one interface
+  one.robots = 1;
+  one.interfaces = {"can3"};
+  one.agents = {4};
+  one.seed = 77;
+  const RunPlan p = plan_run(three, options, one);
+  EXPECT_EQ(p.scenario.robot_count(), 1u);
+  EXPECT_EQ(p.scenario.interfaces, std::vector<std::string>{"can3"});
+  EXPECT_EQ(p.scenario.agents, std::vector<int>{4});
+  EXPECT_EQ(p.scenario.seed, 77u);
+  EXPECT_EQ(three.world.robots.size(), 3u) << "the scenario a command holds is not changed";
+  EXPECT_TRUE(three.interfaces.empty()) << "nor completed";
+
+  const Scenario loaded = read_scenario(shipped_scenario("two_teams.toml"));
+
+  RunOverrides second_half;  // a match's second half: the ends changed
+  second_half.half = 1;
+  second_half.duration_s = 30;
+  const RunPlan h = plan_run(loaded, options, second_half);
+  const RunPlan first = plan_run(loaded, options);
+  EXPECT_EQ(h.scenario.world.robots.at(0).x_m, -first.scenario.world.robots.at(0).x_m);
+  EXPECT_NE(h.scenario.teams.at(0).attacks_positive_x, first.scenario.teams.at(0).attacks_positive_x);
+  EXPECT_EQ(h.length.seconds, 30);
+}
+
 TEST_F(RunPlanTest, Layout) {
   RunOverrides o;
   o.layout = "cambada";

@@ -42,7 +42,7 @@ class SessionTest : public test::WatchedTest {
 };
 
 TEST_F(SessionTest, TheSnapshotIsTheWorldAsTheLastStepLeftIt) {
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   const WorldSnapshot before = session.snapshot();
   EXPECT_EQ(before.steps, 0u);
@@ -60,7 +60,7 @@ TEST_F(SessionTest, TheSnapshotIsTheWorldAsTheLastStepLeftIt) {
 }
 
 TEST_F(SessionTest, MovesTakeEffectAtTheNextStepNotBefore) {
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   driver.run_for(500ms);
   const double x_before = session.world().robot(1).pose().x_m;
@@ -81,7 +81,7 @@ TEST_F(SessionTest, MovesTakeEffectAtTheNextStepNotBefore) {
 }
 
 TEST_F(SessionTest, AMistakenChangeIsRefusedAtOnceAndChangesNothing) {
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   EXPECT_THROW(session.apply(MoveRobot{2, {}}), SetupError);
   EXPECT_THROW(session.apply(MoveObstacle{1, 0, 0}), SetupError);
@@ -98,7 +98,7 @@ TEST_F(SessionTest, AMistakenChangeIsRefusedAtOnceAndChangesNothing) {
 }
 
 TEST_F(SessionTest, AFaultInjectedDuringTheRunActsFromThenOn) {
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   counters.watch_nodes(*session.rig(0).nodes, "robot0.");
   driver.run_for(1s);
@@ -122,7 +122,7 @@ TEST_F(SessionTest, AFaultInjectedDuringTheRunActsFromThenOn) {
 }
 
 TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   std::atomic<bool> done{false};
   std::atomic<std::uint64_t> looks{0};
@@ -156,7 +156,7 @@ TEST_F(SessionTest, AnotherThreadMayReadAndChangeWhileTheRunGoesOn) {
 
 TEST_F(SessionTest, TimedStepsCountEveryStepItsContactPointsAndTheVisionOnlyWhenAsked) {
   {
-    Session session(scenario_, options_);
+    Session session(plan_run(scenario_, options_));
     VirtualDriver driver(session);
     driver.run_for(200ms);
     EXPECT_EQ(session.step_timing().physics.steps, 0U) << "not asked: nothing timed";
@@ -164,7 +164,7 @@ TEST_F(SessionTest, TimedStepsCountEveryStepItsContactPointsAndTheVisionOnlyWhen
     EXPECT_EQ(session.step_timing().vision, Nanos{0});
   }
   options_.time_steps = true;
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   driver.run_for(200ms);
   const PhysicsTiming& t = session.step_timing().physics;
@@ -181,7 +181,7 @@ TEST_F(SessionTest, TimedStepsCountEveryStepItsContactPointsAndTheVisionOnlyWhen
 TEST_F(SessionTest, TimedStepsWithoutVisionCountNoVision) {
   options_.time_steps = true;
   options_.vision_on = false;
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualOptions no_laptop;
   no_laptop.reference_laptop = false;
   VirtualDriver driver(session, no_laptop);
@@ -238,7 +238,7 @@ class RelocationTest : public test::WatchedTest {
 };
 
 TEST_F(RelocationTest, EachCarryChangesTheRobotsSerialOnceTheDelayAfterIt) {
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session, no_laptop_);
   const Nanos delay = from_seconds(kRelocationDelayS);
   const Nanos step = session.step_period();
@@ -281,7 +281,7 @@ TEST_F(RelocationTest, EachCarryChangesTheRobotsSerialOnceTheDelayAfterIt) {
 TEST_F(RelocationTest, ARobotMovedFromOutsideChangesOnlyItsSerialTheDelayAfterTheStepThatMovedIt) {
   scenario_.referee.enabled = false;
   scenario_.laptop.relocation_delay_s = 0.2;  // the scenario's own delay
-  Session session(scenario_, options_);
+  Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session, no_laptop_);
   const Nanos step = session.step_period();
   driver.run_for(200ms);

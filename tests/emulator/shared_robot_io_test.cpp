@@ -81,7 +81,7 @@ TEST(RealtimePhysics, StepsTheSessionOnItsOwnThread) {
   SessionOptions options;
   options.messages = frames::MessageSet::load(test::shipped_dbc());
   options.vision_on = false;
-  Session session(scenario, options);
+  Session session(plan_run(scenario, options));
   can_nodes::SimulatedClock unused;
   can_nodes::MemoryBus bus(unused);
   session.build_nodes(

@@ -43,7 +43,7 @@ TEST_F(TwoTeams, BothTeamsLoopsCloseOnTheirOwnRtdbSets) {
   ASSERT_EQ(s.teams.size(), 2u);
   ASSERT_EQ(s.robot_count(), 10u);
   EXPECT_EQ(s.agents, (std::vector<int>{1, 2, 3, 4, 5, 1, 2, 3, 4, 5})) << "each team numbers its own";
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   VirtualDriver driver(session, {});
   const auto watching = counters.watch_session(session);
   driver.run_for(2s);
@@ -102,7 +102,7 @@ heading_deg = 90.0
 )",
                               "inline.toml");
   EXPECT_FALSE(s.teams[1].attacks_positive_x);
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   VirtualDriver driver(session, {});
   const auto watching = counters.watch_session(session);
   driver.run_for(8s);
@@ -121,7 +121,7 @@ TEST_F(TwoTeams, ABallKickedOutComesBackOnTheLineForTheOtherTeamTheSameTwice) {
   const auto run = [this] {
     Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
     s.world.ball_start = {3.0, 5.5, 0.11};
-    Session session(s, options());
+    Session session(plan_run(s, options()));
     session.apply(MoveBall{{3.0, 5.5, 0.11}, {0.0, 3.0, 0.0}});  // rolling out over the +y touch line
     std::vector<std::string> states;
     session.on_coach_change([&](const CoachState& c) { states.push_back(c.state_of(0) + "/" + c.state_of(1)); });
@@ -159,7 +159,7 @@ TEST_F(TwoTeams, ARestartSendsRobotsOffTheSpotNeverIntoEachOtherAndIntoTheWorldL
   s.world.robots[2] = {1.85, 5.5, -90};  // ... where this one stands
   SessionOptions o = options();
   o.world_log_period = std::chrono::milliseconds(50);
-  Session session(s, o);
+  Session session(plan_run(s, o));
   session.apply(MoveBall{{3.0, 5.5, 0.11}, {0.0, 3.0, 0.0}});
   std::vector<Eigen::Vector2d> at_call;
   Eigen::Vector2d spot = Eigen::Vector2d::Zero();
@@ -191,7 +191,7 @@ TEST_F(TwoTeams, ARestartSendsRobotsOffTheSpotNeverIntoEachOtherAndIntoTheWorldL
 
 TEST_F(TwoTeams, AfterAKickOffEveryReferenceAgentsOdometryKnowsWhereTheRefereePutItsRobot) {
   const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   VirtualDriver driver(session, {});
   const auto watching = counters.watch_session(session);
   driver.run_for(3s);  // the robots drive off their places
@@ -227,7 +227,7 @@ TEST_F(TwoTeams, AfterAGoalTheTeamThatConcededTakesItsKickOff) {
   // the kick-off was never taken, the referee dropped the ball 12 s later.
   Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
   s.vision = {};  // an exact camera: one game
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   VirtualDriver driver(session, {});
   const auto watching = counters.watch_session(session);
   session.apply(MoveBall{{s.world.field.length_m / 2 - 0.3, 0.7, 0.11}, {3.0, 0.0, 0.0}});  // new scores
@@ -263,7 +263,7 @@ TEST_F(TwoTeams, AfterAGoalTheTeamThatConcededTakesItsKickOff) {
 TEST_F(TwoTeams, ABallIntoAGoalDuringARestartsPauseIsNoGoalTheRestartIsTakenAgain) {
   Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
   s.vision = {};
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   VirtualDriver driver(session, {});
   const auto watching = counters.watch_session(session);
   const double line = s.world.field.length_m / 2;
@@ -294,7 +294,7 @@ TEST_F(TwoTeams, TheWorldLogSaysWhoPlaysForWhomAndOneTeamsLogDoesNot) {
   SessionOptions o = options();
   o.world_log_period = std::chrono::milliseconds(50);
   const Scenario s = load_scenario(shipped_scenario("two_teams.toml"));
-  const Session two(s, o);
+  const Session two(plan_run(s, o));
   const std::string& log = two.world_log();
   const auto header_end = log.find('\n');
   ASSERT_NE(header_end, std::string::npos);
@@ -304,7 +304,7 @@ TEST_F(TwoTeams, TheWorldLogSaysWhoPlaysForWhomAndOneTeamsLogDoesNot) {
                 ",vcan" + std::to_string(r) + "\n";
   }
   EXPECT_EQ(log.substr(header_end + 1, expected.size()), expected) << "right after the header";
-  const Session one(load_scenario(shipped_scenario("five_robots.toml")), o);
+  const Session one(plan_run(load_scenario(shipped_scenario("five_robots.toml")), o));
   EXPECT_EQ(one.world_log().find("\n#"), std::string::npos) << "one team's world log as it always was";
 }
 
@@ -359,7 +359,7 @@ TEST_F(TwoTeams, EachTeamHasItsOwnGameState) {
       "t.toml");
   EXPECT_EQ(s.coach.state_of(0), "our_kickoff");
   EXPECT_EQ(s.coach.state_of(1), "stop") << "[coach]'s where the team says nothing";
-  Session session(s, options());
+  Session session(plan_run(s, options()));
   EXPECT_EQ(session.team_coach(1).game_state, "stop");
   EXPECT_EQ(session.team_coach(1).players.size(), 1u);
   session.apply(SetCoach{"their_kickoff", std::nullopt, std::nullopt, std::nullopt, 1});

@@ -35,7 +35,7 @@ TEST(VcanEmulate, CanhilsNodesFollowARealMasterAndARealPicBaseDrivesThem) {
   Scenario scenario = test::one_robot_on_vcan0();
   scenario.emulate = {canhil};
   const SessionOptions options = test::without_vision();
-  Session session(scenario, options);
+  Session session(plan_run(scenario, options));
   RealtimeOptions rt;
   rt.priority = 0;
   RealtimeDriver driver(session, rt);

@@ -42,7 +42,7 @@ struct Config {
 class Loop {
  public:
   explicit Loop(const Config& c, test::CounterWatch* watch = nullptr)
-      : session_(c.scenario, c.options), driver_(session_, c.virtual_options), watch_(watch) {
+      : session_(plan_run(c.scenario, c.options)), driver_(session_, c.virtual_options), watch_(watch) {
     if (watch_ == nullptr) return;
     for (std::size_t r = 0; r < session_.robot_count(); ++r) {
       const std::string p = "robot" + std::to_string(r) + ".";

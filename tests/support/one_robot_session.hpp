@@ -19,7 +19,7 @@ class OneRobotSession {
   /// The world's robots (one at kDefaultPlacement if it places none) get their
   /// node sets; the nodes start at time 0.
   OneRobotSession(std::shared_ptr<const frames::MessageSet> messages, physics::WorldParams world_params)
-      : session_(scenario_of(std::move(world_params)), options_of(std::move(messages))),
+      : session_(emulator::plan_run(scenario_of(std::move(world_params)), options_of(std::move(messages)))),
         driver_(session_, emulator::VirtualOptions{false, false, false}) {}
 
   const std::shared_ptr<const frames::MessageSet>& messages() const { return session_.options().messages; }

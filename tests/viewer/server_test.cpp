@@ -77,7 +77,7 @@ class ViewerServerTest : public ::testing::Test {
     sc.world.obstacles = {physics::ObstaclePlacement{{0, -3, 0}, {}}};
     emulator::SessionOptions o;
     o.messages = frames::MessageSet::load(test::shipped_dbc());
-    session_ = std::make_unique<emulator::Session>(sc, o);
+    session_ = std::make_unique<emulator::Session>(emulator::plan_run(sc, o));
     driver_ = std::make_unique<emulator::VirtualDriver>(*session_);
     commands_ = std::make_unique<control::Commands>(*session_);
     clock_ = std::make_unique<emulator::RunControl>(o.ftt.elementary_cycle, 0, /*paused=*/true);

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/step_timing.hpp"
@@ -49,6 +50,10 @@ using HalfDriverMaker = std::function<std::unique_ptr<HalfDriver>(Session&, std:
 struct MatchOptions {
   int halves = 2;
   double half_s = 600;  ///< virtual seconds per half
+  /// What the command says over the scenario for every half (`--process`,
+  /// `--answer-limit`) and the match's seed (none: the scenario's); each
+  /// half's plan adds its half, its seed (half_seed) and its length.
+  RunOverrides overrides;
   /// A team has the ball while, in play, one of its robots is the nearest to
   /// the ball and within this distance of its centre.
   double possession_reach_m = 1.0;
@@ -114,15 +119,11 @@ struct MatchResult {
   std::optional<std::size_t> winner() const;
 };
 
-/// The scenario of half `half` (0-based): in odd halves the teams change ends
-/// (every robot's place turned about the centre spot, each team attacking the
-/// other goal) and swap their starting game states (the other team kicks off).
-Scenario half_scenario(const Scenario& scenario, int half);
-
 /// The seed of one half of the match with seed `seed`.
 std::uint64_t half_seed(std::uint64_t seed, int half) noexcept;
 
-/// Plays a match of `scenario` (two teams; its seed is the match's) with the
+/// Plays a match of `scenario` (two teams; the match's seed is
+/// match.overrides.seed, else the scenario's) with the
 /// in-process reference handler and agent on every robot, or what
 /// `match.driver` makes. `progress` is
 /// called after each virtual second with the virtual seconds played so far;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/emulator/scenario.hpp"
 #include "canhil/emulator/session_options.hpp"
 #include "canhil/lockstep/conductor.hpp"
@@ -30,8 +31,9 @@ enum class RunMode : std::uint8_t {
   kExternal,  ///< virtual time with the team's processes in lockstep (ExternalDriver)
 };
 
-/// What a command line may say over a scenario file; unset: the file's
-/// value, else canhil's default.
+/// What a command line, or a command itself, may say over a scenario; unset:
+/// the scenario's value, else canhil's default. Applied in plan resolution
+/// only: nothing changes a loaded Scenario but plan_run().
 struct RunOverrides {
   RunMode mode = RunMode::kVirtual;
   // The first team's laptop side ([laptop]).
@@ -43,6 +45,12 @@ struct RunOverrides {
   std::vector<std::string> faults;       ///< more fault rules, as `--fault` takes them
   std::vector<std::string> processes;    ///< [external] processes (every team's that gives none)
   std::optional<double> answer_limit_s;  ///< every team's [external] answer limit
+  // What commands say beyond their command lines:
+  std::optional<int> half;                  ///< a match's half (0-based): odd halves change ends (half_scenario)
+  std::optional<std::size_t> robots;        ///< only the first N robots (`canhil nodes`: one)
+  std::vector<std::string> interfaces;      ///< the robots' interfaces, robot by robot (empty: the scenario's)
+  std::vector<int> agents;                  ///< the robots' agent numbers, robot by robot (empty: the scenario's)
+  std::vector<can_nodes::NodeSet> emulate;  ///< the nodes canhil emulates, robot by robot (empty: the scenario's)
 };
 
 /// A value of the command line that cannot be used: what() names the option
@@ -91,22 +99,33 @@ struct RunPlan {
   }
 };
 
-/// The plan of a scenario built in code (tests, matches, benchmarks):
-/// complete(), then, with vision, every team's laptop resolved (the
-/// defaults of a real-time run when options.realtime or options.external).
-/// SetupError saying what to change.
-RunPlan plan_run(Scenario scenario, SessionOptions options);
+/// The plan of a scenario in hand (built in code, or loaded by a command
+/// that says more over it: matches, benchmarks, `canhil nodes`): `overrides`
+/// applied (their mode aside: options.realtime and options.external say it),
+/// complete(), with vision every team's laptop resolved (the defaults of a
+/// real-time run when options.realtime or options.external) and the
+/// scenario's [vision] imperfections merged into options.vision, the run's
+/// length, with options.external the [external] settings. SetupError saying
+/// what to change; OverrideError for an override that cannot be used.
+RunPlan plan_run(Scenario scenario, SessionOptions options, const RunOverrides& overrides = {});
+
+/// The scenario of half `half` (0-based) of a match (RunOverrides::half): in
+/// odd halves the teams change ends (every robot's place turned about the
+/// centre spot, each team attacking the other goal) and swap their starting
+/// game states (the other team kicks off).
+Scenario half_scenario(const Scenario& scenario, int half);
+
+/// `scenario` with `overrides` applied (their mode and duration aside), not
+/// yet complete: for a command that checks what a run would start before it
+/// plans one (`canhil match --external`: the processes, the goals they are
+/// told). OverrideError as plan_run's.
+Scenario overridden(Scenario scenario, const RunOverrides& overrides);
 
 /// A command line with robot `robot`'s values in place of "{agent}",
 /// "{iface}", "{x}", "{y}", "{heading}" (its start placement: metres,
 /// degrees) and "{goal_x}" (the x of the goal its team attacks, metres),
 /// numbers as "%g" prints them. `scenario`: complete().
 std::string expand_command(std::string command, const Scenario& scenario, std::size_t robot);
-
-/// `--process` and `--answer-limit` over a scenario's [external] sides (the
-/// limit is every team's). OverrideError for a limit outside 0.01..3600 s.
-void apply_external_overrides(Scenario& scenario, const std::vector<std::string>& processes,
-                              const std::optional<double>& answer_limit_s);
 
 /// The plan of a scenario file (nullopt: the shipped one-robot scenario) and
 /// a command line's overrides; options.realtime and options.external follow

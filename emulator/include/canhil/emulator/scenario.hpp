@@ -208,6 +208,9 @@ void complete(Scenario& scenario);
 /// Parses and completes a scenario (or a physics world file).
 Scenario parse_scenario(std::string_view toml_text, const std::string& file_name);
 Scenario load_scenario(const std::filesystem::path& path);
+/// The file's values, not completed: plan_run() completes it once, after the
+/// command's overrides. SetupError naming the file, line and field.
+Scenario read_scenario(const std::filesystem::path& path);
 
 /// The scenario installed with canhil (share/canhil/scenarios/NAME), or the
 /// one in the source tree.

@@ -141,8 +141,6 @@ class Session {
   /// the goal watcher; attaches to the RTDB when vision is on. No nodes yet:
   /// a driver builds them. The plan is never changed.
   explicit Session(RunPlan plan);
-  /// The same for plan_run(scenario, options) (tests, matches, benchmarks).
-  Session(Scenario scenario, SessionOptions options);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
