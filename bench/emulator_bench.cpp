@@ -17,9 +17,9 @@ using namespace canhil;
 using namespace std::chrono_literals;
 
 // Sends M6 in its slots (like the laptop's handler) and counts what it hears.
-class Laptop final : public can_nodes::Participant {
+class HandlerStandIn final : public can_nodes::Participant {
  public:
-  Laptop(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set)
+  HandlerStandIn(can_nodes::MemoryBus& bus, std::shared_ptr<const frames::MessageSet> set)
       : ep_(bus.attach("laptop", 1 << 16)), set_(std::move(set)) {}
   std::size_t poll() override {
     std::size_t n = 0;
@@ -55,15 +55,15 @@ void BM_OneRobotVirtualTime(benchmark::State& state) {
   wp.robots = {physics::Placement{0, 0, 0}};
   wp.ball_start = {2, 2, wp.ball.radius_m};
   test::OneRobotSession session(frames::MessageSet::load(CANHIL_BENCH_DBC), wp);
-  Laptop laptop(session.bus(), session.messages());
-  session.add(laptop);
+  HandlerStandIn handler(session.bus(), session.messages());
+  session.add(handler);
   std::int64_t simulated_s = 0;
   for (auto _ : state) {
     session.run_for(1s);
     ++simulated_s;
   }
   state.counters["realtime_factor"] = benchmark::Counter(static_cast<double>(simulated_s), benchmark::Counter::kIsRate);
-  state.counters["frames_per_sim_s"] = static_cast<double>(laptop.heard_) / static_cast<double>(simulated_s);
+  state.counters["frames_per_sim_s"] = static_cast<double>(handler.heard_) / static_cast<double>(simulated_s);
 }
 BENCHMARK(BM_OneRobotVirtualTime)->Unit(benchmark::kMillisecond);
 

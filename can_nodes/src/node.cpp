@@ -4,7 +4,7 @@
 
 namespace canhil::can_nodes {
 
-Node::Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet> set)
+Node::Node(std::string name, Endpoint& bus, std::shared_ptr<const frames::MessageSet> set)
     : bus_(bus),
       tm_length_(static_cast<std::uint8_t>(set->tm.message().def().length)),
       tm_(&set->tm.message()),

@@ -39,7 +39,7 @@ Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, c
 
 // --- FttMaster -----------------------------------------------------------------
 
-FttMaster::FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
+FttMaster::FttMaster(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
                      Nanos first_ec)
     : Node(node_name(NodeId::kMaster), bus, std::move(set)), schedule_(schedule), first_ec_(first_ec) {
   const auto longest = std::chrono::ceil<std::chrono::microseconds>(schedule_.longest_sync_window());
@@ -73,7 +73,7 @@ void FttMaster::step(Nanos now) {
 
 // --- PicBase -------------------------------------------------------------------
 
-PicBase::PicBase(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot)
+PicBase::PicBase(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot)
     : Node(node_name(NodeId::kPicBase), bus, std::move(set)),
       params_(params),
       robot_(robot),
@@ -162,16 +162,16 @@ void PicBase::step(Nanos now) {
 
 // --- MotorNode -----------------------------------------------------------------
 
-MotorNode::MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
-                     int wheel, Nanos first_tick)
+MotorNode::MotorNode(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
+                     RobotIo& robot, int wheel, Nanos first_tick)
     : Node(node_name(motor_node(wheel)), bus, std::move(set)),
       params_(params),
       robot_(robot),
       wheel_(wheel),
-      next_tick_(first_tick) {
+      ticks_(from_seconds(params.encoder.motor_tick_s), first_tick) {
   const auto f = filters_for(messages(), {"TM", "M1"});
   bus.set_filters(f);
-  wake_at(next_tick_);
+  wake_at(ticks_.next());
 }
 
 void MotorNode::on_frame(const TimedFrame& tf) {
@@ -193,14 +193,13 @@ void MotorNode::on_frame(const TimedFrame& tf) {
 }
 
 void MotorNode::step(Nanos now) {
-  const Nanos tick = from_seconds(params_.encoder.motor_tick_s);
-  if (now >= next_tick_) {
+  if (ticks_.due(now)) {
     // The motor tick: the speed loop's target, braked without a fresh M1.
     const bool active = enable_ && now - last_m1_ <= params_.motor_watchdog;
     robot_.set_wheel_speed(wheel_, active ? params_.encoder.wheel_radps(setpoint_) : 0.0);
-    while (next_tick_ <= now) next_tick_ += tick;
+    ticks_.advance_past(now);
   }
-  wake_at(next_tick_);
+  wake_at(ticks_.next());
   if (slot_.pending(now)) {
     const frames::MessageSet& s = messages();
     const std::int64_t count = robot_.encoder_count(wheel_);
@@ -220,7 +219,7 @@ void MotorNode::step(Nanos now) {
 
 // --- PicOdom -------------------------------------------------------------------
 
-PicOdom::PicOdom(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params)
+PicOdom::PicOdom(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params)
     : Node(node_name(NodeId::kPicOdom), bus, std::move(set)), params_(params), kinematics_(params.geometry) {
   const auto f = filters_for(messages(), {"TM", "M3_1", "M3_2", "M3_3", "M5_1", "M5_2"});
   bus.set_filters(f);
@@ -294,7 +293,7 @@ void PicOdom::step(Nanos now) {
 
 // --- CompassNode ---------------------------------------------------------------
 
-CompassNode::CompassNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
+CompassNode::CompassNode(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
                          RobotIo& robot)
     : Node(node_name(NodeId::kCompass), bus, std::move(set)), params_(params), robot_(robot) {
   const auto f = filters_for(messages(), {"TM"});
@@ -323,9 +322,9 @@ void CompassNode::step(Nanos now) {
 
 // --- SystemMonitor -------------------------------------------------------------
 
-SystemMonitor::SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
+SystemMonitor::SystemMonitor(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
                              std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state,
-                             Bus* watch)
+                             Endpoint* watch)
     : Node(node_name(NodeId::kSysMon), bus, std::move(set)),
       params_(params),
       watch_(watch),

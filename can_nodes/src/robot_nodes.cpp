@@ -14,17 +14,17 @@ RobotNodes::RobotNodes(const std::shared_ptr<const frames::MessageSet>& set, con
     const auto id = static_cast<NodeId>(i);
     if (emulates(id)) buses_[i] = endpoints(node_name(id));
   }
-  auto bus = [&](NodeId id) -> Bus& { return *buses_[static_cast<std::size_t>(id)]; };
+  auto bus = [&](NodeId id) -> Endpoint& { return *buses_[static_cast<std::size_t>(id)]; };
   auto make = [&](NodeId id, auto build) {
     if (emulates(id)) nodes_[static_cast<std::size_t>(id)] = build(bus(id));
   };
-  make(NodeId::kMaster, [&](Bus& b) { return std::make_unique<FttMaster>(b, set, schedule_, start); });
-  make(NodeId::kPicBase, [&](Bus& b) { return std::make_unique<PicBase>(b, set, params, robot); });
+  make(NodeId::kMaster, [&](Endpoint& b) { return std::make_unique<FttMaster>(b, set, schedule_, start); });
+  make(NodeId::kPicBase, [&](Endpoint& b) { return std::make_unique<PicBase>(b, set, params, robot); });
   for (int w = 0; w < 3; ++w) {
-    make(motor_node(w), [&](Bus& b) { return std::make_unique<MotorNode>(b, set, params, robot, w, start); });
+    make(motor_node(w), [&](Endpoint& b) { return std::make_unique<MotorNode>(b, set, params, robot, w, start); });
   }
-  make(NodeId::kPicOdom, [&](Bus& b) { return std::make_unique<PicOdom>(b, set, params); });
-  make(NodeId::kCompass, [&](Bus& b) { return std::make_unique<CompassNode>(b, set, params, robot); });
+  make(NodeId::kPicOdom, [&](Endpoint& b) { return std::make_unique<PicOdom>(b, set, params); });
+  make(NodeId::kCompass, [&](Endpoint& b) { return std::make_unique<CompassNode>(b, set, params, robot); });
   if (!emulates(NodeId::kSysMon)) return;
   watch_bus_ = endpoints("SysMon watch");
   auto* base = static_cast<PicBase*>(nodes_[static_cast<std::size_t>(NodeId::kPicBase)].get());

@@ -81,20 +81,19 @@ void Participants::refresh() {
 }
 
 void VirtualTime::set_step(Nanos period, std::function<void(Nanos now)> step) {
-  period_ = period;
   step_ = std::move(step);
-  next_step_ = clock_.now() + period_;
+  steps_at_ = Periodic(period, clock_.now() + period);
 }
 
 void VirtualTime::run_until(Nanos end) {
   participants_.refresh();  // the caller may have moved wake-ups between runs
   while (true) {
-    const Nanos next = std::min(next_step_, participants_.next_wakeup());
+    const Nanos next = std::min(steps_at_.next(), participants_.next_wakeup());
     if (next > end) break;
     clock_.set(std::max(next, clock_.now()));
     const Nanos now = clock_.now();
-    if (next_step_ <= now) {
-      next_step_ += period_;
+    if (steps_at_.due(now)) {
+      steps_at_.advance();
       ++steps_;
       step_(now);
       participants_.refresh();  // the step may move wake-ups (a vision frame wakes an agent)

@@ -41,7 +41,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       conductor_(conductor),
       options_(options),
       watch_(session, {options.record_trace, options.check_timing}),
-      lockstep_(clock_) {
+      time_(clock_) {
   if (session_.scenario().mixes_real_boards()) {
     throw SetupError(
         "emulate = [...] leaves nodes to real boards, and a board keeps the wall clock's time, not "
@@ -88,14 +88,14 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       [this, &node_options](std::size_t r, const std::string&) {
         auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, node_options);
         sockets_[r].push_back(bus.get());
-        return std::unique_ptr<can_nodes::Bus>(std::move(bus));
+        return std::unique_ptr<can_nodes::Endpoint>(std::move(bus));
       },
       Session::IoMode::kDirect, Nanos{0});
   processes_ = std::make_unique<Processes>(*this);
   for (std::size_t r = 0; r < n; ++r) {
-    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) lockstep_.add(*node);
+    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) time_.add(*node);
   }
-  lockstep_.add(*processes_);
+  time_.add(*processes_);
   // A team's agent is activated through its PMan table; canhil's own waits on
   // canhil's RTDB's frame signal. Both only in settle(), once the processes'
   // clock reads the frame's instant: a frame is written during the step, and
@@ -114,7 +114,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       return at_an_observer || (waiting_on_fence_ && !unfenced());
     };
   }
-  lockstep_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
+  time_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
 }
 
 ExternalDriver::~ExternalDriver() {
@@ -137,7 +137,7 @@ void ExternalDriver::run_until(Nanos end) {
     const std::string stuck = conductor_.wait_quiet({}, "its start, before canhil's first frame", options_.start_limit);
     if (!stuck.empty()) throw ProcessStuck(stuck);
   }
-  lockstep_.run_until(end);
+  time_.run_until(end);
 }
 
 std::uint64_t ExternalDriver::canhil_sent() const {

@@ -24,7 +24,7 @@ struct RealtimeDriver::Locked {
 };
 
 RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
-    : session_(session), options_(options), physics_(session, options.max_behind) {
+    : session_(session), options_(options), physics_(session, clock_, options.max_behind) {
   const std::size_t n = session_.robot_count();
   const Scenario& sc = session_.scenario();
   const bool error_frames = std::any_of(sc.faults.begin(), sc.faults.end(), [](const can_nodes::FaultRule& f) {
@@ -50,7 +50,7 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
         auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options);
         const auto id = can_nodes::node_by_name(node);
         sockets_[r][id ? static_cast<std::size_t>(*id) : can_nodes::kNodeCount] = bus.get();
-        return std::unique_ptr<can_nodes::Bus>(std::move(bus));
+        return std::unique_ptr<can_nodes::Endpoint>(std::move(bus));
       },
       Session::IoMode::kShared, start_);
   std::vector<int> fds;

@@ -4,19 +4,20 @@
 
 namespace canhil::emulator {
 
-void book_step(RealtimeStats& stats, Nanos now, Nanos& due, Nanos step, Nanos max_behind) noexcept {
-  const Nanos late = now - due;
+void book_step(RealtimeStats& stats, Nanos now, Periodic& steps, Nanos max_behind) noexcept {
+  const Nanos late = now - steps.next();
   stats.worst_lateness = std::max(stats.worst_lateness, late);
-  if (late > step) ++stats.late_steps;
+  if (late > steps.period()) ++stats.late_steps;
   if (late > max_behind) {
     // Stalled (debugger, overloaded machine): drop the missed steps.
-    const auto missed = late / step;
+    const auto missed = late / steps.period();
     stats.skipped_steps += static_cast<std::uint64_t>(missed);
-    due += step * missed;
+    steps.skip(missed);
   }
 }
 
-RealtimePhysics::RealtimePhysics(Session& session, Nanos max_behind) : session_(session), max_behind_(max_behind) {}
+RealtimePhysics::RealtimePhysics(Session& session, const can_nodes::WallClock& clock, Nanos max_behind)
+    : session_(session), clock_(clock), max_behind_(max_behind) {}
 
 RealtimePhysics::~RealtimePhysics() { stop(); }
 
@@ -36,19 +37,18 @@ RealtimeStats RealtimePhysics::stats() const {
 }
 
 void RealtimePhysics::loop(Nanos start) {
-  const Nanos step = session_.step_period();
-  Nanos next = start + step;
+  Periodic steps(session_.step_period(), start + session_.step_period());
   RealtimeStats stats;
   while (!stop_.load(std::memory_order_relaxed)) {
-    if (can_nodes::WallClock{}.now() < next) {
-      can_nodes::WallClock::sleep_until(next);
+    const Nanos now = clock_.now();
+    if (!steps.due(now)) {
+      clock_.sleep_until(steps.next());
       continue;
     }
-    const Nanos now = can_nodes::WallClock{}.now();
-    book_step(stats, now, next, step, max_behind_);
+    book_step(stats, now, steps, max_behind_);
     session_.step(now, false);  // the bus changes: on the nodes' thread (RealtimeDriver)
     ++stats.physics_steps;
-    next += step;
+    steps.advance();
     const std::lock_guard lock(mutex_);
     stats_ = stats;
   }

@@ -54,8 +54,8 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     : session_(session),
       options_(options),
       watch_(session, {options.record_trace, options.check_timing}),
-      lockstep_(clock_) {
-  if (options_.reference_laptop && !session_.options().vision_on) {
+      time_(clock_) {
+  if (options_.reference_handler_and_agent && !session_.options().vision_on) {
     throw SetupError("the reference laptop stack needs the vision and the RTDB (SessionOptions::vision_on)");
   }
   if (session_.scenario().mixes_real_boards() && !options_.caller_plays_real_boards) {
@@ -63,7 +63,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
         "emulate = [...] leaves nodes to real boards, and a virtual-time run has no real bus: run that "
         "scenario in real time (without --virtual-time)");
   }
-  if (options_.reference_laptop) {
+  if (options_.reference_handler_and_agent) {
     // Items stamped and aged in the run's time: an age is what the robot would see, at any speed.
     session_.for_each_laptop([this](LaptopLink& link) { rtdb_clock_set_ |= link.set_clock(&virtual_now, &clock_); });
   }
@@ -73,7 +73,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   }
   session_.build_nodes(
       [this](std::size_t r, const std::string& node) {
-        return std::unique_ptr<can_nodes::Bus>(buses_[r]->attach(node));
+        return std::unique_ptr<can_nodes::Endpoint>(buses_[r]->attach(node));
       },
       Session::IoMode::kDirect, Nanos{0});
   laptop::AgentConfig agent_cfg;
@@ -83,7 +83,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   for (std::size_t r = 0; r < n; ++r) {
     const Rig& rig = session_.rig(r);
     auto stack = std::make_unique<ReferenceStack>();
-    if (options_.reference_laptop) {
+    if (options_.reference_handler_and_agent) {
       // A fresh database: every item of the agent zeroed, the handler asked
       // to put the odometry where the robot stands.
       LaptopLink& link = *session_.laptop(rig.team);
@@ -111,17 +111,17 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
   }
   // Ticked in this order at every instant: robot by robot, its nodes, then its handler and agent.
   for (std::size_t r = 0; r < n; ++r) {
-    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) lockstep_.add(*node);
-    if (stacks_[r]->handler) lockstep_.add(*stacks_[r]->handler);
-    if (stacks_[r]->agent) lockstep_.add(*stacks_[r]->agent);
+    for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) time_.add(*node);
+    if (stacks_[r]->handler) time_.add(*stacks_[r]->handler);
+    if (stacks_[r]->agent) time_.add(*stacks_[r]->agent);
   }
   session_.on_detail([this](WorldSnapshot& s) { fill_detail(s); });
   session_.on_vision_frame([this](std::size_t r, Nanos now) {
     if (stacks_[r]->agent) stacks_[r]->agent->frame_ready(now);
   });
-  lockstep_.set_step(session_.step_period(), [this](Nanos now) {
+  time_.set_step(session_.step_period(), [this](Nanos now) {
     session_.step(now);
-    if (options_.reference_laptop) set_pose_of_carried_robots();
+    if (options_.reference_handler_and_agent) set_pose_of_carried_robots();
   });
 }
 
@@ -147,7 +147,7 @@ VirtualDriver::~VirtualDriver() {
   if (rtdb_clock_set_) session_.for_each_laptop([](LaptopLink& link) { link.set_clock(nullptr, nullptr); });
 }
 
-void VirtualDriver::run_until(Nanos end) { lockstep_.run_until(end); }
+void VirtualDriver::run_until(Nanos end) { time_.run_until(end); }
 
 void VirtualDriver::run_for(Nanos duration) { run_until(clock_.now() + duration); }
 

@@ -26,6 +26,7 @@
 #include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
 #include "canhil/base/setup_error.hpp"
+#include "canhil/base/start_again.hpp"
 #include "canhil/lockstep/shim_hook.h"
 
 namespace canhil::lockstep {
@@ -141,9 +142,8 @@ Conductor::~Conductor() {
 }
 
 std::vector<std::string> Conductor::environment(const std::filesystem::path& shim, const char* preload_already) const {
-  std::string preload = "LD_PRELOAD=" + shim.string();
-  if (preload_already != nullptr && *preload_already != '\0') preload += std::string(":") + preload_already;
-  return {std::string(kBoardVariable) + "=" + name_, preload};
+  return {std::string(kBoardVariable) + "=" + name_,
+          "LD_PRELOAD=" + preload_list(shim.string(), preload_already != nullptr ? preload_already : "")};
 }
 
 std::size_t Conductor::wait_attached(std::size_t count, Nanos limit) {

@@ -37,5 +37,34 @@ TEST(Assets, AnInstalledCopyBesideTheProgramElseTheBuiltOne) {
   fs::remove(folder / probe);
 }
 
+TEST(Assets, AFileThatMustBeThereIsTheVariablesElseInstalledElseBuiltElseANamedError) {
+  const fs::path folder = program_folder();
+  const std::string probe = "canhil_asset_probe_" + std::to_string(getpid());
+  const fs::path built = fs::temp_directory_path() / probe;
+  unsetenv("CANHIL_ASSETS_TEST");
+  try {
+    find_asset("CANHIL_ASSETS_TEST", "the probe", {probe}, built, "probe_target");
+    ADD_FAILURE() << "nothing anywhere: an error";
+  } catch (const SetupError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the probe " + probe + " is not at " + (folder / probe).string()), std::string::npos) << what;
+    EXPECT_NE(what.find(built.string()), std::string::npos) << what;
+    EXPECT_NE(what.find("build it (target probe_target) or set CANHIL_ASSETS_TEST="), std::string::npos) << what;
+  }
+  std::ofstream(built) << "x";
+  EXPECT_EQ(find_asset("CANHIL_ASSETS_TEST", "the probe", {probe}, built, "probe_target"), built);
+  std::ofstream(folder / probe) << "x";
+  EXPECT_EQ(find_asset("CANHIL_ASSETS_TEST", "the probe", {probe}, built, "probe_target"), folder / probe)
+      << "the installed copy first";
+  setenv("CANHIL_ASSETS_TEST", "/no/such/file", 1);
+  EXPECT_THROW(find_asset("CANHIL_ASSETS_TEST", "the probe", {probe}, built, "probe_target"), SetupError)
+      << "a variable naming nothing is an error, not a fallback";
+  setenv("CANHIL_ASSETS_TEST", built.c_str(), 1);
+  EXPECT_EQ(find_asset("CANHIL_ASSETS_TEST", "the probe", {probe}, built, "probe_target"), built);
+  unsetenv("CANHIL_ASSETS_TEST");
+  fs::remove(folder / probe);
+  fs::remove(built);
+}
+
 }  // namespace
 }  // namespace canhil

@@ -20,7 +20,7 @@ using namespace std::chrono_literals;
 // Asks for the wake-ups it is given and notes when it steps; a step may ask for more.
 class Waker final : public Node {
  public:
-  Waker(Bus& bus, std::shared_ptr<const frames::MessageSet> set) : Node("waker", bus, std::move(set)) {}
+  Waker(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set) : Node("waker", bus, std::move(set)) {}
   void ask(Nanos t) { wake_at(t); }
   std::vector<Nanos> steps;
   std::vector<Nanos> then;  // asked for by the first step

@@ -100,7 +100,7 @@ TEST(RobotNodesSubset, NodesLeftToRealBoardsGetNoEndpointAndTheOthersFollowTheRe
   test::FakeRobot board_robot;  // what the real Pic_base drives (its kicker, grabber)
   RobotNodes real(
       rig.set, rig.params, board_robot,
-      [&](const std::string& name) { return std::unique_ptr<Bus>(rig.bus.attach(name)); }, Nanos{0}, boards);
+      [&](const std::string& name) { return std::unique_ptr<Endpoint>(rig.bus.attach(name)); }, Nanos{0}, boards);
   for (Node* n : real.nodes()) rig.run.add(*n);
   rig.laptop.m6_1 = frames::M6_1{0, 0.5};  // forward
   rig.run.run_until(1s - 1ns);             // ECs 0..99 of the real master

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "canhil/emulator/virtual_driver.hpp"
+#include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::control {
@@ -18,7 +19,7 @@ namespace {
 using namespace std::chrono_literals;
 using nlohmann::json;
 
-class CommandsTest : public ::testing::Test {
+class CommandsTest : public test::WatchedTest {
  protected:
   CommandsTest() {
     setenv("RTDB_KEY", std::to_string(0x5E100000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
@@ -28,6 +29,10 @@ class CommandsTest : public ::testing::Test {
     session_ = std::make_unique<emulator::Session>(emulator::plan_run(scenario_, options_));
     driver_ = std::make_unique<emulator::VirtualDriver>(*session_);
     commands_ = std::make_unique<Commands>(*session_);
+    // Silent trouble in the robots' nodes fails the test (TearDown), the driver still there.
+    for (std::size_t r = 0; r < session_->robot_count(); ++r) {
+      counters.watch_nodes(*session_->rig(r).nodes, session_->rig(r).interface + ".");
+    }
   }
   json send(const std::string& text) { return json::parse(commands_->handle(text)); }
   json step_and_snapshot() {
@@ -59,6 +64,7 @@ TEST_F(CommandsTest, TheCoachAndFaultsGoThroughTheSessionToo) {
   EXPECT_EQ(send(R"({"command":"coach","game_state":"stop"})")["ok"], true);
   EXPECT_EQ(send(R"({"command":"coach","robot":1,"running":false,"role":"goalie"})")["ok"], true);
   EXPECT_EQ(send(R"({"command":"fault","rule":"drop:M8"})")["ok"], true);
+  counters.allow_suffix(".fault_dropped");  // what the fault does
   const json s = step_and_snapshot();
   EXPECT_EQ(s["coach"]["game_state"], "stop");
   EXPECT_EQ(s["coach"]["players"][1]["running"], false);

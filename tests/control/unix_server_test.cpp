@@ -1,5 +1,8 @@
 // The control socket: a request in, the reply out, owner-only; a socket left
 // by a crashed run is replaced, one in use is not taken over.
+// Silent trouble (test::WatchedTest): no step is taken here (the socket's
+// requests and replies only); tests/control/commands_test.cpp watches the
+// nodes while the same commands run.
 #include "canhil/control/unix_server.hpp"
 
 #include <gtest/gtest.h>

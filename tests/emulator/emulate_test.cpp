@@ -135,8 +135,8 @@ TEST_F(Emulate, CanhilsNodesFollowARealMasterAndARealPicBaseClosesTheLoop) {
   test::FakeRobot board_robot;
   can_nodes::RobotNodes boards(
       o.messages, session.node_params(), board_robot,
-      [&](const std::string& name) { return std::unique_ptr<can_nodes::Bus>(driver.bus(0).attach(name)); }, Nanos{0},
-      set_of({NodeId::kMaster, NodeId::kPicBase}));
+      [&](const std::string& name) { return std::unique_ptr<can_nodes::Endpoint>(driver.bus(0).attach(name)); },
+      Nanos{0}, set_of({NodeId::kMaster, NodeId::kPicBase}));
   for (can_nodes::Node* n : boards.nodes()) driver.add(*n);
   const auto watching = counters.watch_session(session);
 

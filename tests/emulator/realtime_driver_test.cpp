@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/counter_watch.hpp"
 #include "support/driving_laptop.hpp"
 #include "support/test_paths.hpp"
 
@@ -21,6 +22,14 @@ TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
   RealtimeOptions rt;
   rt.priority = 0;
   RealtimeDriver driver(session, rt);
+  // Silent trouble in canhil's nodes fails the test: a frame of a wrong length
+  // or out of range, an unknown id, an error frame. A full queue or a send the
+  // kernel refused is the machine's in real time (a busy one fills queues),
+  // not canhil's: allowed.
+  test::CounterWatch watch;
+  const auto watched = watch.watch_session(session);
+  for (const char* load : {".rx_overflow", ".send_dropped", ".send_failed"}) watch.allow_suffix(load);
+  watch.allow_suffix(".fault_dropped");  // the drop:M8 injected below
   const frames::MessageSet& set = *options.messages;
 
   // The laptop: M6 (forward, 0.5 m/s) in every slot that schedules it; counts M8.

@@ -183,7 +183,7 @@ TEST_F(SessionTest, TimedStepsWithoutVisionCountNoVision) {
   options_.vision_on = false;
   Session session(plan_run(scenario_, options_));
   VirtualOptions no_laptop;
-  no_laptop.reference_laptop = false;
+  no_laptop.reference_handler_and_agent = false;
   VirtualDriver driver(session, no_laptop);
   driver.run_for(200ms);
   EXPECT_EQ(session.step_timing().physics.steps, session.snapshot().steps);
@@ -206,7 +206,7 @@ class RelocationTest : public test::WatchedTest {
     scenario_.laptop.rtdb_ini = team + "config/rtdb.ini";
     scenario_.laptop.layout = "cambada";
     options_.messages = frames::MessageSet::load(test::shipped_dbc());
-    no_laptop_.reference_laptop = false;  // canhil's agent wants CMD_SETPOSE, which CAMBADA has not
+    no_laptop_.reference_handler_and_agent = false;  // canhil's agent wants CMD_SETPOSE, which CAMBADA has not
   }
   // changePositionSN[agent - 1] of the base station's COACH_INFO in the
   // agent's database (CAMBADA's CoachInfo: six ints from byte 192).

@@ -14,6 +14,7 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/realtime_driver.hpp"
 #include "canhil/emulator/wall_waiter.hpp"
+#include "support/counter_watch.hpp"
 #include "support/driving_laptop.hpp"
 #include "support/fake_robot.hpp"
 #include "support/test_paths.hpp"
@@ -39,6 +40,13 @@ TEST(VcanEmulate, CanhilsNodesFollowARealMasterAndARealPicBaseDrivesThem) {
   RealtimeOptions rt;
   rt.priority = 0;
   RealtimeDriver driver(session, rt);
+  // Silent trouble in canhil's nodes fails the test: a frame of a wrong length
+  // or out of range, an unknown id, an error frame. A full queue or a send the
+  // kernel refused is the machine's in real time (a busy one fills queues),
+  // not canhil's: allowed.
+  test::CounterWatch watch;
+  const auto watched = watch.watch_session(session);
+  for (const char* load : {".rx_overflow", ".send_dropped", ".send_failed"}) watch.allow_suffix(load);
   const frames::MessageSet& set = *options.messages;
   EXPECT_THROW(driver.socket(0, static_cast<std::size_t>(NodeId::kMaster)), std::out_of_range)
       << "canhil opened no socket for a real board";
@@ -53,7 +61,7 @@ TEST(VcanEmulate, CanhilsNodesFollowARealMasterAndARealPicBaseDrivesThem) {
       [&](const std::string&) {
         auto bus = can_nodes::SocketCanBus::open("vcan0");
         board_fds.push_back(bus->fd());
-        return std::unique_ptr<can_nodes::Bus>(std::move(bus));
+        return std::unique_ptr<can_nodes::Endpoint>(std::move(bus));
       },
       (wall.now() / ec + 5) * ec, boards);
   WallWaiter board_waiter(board_fds);

@@ -2,6 +2,8 @@
 // and a clock the test sets. What it writes for each frame, what it sends in
 // which slot, and what it counts. (In the loop with the emulated nodes:
 // tests/emulator/handler_participant_test.cpp.)
+// Silent trouble (test::WatchedTest): no node runs here; the handler's own
+// counts are what these tests check, each by name.
 #include "canhil/laptop/hwcomm.hpp"
 
 #include <gtest/gtest.h>

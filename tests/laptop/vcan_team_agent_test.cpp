@@ -5,6 +5,9 @@
 // API; `canhil run` loads both (--rtdb-lib, --pman-lib) in CAMBADA's layout,
 // `canhil-hwcomm` serves the same RTDB. Order, counts and outcomes are
 // checked, never timing (real time in the VM is slow and noisy).
+// Silent trouble (test::WatchedTest): canhil runs in a process of its own
+// here, so its nodes' counters are not this test's to watch; the same runs
+// in process are watched (tests/emulator/session_test.cpp, in CAMBADA's layout).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>

@@ -25,7 +25,7 @@ struct NodeRig {
             set, params, robot,
             [this](const std::string& name) {
               endpoints_asked.push_back(name);
-              return std::unique_ptr<can_nodes::Bus>(bus.attach(name));
+              return std::unique_ptr<can_nodes::Endpoint>(bus.attach(name));
             },
             Nanos{0}, emulate),
         laptop(bus, set, params.ftt.elementary_cycle),

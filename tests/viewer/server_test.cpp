@@ -18,6 +18,7 @@
 #include "canhil/emulator/virtual_driver.hpp"
 #include "canhil/viewer/live_feed.hpp"
 #include "canhil/viewer/page_client.hpp"
+#include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
 
 namespace canhil::viewer {
@@ -61,7 +62,7 @@ class Client {
 // GET target -> (status, body)
 std::pair<int, std::string> get(std::uint16_t port, const std::string& target) { return http_get(port, target); }
 
-class ViewerServerTest : public ::testing::Test {
+class ViewerServerTest : public test::WatchedTest {
  protected:
   ViewerServerTest() {
     setenv("RTDB_KEY", std::to_string(0x5E300000 + ((getpid() & 0xFFF) << 8)).c_str(), 1);
@@ -80,6 +81,10 @@ class ViewerServerTest : public ::testing::Test {
     session_ = std::make_unique<emulator::Session>(emulator::plan_run(sc, o));
     driver_ = std::make_unique<emulator::VirtualDriver>(*session_);
     commands_ = std::make_unique<control::Commands>(*session_);
+    // Silent trouble in the robots' nodes fails the test (TearDown), the driver still there.
+    for (std::size_t r = 0; r < session_->robot_count(); ++r) {
+      counters.watch_nodes(*session_->rig(r).nodes, session_->rig(r).interface + ".");
+    }
     clock_ = std::make_unique<emulator::RunControl>(o.ftt.elementary_cycle, 0, /*paused=*/true);
     control::add_run_commands(*commands_, *clock_);
     control::add_save_commands(*commands_, *session_, dir_ / "saves");
@@ -150,6 +155,7 @@ TEST_F(ViewerServerTest, EveryCommandChangesTheWorldAsTheScenarioWouldAndIsLogge
   EXPECT_EQ(page.ask({{"command", "move_obstacle"}, {"obstacle", 0}, {"x", 5.0}, {"y", 5.0}})["ok"], true);
   EXPECT_EQ(page.ask({{"command", "coach"}, {"game_state", "our_kickoff"}})["ok"], true);
   EXPECT_EQ(page.ask({{"command", "fault"}, {"rule", "drop:M4_1:1"}})["ok"], true);
+  counters.allow_suffix(".fault_dropped");  // what the fault does
   step();
   const json s = snapshot();
   EXPECT_NEAR(s["robots"][1]["x"].get<double>(), 4.0, 0.01);

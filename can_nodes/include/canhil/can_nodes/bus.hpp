@@ -1,9 +1,11 @@
-// canhil/can_nodes/bus.hpp — the narrow bus interface every node talks through.
+// canhil/can_nodes/bus.hpp — the narrow interface every node talks through:
+// an Endpoint, one controller's place on a bus (the medium: a MemoryBus, the
+// kernel's SocketCAN, canhil's user-space bus).
 //
-// Two backends: SocketCanBus (CAN_RAW on vcan or a real interface) and the
-// endpoints of a MemoryBus (in-process, deterministic). Both are non-blocking:
+// Two backends: SocketCanBus (a CAN_RAW socket on vcan or a real interface)
+// and the endpoints of a MemoryBus (in-process, deterministic). Both are non-blocking:
 // send() never waits for the wire, receive() returns nothing when nothing is
-// there. A Bus is used from one thread at a time.
+// there. An Endpoint is used from one thread at a time.
 #pragma once
 
 #include <cstddef>
@@ -57,7 +59,7 @@ struct Filter {
 enum class SendStatus : std::uint8_t {
   kOk,       ///< handed to the bus
   kDropped,  ///< the transmit queue stayed full through every retry; counted in stats
-  kDown,     ///< the interface is down or gone; see Bus::state()
+  kDown,     ///< the interface is down or gone; see Endpoint::state()
 };
 
 enum class BusState : std::uint8_t {
@@ -78,11 +80,11 @@ struct BusStats {
   std::uint64_t state_changes = 0;  ///< up/down transitions seen
 };
 
-class Bus {
+class Endpoint {
  public:
-  virtual ~Bus() = default;
-  Bus(const Bus&) = delete;
-  Bus& operator=(const Bus&) = delete;
+  virtual ~Endpoint() = default;
+  Endpoint(const Endpoint&) = delete;
+  Endpoint& operator=(const Endpoint&) = delete;
 
   /// Sends one frame. Never blocks longer than the backend's bounded retry.
   virtual SendStatus send(const CanFrame& frame) = 0;
@@ -109,7 +111,7 @@ class Bus {
   virtual const std::string& name() const = 0;
 
  protected:
-  Bus() = default;
+  Endpoint() = default;
 };
 
 }  // namespace canhil::can_nodes

@@ -1,6 +1,6 @@
 // canhil/can_nodes/memory_bus.hpp — an in-process CAN bus for virtual time.
 //
-// A MemoryBus is the medium; attach() gives endpoints (each a Bus). A frame
+// A MemoryBus is the medium; attach() gives endpoints (each an Endpoint). A frame
 // sent on one endpoint is delivered, stamped with the injected clock's time,
 // to every other attached endpoint whose filters pass it, in attach order,
 // like SocketCAN with loopback on and own messages off (`receive_own` turns
@@ -37,7 +37,7 @@ class MemoryBus;
 /// 11-bit identifiers: the data frames a bus routes by table.
 inline constexpr std::size_t kStandardIds = std::size_t{1} << 11;
 
-class MemoryEndpoint final : public Bus {
+class MemoryEndpoint final : public Endpoint {
  public:
   ~MemoryEndpoint() override;
 

@@ -59,7 +59,7 @@ class FaultHook {
 
 class Node {
  public:
-  Node(std::string name, Bus& bus, std::shared_ptr<const frames::MessageSet> set);
+  Node(std::string name, Endpoint& bus, std::shared_ptr<const frames::MessageSet> set);
   virtual ~Node() = default;
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
@@ -70,7 +70,7 @@ class Node {
   /// False only when poll() would certainly find nothing to read.
   bool may_have_frames() const { return bus_.may_have_frames() || more_may_have_frames(); }
   /// Rings `bell` with `index` when a frame arrives on anything poll() reads
-  /// (Bus::set_doorbell); false when some of it cannot ring.
+  /// (Endpoint::set_doorbell); false when some of it cannot ring.
   bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) {
     const bool mine = bus_.set_doorbell(bell, index);
     return more_set_doorbell(bell, index) && mine;
@@ -87,8 +87,8 @@ class Node {
   /// The hook must outlive the node; nullptr removes it.
   void set_fault_hook(FaultHook* hook) noexcept { hook_ = hook; }
   const NodeCounters& counters() const noexcept { return counters_; }
-  Bus& bus() noexcept { return bus_; }
-  const Bus& bus() const noexcept { return bus_; }
+  Endpoint& bus() noexcept { return bus_; }
+  const Endpoint& bus() const noexcept { return bus_; }
 
  protected:
   virtual void on_frame(const frames::TimedFrame& frame) = 0;
@@ -98,9 +98,9 @@ class Node {
     (void)max_frames;
     return 0;
   }
-  /// As Bus::may_have_frames, for what poll_more reads.
+  /// As Endpoint::may_have_frames, for what poll_more reads.
   virtual bool more_may_have_frames() const { return false; }
-  /// As Bus::set_doorbell, for what poll_more reads (nothing: true).
+  /// As Endpoint::set_doorbell, for what poll_more reads (nothing: true).
   virtual bool more_set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) {
     (void)bell;
     (void)index;
@@ -137,7 +137,7 @@ class Node {
 
   // What poll(), tick() and next_wakeup() read come first, together: a node
   // is visited a few times an elementary cycle, its lines cold each time.
-  Bus& bus_;
+  Endpoint& bus_;
   bool enabled_ = true;
   std::uint8_t tm_length_;
   const frames::MessageCodec* tm_;  // the trigger message, in set_

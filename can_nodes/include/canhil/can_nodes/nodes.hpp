@@ -17,6 +17,7 @@
 #include <functional>
 #include <optional>
 
+#include "canhil/base/periodic.hpp"
 #include "canhil/can_nodes/node.hpp"
 #include "canhil/can_nodes/node_ids.hpp"
 #include "canhil/can_nodes/robot_io.hpp"
@@ -45,7 +46,7 @@ struct NodeParams {
 class FttMaster final : public Node {
  public:
   /// Sends the TM of EC k at first_ec + k * EC.
-  FttMaster(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
+  FttMaster(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const frames::FttSchedule& schedule,
             Nanos first_ec);
   std::uint64_t ec_count() const noexcept { return ec_; }
 
@@ -61,7 +62,7 @@ class FttMaster final : public Node {
 
 class PicBase final : public Node {
  public:
-  PicBase(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot);
+  PicBase(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot);
   /// True while braking because M6 stopped arriving.
   bool watchdog_tripped(Nanos now) const noexcept;
   const std::array<int, 3>& setpoints() const noexcept { return setpoints_; }
@@ -98,7 +99,7 @@ class PicBase final : public Node {
 class MotorNode final : public Node {
  public:
   /// `wheel` is 0..2 (Motor1..Motor3).
-  MotorNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
+  MotorNode(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot,
             int wheel, Nanos first_tick);
 
  protected:
@@ -110,7 +111,7 @@ class MotorNode final : public Node {
   RobotIo& robot_;
   int wheel_;
   frames::SyncSlot slot_;
-  Nanos next_tick_;
+  Periodic ticks_;  ///< the speed loop's ticks (encoder.motor_tick_s)
   int setpoint_ = 0;
   bool enable_ = false;
   Nanos last_m1_ = kLongAgo;
@@ -121,7 +122,7 @@ class MotorNode final : public Node {
 
 class PicOdom final : public Node {
  public:
-  PicOdom(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params);
+  PicOdom(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params);
   const kinematics::Pose& pose() const noexcept { return pose_; }
 
  protected:
@@ -144,7 +145,7 @@ class PicOdom final : public Node {
 
 class CompassNode final : public Node {
  public:
-  CompassNode(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot);
+  CompassNode(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params, RobotIo& robot);
 
  protected:
   void on_frame(const frames::TimedFrame& frame) override;
@@ -163,9 +164,9 @@ class SystemMonitor final : public Node {
   /// node takes only TMs on `bus` and watches the whole bus on `watch`, so
   /// that a flood of other frames (counted, and lost to overflow if need be)
   /// never costs it a TM; without, `bus` does both.
-  SystemMonitor(Bus& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
+  SystemMonitor(Endpoint& bus, std::shared_ptr<const frames::MessageSet> set, const NodeParams& params,
                 std::function<std::uint64_t()> bad_frames, std::function<std::uint8_t(Nanos)> state,
-                Bus* watch = nullptr);
+                Endpoint* watch = nullptr);
   /// alive bitmap as M10 reports it now.
   std::uint8_t alive(Nanos now) const noexcept;
 
@@ -181,7 +182,7 @@ class SystemMonitor final : public Node {
  private:
   void observe(const frames::TimedFrame& frame);  // bad frames and who is alive
   const NodeParams& params_;
-  Bus* watch_;
+  Endpoint* watch_;
   std::function<std::uint64_t()> bad_frames_;
   std::function<std::uint8_t(Nanos)> state_;
   std::array<Nanos, 6> last_seen_;     // Pic_base, Motor1..3, Pic_odom, Compass

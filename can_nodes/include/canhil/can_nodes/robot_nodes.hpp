@@ -46,7 +46,7 @@ class RobotNodes {
  public:
   /// Makes one bus endpoint per node, and a second one ("SysMon watch") on
   /// which the system monitor watches the whole bus.
-  using EndpointFactory = std::function<std::unique_ptr<Bus>(const std::string& node_name)>;
+  using EndpointFactory = std::function<std::unique_ptr<Endpoint>(const std::string& node_name)>;
 
   /// Builds the nodes of `emulate` (endpoints only for those; the watching
   /// one with the system monitor). `params` and `robot` must outlive it.
@@ -76,8 +76,8 @@ class RobotNodes {
   frames::FttSchedule schedule_;
   Nanos start_;
   NodeSet emulated_;
-  std::array<std::unique_ptr<Bus>, kNodeCount> buses_;
-  std::unique_ptr<Bus> watch_bus_;                       // the system monitor's second endpoint: the whole bus
+  std::array<std::unique_ptr<Endpoint>, kNodeCount> buses_;
+  std::unique_ptr<Endpoint> watch_bus_;                  // the system monitor's second endpoint: the whole bus
   std::array<std::unique_ptr<Node>, kNodeCount> nodes_;  // NodeId order; null: a real board's
 };
 

@@ -1,4 +1,4 @@
-// canhil/can_nodes/socketcan_bus.hpp — the Bus on a SocketCAN interface.
+// canhil/can_nodes/socketcan_bus.hpp — an Endpoint on a SocketCAN interface: one socket.
 //
 // CAN_RAW, non-blocking. Received frames carry the kernel's receive timestamp
 // (SO_TIMESTAMPNS, CLOCK_REALTIME). Receive-queue overflow is counted from
@@ -76,7 +76,7 @@ bool on_user_space_bus(const std::string& iface);
 /// with that interface), else "the kernel's SocketCAN".
 const char* bus_of(const std::string& iface);
 
-class SocketCanBus final : public Bus {
+class SocketCanBus final : public Endpoint {
  public:
   /// Opens `iface`. Throws SetupError with what to do when it cannot.
   static std::unique_ptr<SocketCanBus> open(const std::string& iface, const SocketCanOptions& options = {});

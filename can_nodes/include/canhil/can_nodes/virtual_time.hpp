@@ -22,6 +22,7 @@
 #include <memory>
 #include <vector>
 
+#include "canhil/base/periodic.hpp"
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/doorbell.hpp"
 #include "canhil/can_nodes/node.hpp"
@@ -140,8 +141,7 @@ class VirtualTime {
 
  private:
   SimulatedClock& clock_;
-  Nanos period_{0};
-  Nanos next_step_ = kNever;
+  Periodic steps_at_;  ///< the step's instants (none due before set_step)
   std::uint64_t steps_ = 0;
   std::function<void(Nanos)> step_;
   Participants participants_;

@@ -64,7 +64,7 @@ class ExternalDriver {
   /// ProcessStuck: see above.
   void run_until(Nanos end);
   Nanos now() const noexcept { return clock_.now(); }
-  std::uint64_t physics_steps() const noexcept { return lockstep_.steps(); }
+  std::uint64_t physics_steps() const noexcept { return time_.steps(); }
   /// Frames the processes sent, as seen on the buses.
   std::uint64_t frames_from_processes() const noexcept { return from_processes_; }
   /// Every bus as a candump log in virtual time: by time, then robot, then arrival.
@@ -117,7 +117,7 @@ class ExternalDriver {
   std::vector<bool> woken_;   // robots whose agents PMan activated at this instant
   std::vector<bool> cycled_;  // robots whose agents have ended a first activation
   std::unique_ptr<Processes> processes_;
-  can_nodes::VirtualTime lockstep_;
+  can_nodes::VirtualTime time_;
 };
 
 }  // namespace canhil::emulator

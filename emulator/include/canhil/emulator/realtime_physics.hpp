@@ -16,7 +16,9 @@
 #include <mutex>
 #include <thread>
 
+#include "canhil/base/periodic.hpp"
 #include "canhil/base/pi_mutex.hpp"
+#include "canhil/can_nodes/clock.hpp"
 #include "canhil/emulator/session.hpp"
 
 namespace canhil::emulator {
@@ -28,15 +30,17 @@ struct RealtimeStats {
   Nanos worst_lateness{0};
 };
 
-/// Books a step due at `due` and taken at `now` in `stats` (its lateness; a
-/// late step; past `max_behind`, the missed steps skipped, `due` moved past
-/// them rather than running them as a burst).
-void book_step(RealtimeStats& stats, Nanos now, Nanos& due, Nanos step, Nanos max_behind) noexcept;
+/// Books the step `steps` has due, taken at `now`, in `stats` (its lateness;
+/// a late step; past `max_behind`, the missed steps skipped, `steps` moved
+/// past them rather than running them as a burst).
+void book_step(RealtimeStats& stats, Nanos now, Periodic& steps, Nanos max_behind) noexcept;
 
 class RealtimePhysics {
  public:
-  /// `session` (its nodes built with shared I/O) must outlive this; nothing runs before start().
-  explicit RealtimePhysics(Session& session, Nanos max_behind = std::chrono::milliseconds(100));
+  /// `session` (its nodes built with shared I/O) and `clock` (the run's, which
+  /// the nodes' loop reads too) must outlive this; nothing runs before start().
+  RealtimePhysics(Session& session, const can_nodes::WallClock& clock,
+                  Nanos max_behind = std::chrono::milliseconds(100));
   ~RealtimePhysics();
   RealtimePhysics(const RealtimePhysics&) = delete;
   RealtimePhysics& operator=(const RealtimePhysics&) = delete;
@@ -51,6 +55,7 @@ class RealtimePhysics {
   void loop(Nanos start);
 
   Session& session_;
+  const can_nodes::WallClock& clock_;
   Nanos max_behind_;
   std::atomic<bool> stop_{false};
   std::thread thread_;

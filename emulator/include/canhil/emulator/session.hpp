@@ -152,7 +152,7 @@ class Session {
 
   // --- for drivers --------------------------------------------------------------
   /// A bus endpoint for robot `robot`'s node `node` (a node name, or "SysMon watch").
-  using Endpoints = std::function<std::unique_ptr<can_nodes::Bus>(std::size_t robot, const std::string& node)>;
+  using Endpoints = std::function<std::unique_ptr<can_nodes::Endpoint>(std::size_t robot, const std::string& node)>;
   enum class IoMode : std::uint8_t {
     kDirect,  ///< nodes on the thread that steps the world (virtual time)
     kShared,  ///< nodes on another thread: SharedRobotIo hands commands and sensors across

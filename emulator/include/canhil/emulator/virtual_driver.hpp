@@ -29,7 +29,7 @@ struct VirtualOptions {
   /// The reference handler and agent per robot, in process (with their RTDB
   /// cleared at start and the handler's odometry set to the robot's pose, and
   /// set again wherever the referee carries the robot).
-  bool reference_laptop = true;
+  bool reference_handler_and_agent = true;
   bool count_frames = true;  ///< a listener on every bus counts its frames (RobotOutcome::frames)
   bool record_trace = true;  ///< and keeps them for trace(); false: trace() is empty
   /// Every bus checked as `canhil timing` would (FTT windows, periods), in
@@ -67,10 +67,10 @@ class VirtualDriver {
   can_nodes::MemoryBus& bus(std::size_t robot) { return *buses_.at(robot); }
   /// Another participant (ticked after the nodes and the reference laptop),
   /// such as a node playing a real board; must outlive the driver.
-  void add(can_nodes::Participant& p) { lockstep_.add(p); }
-  void add(can_nodes::Node& node) { lockstep_.add(node); }
+  void add(can_nodes::Participant& p) { time_.add(p); }
+  void add(can_nodes::Node& node) { time_.add(node); }
   const can_nodes::SimulatedClock& clock() const noexcept { return clock_; }
-  std::uint64_t physics_steps() const noexcept { return lockstep_.steps(); }
+  std::uint64_t physics_steps() const noexcept { return time_.steps(); }
 
   std::vector<RobotOutcome> outcomes() const;
   /// Robot r's in-process reference handler, or nullptr without the reference laptop.
@@ -95,7 +95,7 @@ class VirtualDriver {
   bool listening_ = false;  // the buses' taps count, check or record their frames
   BusWatch watch_;
   std::vector<std::unique_ptr<ReferenceStack>> stacks_;
-  can_nodes::VirtualTime lockstep_;
+  can_nodes::VirtualTime time_;
   bool rtdb_clock_set_ = false;  // the RTDB stamps and ages items in this run's virtual time
 };
 
