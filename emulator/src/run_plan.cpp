@@ -32,9 +32,9 @@ std::vector<LaptopSide> resolve_laptops(Scenario& s, bool realtime) {
 }
 
 // The longest `field` the run's external sides give.
+// The longest `field` of the teams' external sides (`s` complete: one team at least).
 double longest(const Scenario& s, double ExternalSide::*field) {
-  double most = s.external.*field;
-  if (!s.teams.empty()) most = 0;
+  double most = 0;
   for (std::size_t t = 0; t < s.teams.size(); ++t) most = std::max(most, s.external_of(t).*field);
   return most;
 }

@@ -23,12 +23,7 @@ namespace canhil {
 /// LD_PRELOAD takes it, ':' between) after it, `library` not twice.
 inline std::string preload_list(const std::string& library, const std::string& existing) {
   if (existing.empty()) return library;
-  if (existing == library || existing.rfind(library + ":", 0) == 0 ||
-      existing.find(":" + library + ":") != std::string::npos ||
-      (existing.size() > library.size() &&
-       existing.compare(existing.size() - library.size() - 1, std::string::npos, ":" + library) == 0)) {
-    return existing;
-  }
+  if ((":" + existing + ":").find(":" + library + ":") != std::string::npos) return existing;  // one of its entries
   return library + ":" + existing;
 }
 
