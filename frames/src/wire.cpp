@@ -1,76 +1,250 @@
 #include "canhil/frames/wire.hpp"
 
-#include <array>
+#include <algorithm>
 
 namespace canhil::frames {
 namespace {
 
-constexpr std::uint32_t kTailBits = 1 + 1 + 1 + 7 + 3;  // CRC delimiter, ACK slot, ACK delimiter, EOF, IFS
+// CRC delimiter, ACK slot, ACK delimiter, end of frame, intermission: never stuffed.
+constexpr std::uint32_t kTailBits = 1 + 1 + 1 + 7 + 3;
 
-// Bits of the stuffed region (SOF to the end of the CRC), one per byte.
-struct BitBuffer {
-  std::array<std::uint8_t, 160> bits{};
-  std::uint32_t n = 0;
-  void put(std::uint32_t value, int count) {
-    for (int i = count - 1; i >= 0; --i) bits[n++] = static_cast<std::uint8_t>((value >> i) & 1u);
+// A CRC register, fed one bit at a time (first bit first).
+class Crc {
+ public:
+  Crc(std::uint32_t polynomial, int width, std::uint32_t initial)
+      : poly_(polynomial),
+        top_(std::uint32_t{1} << (width - 1)),
+        mask_((std::uint32_t{1} << width) - 1),
+        reg_(initial) {}
+  void feed(bool bit) noexcept {
+    const bool flip = ((reg_ & top_) != 0) != bit;
+    reg_ = (reg_ << 1) & mask_;
+    if (flip) reg_ ^= poly_;
   }
+  std::uint32_t value() const noexcept { return reg_; }
+
+ private:
+  std::uint32_t poly_, top_, mask_, reg_;
+};
+
+// The frame's bits in order, handed to `sink(const WireBit&)`; the sink
+// returns false to stop early. One encoder for counting, for locating a bit
+// and for the tests' bounds.
+template <class Sink>
+class Encoder {
+ public:
+  Encoder(const WireFrame& f, Sink& sink) : f_(f), sink_(sink) {}
+
+  void run() {
+    // The arbitration and control fields.
+    put(false, kProtocolLocationSof);
+    const std::uint32_t base = f_.extended ? (f_.id >> 18) & 0x7FFu : f_.id & kStandardIdMask;
+    put_field(base >> 3, 8, kProtocolLocationId28To21);
+    put_field(base & 0x7u, 3, kProtocolLocationId20To18);
+    const bool rtr = f_.remote && !f_.fd;
+    if (f_.extended) {
+      put(true, kProtocolLocationSrtr);  // SRR
+      put(true, kProtocolLocationIde);
+      put_field((f_.id >> 13) & 0x1Fu, 5, kProtocolLocationId17To13);
+      put_field((f_.id >> 5) & 0xFFu, 8, kProtocolLocationId12To05);
+      put_field(f_.id & 0x1Fu, 5, kProtocolLocationId04To00);
+      put(rtr, kProtocolLocationRtr);  // RTR, or FD's RRS (dominant)
+      if (f_.fd) {
+        put(true, kProtocolLocationRes1);  // FDF
+        put(false, kProtocolLocationRes0);
+      } else {
+        put(false, kProtocolLocationRes1);
+        put(false, kProtocolLocationRes0);
+      }
+    } else {
+      put(rtr, kProtocolLocationRtr);  // RTR, or FD's RRS
+      put(false, kProtocolLocationIde);
+      if (f_.fd) {
+        put(true, kProtocolLocationRes1);  // FDF
+        put(false, kProtocolLocationRes0);
+      } else {
+        put(false, kProtocolLocationRes0);  // r0
+      }
+    }
+    if (f_.fd) {
+      put(f_.brs, kProtocolLocationUnspecified);
+      fast_ = f_.brs;  // from here to the CRC delimiter, at the data bit rate
+      put(f_.esi, kProtocolLocationUnspecified);
+    }
+    const std::uint8_t len = f_.fd ? fd_length(fd_dlc(f_.len)) : std::min<std::uint8_t>(f_.len, 8);
+    const std::uint32_t dlc = f_.fd ? fd_dlc(f_.len) : (f_.len8_dlc > 8 ? f_.len8_dlc : len);
+    put_field(dlc, 4, kProtocolLocationDlc);
+    if (!rtr) {
+      for (std::uint8_t i = 0; i < len; ++i) put_field(f_.data[i], 8, kProtocolLocationData);
+    }
+    if (!f_.fd) {
+      put_field(crc15_.value(), 15, kProtocolLocationCrc);
+      flush_stuff();
+    } else {
+      fd_crc_field(len);
+    }
+    fast_ = false;
+    emit(true, kProtocolLocationCrcDelimiter, false);
+    emit(true, kProtocolLocationAck, false);  // sent recessive; a receiver's acknowledgement makes it dominant
+    emit(true, kProtocolLocationAckDelimiter, false);
+    for (int i = 0; i < 7; ++i) emit(true, kProtocolLocationEof, false);
+    for (int i = 0; i < 3; ++i) emit(true, kProtocolLocationIntermission, false);
+  }
+
+ private:
+  // A bit of the dynamically stuffed part.
+  void put(bool recessive, std::uint8_t location) {
+    flush_stuff();
+    if (!f_.fd && !in_crc_) crc15_.feed(recessive);
+    emit(recessive, location, false);
+    count_run(recessive);
+  }
+  void put_field(std::uint32_t value, int count, std::uint8_t location) {
+    if (location == kProtocolLocationCrc) in_crc_ = true;
+    for (int i = count - 1; i >= 0; --i) put(((value >> i) & 1u) != 0, location);
+  }
+  void count_run(bool level) {
+    if (level == last_ && run_ > 0) {
+      ++run_;
+    } else {
+      last_ = level;
+      run_ = 1;
+    }
+    if (run_ == 5) stuff_due_ = true;
+  }
+  // After five equal bits, one of the other value; it starts the next run.
+  void flush_stuff() {
+    if (!stuff_due_) return;
+    stuff_due_ = false;
+    ++dynamic_stuff_;
+    const bool level = !last_;
+    emit(level, location_, true);
+    last_ = level;
+    run_ = 1;
+  }
+  // FD: a fixed stuff bit, the stuff count and the CRC, a fixed stuff bit before every fourth bit.
+  void fd_crc_field(std::uint8_t len) {
+    stuff_due_ = false;  // the first fixed stuff bit stands in for a dynamic one due here
+    in_fd_tail_ = true;  // the CRC covers the stuff count, not the fixed stuff bits
+    Crc& fd_crc = len <= 16 ? fd_crc17_ : fd_crc21_;
+    static constexpr std::uint8_t kGray[8] = {0, 1, 3, 2, 6, 7, 5, 4};
+    const std::uint32_t gray = kGray[dynamic_stuff_ % 8];
+    const std::uint32_t parity = (gray ^ (gray >> 1) ^ (gray >> 2)) & 1u;
+    const std::uint32_t count = (gray << 1) | parity;
+    for (int i = 3; i >= 0; --i) fd_crc.feed(((count >> i) & 1u) != 0);
+    const int width = len <= 16 ? 17 : 21;
+    const std::uint32_t crc = fd_crc.value();
+    const int total = 4 + width;
+    for (int i = 0; i < total; ++i) {
+      if (i % 4 == 0) emit(!last_emitted_, kProtocolLocationCrc, true);
+      const bool bit = i < 4 ? ((count >> (3 - i)) & 1u) != 0 : ((crc >> (width - 1 - (i - 4))) & 1u) != 0;
+      emit(bit, kProtocolLocationCrc, false);
+    }
+  }
+  void emit(bool recessive, std::uint8_t location, bool stuff) {
+    if (stopped_) return;
+    location_ = location;
+    last_emitted_ = recessive;
+    if (f_.fd && !in_fd_tail_) {
+      fd_crc17_.feed(recessive);
+      fd_crc21_.feed(recessive);
+    }
+    if (!sink_(WireBit{recessive, location, fast_, stuff})) stopped_ = true;
+  }
+
+  const WireFrame& f_;
+  Sink& sink_;
+  Crc crc15_{0x4599, 15, 0};
+  // FD's CRCs over the stuffed stream from SOF to the data's end and the
+  // stuff count; the frame's length picks one.
+  Crc fd_crc17_{0x1685B, 17, 1u << 16};   // x^17 + x^16 + x^14 + x^13 + x^11 + x^6 + x^4 + x^3 + x + 1
+  Crc fd_crc21_{0x102899, 21, 1u << 20};  // x^21 + x^20 + x^13 + x^11 + x^7 + x^4 + x^3 + 1
+  bool in_crc_ = false;
+  bool in_fd_tail_ = false;
+  bool fast_ = false;
+  bool last_ = false;
+  bool last_emitted_ = true;
+  int run_ = 0;
+  bool stuff_due_ = false;
+  std::uint32_t dynamic_stuff_ = 0;
+  std::uint8_t location_ = kProtocolLocationSof;
+  bool stopped_ = false;
 };
 
 }  // namespace
 
+WireFrame wire_frame(const CanFrame& frame) noexcept {
+  WireFrame w;
+  w.id = frame.id;
+  w.extended = frame.extended;
+  w.remote = frame.kind == FrameKind::kRemote;
+  w.len = std::min<std::uint8_t>(frame.len, kMaxDataBytes);
+  w.len8_dlc = frame.len8_dlc;
+  std::copy(frame.data.begin(), frame.data.end(), w.data.begin());
+  return w;
+}
+
+std::uint8_t fd_dlc(std::uint8_t len) noexcept {
+  if (len <= 8) return len;
+  if (len <= 24) return static_cast<std::uint8_t>(9 + (len - 9) / 4);  // 12, 16, 20, 24
+  if (len <= 32) return 13;
+  if (len <= 48) return 14;
+  return 15;
+}
+
+std::uint8_t fd_length(std::uint8_t dlc) noexcept {
+  static constexpr std::uint8_t kLengths[16] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64};
+  return kLengths[dlc & 0xFu];
+}
+
 std::uint16_t can_crc15(const std::uint8_t* bits, std::uint32_t count) noexcept {
-  std::uint16_t crc = 0;
-  for (std::uint32_t i = 0; i < count; ++i) {
-    const bool next = ((crc >> 14) & 1u) != bits[i];
-    crc = static_cast<std::uint16_t>((crc << 1) & 0x7FFF);
-    if (next) crc ^= 0x4599;
-  }
-  return crc;
+  Crc crc(0x4599, 15, 0);
+  for (std::uint32_t i = 0; i < count; ++i) crc.feed(bits[i] != 0);
+  return static_cast<std::uint16_t>(crc.value());
+}
+
+std::uint32_t can_fd_crc(const std::uint8_t* bits, std::uint32_t count, int width, bool iso) noexcept {
+  Crc crc(width == 17 ? 0x1685Bu : 0x102899u, width, iso ? std::uint32_t{1} << (width - 1) : 0);
+  for (std::uint32_t i = 0; i < count; ++i) crc.feed(bits[i] != 0);
+  return crc.value();
+}
+
+FrameBits count_bits(const WireFrame& frame) noexcept {
+  FrameBits bits;
+  auto sink = [&bits](const WireBit& b) {
+    ++(b.fast ? bits.fast : bits.nominal);
+    return true;
+  };
+  Encoder<decltype(sink)>(frame, sink).run();
+  return bits;
+}
+
+FrameBits prefix_bits(const WireFrame& frame, std::uint32_t count) noexcept {
+  FrameBits bits;
+  auto sink = [&bits, count](const WireBit& b) {
+    if (bits.total() == count) return false;
+    ++(b.fast ? bits.fast : bits.nominal);
+    return true;
+  };
+  Encoder<decltype(sink)>(frame, sink).run();
+  return bits;
+}
+
+WireBit bit_at(const WireFrame& frame, std::uint32_t index) noexcept {
+  WireBit found{true, kProtocolLocationIntermission, false, false};
+  std::uint32_t i = 0;
+  auto sink = [&](const WireBit& b) {
+    if (i++ != index) return true;
+    found = b;
+    return false;
+  };
+  Encoder<decltype(sink)>(frame, sink).run();
+  return found;
 }
 
 std::uint32_t frame_bits(const CanFrame& f) noexcept {
   if (f.kind == FrameKind::kError) return kErrorFrameBits;
-  BitBuffer b;
-  const bool remote = f.kind == FrameKind::kRemote;
-  const std::uint32_t dlc = f.len8_dlc > 8 ? f.len8_dlc : f.len;
-  b.put(0, 1);  // SOF
-  if (!f.extended) {
-    b.put(f.id & kStandardIdMask, 11);
-    b.put(remote ? 1 : 0, 1);  // RTR
-    b.put(0, 1);               // IDE
-    b.put(0, 1);               // r0
-  } else {
-    b.put((f.id >> 18) & 0x7FF, 11);
-    b.put(1, 1);  // SRR
-    b.put(1, 1);  // IDE
-    b.put(f.id & 0x3FFFF, 18);
-    b.put(remote ? 1 : 0, 1);
-    b.put(0, 2);  // r1, r0
-  }
-  b.put(dlc, 4);
-  if (!remote) {
-    for (std::uint8_t i = 0; i < f.len && i < kMaxDataBytes; ++i) b.put(f.data[i], 8);
-  }
-  b.put(can_crc15(b.bits.data(), b.n), 15);
-  // Stuffing: after five equal bits, one of the opposite value (which counts
-  // towards the next run).
-  std::uint32_t stuffed = 0;
-  std::uint8_t last = 2;
-  int run = 0;
-  for (std::uint32_t i = 0; i < b.n; ++i) {
-    if (b.bits[i] == last) {
-      ++run;
-    } else {
-      last = b.bits[i];
-      run = 1;
-    }
-    if (run == 5) {
-      ++stuffed;
-      last = static_cast<std::uint8_t>(1 - last);
-      run = 1;
-    }
-  }
-  return b.n + stuffed + kTailBits;
+  return count_bits(wire_frame(f)).total();
 }
 
 std::uint32_t best_case_frame_bits(std::uint8_t data_bytes, bool extended) noexcept {

@@ -63,8 +63,41 @@ inline constexpr std::uint32_t kErrorClassNoAck = 0x020u;        ///< CAN_ERR_AC
 inline constexpr std::uint32_t kErrorClassBusOff = 0x040u;       ///< CAN_ERR_BUSOFF
 inline constexpr std::uint32_t kErrorClassBusError = 0x080u;     ///< CAN_ERR_BUSERROR
 inline constexpr std::uint32_t kErrorClassRestarted = 0x100u;    ///< CAN_ERR_RESTARTED
-inline constexpr std::uint8_t kProtocolErrorBit = 0x01;          ///< CAN_ERR_PROT_BIT, in data[2]
-inline constexpr std::uint8_t kProtocolLocationCrc = 0x08;       ///< CAN_ERR_PROT_LOC_CRC_SEQ, in data[3]
+inline constexpr std::uint32_t kErrorClassCounters = 0x200u;     ///< CAN_ERR_CNT: data[6] TEC, data[7] REC
+/// CAN_ERR_CRTL's details, in data[1].
+inline constexpr std::uint8_t kControllerRxWarning = 0x04;  ///< CAN_ERR_CRTL_RX_WARNING
+inline constexpr std::uint8_t kControllerTxWarning = 0x08;  ///< CAN_ERR_CRTL_TX_WARNING
+inline constexpr std::uint8_t kControllerRxPassive = 0x10;  ///< CAN_ERR_CRTL_RX_PASSIVE
+inline constexpr std::uint8_t kControllerTxPassive = 0x20;  ///< CAN_ERR_CRTL_TX_PASSIVE
+inline constexpr std::uint8_t kControllerActive = 0x40;     ///< CAN_ERR_CRTL_ACTIVE
+/// CAN_ERR_PROT's kind, in data[2].
+inline constexpr std::uint8_t kProtocolErrorBit = 0x01;    ///< CAN_ERR_PROT_BIT
+inline constexpr std::uint8_t kProtocolErrorForm = 0x02;   ///< CAN_ERR_PROT_FORM
+inline constexpr std::uint8_t kProtocolErrorStuff = 0x04;  ///< CAN_ERR_PROT_STUFF
+inline constexpr std::uint8_t kProtocolErrorBit0 = 0x08;   ///< CAN_ERR_PROT_BIT0: could not send a dominant bit
+inline constexpr std::uint8_t kProtocolErrorBit1 = 0x10;   ///< CAN_ERR_PROT_BIT1: could not send a recessive bit
+inline constexpr std::uint8_t kProtocolErrorTx = 0x80;     ///< CAN_ERR_PROT_TX: seen while transmitting
+/// CAN_ERR_PROT's place, in data[3] (CAN_ERR_PROT_LOC_*).
+inline constexpr std::uint8_t kProtocolLocationUnspecified = 0x00;
+inline constexpr std::uint8_t kProtocolLocationSof = 0x03;
+inline constexpr std::uint8_t kProtocolLocationId28To21 = 0x02;
+inline constexpr std::uint8_t kProtocolLocationId20To18 = 0x06;
+inline constexpr std::uint8_t kProtocolLocationSrtr = 0x04;
+inline constexpr std::uint8_t kProtocolLocationIde = 0x05;
+inline constexpr std::uint8_t kProtocolLocationId17To13 = 0x07;
+inline constexpr std::uint8_t kProtocolLocationId12To05 = 0x0F;
+inline constexpr std::uint8_t kProtocolLocationId04To00 = 0x0E;
+inline constexpr std::uint8_t kProtocolLocationRtr = 0x0C;
+inline constexpr std::uint8_t kProtocolLocationRes1 = 0x0D;
+inline constexpr std::uint8_t kProtocolLocationRes0 = 0x09;
+inline constexpr std::uint8_t kProtocolLocationDlc = 0x0B;
+inline constexpr std::uint8_t kProtocolLocationData = 0x0A;
+inline constexpr std::uint8_t kProtocolLocationCrc = 0x08;  ///< CAN_ERR_PROT_LOC_CRC_SEQ
+inline constexpr std::uint8_t kProtocolLocationCrcDelimiter = 0x18;
+inline constexpr std::uint8_t kProtocolLocationAck = 0x19;
+inline constexpr std::uint8_t kProtocolLocationAckDelimiter = 0x1B;
+inline constexpr std::uint8_t kProtocolLocationEof = 0x1A;
+inline constexpr std::uint8_t kProtocolLocationIntermission = 0x12;
 
 /// The error frame a bit error in a frame's CRC sequence gives, as SocketCAN
 /// reports it: protocol violation and bus error, all 8 data bytes.

@@ -1,0 +1,227 @@
+// canhil/wire/wire_bus.hpp — a CAN bus's physics: wire time, arbitration,
+// controllers with transmit queues, error confinement and bus-off, and faults.
+//
+// Pure and clock-injected: the caller says what time it is (submit, advance),
+// the bus says what happened by then, in order (WireEvent), and when it next
+// has something to say (next_event). It never reads a clock and holds no
+// socket, so the in-memory bus of a virtual-time run and the user-space bus's
+// broker in real time use the same model and give the same order.
+//
+// The model (docs/wire.md says it for users):
+// - A controller is one CAN controller on the bus (an emulated node; a
+//   program's adapter). It sends its own frames in the order given (one
+//   transmit buffer fed from a FIFO queue, as SocketCAN's qdisc feeds a
+//   can-dev driver); a full queue refuses the frame (the socket's ENOBUFS).
+// - A frame takes its exact bits (frames::count_bits: stuffing on its real bit
+//   stream, CRC included; FD's data phase at the data bit rate), or the worst
+//   case of its shape. Its receivers have it at the end of its end-of-frame
+//   field; the bus is free 3 bits later (intermission), when every controller's
+//   next frame takes part in arbitration: the lowest identifier wins, bit by bit
+//   (frames::arbitration_key: a base frame before an extended one with the
+//   same 11 bits, a data frame before a remote one); equal keys go in the
+//   order they were given. A frame given at the very instant arbitration
+//   starts takes part in it. An error-passive controller that has just sent
+//   waits 8 bits more (suspend transmission).
+// - Errors (from the fault rules, or a frame nobody acknowledges) end the
+//   frame at the bit where they are seen: an error flag (6 bits, 12 with the
+//   other nodes' flags superposed), the 8-bit delimiter and the intermission
+//   follow; the transmitter sends the frame again at the next arbitration.
+//   Counters as confinement.hpp; each controller that sees the error reports
+//   it as a can-dev driver does (error_frames.hpp).
+// - Bus-off: the controller's frame on the wire is dropped, its queue kept; it
+//   sends and receives nothing. After its restart delay (or restart()), it
+//   needs 128 occurrences of 11 consecutive recessive bits on the bus (the
+//   tail of every frame is one: ACK delimiter, end of frame, intermission),
+//   then it is error-active with both counters 0 and reports CAN_ERR_RESTARTED.
+// Not modelled: the analogue layer, bit timing segments and resynchronisation,
+// propagation delay, overload frames.
+//
+// Deterministic: the same calls give the same events (the faults' draws come
+// from `seed`). Not thread-safe.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "canhil/base/time.hpp"
+#include "canhil/frames/frame.hpp"
+#include "canhil/frames/wire.hpp"
+#include "canhil/wire/confinement.hpp"
+#include "canhil/wire/wire_fault.hpp"
+
+namespace canhil::wire {
+
+using ControllerId = std::uint32_t;
+
+struct WireConfig {
+  std::uint32_t bit_rate = 1'000'000;  ///< nominal (arbitration) bit rate, bit/s; > 0
+  std::uint32_t data_bit_rate = 0;     ///< CAN FD's data phase (BRS); 0: the nominal rate
+  enum class Bits : std::uint8_t { kExact, kWorstCase };
+  Bits bits = Bits::kExact;  ///< a frame's exact bits, or the most its shape can take
+  std::uint64_t seed = 1;    ///< the fault rules' random draws
+};
+
+struct ControllerOptions {
+  std::size_t queue_frames = 64;  ///< frames that may wait to be sent; one more is refused
+  /// After bus-off, when the recovery (128 x 11 recessive bits) begins:
+  /// nullopt only on restart() (the kernel's restart-ms 0); a delay, that
+  /// long after (restart-ms); Nanos{0} at once (a microcontroller's automatic recovery).
+  std::optional<Nanos> restart_delay = Nanos{0};
+};
+
+/// What happened on the bus.
+struct WireEvent {
+  enum class Kind : std::uint8_t {
+    kFrame,  ///< a frame's last bit has passed: its receivers have it
+    kError,  ///< a controller reports an error or a change of state (Linux's error frame)
+  };
+  Kind kind = Kind::kFrame;
+  ControllerId controller = 0;  ///< kFrame: the sender; kError: the reporting controller
+  std::uint64_t tag = 0;        ///< kFrame: the sender's tag (submit); kBabbleTag for a babbling node's frame
+  Nanos start{0};               ///< kFrame: its first bit
+  Nanos at{0};                  ///< kFrame: its end of frame; kError: when it was seen
+  frames::WireFrame frame;      ///< kFrame
+  frames::CanFrame error;       ///< kError: kind kError, id the CAN_ERR_* classes, data[1..7]
+  /// kFrame: controllers that did not receive it (bus-off or cut off), besides the sender.
+  std::vector<ControllerId> missed;
+};
+inline constexpr std::uint64_t kBabbleTag = ~std::uint64_t{0};
+
+struct ControllerStatus {
+  std::string name;
+  ControllerState state = ControllerState::kErrorActive;
+  std::uint16_t tec = 0;
+  std::uint16_t rec = 0;
+  std::uint64_t sent = 0;      ///< frames sent whole
+  std::uint64_t received = 0;  ///< frames received whole
+  std::uint64_t errors = 0;    ///< errors it saw (each one error report)
+  std::uint64_t bus_offs = 0;
+  std::uint64_t restarts = 0;
+  std::uint64_t refused = 0;  ///< frames refused on a full queue
+  std::size_t queued = 0;     ///< frames waiting, the one on the wire included
+  bool connected = true;      ///< false while a cut-cable fault holds
+  bool recovering = false;    ///< bus-off and counting recessive bits
+};
+
+struct WireStats {
+  std::uint64_t frames = 0;        ///< frames carried whole
+  std::uint64_t error_frames = 0;  ///< errors on the bus (one per failed frame)
+  Nanos busy{0};                   ///< time the bus carried bits (frames, errors, intermissions)
+  Nanos until{0};                  ///< the time the bus has been advanced to
+  double load() const noexcept {
+    return until.count() > 0 ? static_cast<double>(busy.count()) / static_cast<double>(until.count()) : 0.0;
+  }
+};
+
+class WireBus {
+ public:
+  explicit WireBus(const WireConfig& config);
+  WireBus(const WireBus&) = delete;
+  WireBus& operator=(const WireBus&) = delete;
+
+  const WireConfig& config() const noexcept { return config_; }
+  ControllerId add_controller(std::string name, const ControllerOptions& options = {});
+  std::size_t controllers() const noexcept { return controllers_.size(); }
+
+  enum class Submit : std::uint8_t { kQueued, kQueueFull, kBusOff };
+  /// Queues `frame` on `controller` at `now` (not before the last advance);
+  /// `tag` comes back in its kFrame event. A bus-off controller still queues
+  /// (its frames wait for the recovery), as a stopped SocketCAN queue does;
+  /// kBusOff says so.
+  Submit submit(ControllerId controller, const frames::WireFrame& frame, Nanos now, std::uint64_t tag = 0);
+
+  /// Runs the bus up to `now`; appends what happened by then, in order of
+  /// time (ties: the order it happened in), to `out`.
+  void advance(Nanos now, std::vector<WireEvent>& out);
+  /// The earliest time advance() has something to do; kNever when idle.
+  Nanos next_event() const;
+
+  /// Restarts a bus-off controller's recovery now (`ip link set can0 type
+  /// can restart`); false when it is not bus-off.
+  bool restart(ControllerId controller, Nanos now);
+  void set_restart_delay(ControllerId controller, std::optional<Nanos> delay);
+  /// A fault rule from `rule.from` to `rule.until` (wire_fault.hpp).
+  void add_fault(const FaultRule& rule);
+  /// Ends every fault rule (live: `canhil bus fault clear`).
+  void clear_faults(Nanos now);
+
+  ControllerStatus status(ControllerId controller) const;
+  const WireStats& stats() const noexcept { return stats_; }
+  /// Frames waiting on all controllers, the one on the wire included.
+  std::size_t queued() const noexcept;
+
+ private:
+  struct Queued {
+    frames::WireFrame frame;
+    std::uint64_t key = 0;  // frames::arbitration_key
+    std::uint64_t seq = 0;  // order given
+    std::uint64_t tag = 0;
+    Nanos given{0};
+  };
+  struct Controller {
+    std::string name;
+    ControllerOptions options;
+    Confinement confinement;
+    std::deque<Queued> queue;
+    ControllerStatus counts;
+    Nanos not_before{0};            // suspend transmission after an error-passive send
+    Nanos restart_at = kNever;      // bus-off: when the recovery begins
+    bool recovering = false;        // bus-off: counting 11-bit recessive runs
+    std::uint32_t occurrences = 0;  // of 11 recessive bits, so far
+    Nanos run_from{0};              // where this controller's current count of recessive bits began
+    Nanos cut_busy_until{0};        // cut off: its own stub is busy with an attempt until then
+    ControllerState reported = ControllerState::kErrorActive;  // last state told
+  };
+  // A frame (or babble frame) on the wire.
+  struct OnWire {
+    ControllerId from = 0;
+    Queued q;
+    bool babble = false;
+    ErrorPlan plan;  // how it ends
+    Nanos start{0};
+    Nanos end{0};      // its end of frame, or when its error is seen
+    Nanos free_at{0};  // the bus is free for the next arbitration
+  };
+
+  Nanos bits(std::uint32_t n) const noexcept { return frames::bits_to_time(n, config_.bit_rate); }
+  Nanos frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept;
+  // The one thing due at `at` (the earliest), done.
+  void step(Nanos at, std::vector<WireEvent>& out);
+  // When controller `c` could start its next frame (kNever: it cannot).
+  Nanos ready_at(ControllerId c) const noexcept;
+  Nanos bus_due() const noexcept;
+  bool arbitrate(Nanos at);
+  void finish(std::vector<WireEvent>& out);
+  void fail(OnWire& w, std::vector<WireEvent>& out);
+  // Tells controller `c`'s error (`classes` 0: only a change of state, if any).
+  void report(ControllerId c, Nanos at, std::uint32_t classes, std::uint8_t kind, std::uint8_t location,
+              std::vector<WireEvent>& out);
+  void enter_bus_off(ControllerId c, Nanos at);
+  void recessive_run_ends(Nanos at);  // a dominant bit at `at`: every recovering controller counts its run
+  Nanos recovery_due(const Controller& k) const noexcept;
+  void recover(ControllerId c, Nanos at, std::vector<WireEvent>& out);
+  bool acknowledged(ControllerId from) const noexcept;
+  // The fault rules' own moments (wire_bus_faults.cpp).
+  void fault_change(Nanos at, std::vector<WireEvent>& out);
+  void stuck_tick(Nanos at, std::vector<WireEvent>& out);
+  Nanos cut_due(ControllerId c) const noexcept;
+  void cut_attempt(ControllerId c, Nanos at, std::vector<WireEvent>& out);
+
+  WireConfig config_;
+  std::vector<Controller> controllers_;
+  Faults faults_;
+  std::uint64_t seq_ = 0;
+  std::optional<OnWire> wire_;
+  Nanos stuck_tick_at_ = kNever;  // a stuck-dominant bus's next 8-bit sequence
+  Nanos idle_from_{0};            // the bus is free from then (arbitration then or at the next frame given)
+  Nanos recessive_from_{0};       // the bus has been recessive since then (no SOF, no flag)
+  Nanos now_{0};
+  WireStats stats_;
+};
+
+}  // namespace canhil::wire

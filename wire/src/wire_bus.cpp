@@ -1,0 +1,368 @@
+#include "canhil/wire/wire_bus.hpp"
+
+#include <algorithm>
+
+#include "bit_counts.hpp"
+#include "canhil/base/demand.hpp"
+#include "canhil/wire/error_frames.hpp"
+
+namespace canhil::wire {
+using namespace bit_counts;  // NOLINT(google-build-using-namespace): the model's own constants
+
+WireBus::WireBus(const WireConfig& config) : config_(config), faults_(config.seed) {
+  CANHIL_DEMAND(config.bit_rate > 0, "a timed wire needs a bit rate");
+}
+
+ControllerId WireBus::add_controller(std::string name, const ControllerOptions& options) {
+  Controller c;
+  c.name = std::move(name);
+  c.options = options;
+  c.counts.name = c.name;
+  controllers_.push_back(std::move(c));
+  return static_cast<ControllerId>(controllers_.size() - 1);
+}
+
+Nanos WireBus::frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept {
+  return frames::bits_to_time(frames::prefix_bits(f, bit_count), config_.bit_rate, config_.data_bit_rate);
+}
+
+WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame& frame, Nanos now, std::uint64_t tag) {
+  Controller& k = controllers_.at(controller);
+  if (k.queue.size() >= k.options.queue_frames) {
+    ++k.counts.refused;
+    return Submit::kQueueFull;
+  }
+  Queued q;
+  q.frame = frame;
+  q.key = frames::arbitration_key(frame.id, frame.extended, frame.remote && !frame.fd);
+  q.seq = seq_++;
+  q.tag = tag;
+  q.given = now;
+  k.queue.push_back(q);
+  if (now == now_ && k.queue.size() == 1 && ready_at(controller) == now) {
+    if (wire_ && wire_->start == now && !wire_->babble && q.key < wire_->q.key) {
+      // Arbitration began at this very instant: the frame given now takes part, and wins.
+      wire_.reset();
+    }
+    if (!wire_) arbitrate(now);
+  }
+  return k.confinement.bus_off() ? Submit::kBusOff : Submit::kQueued;
+}
+
+std::size_t WireBus::queued() const noexcept {
+  std::size_t n = 0;
+  for (const Controller& k : controllers_) n += k.queue.size();
+  return n;
+}
+
+bool WireBus::acknowledged(ControllerId from) const noexcept {
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    if (c != from && !controllers_[c].confinement.bus_off() && !faults_.cut(c, now_)) return true;
+  }
+  return false;
+}
+
+Nanos WireBus::ready_at(ControllerId c) const noexcept {
+  const Controller& k = controllers_[c];
+  if (k.confinement.bus_off()) return kNever;
+  const Nanos earliest = std::max({idle_from_, k.not_before, now_});
+  Nanos t = kNever;
+  if (faults_.babbling(c, earliest) != nullptr) {
+    t = earliest;
+  } else if (!k.queue.empty()) {
+    t = std::max(earliest, k.queue.front().given);
+  }
+  if (t == kNever || faults_.cut(c, t) || faults_.stuck(t) != nullptr) return kNever;
+  return t;
+}
+
+bool WireBus::arbitrate(Nanos at) {
+  if (wire_) return false;
+  std::optional<OnWire> best;
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    if (ready_at(c) != at) continue;
+    const Controller& k = controllers_[c];
+    OnWire w;
+    w.from = c;
+    if (const FaultRule* b = faults_.babbling(c, at)) {
+      w.babble = true;
+      w.q.frame = b->babble;
+      w.q.key = frames::arbitration_key(b->babble.id, b->babble.extended, b->babble.remote && !b->babble.fd);
+      w.q.tag = kBabbleTag;
+    } else {
+      w.q = k.queue.front();
+    }
+    if (!best || w.q.key < best->q.key || (w.q.key == best->q.key && w.q.seq < best->q.seq)) best = w;
+  }
+  if (!best) return false;
+  OnWire& w = *best;
+  w.start = at;
+  recessive_run_ends(at);
+  const frames::FrameBits all = frames::count_bits(w.q.frame);
+  std::uint32_t total = all.total();
+  if (config_.bits == WireConfig::Bits::kWorstCase && !w.q.frame.fd) {
+    total = frames::worst_case_frame_bits(w.q.frame.remote ? 0 : w.q.frame.len, w.q.frame.extended);
+  }
+  w.plan = faults_.plan(w.q.frame, w.from, at, total, acknowledged(w.from));
+  if (w.plan.cause == ErrorPlan::Cause::kNone) {
+    if (total == all.total()) {
+      w.end = at + frames::bits_to_time(frames::FrameBits{all.nominal - kIntermission, all.fast}, config_.bit_rate,
+                                        config_.data_bit_rate);
+    } else {
+      w.end = at + bits(total - kIntermission);
+    }
+    w.free_at = w.end + bits(kIntermission);
+  } else {
+    w.end = at + frame_time(w.q.frame, w.plan.bit + 1);  // seen at the bit's end: the flag starts at the next
+  }
+  wire_ = w;
+  return true;
+}
+
+Nanos WireBus::recovery_due(const Controller& k) const noexcept {
+  if (!k.recovering || wire_ || faults_.stuck(now_) != nullptr) return kNever;
+  const Nanos from = std::max(recessive_from_, k.run_from);
+  return from + bits(kRecoveryRunBits) * (kRecoveryOccurrences - k.occurrences);
+}
+
+void WireBus::recessive_run_ends(Nanos at) {
+  const Nanos run = bits(kRecoveryRunBits);
+  for (Controller& k : controllers_) {
+    if (!k.recovering) continue;
+    const Nanos from = std::max(recessive_from_, k.run_from);
+    if (at > from) k.occurrences += static_cast<std::uint32_t>((at - from) / run);
+    k.run_from = at;
+  }
+}
+
+Nanos WireBus::bus_due() const noexcept {
+  if (wire_) return wire_->end;
+  Nanos due = kNever;
+  for (ControllerId c = 0; c < controllers_.size(); ++c) due = std::min(due, ready_at(c));
+  return due;
+}
+
+Nanos WireBus::next_event() const {
+  Nanos next = bus_due();
+  next = std::min(next, faults_.next_change());
+  next = std::min(next, stuck_tick_at_);
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    const Controller& k = controllers_[c];
+    next = std::min({next, k.restart_at, recovery_due(k)});
+    if (!k.queue.empty() && faults_.cut(c, now_)) next = std::min(next, cut_due(c));
+  }
+  return next;
+}
+
+void WireBus::advance(Nanos now, std::vector<WireEvent>& out) {
+  while (true) {
+    const Nanos due = next_event();
+    if (due > now) break;
+    now_ = std::max(now_, due);
+    step(due, out);
+  }
+  now_ = std::max(now_, now);
+  stats_.until = now_;
+}
+
+void WireBus::step(Nanos at, std::vector<WireEvent>& out) {
+  // One thing, the earliest; ties in this order: the wire, fault rules, timers.
+  if (wire_ && wire_->end == at) {
+    finish(out);
+    return;
+  }
+  if (faults_.next_change() == at) {
+    fault_change(at, out);
+    return;
+  }
+  if (stuck_tick_at_ == at) {
+    stuck_tick(at, out);
+    return;
+  }
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    Controller& k = controllers_[c];
+    if (k.restart_at == at) {
+      k.restart_at = kNever;
+      k.recovering = true;
+      k.occurrences = 0;
+      k.run_from = at;
+      return;
+    }
+    if (recovery_due(k) == at) {
+      recover(c, at, out);
+      return;
+    }
+    if (!k.queue.empty() && faults_.cut(c, at) && cut_due(c) == at) {
+      cut_attempt(c, at, out);
+      return;
+    }
+  }
+  CANHIL_DEMAND(bus_due() == at && arbitrate(at), "the wire had something due it did not do");
+}
+
+void WireBus::finish(std::vector<WireEvent>& out) {
+  OnWire w = *wire_;
+  wire_.reset();
+  Controller& tx = controllers_[w.from];
+  if (w.plan.cause != ErrorPlan::Cause::kNone) {
+    fail(w, out);
+    return;
+  }
+  stats_.busy += w.free_at - w.start;
+  ++stats_.frames;
+  WireEvent e;
+  e.kind = WireEvent::Kind::kFrame;
+  e.controller = w.from;
+  e.tag = w.q.tag;
+  e.start = w.start;
+  e.at = w.end;
+  e.frame = w.q.frame;
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    if (c == w.from) continue;
+    Controller& k = controllers_[c];
+    if (k.confinement.bus_off() || faults_.cut(c, w.end)) {
+      e.missed.push_back(c);
+      continue;
+    }
+    k.confinement.received();
+    ++k.counts.received;
+  }
+  tx.confinement.transmitted();
+  ++tx.counts.sent;
+  if (!w.babble) tx.queue.pop_front();
+  if (tx.confinement.state() == ControllerState::kErrorPassive) tx.not_before = w.free_at + bits(kSuspend);
+  out.push_back(std::move(e));
+  // Counters going down may change states: told after the frame, as a driver's interrupt would.
+  for (ControllerId c = 0; c < controllers_.size(); ++c) report(c, w.end, 0, 0, 0, out);
+  idle_from_ = w.free_at;
+  recessive_from_ = w.end - bits(kTailRecessive - kIntermission);
+}
+
+void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
+  Controller& tx = controllers_[w.from];
+  const ErrorPlan& plan = w.plan;
+  const frames::WireBit bit = frames::bit_at(w.q.frame, plan.bit);
+  const bool passive_tx = tx.confinement.state() == ControllerState::kErrorPassive;
+  bool others_flag = false;
+  // The receivers: they see the transmitter's flag (a stuff or form error),
+  // or, for a missing acknowledgement, an error-active transmitter's flag in
+  // the ACK delimiter; an error-passive one's passive flag they do not see.
+  const bool receivers_see = !(plan.cause == ErrorPlan::Cause::kAck && passive_tx);
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    if (c == w.from) continue;
+    Controller& k = controllers_[c];
+    if (k.confinement.bus_off() || faults_.cut(c, w.end) || !receivers_see) continue;
+    const ControllerState before = k.confinement.state();
+    k.confinement.receive_error();
+    ++k.counts.errors;
+    if (before != ControllerState::kErrorPassive) others_flag = true;
+    const std::uint8_t kind =
+        plan.cause == ErrorPlan::Cause::kBit ? frames::kProtocolErrorStuff : frames::kProtocolErrorForm;
+    const std::uint8_t where =
+        plan.cause == ErrorPlan::Cause::kAck ? frames::kProtocolLocationAckDelimiter : bit.location;
+    report(c, w.end, frames::kErrorClassProtocol | frames::kErrorClassBusError, kind, where, out);
+  }
+  std::uint32_t classes = frames::kErrorClassProtocol | frames::kErrorClassBusError;
+  std::uint8_t kind = frames::kProtocolErrorTx;
+  TransmitError error = TransmitError::kOther;
+  switch (plan.cause) {
+    case ErrorPlan::Cause::kBit:
+      kind |= bit.recessive ? frames::kProtocolErrorBit1 : frames::kProtocolErrorBit0;
+      break;
+    case ErrorPlan::Cause::kForm:
+      kind |= frames::kProtocolErrorForm;
+      break;
+    case ErrorPlan::Cause::kAck:
+      classes |= frames::kErrorClassNoAck;
+      error = others_flag ? TransmitError::kOther : TransmitError::kAckNoDominant;
+      break;
+    case ErrorPlan::Cause::kNone:
+      break;
+  }
+  tx.confinement.transmit_error(error);
+  ++tx.counts.errors;
+  ++stats_.error_frames;
+  report(w.from, w.end, classes, kind, bit.location, out);
+  // The others' flags, started when they see the transmitter's, end up to 6 bits after it.
+  const std::uint32_t flags = kErrorFlag + (others_flag ? kErrorFlag : 0);
+  w.free_at = w.end + bits(flags + kErrorDelimiter + kIntermission);
+  if (tx.confinement.bus_off()) {
+    if (!w.babble && !tx.queue.empty()) tx.queue.pop_front();  // the frame in its buffer is dropped
+  } else if (tx.confinement.state() == ControllerState::kErrorPassive) {
+    tx.not_before = w.free_at + bits(kSuspend);
+  }
+  stats_.busy += w.free_at - w.start;
+  idle_from_ = w.free_at;
+  recessive_from_ = w.free_at - bits(kErrorDelimiter + kIntermission);
+}
+
+void WireBus::report(ControllerId c, Nanos at, std::uint32_t classes, std::uint8_t kind, std::uint8_t location,
+                     std::vector<WireEvent>& out) {
+  Controller& k = controllers_[c];
+  const ControllerState state = k.confinement.state();
+  if (classes == 0 && state == k.reported) return;
+  WireEvent e;
+  e.kind = WireEvent::Kind::kError;
+  e.controller = c;
+  e.at = at;
+  e.start = at;
+  e.error = error_frame(classes, kind, location, k.confinement, k.reported);
+  if (state == ControllerState::kBusOff && k.reported != ControllerState::kBusOff) enter_bus_off(c, at);
+  k.reported = state;
+  out.push_back(std::move(e));
+}
+
+void WireBus::enter_bus_off(ControllerId c, Nanos at) {
+  Controller& k = controllers_[c];
+  ++k.counts.bus_offs;
+  k.recovering = false;
+  k.restart_at = k.options.restart_delay ? at + *k.options.restart_delay : kNever;
+}
+
+void WireBus::recover(ControllerId c, Nanos at, std::vector<WireEvent>& out) {
+  Controller& k = controllers_[c];
+  k.confinement.recovered();
+  k.recovering = false;
+  ++k.counts.restarts;
+  k.not_before = at;
+  WireEvent e;
+  e.kind = WireEvent::Kind::kError;
+  e.controller = c;
+  e.at = at;
+  e.start = at;
+  e.error = error_frame(frames::kErrorClassRestarted, 0, 0, k.confinement, ControllerState::kErrorActive);
+  k.reported = ControllerState::kErrorActive;
+  out.push_back(std::move(e));
+}
+
+bool WireBus::restart(ControllerId controller, Nanos now) {
+  Controller& k = controllers_.at(controller);
+  if (!k.confinement.bus_off()) return false;
+  k.restart_at = std::max(now, now_);
+  return true;
+}
+
+void WireBus::set_restart_delay(ControllerId controller, std::optional<Nanos> delay) {
+  controllers_.at(controller).options.restart_delay = delay;
+}
+
+void WireBus::add_fault(const FaultRule& rule) { faults_.add(rule, now_); }
+
+void WireBus::clear_faults(Nanos now) {
+  faults_.clear(std::max(now, now_));
+  stuck_tick_at_ = kNever;
+}
+
+ControllerStatus WireBus::status(ControllerId controller) const {
+  const Controller& k = controllers_.at(controller);
+  ControllerStatus s = k.counts;
+  s.state = k.confinement.state();
+  s.tec = k.confinement.tec();
+  s.rec = k.confinement.rec();
+  s.queued = k.queue.size();
+  s.connected = !faults_.cut(controller, now_);
+  s.recovering = k.recovering;
+  return s;
+}
+
+}  // namespace canhil::wire
