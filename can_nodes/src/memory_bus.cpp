@@ -16,6 +16,16 @@ MemoryEndpoint::~MemoryEndpoint() {
 
 SendStatus MemoryEndpoint::send(const CanFrame& frame) {
   if (!bus_->up()) return SendStatus::kDown;
+  if (bus_->model_ && frame.kind != frames::FrameKind::kError) {
+    bus_->advance(bus_->clock_.now());
+    const auto queued = bus_->model_->submit(controller_, frames::wire_frame(frame), bus_->clock_.now());
+    if (queued == wire::WireBus::Submit::kQueueFull) {
+      ++stats_.send_dropped;  // the socket's ENOBUFS
+      return SendStatus::kDropped;
+    }
+    ++stats_.sent;
+    return SendStatus::kOk;
+  }
   ++stats_.sent;
   bus_->transmit(this, frame);
   return SendStatus::kOk;
@@ -45,7 +55,12 @@ void MemoryEndpoint::set_filters(std::span<const Filter> filters) {
   }
 }
 
-BusState MemoryEndpoint::state() const { return bus_->up() ? BusState::kUp : BusState::kDown; }
+BusState MemoryEndpoint::state() const {
+  if (!bus_->up()) return BusState::kDown;
+  // Bus-off: as a can-dev interface, its carrier is off until it recovers.
+  if (bus_->model_ && bus_->model_->status(controller_).state == wire::ControllerState::kBusOff) return BusState::kDown;
+  return BusState::kUp;
+}
 
 void MemoryEndpoint::deliver(const TimedFrame& frame) {
   const CanFrame& f = frame.frame;
@@ -86,12 +101,41 @@ std::unique_ptr<MemoryEndpoint> MemoryBus::attach(std::string endpoint_name, std
   auto endpoint = std::unique_ptr<MemoryEndpoint>(new MemoryEndpoint(this, std::move(endpoint_name), queue_capacity));
   endpoints_.push_back(endpoint.get());
   routes_stale_ = true;
+  if (model_) {
+    endpoint->controller_ = model_->add_controller(endpoint->name(), wire_.controller);
+    controllers_.push_back(endpoint.get());
+  }
   return endpoint;
 }
 
 void MemoryBus::detach(MemoryEndpoint* endpoint) {
   endpoints_.erase(std::remove(endpoints_.begin(), endpoints_.end(), endpoint), endpoints_.end());
   routes_stale_ = true;
+  if (model_) {
+    model_->remove_controller(endpoint->controller_);
+    controllers_[endpoint->controller_] = nullptr;
+  }
+}
+
+void MemoryBus::set_wire(const Wire& wire) {
+  wire_ = wire;
+  model_.reset();
+  controllers_.clear();
+  if (wire.bit_rate == 0) return;
+  wire::WireConfig config;
+  config.bit_rate = wire.bit_rate;
+  config.data_bit_rate = wire.data_bit_rate;
+  config.bits = wire.bits == Wire::Bits::kExact ? wire::WireConfig::Bits::kExact : wire::WireConfig::Bits::kWorstCase;
+  config.seed = wire.seed;
+  model_ = std::make_unique<wire::WireBus>(config);
+  for (MemoryEndpoint* e : endpoints_) {
+    e->controller_ = model_->add_controller(e->name(), wire.controller);
+    controllers_.push_back(e);
+  }
+}
+
+MemoryEndpoint* MemoryBus::endpoint_of(wire::ControllerId controller) const {
+  return controller < controllers_.size() ? controllers_[controller] : nullptr;
 }
 
 void MemoryBus::route() {
@@ -109,71 +153,51 @@ void MemoryBus::route() {
   routes_stale_ = false;
 }
 
-void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) {
-  if (wire_.bit_rate != 0 && frame.kind != frames::FrameKind::kError) {
-    queue(from, frame);
-    return;
-  }
-  deliver_now(from, frame, clock_.now());
-}
-
-void MemoryBus::queue(MemoryEndpoint* from, const CanFrame& frame) {
-  const Pending p{frame, from,
-                  frames::arbitration_key(frame.id, frame.extended, frame.kind == frames::FrameKind::kRemote), seq_++};
-  const Nanos now = clock_.now();
-  if (!busy_) {
-    start(p, now);
-  } else if (start_ == now && p.key < on_wire_.key) {
-    // Arbitration started at this very instant: the frame queued now takes part, and wins.
-    pending_.push_back(on_wire_);
-    start(p, now);
-  } else {
-    pending_.push_back(p);
-  }
-}
-
-void MemoryBus::start(const Pending& p, Nanos at) {
-  const CanFrame& f = p.frame;
-  const std::uint32_t bits =
-      wire_.bits == Wire::Bits::kExact
-          ? frames::frame_bits(f)
-          : frames::worst_case_frame_bits(f.kind == frames::FrameKind::kRemote ? 0 : f.len, f.extended);
-  busy_ = true;
-  on_wire_ = p;
-  start_ = at;
-  end_ = at + frames::bits_to_time(bits, wire_.bit_rate);
-}
+void MemoryBus::transmit(MemoryEndpoint* from, const CanFrame& frame) { deliver_now(from, frame, clock_.now()); }
 
 void MemoryBus::advance(Nanos now) {
-  while (busy_ && end_ <= now) {
-    busy_ = false;
-    const Nanos end = end_;
-    deliver_now(on_wire_.from, on_wire_.frame, wire_.stamp == Wire::Stamp::kStartOfFrame ? start_ : end);
-    if (pending_.empty()) break;
-    // The bus is idle: the lowest key wins, and among equal keys the first sent.
-    const auto winner = std::min_element(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
-      return a.key != b.key ? a.key < b.key : a.seq < b.seq;
-    });
-    const Pending next = *winner;
-    pending_.erase(winner);
-    start(next, end);
+  if (!model_) return;
+  events_.clear();
+  model_->advance(now, events_);
+  for (const wire::WireEvent& e : events_) {
+    MemoryEndpoint* endpoint = endpoint_of(e.controller);
+    if (e.kind == wire::WireEvent::Kind::kError) {
+      const TimedFrame timed{e.error, e.at};
+      if (tap_) tap_(timed);
+      if (endpoint != nullptr) endpoint->deliver(timed);
+      continue;
+    }
+    CanFrame f;
+    f.id = e.frame.id;
+    f.extended = e.frame.extended;
+    f.kind = e.frame.remote ? frames::FrameKind::kRemote : frames::FrameKind::kData;
+    f.len = e.frame.len;
+    f.len8_dlc = e.frame.len8_dlc;
+    std::copy_n(e.frame.data.begin(), f.data.size(), f.data.begin());
+    deliver_now(endpoint, f, wire_.stamp == Wire::Stamp::kStartOfFrame ? e.start : e.at, &e.missed);
   }
 }
 
-void MemoryBus::deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time) {
+void MemoryBus::deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time,
+                            const std::vector<wire::ControllerId>* missed) {
   ++carried_;
   const TimedFrame timed{frame, time};
   if (tap_) tap_(timed);
+  const bool some_missed = missed != nullptr && !missed->empty();
+  auto gets = [&](const MemoryEndpoint* e) {
+    if (e == from && !e->receive_own_) return false;
+    return !some_missed || std::find(missed->begin(), missed->end(), e->controller_) == missed->end();
+  };
   if (frame.kind == frames::FrameKind::kData && !frame.extended && frame.id < kStandardIds) {
     route();
     for (std::uint32_t k = route_start_[frame.id]; k < route_start_[frame.id + 1]; ++k) {
       MemoryEndpoint* e = route_list_[k];
-      if (e != from || e->receive_own_) e->accept(timed);
+      if (gets(e)) e->accept(timed);
     }
     return;
   }
   for (MemoryEndpoint* e : endpoints_) {
-    if (e != from || e->receive_own_) e->deliver(timed);
+    if (gets(e)) e->deliver(timed);
   }
 }
 

@@ -293,9 +293,9 @@ TEST(MemoryBusWire, ArbitrationByIdentifierFramesOneAfterTheOtherNoPreemption) {
   Participant& wire = bus.wire_participant();
   a->send(make_data_frame(0x300, {1, 2, 3, 4, 5, 6, 7, 8}));  // first, but at the same instant as 0x100
   b->send(make_data_frame(0x100, {1, 2, 3, 4, 5, 6, 7, 8}));  // arbitration still open: wins
-  EXPECT_EQ(bus.queued(), 1u);
+  EXPECT_EQ(bus.queued(), 2u) << "one on the wire, one waiting";
   EXPECT_FALSE(rx->receive()) << "nothing before its last bit";
-  EXPECT_EQ(wire.next_wakeup(), 1ms + 135us);
+  EXPECT_EQ(wire.next_wakeup(), 1ms + 132us) << "its end of frame: 135 bits less the 3 of intermission";
   clock.set(1ms + 50us);
   c->send(make_data_frame(0x050, {1, 2, 3, 4, 5, 6, 7, 8}));  // higher still, but 0x100 is on the wire
   std::vector<std::pair<std::uint32_t, Nanos>> got;
@@ -305,8 +305,8 @@ TEST(MemoryBusWire, ArbitrationByIdentifierFramesOneAfterTheOtherNoPreemption) {
     while (auto f = rx->receive()) got.emplace_back(f->frame.id, f->time);
   }
   const std::vector<std::pair<std::uint32_t, Nanos>> expected = {
-      {0x100, 1ms + 135us}, {0x050, 1ms + 270us}, {0x300, 1ms + 405us}};
-  EXPECT_EQ(got, expected) << "each stamped at its last bit, the lower identifier first at each idle bus";
+      {0x100, 1ms + 132us}, {0x050, 1ms + 267us}, {0x300, 1ms + 402us}};
+  EXPECT_EQ(got, expected) << "each stamped at its end of frame, the lower identifier first at each idle bus";
 }
 
 TEST(MemoryBusWire, ExactBitsFollowThePayloadsStuffing) {
@@ -317,8 +317,65 @@ TEST(MemoryBusWire, ExactBitsFollowThePayloadsStuffing) {
   auto rx = bus.attach("rx");
   const frames::CanFrame f = make_data_frame(0x000, {0, 0, 0, 0, 0, 0, 0, 0});  // long runs: many stuff bits
   a->send(f);
-  EXPECT_EQ(bus.wire_participant().next_wakeup(), frames::bits_to_time(frames::frame_bits(f), 500'000));
+  EXPECT_EQ(bus.wire_participant().next_wakeup(), frames::bits_to_time(frames::frame_bits(f) - 3, 500'000));
   EXPECT_GT(frames::frame_bits(f), frames::best_case_frame_bits(8));
+}
+
+TEST(MemoryBusWire, ABusOffEndpointReadsDownGetsNothingAndSeesItsErrorFrames) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  Wire wire{1'000'000};
+  wire.controller.restart_delay = std::nullopt;  // stays bus-off until restarted
+  bus.set_wire(wire);
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto c = bus.attach("c");  // acknowledges b's frame while a is bus-off
+  a->set_error_mask(frames::kErrorClassMask);
+  wire::FaultRule off;
+  off.kind = wire::FaultRule::Kind::kBusOff;
+  off.controller = bus.controller_of(*a);
+  off.from = 1ms;
+  bus.wire_bus()->add_fault(off);
+  clock.set(2ms);
+  bus.wire_participant().tick(clock.now());
+  EXPECT_EQ(a->state(), BusState::kDown) << "bus-off: the carrier is off, as can-dev's";
+  EXPECT_EQ(b->state(), BusState::kUp);
+  const auto err = a->receive();
+  ASSERT_TRUE(err);
+  EXPECT_EQ(err->frame.kind, frames::FrameKind::kError);
+  EXPECT_NE(err->frame.id & frames::kErrorClassBusOff, 0u);
+  EXPECT_EQ(err->time, 1ms);
+  EXPECT_FALSE(b->receive()) << "b's mask takes no error frames, and a's errors are a's";
+  b->send(make_data_frame(0x100, {1}));
+  clock.set(3ms);
+  bus.wire_participant().tick(clock.now());
+  EXPECT_FALSE(a->receive()) << "a bus-off controller receives nothing";
+  EXPECT_TRUE(c->receive());
+  EXPECT_TRUE(bus.wire_bus()->restart(bus.controller_of(*a), clock.now()));
+  clock.set(5ms);
+  bus.wire_participant().tick(clock.now());
+  EXPECT_EQ(a->state(), BusState::kUp) << "recovered 1.408 ms after the restart";
+  const auto restarted = a->receive();
+  ASSERT_TRUE(restarted);
+  EXPECT_NE(restarted->frame.id & frames::kErrorClassRestarted, 0u);
+  EXPECT_EQ(restarted->time, 3ms + 1408us);
+}
+
+TEST(MemoryBusWire, AFullTransmitQueueDropsTheFrameAsEnobufs) {
+  SimulatedClock clock;
+  MemoryBus bus(clock);
+  Wire wire{125'000};
+  wire.controller.queue_frames = 4;
+  bus.set_wire(wire);
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  int dropped = 0;
+  for (int i = 0; i < 10; ++i) {
+    if (a->send(make_data_frame(0x100, {1, 2, 3})) == SendStatus::kDropped) ++dropped;
+  }
+  EXPECT_EQ(dropped, 6);
+  EXPECT_EQ(a->stats().send_dropped, 6u);
+  EXPECT_EQ(a->stats().sent, 4u);
 }
 
 }  // namespace

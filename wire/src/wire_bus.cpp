@@ -22,6 +22,15 @@ ControllerId WireBus::add_controller(std::string name, const ControllerOptions& 
   return static_cast<ControllerId>(controllers_.size() - 1);
 }
 
+void WireBus::remove_controller(ControllerId controller) {
+  Controller& k = controllers_.at(controller);
+  k.gone = true;
+  k.queue.clear();
+  k.restart_at = kNever;
+  k.recovering = false;
+  if (wire_ && wire_->from == controller) wire_->babble = true;  // its frame finishes; nothing left to pop
+}
+
 Nanos WireBus::frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept {
   return frames::bits_to_time(frames::prefix_bits(f, bit_count), config_.bit_rate, config_.data_bit_rate);
 }
@@ -57,7 +66,7 @@ std::size_t WireBus::queued() const noexcept {
 
 bool WireBus::acknowledged(ControllerId from) const noexcept {
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
-    if (c != from && !controllers_[c].confinement.bus_off() && !faults_.cut(c, now_)) return true;
+    if (c != from && !controllers_[c].confinement.bus_off() && !off_bus(c, now_)) return true;
   }
   return false;
 }
@@ -72,7 +81,7 @@ Nanos WireBus::ready_at(ControllerId c) const noexcept {
   } else if (!k.queue.empty()) {
     t = std::max(earliest, k.queue.front().given);
   }
-  if (t == kNever || faults_.cut(c, t) || faults_.stuck(t) != nullptr) return kNever;
+  if (t == kNever || off_bus(c, t) || faults_.stuck(t) != nullptr) return kNever;
   return t;
 }
 
@@ -220,7 +229,7 @@ void WireBus::finish(std::vector<WireEvent>& out) {
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
     if (c == w.from) continue;
     Controller& k = controllers_[c];
-    if (k.confinement.bus_off() || faults_.cut(c, w.end)) {
+    if (k.confinement.bus_off() || off_bus(c, w.end)) {
       e.missed.push_back(c);
       continue;
     }
@@ -251,7 +260,7 @@ void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
     if (c == w.from) continue;
     Controller& k = controllers_[c];
-    if (k.confinement.bus_off() || faults_.cut(c, w.end) || !receivers_see) continue;
+    if (k.confinement.bus_off() || off_bus(c, w.end) || !receivers_see) continue;
     const ControllerState before = k.confinement.state();
     k.confinement.receive_error();
     ++k.counts.errors;
@@ -360,7 +369,7 @@ ControllerStatus WireBus::status(ControllerId controller) const {
   s.tec = k.confinement.tec();
   s.rec = k.confinement.rec();
   s.queued = k.queue.size();
-  s.connected = !faults_.cut(controller, now_);
+  s.connected = !off_bus(controller, now_);
   s.recovering = k.recovering;
   return s;
 }

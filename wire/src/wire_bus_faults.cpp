@@ -62,7 +62,7 @@ void WireBus::stuck_tick(Nanos at, std::vector<WireEvent>& out) {
   bool more = false;
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
     Controller& k = controllers_[c];
-    if (k.confinement.bus_off() || faults_.cut(c, at)) continue;
+    if (k.confinement.bus_off() || off_bus(c, at)) continue;
     const bool transmitter = !k.queue.empty() || faults_.babbling(c, at) != nullptr;
     k.confinement.dominant_sequence(transmitter);
     report(c, at, 0, 0, 0, out);

@@ -7,12 +7,14 @@
 // them on). Each endpoint's queue is bounded; overflow is dropped and counted.
 //
 // By default a frame is delivered at the instant it is sent, as vcan does (the
-// shipped robot's traces). With a wire (set_wire: a bit rate) the bus is
-// bit-timed as a real one: frames sent wait in their controllers, each time the
-// bus falls idle the lowest identifier wins arbitration (frames::arbitration_key;
-// a frame queued at the very instant arbitration starts still takes part), and
-// a frame is delivered, stamped, when its last bit has passed (interframe space
-// included; its exact bits or the worst case of its shape). The wire is then a
+// shipped robot's traces). With a wire (set_wire: a bit rate) the bus has a
+// real one's physics, canhil's one model of it (wire::WireBus): each endpoint
+// is a controller with a transmit queue, frames wait for the wire and win or
+// lose arbitration, and a frame is delivered, stamped, when its end of frame
+// has passed; errors and faults (wire_bus().add_fault) count against the
+// controllers, which may go error-passive and bus-off (the endpoint's state
+// then reads kDown, as a can-dev interface's carrier) and report it as error
+// frames to their own endpoint, where its error mask asks. The wire is then a
 // participant of the virtual-time runner (wire_participant()).
 //
 // Deterministic; not thread-safe (virtual time runs on one thread).
@@ -29,6 +31,7 @@
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/doorbell.hpp"
 #include "canhil/can_nodes/virtual_time.hpp"
+#include "canhil/wire/wire_bus.hpp"
 
 namespace canhil::can_nodes {
 
@@ -81,6 +84,7 @@ class MemoryEndpoint final : public Endpoint {
   std::uint32_t error_mask_ = 0;
   std::shared_ptr<Doorbell> bell_;  // shared: an endpoint may outlive its runner
   std::size_t bell_index_ = 0;
+  wire::ControllerId controller_ = 0;  // its controller on the bus's wire, once there is one
   BusStats stats_;
   std::string name_;
   std::vector<Filter> filters_{Filter::all()};
@@ -90,16 +94,20 @@ class MemoryEndpoint final : public Endpoint {
 
 /// A bit-timed wire: its bit rate (0: none, frames delivered at once),
 /// whether a frame takes its exact bits or the worst case of its shape, and
-/// what its time stamp says: its last bit (SocketCAN's software stamp, taken
-/// on reception) or its first (a controller's start-of-frame stamp, and what
-/// canhil's FTT slaves take a TM's stamp to be: frames/ftt_slot.hpp). Either
-/// way a frame is delivered when its last bit has passed.
+/// what its time stamp says: its end of frame (a controller's receive stamp)
+/// or its first bit (a controller's start-of-frame stamp, and what canhil's
+/// FTT slaves take a TM's stamp to be: frames/ftt_slot.hpp). Either way a
+/// frame is delivered when its end of frame has passed. The rest as
+/// wire::WireConfig and wire::ControllerOptions, for every endpoint.
 struct Wire {
   enum class Bits : std::uint8_t { kExact, kWorstCase };
   enum class Stamp : std::uint8_t { kEndOfFrame, kStartOfFrame };
   std::uint32_t bit_rate = 0;
   Bits bits = Bits::kExact;
   Stamp stamp = Stamp::kEndOfFrame;
+  std::uint32_t data_bit_rate = 0;
+  std::uint64_t seed = 1;
+  wire::ControllerOptions controller{};
 };
 
 class MemoryBus {
@@ -116,12 +124,17 @@ class MemoryBus {
 
   /// Bit-times the bus (see the top of this file); Wire{} delivers at once again.
   /// Set it before frames are sent.
-  void set_wire(const Wire& wire) { wire_ = wire; }
+  void set_wire(const Wire& wire);
   /// The wire as a participant of the virtual-time runner: it delivers each
-  /// frame when its last bit has passed and starts the next arbitration.
+  /// frame when its end of frame has passed and starts the next arbitration.
   Participant& wire_participant() noexcept { return wire_driver_; }
-  /// Frames waiting for the wire (the one on it not counted).
-  std::size_t queued() const noexcept { return pending_.size(); }
+  /// The wire's model (faults, controllers' states, load); nullptr without a wire.
+  wire::WireBus* wire_bus() noexcept { return model_.get(); }
+  const wire::WireBus* wire_bus() const noexcept { return model_.get(); }
+  /// The wire's controller of `endpoint` (attached to this bus), with a wire.
+  wire::ControllerId controller_of(const MemoryEndpoint& endpoint) const { return endpoint.controller_; }
+  /// Frames waiting for the wire (the one on it included).
+  std::size_t queued() const noexcept { return model_ ? model_->queued() : 0; }
 
   /// Puts an error frame on the bus (delivered to endpoints whose error mask matches).
   void inject_error(std::uint32_t error_class);
@@ -142,29 +155,24 @@ class MemoryBus {
   void detach(MemoryEndpoint* endpoint);
 
   void route();  // rebuilds routes_ when stale
-  void deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time);
+  // `missed`: endpoints that do not get it (bus-off or cut off the wire).
+  void deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time,
+                   const std::vector<wire::ControllerId>* missed = nullptr);
 
-  // The wire (set_wire): a frame waiting for it, or on it.
-  struct Pending {
-    CanFrame frame;
-    MemoryEndpoint* from = nullptr;
-    std::uint64_t key = 0;  // frames::arbitration_key
-    std::uint64_t seq = 0;  // sending order: equal keys (two senders of one id) go in it
-  };
   class WireDriver final : public Participant {
    public:
     explicit WireDriver(MemoryBus& bus) : bus_(bus) {}
     std::size_t poll() override { return 0; }
     void tick(Nanos now) override { bus_.advance(now); }
-    Nanos next_wakeup() const override { return bus_.busy_ ? bus_.end_ : kNever; }
+    Nanos next_wakeup() const override { return bus_.model_ ? bus_.model_->next_event() : kNever; }
     bool may_have_frames() const override { return false; }
 
    private:
     MemoryBus& bus_;
   };
-  void queue(MemoryEndpoint* from, const CanFrame& frame);
-  void start(const Pending& p, Nanos at);
+  // Runs the wire to `now` and hands out what happened.
   void advance(Nanos now);
+  MemoryEndpoint* endpoint_of(wire::ControllerId controller) const;
 
   const Clock& clock_;
   std::string name_;
@@ -179,12 +187,9 @@ class MemoryBus {
   std::uint64_t carried_ = 0;
   std::function<void(const TimedFrame&)> tap_;
   Wire wire_;
-  std::vector<Pending> pending_;
-  bool busy_ = false;
-  Pending on_wire_;
-  Nanos start_{0};
-  Nanos end_{0};
-  std::uint64_t seq_ = 0;
+  std::unique_ptr<wire::WireBus> model_;      // with a wire
+  std::vector<MemoryEndpoint*> controllers_;  // each controller's endpoint (nullptr once detached)
+  std::vector<wire::WireEvent> events_;       // advance()'s, reused
   WireDriver wire_driver_{*this};
 };
 

@@ -126,6 +126,9 @@ class WireBus {
 
   const WireConfig& config() const noexcept { return config_; }
   ControllerId add_controller(std::string name, const ControllerOptions& options = {});
+  /// Takes a controller off the bus for good (its endpoint closed): its
+  /// queue is dropped, it sends, receives and acknowledges nothing more.
+  void remove_controller(ControllerId controller);
   std::size_t controllers() const noexcept { return controllers_.size(); }
 
   enum class Submit : std::uint8_t { kQueued, kQueueFull, kBusOff };
@@ -176,6 +179,7 @@ class WireBus {
     Nanos run_from{0};              // where this controller's current count of recessive bits began
     Nanos cut_busy_until{0};        // cut off: its own stub is busy with an attempt until then
     ControllerState reported = ControllerState::kErrorActive;  // last state told
+    bool gone = false;                                         // remove_controller()
   };
   // A frame (or babble frame) on the wire.
   struct OnWire {
@@ -206,6 +210,8 @@ class WireBus {
   Nanos recovery_due(const Controller& k) const noexcept;
   void recover(ControllerId c, Nanos at, std::vector<WireEvent>& out);
   bool acknowledged(ControllerId from) const noexcept;
+  // Off the bus at `t`: removed, or cut off by a fault.
+  bool off_bus(ControllerId c, Nanos t) const noexcept { return controllers_[c].gone || faults_.cut(c, t); }
   // The fault rules' own moments (wire_bus_faults.cpp).
   void fault_change(Nanos at, std::vector<WireEvent>& out);
   void stuck_tick(Nanos at, std::vector<WireEvent>& out);
