@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/frames/ftt.hpp"
 
 namespace canhil::app {
 
@@ -132,6 +133,19 @@ inline std::optional<std::uint64_t> seed_option(Args& args) {
     throw UsageError("--seed takes a whole number, 0 or more, got '" + *text + "'");
   }
   return seed;
+}
+
+/// Removes `--stamps start|end` (what a trace's time stamps mark: a frame's
+/// first bit, as on vcan, or its end of frame, as on a real can0 or canhil's
+/// timed wire); start when absent.
+inline frames::StampAt stamps_option(Args& args) {
+  const auto v = args.option("--stamps");
+  if (!v || *v == "start") return frames::StampAt::kStartOfFrame;
+  if (*v == "end") return frames::StampAt::kEndOfFrame;
+  throw UsageError(
+      "--stamps takes start (a frame's first bit: vcan) or end (its end of frame: a real can0, canhil's "
+      "timed wire), got '" +
+      *v + "'");
 }
 
 }  // namespace canhil::app

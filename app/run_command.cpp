@@ -109,8 +109,16 @@ int run_virtual(emulator::Session& session, const emulator::RunLength& length, c
   print_virtual_summary(session, driver, wall);
   if (out.trace) {
     write_file(*out.trace, driver.trace(), "trace");
-    std::printf("trace written to %s (candump log; check it with `canhil timing %s`)\n", out.trace->c_str(),
-                out.trace->c_str());
+    const emulator::BusPhysics& bus = session.options().bus;
+    if (bus.timed()) {
+      std::printf(
+          "trace written to %s (candump log, stamped at each frame's end of frame; check it with `canhil "
+          "timing --stamps end --bit-rate %u %s`)\n",
+          out.trace->c_str(), bus.bit_rate, out.trace->c_str());
+    } else {
+      std::printf("trace written to %s (candump log; check it with `canhil timing %s`)\n", out.trace->c_str(),
+                  out.trace->c_str());
+    }
   }
   if (out.save_world) {
     physics::save_state(session.world().save(), *out.save_world);
@@ -185,7 +193,7 @@ struct RunRequest {
   ViewChoice view;
   double speed = 0;  // virtual seconds per wall second; 0: as fast as possible
   bool start_paused = false, no_control = false;
-  double bit_rate = 0, rx_buffer_kb = 0, priority = 0;
+  double rx_buffer_kb = 0, priority = 0;
 };
 
 RunRequest read_request(Args& args) {
@@ -215,7 +223,12 @@ RunRequest read_request(Args& args) {
   if (q.control_path && q.no_control) throw UsageError("give --control PATH or --no-control, not both");
   laptop_options(args, o);
   o.duration_s = optional_number(args, "--duration");
-  q.bit_rate = number_option(args, "--bit-rate", 1'000'000);
+  if (const auto b = optional_number(args, "--bit-rate")) {
+    if (!(*b == 0 || (*b >= 10'000 && *b <= 1'000'000)) || *b != static_cast<std::uint32_t>(*b)) {
+      throw UsageError("--bit-rate takes 10000..1000000 bit/s, or 0 for an instant bus (no wire time, no errors)");
+    }
+    o.bit_rate = static_cast<std::uint32_t>(*b);
+  }
   q.rx_buffer_kb = number_option(args, "--rx-buffer-kb", 1024);
   q.priority = number_option(args, "--priority", 40);
   q.outputs.log_period_s = number_option(args, "--world-log-period", 0.05);
@@ -249,7 +262,6 @@ RunRequest read_request(Args& args) {
           "--trace and --world-log are for --virtual-time runs; in real time record the buses with `candump -l "
           "vcan0` or `canhil dump vcan0`");
     }
-    if (!(q.bit_rate >= 10'000 && q.bit_rate <= 1'000'000)) throw UsageError("--bit-rate takes 10000..1000000 bit/s");
     if (!(q.rx_buffer_kb >= 16 && q.rx_buffer_kb <= 65536)) throw UsageError("--rx-buffer-kb takes 16..65536 KiB");
     if (!(q.priority >= 0 && q.priority <= 99 && q.priority == static_cast<int>(q.priority))) {
       throw UsageError("--priority takes a SCHED_FIFO priority 1..99, or 0 for the normal scheduler");
@@ -264,9 +276,7 @@ emulator::RunPlan make_plan(const RunRequest& q, const std::optional<std::string
   emulator::SessionOptions options;
   options.messages = frames::MessageSet::create(load_chosen_dbc(dbc));
   if (q.restore_world) options.initial_state = load_world(*q.restore_world);
-  if (q.overrides.mode == emulator::RunMode::kRealtime) {
-    options.ftt.bit_rate = static_cast<std::uint32_t>(q.bit_rate);
-  } else if (q.outputs.world_log) {
+  if (q.overrides.mode != emulator::RunMode::kRealtime && q.outputs.world_log) {
     options.world_log_period = from_seconds(q.outputs.log_period_s);
   }
   try {

@@ -30,6 +30,7 @@ int run_timing_analyse(Args& args, const std::optional<std::string>& dbc) {
   const auto window_us = optional_number(args, "--sync-window-us");
   const auto guard_us = optional_number(args, "--guard-us");
   const double slack_us = number_option(args, "--slack-us", 0);
+  const frames::StampAt stamps = stamps_option(args);
   positive(ec_ms, "--ec-ms");
   positive(bit_rate, "--bit-rate");
   positive(window_us, "--sync-window-us");
@@ -63,6 +64,7 @@ int run_timing_analyse(Args& args, const std::optional<std::string>& dbc) {
       config.ftt.bit_rate = static_cast<std::uint32_t>(*v);
   }
   if (bit_rate) config.ftt.bit_rate = static_cast<std::uint32_t>(*bit_rate);
+  config.ftt.stamps = stamps;
   if (guard_us) config.ftt.sync_window_guard = from_ms(*guard_us / 1e3);
   if (window_us) config.sync_window = from_ms(*window_us / 1e3);
 

@@ -44,6 +44,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
   cfg.ftt.elementary_cycle = std::chrono::duration_cast<Nanos>(
       std::chrono::duration<double, std::milli>(number(args.option("--ec-ms"), "--ec-ms", 10)));
   cfg.ftt.bit_rate = static_cast<std::uint32_t>(number(args.option("--bit-rate"), "--bit-rate", 1'000'000));
+  cfg.ftt.stamps = stamps_option(args);
   cfg.window_slack = std::chrono::duration_cast<Nanos>(
       std::chrono::duration<double, std::micro>(number(args.option("--slack-us"), "--slack-us", 0)));
   const double seconds = number(args.option("--seconds"), "--seconds", 10);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/wire.hpp"
 
 namespace canhil::can_nodes {
@@ -28,6 +29,10 @@ std::vector<Filter> filters_for(const frames::MessageSet& set, std::initializer_
 Nanos tm_wire_time(const NodeParams& p) {
   return frames::bits_to_time(frames::worst_case_frame_bits(8), p.ftt.bit_rate);
 }
+
+// The start of the EC the TM `tf` opens (frames::ec_start: its stamp, or
+// earlier by its wire time when stamped at its end of frame).
+Nanos ec_start(const TimedFrame& tf, const NodeParams& p) { return frames::ec_start(tf.frame, tf.time, p.ftt); }
 
 // Asynchronous message `m`'s slot in the EC the TM at `tm_time` opens (frames::async_slot).
 Nanos async_slot(const frames::MessageSet& set, const frames::MessageCodec& m, const NodeParams& p, Nanos tm_time,
@@ -91,8 +96,8 @@ void PicBase::on_frame(const TimedFrame& tf) {
     frames::Tm tm;
     if (!decode(s.tm, f, tm)) return;
     const std::uint32_t mine = (1u << s.ftt(s.m1.message()).index) | (1u << s.ftt(s.m9.message()).index);
-    if (const auto start = slot_.on_tm(tm, tf.time, params_.ftt.elementary_cycle, mine)) wake_at(*start);
-    const Nanos at = async_slot(s, s.m2.message(), params_, tf.time, last_m2_);
+    if (const auto start = slot_.on_tm(tm, ec_start(tf, params_), params_.ftt.elementary_cycle, mine)) wake_at(*start);
+    const Nanos at = async_slot(s, s.m2.message(), params_, ec_start(tf, params_), last_m2_);
     if (at != kNever) {
       async_at_ = at;
       wake_at(at);
@@ -182,7 +187,7 @@ void MotorNode::on_frame(const TimedFrame& tf) {
     frames::Tm tm;
     if (!decode(s.tm, f, tm)) return;
     const std::uint32_t mine = 1u << s.ftt(s.m3[w].message()).index;
-    if (const auto start = slot_.on_tm(tm, tf.time, params_.ftt.elementary_cycle, mine)) wake_at(*start);
+    if (const auto start = slot_.on_tm(tm, ec_start(tf, params_), params_.ftt.elementary_cycle, mine)) wake_at(*start);
   } else if (is_message(f, s.m1.message())) {
     frames::M1 m1;
     if (!decode(s.m1, f, m1)) return;
@@ -249,7 +254,7 @@ void PicOdom::on_frame(const TimedFrame& tf) {
     frames::Tm tm;
     if (!decode(s.tm, f, tm)) return;
     const std::uint32_t mine = (1u << s.ftt(s.m4_1.message()).index) | (1u << s.ftt(s.m4_2.message()).index);
-    if (const auto start = slot_.on_tm(tm, tf.time, params_.ftt.elementary_cycle, mine)) wake_at(*start);
+    if (const auto start = slot_.on_tm(tm, ec_start(tf, params_), params_.ftt.elementary_cycle, mine)) wake_at(*start);
     return;
   }
   for (std::size_t n = 0; n < 3; ++n) {
@@ -304,7 +309,8 @@ void CompassNode::on_frame(const TimedFrame& tf) {
   const frames::MessageSet& s = messages();
   frames::Tm tm;
   if (!is_message(tf.frame, s.tm.message()) || !decode(s.tm, tf.frame, tm)) return;
-  if (const auto start = slot_.on_tm(tm, tf.time, params_.ftt.elementary_cycle, 1u << s.ftt(s.m8.message()).index)) {
+  if (const auto start =
+          slot_.on_tm(tm, ec_start(tf, params_), params_.ftt.elementary_cycle, 1u << s.ftt(s.m8.message()).index)) {
     wake_at(*start);
   }
 }
@@ -383,7 +389,7 @@ void SystemMonitor::on_frame(const TimedFrame& tf) {
   const CanFrame& f = tf.frame;
   if (watch_ == nullptr) observe(tf);
   if (is_message(f, messages().tm.message())) {
-    const Nanos at = async_slot(messages(), messages().m10.message(), params_, tf.time, last_m10_);
+    const Nanos at = async_slot(messages(), messages().m10.message(), params_, ec_start(tf, params_), last_m10_);
     if (at != kNever) {
       async_at_ = at;
       wake_at(at);

@@ -133,6 +133,26 @@ Scenario overridden(Scenario s, const RunOverrides& o) {
   return s;
 }
 
+namespace {
+
+// The buses' physics: --bit-rate over [bus] over an instant bus.
+void resolve_bus(const BusSettings& file, std::optional<std::uint32_t> flag, SessionOptions& options) {
+  BusPhysics& bus = options.bus;
+  bus.bit_rate = flag.value_or(file.bit_rate.value_or(0));
+  bus.data_bit_rate = file.data_bit_rate.value_or(0);
+  if (file.restart_ms) {
+    bus.restart = *file.restart_ms > 0 ? std::optional<Nanos>(from_ms(*file.restart_ms)) : std::nullopt;
+  }
+  bus.tx_queue = file.tx_queue.value_or(bus.tx_queue);
+  if (bus.timed()) {
+    options.ftt.bit_rate = bus.bit_rate;  // the schedule's wire times at the wire's rate
+    // In virtual time the wire is canhil's and stamps frames at their end of frame.
+    if (!options.realtime) options.ftt.stamps = frames::StampAt::kEndOfFrame;
+  }
+}
+
+}  // namespace
+
 RunPlan plan_run(Scenario scenario, SessionOptions options, const RunOverrides& o) {
   if (!options.messages) throw SetupError("a run needs a message set");
   scenario = overridden(std::move(scenario), o);
@@ -151,6 +171,7 @@ RunPlan plan_run(Scenario scenario, SessionOptions options, const RunOverrides& 
   vision.ball_noise_m = imperfect.ball_noise_m.value_or(vision.ball_noise_m);
   vision.detection_probability = imperfect.detection_probability.value_or(vision.detection_probability);
   vision.latency_s = imperfect.latency_s.value_or(vision.latency_s);
+  resolve_bus(scenario.bus, o.bit_rate, options);
   if (options.external) plan.external = resolve_external(scenario);
   plan.scenario = std::move(scenario);
   plan.options = std::move(options);

@@ -209,8 +209,8 @@ namespace {
 Scenario read_text(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
   const toml::table root = physics::parse_toml(toml_text, file_name);  // parsed once, for the world and the run
-  s.world =
-      physics::read_world_params(root, file_name, {"run", "coach", "laptop", "external", "teams", "referee", "vision"});
+  s.world = physics::read_world_params(root, file_name,
+                                       {"run", "coach", "laptop", "external", "teams", "referee", "vision", "bus"});
   const bool teams = detail::read_teams(root, file_name, s);  // places the teams' robots
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
@@ -255,6 +255,13 @@ Scenario read_text(std::string_view toml_text, const std::string& file_name) {
     s.vision.ball_noise_m = r.number("ball_noise_m", 0.0, 1.0);
     s.vision.detection_probability = r.number("detection_probability", 0.0, 1.0);
     s.vision.latency_s = r.number("latency_s", 0.0, 1.0);
+  }
+  if (const toml::table* bus = root["bus"].as_table()) {
+    const TableReader r(*bus, "bus", file_name, {"bit_rate", "data_bit_rate", "restart_ms", "tx_queue"});
+    if (const auto v = r.number("bit_rate", 0, 1'000'000)) s.bus.bit_rate = static_cast<std::uint32_t>(*v);
+    if (const auto v = r.number("data_bit_rate", 0, 8'000'000)) s.bus.data_bit_rate = static_cast<std::uint32_t>(*v);
+    if (const auto v = r.number("restart_ms", 0, 60'000)) s.bus.restart_ms = *v;
+    if (const auto v = r.number("tx_queue", 1, 4096)) s.bus.tx_queue = static_cast<std::size_t>(*v);
   }
   if (const toml::table* external = root["external"].as_table()) {
     detail::read_external(TableReader(*external, "external", file_name, detail::external_fields()), s.external);

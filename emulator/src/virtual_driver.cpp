@@ -68,8 +68,20 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     session_.for_each_laptop([this](LaptopLink& link) { rtdb_clock_set_ |= link.set_clock(&virtual_now, &clock_); });
   }
   const std::size_t n = session_.robot_count();
+  const BusPhysics& physics = session_.options().bus;
   for (std::size_t r = 0; r < n; ++r) {
     buses_.push_back(std::make_unique<can_nodes::MemoryBus>(clock_, session_.rig(r).interface));
+    if (physics.timed()) {
+      // The robot's wire: every node and the handler a controller on it (docs/wire.md).
+      can_nodes::Wire wire;
+      wire.bit_rate = physics.bit_rate;
+      wire.data_bit_rate = physics.data_bit_rate;
+      wire.seed = session_.scenario().seed + r;
+      wire.controller.queue_frames = physics.tx_queue;
+      wire.controller.restart_delay = physics.restart;
+      buses_.back()->set_wire(wire);
+      time_.add(buses_.back()->wire_participant());
+    }
   }
   session_.build_nodes(
       [this](std::size_t r, const std::string& node) {
@@ -98,6 +110,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       stack->handler = std::make_unique<HandlerParticipant>(*buses_[r], messages, ec, clock_, link.database(),
                                                             link.layout(), rig.agent);
       stack->handler->hw().set_bit_rate(session_.options().ftt.bit_rate);
+      stack->handler->hw().set_stamps(session_.options().ftt.stamps);
       const double goal_x = session_.scenario().world.field.length_m / 2;
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
       stack->agent = std::make_unique<AgentParticipant>(link, rig.agent, agent_cfg);

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "canhil/frames/ftt_slot.hpp"
 #include "canhil/frames/wire.hpp"
 
 namespace canhil::frames {
@@ -103,6 +104,13 @@ Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
   Nanos w{0};
   for (; b != 0; b &= b - 1) w += frame_time_[static_cast<std::size_t>(std::countr_zero(b))];
   return w == Nanos{0} ? w : w + config_.sync_window_guard;
+}
+
+Nanos ec_start(const CanFrame& tm, Nanos stamp, const FttConfig& config) noexcept {
+  if (config.stamps == StampAt::kStartOfFrame || config.bit_rate == 0) return stamp;
+  const FrameBits bits = count_bits(wire_frame(tm));
+  constexpr std::uint32_t kIntermission = 3;  // the end of frame is before it
+  return stamp - bits_to_time(bits.total() - kIntermission, config.bit_rate);
 }
 
 }  // namespace canhil::frames

@@ -142,7 +142,13 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
   const frames::MessageSet& s = *set_;
   if (frames::is_message(f, s.tm.message())) {
     frames::Tm tm;
-    if (usable(s.tm, f, tm, stats_)) on_tm(tm, rx);
+    if (usable(s.tm, f, tm, stats_)) {
+      frames::FttConfig ftt;
+      ftt.elementary_cycle = ec_;
+      ftt.bit_rate = bit_rate_;
+      ftt.stamps = stamps_;
+      on_tm(tm, frames::ec_start(f, rx, ftt));
+    }
   } else if (frames::is_message(f, s.m4_1.message())) {
     have_m4_1_ = usable(s.m4_1, f, m4_1_, stats_);
   } else if (frames::is_message(f, s.m4_2.message())) {
@@ -239,7 +245,7 @@ void HwComm::write_hwerrors() {
   i.put(i.hwerrors);
 }
 
-void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
+void HwComm::on_tm(const frames::Tm& tm, Nanos ec_start) {
   if (have_tm_) {
     const auto gap = static_cast<std::uint16_t>(tm.ec_counter - last_ec_);
     if (gap > 1) stats_.missed_tms += gap - 1u;
@@ -248,13 +254,14 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos rx) {
   last_ec_ = tm.ec_counter;
   const frames::MessageSet& s = *set_;
   const std::uint32_t m6 = (1u << s.ftt(s.m6_1.message()).index) | (1u << s.ftt(s.m6_2.message()).index);
-  if (const auto start = m6_slot_.on_tm(tm, rx, ec_, m6)) m6_at_ = *start;
+  if (const auto window = m6_slot_.on_tm(tm, ec_start, ec_, m6)) m6_at_ = *window;
   // Kicker and grabber, pose: when the TM has left the wire.
-  async_at_ = frames::async_slot(rx, tm_wire_, kLongAgo, Nanos{0});
+  async_at_ = frames::async_slot(ec_start, tm_wire_, kLongAgo, Nanos{0});
 }
 
 void HwComm::set_bit_rate(std::uint32_t bit_rate) {
   if (bit_rate == 0) throw SetupError("the bit rate must be positive");
+  bit_rate_ = bit_rate;
   const frames::MessageDef& tm = set_->tm.message().def();
   tm_wire_ = frames::bits_to_time(frames::worst_case_frame_bits(tm.length, tm.extended), bit_rate);
 }

@@ -17,6 +17,8 @@
 namespace canhil::emulator {
 namespace {
 
+using namespace std::chrono_literals;
+
 class RunPlanTest : public test::WatchedTest {
  protected:
   void SetUp() override {
@@ -80,6 +82,27 @@ TEST_F(RunPlanTest, KickPower) {
   RunOverrides o;
   o.kick_power = 77;
   EXPECT_EQ(plan(o).scenario.kick_power, 77);
+}
+
+TEST_F(RunPlanTest, TheBusIsInstantUnlessBitRateOrTheBusTableTimesIt) {
+  const RunPlan instant = plan();
+  EXPECT_FALSE(instant.options.bus.timed());
+  EXPECT_EQ(instant.options.ftt.stamps, frames::StampAt::kStartOfFrame);
+  RunOverrides o;
+  o.bit_rate = 500'000;
+  const RunPlan timed = plan(o);
+  EXPECT_EQ(timed.options.bus.bit_rate, 500'000u);
+  EXPECT_EQ(timed.options.ftt.bit_rate, 500'000u) << "the schedule's wire times at the wire's rate";
+  EXPECT_EQ(timed.options.ftt.stamps, frames::StampAt::kEndOfFrame) << "canhil's wire stamps the end of frame";
+  EXPECT_EQ(timed.options.bus.restart, std::optional<Nanos>(100ms)) << "restart-ms 100 unless [bus] says";
+  EXPECT_EQ(timed.options.bus.tx_queue, 10u) << "can-dev's txqueuelen";
+  std::ofstream(file_) << "[bus]\nbit_rate = 250000\nrestart_ms = 0\ntx_queue = 32\n";
+  const RunPlan file = plan();
+  EXPECT_EQ(file.options.bus.bit_rate, 250'000u);
+  EXPECT_EQ(file.options.bus.restart, std::nullopt) << "0: bus-off until restarted";
+  EXPECT_EQ(file.options.bus.tx_queue, 32u);
+  o.bit_rate = 0;
+  EXPECT_FALSE(plan(o).options.bus.timed()) << "--bit-rate 0 over the file: instant";
 }
 
 TEST_F(RunPlanTest, Duration) {

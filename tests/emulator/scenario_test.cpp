@@ -28,6 +28,11 @@ TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
   EXPECT_NE(error_of("[run]\nduratoin_s = 3\n").find("run.duratoin_s: unknown field"), std::string::npos);
   EXPECT_NE(error_of(robot + robot + "[run]\nagents = [2, 2]\n").find("appears twice"), std::string::npos);
   EXPECT_NE(error_of("[rnu]\n").find("unknown field"), std::string::npos) << "the world's own check";
+  EXPECT_NE(error_of("[bus]\nbit_rate = 2000000\n").find("bad.toml:2: bus.bit_rate: must be a number from 0 to 1e+06"),
+            std::string::npos)
+      << error_of("[bus]\nbit_rate = 2000000\n");
+  EXPECT_NE(error_of("[bus]\nbitrate = 1\n").find("bus.bitrate: unknown field; known here: bit_rate"),
+            std::string::npos);
   const Scenario ok = parse_scenario(robot + robot + "[run]\nseed = 9\nagents = [3, 1]\n", "ok.toml");
   EXPECT_EQ(ok.seed, 9u);
   EXPECT_EQ(ok.agents, (std::vector<int>{3, 1}));

@@ -21,6 +21,8 @@
 #include "canhil/physics/config.hpp"
 #include "canhil/rtdb/rtdb.h"
 #include "canhil/timing/analysis.hpp"
+#include "canhil/timing/bound_check.hpp"
+#include "canhil/timing/bus_analysis.hpp"
 #include "rtdb_user.h"
 #include "support/counter_watch.hpp"
 #include "support/test_paths.hpp"
@@ -143,6 +145,77 @@ TEST_F(VirtualRunTest, TheTraceIsFttCompliant) {
   EXPECT_TRUE(report.ok()) << timing::format_table(report);
   EXPECT_EQ(report.unknown, 0u);
   EXPECT_EQ(run.outcomes()[0].bad_frames, 0u);
+}
+
+// The robot's bus on a timed wire at 1 Mbit/s ([bus] bit_rate): frames take
+// their wire time and are stamped at their end of frame, and the FTT master
+// and slaves keep their windows from those stamps (frames::ec_start).
+Config on_the_wire() {
+  Config c;
+  c.options.messages = frames::MessageSet::load(test::shipped_dbc());
+  c.scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};
+  c.scenario.world.ball_start = {-1.0, 1.0, c.scenario.world.ball.radius_m};
+  c.scenario.bus.bit_rate = 1'000'000;
+  return c;
+}
+
+std::vector<frames::TimedFrame> frames_of(const std::string& trace) {
+  std::vector<frames::TimedFrame> out;
+  std::istringstream in(trace);
+  std::string line;
+  while (std::getline(in, line)) {
+    frames::LogEntry e;
+    EXPECT_TRUE(frames::parse_log_line(line, e)) << line;
+    out.push_back({e.frame, e.time});
+  }
+  return out;
+}
+
+TEST_F(VirtualRunTest, OnATimedWireFramesTakeTheirBitsAndStayInsideEveryBoundOfTheAnalysis) {
+  Loop run(on_the_wire(), &counters);
+  run.run_for(3s);
+  const std::vector<frames::TimedFrame> seen = frames_of(run.trace());
+  ASSERT_GT(seen.size(), 1500u);
+  // One frame at a time: each ends at least its own wire time (less the
+  // intermission) after the previous one.
+  for (std::size_t i = 1; i < seen.size(); ++i) {
+    ASSERT_GE(seen[i].time - seen[i - 1].time, frames::bits_to_time(frames::frame_bits(seen[i].frame) - 3, 1'000'000))
+        << "frame " << i;
+  }
+  timing::AnalysisConfig config;
+  config.ftt.stamps = frames::StampAt::kEndOfFrame;
+  const timing::BusAnalysis analysis =
+      timing::analyse_bus(timing::read_bus_set(frames::load_dbc(test::shipped_dbc())), config);
+  timing::BoundChecker check(analysis, on_the_wire().options.messages, Nanos{0});
+  timing::TimingConfig ftt;
+  ftt.ftt.stamps = frames::StampAt::kEndOfFrame;
+  timing::TimingAnalyzer analyzer(on_the_wire().options.messages, ftt);
+  for (const frames::TimedFrame& f : seen) {
+    check.add(f);
+    analyzer.add(f);
+  }
+  const timing::BoundReport bounds = check.finish();
+  EXPECT_TRUE(bounds.ok()) << timing::format_bounds(bounds);
+  EXPECT_TRUE(analyzer.finish().ok()) << timing::format_table(analyzer.finish());
+  // Responses are not zero on a wire: each synchronous frame of an EC ends after the one before it.
+  Nanos latest_in_window{0};
+  for (const timing::Observation& o : bounds.observations) {
+    if (o.quantity == timing::Bounded::kEndInWindow && o.count > 0)
+      latest_in_window = std::max(latest_in_window, o.most);
+  }
+  EXPECT_GT(latest_in_window, 1ms) << "the EC's last synchronous frame ends over a millisecond into the window";
+}
+
+TEST_F(VirtualRunTest, OnATimedWireTheSameScenarioGivesTheSameTrace) {
+  std::string first;
+  {
+    Loop run(on_the_wire(), &counters);
+    run.run_for(2s);
+    first = run.trace();
+  }
+  Loop again(on_the_wire(), &counters);
+  again.run_for(2s);
+  EXPECT_EQ(again.trace(), first);
 }
 
 TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "canhil/frames/wire.hpp"
+
 namespace canhil::frames {
 namespace {
 
@@ -13,6 +15,18 @@ using namespace std::chrono_literals;
 constexpr Nanos kEc = 10ms;
 constexpr Nanos kTmWire = 135us;  // an 8-byte frame's worst case at 1 Mbit/s
 constexpr Tm tm_with_window(std::uint16_t window_us) { return Tm{7, 0x1, window_us}; }
+
+TEST(FttSlot, TheEcStartsAtTheTmsStampOrItsWireTimeBeforeAnEndOfFrameStamp) {
+  const CanFrame tm = make_data_frame(0x010, {0, 0, 0xFF, 3, 0, 0, 0x5A, 5});
+  FttConfig instant;  // a vcan: the write is the send, the stamp the TM's first bit
+  EXPECT_EQ(ec_start(tm, 10ms, instant), 10ms);
+  FttConfig wire;
+  wire.stamps = StampAt::kEndOfFrame;  // a controller's receive stamp, at the end of frame
+  wire.bit_rate = 500'000;
+  const Nanos on_wire = bits_to_time(frame_bits(tm) - 3, 500'000);  // up to its end of frame: no intermission
+  EXPECT_EQ(ec_start(tm, 10ms + on_wire, wire), 10ms);
+  EXPECT_NE(ec_start(tm, 10ms + on_wire - 1ns, wire), 10ms) << "a nanosecond earlier: another EC start";
+}
 
 TEST(FttSlot, TheSynchronousWindowStartsItsLengthBeforeTheEcEnds) {
   EXPECT_EQ(sync_window_start(tm_with_window(290), 1s, kEc), 1s + 10ms - 290us);

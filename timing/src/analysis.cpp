@@ -101,7 +101,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
     frames::Tm tm;
     if (set_->tm.decode(f, tm).ok()) {
       have_tm_ = true;
-      tm_time_ = t;
+      tm_time_ = frames::ec_start(f, t, config_.ftt);  // the EC's start: the TM's stamp, or before it
       tm_ = tm;
       ++ec_index_;
     }

@@ -32,7 +32,7 @@ const char* bounded_name(Bounded q) noexcept {
 }
 
 BoundChecker::BoundChecker(const BusAnalysis& a, std::shared_ptr<const frames::MessageSet> set, Nanos slack)
-    : set_(std::move(set)), slack_(slack), ec_(a.config.ftt.elementary_cycle) {
+    : set_(std::move(set)), slack_(slack), ec_(a.config.ftt.elementary_cycle), ftt_(a.config.ftt) {
   if (!a.ftt) {
     for (const ResponseBound& m : a.native.messages) {
       Watch& w = watch_[key(m.id, m.extended)];
@@ -99,14 +99,18 @@ void BoundChecker::add(const frames::TimedFrame& tf) {
   if (it == watch_.end()) return;
   Watch& w = it->second;
   const Nanos t = tf.time;
-  if (w.interval != ~std::size_t{0} && w.last != kNever) note(w.interval, t - w.last, t);
-  w.last = t;
+  // The TM's interval is its EC's (stamped at its end of frame, a TM's own
+  // stuffing would move it by a few bits; the master keeps the EC's start).
+  const Nanos at = w.kind == FttKind::kTrigger ? frames::ec_start(f, t, ftt_) : t;
+  if (w.interval != ~std::size_t{0} && w.last != kNever) note(w.interval, at - w.last, t);
+  w.last = at;
   if (w.kind == FttKind::kTrigger) {
     frames::Tm tm;
     if (set_ != nullptr && set_->tm.decode(f, tm).status == frames::DecodeStatus::kOk) {
       have_tm_ = true;
-      window_start_ = frames::sync_window_start(tm, t, ec_);
-      async_open_ = t + tm_wire_;
+      const Nanos start = at;  // the EC's start: the TM's stamp, or before it
+      window_start_ = frames::sync_window_start(tm, start, ec_);
+      async_open_ = start + tm_wire_;
     }
     return;
   }

@@ -41,10 +41,11 @@ struct RunOverrides {
   std::optional<std::string> pman;  ///< a library path, "builtin" or "none"
   std::optional<std::uint64_t> seed;
   std::optional<int> kick_power;
-  std::optional<double> duration_s;      ///< 0: until stopped (real time only)
-  std::vector<std::string> faults;       ///< more fault rules, as `--fault` takes them
-  std::vector<std::string> processes;    ///< [external] processes (every team's that gives none)
-  std::optional<double> answer_limit_s;  ///< every team's [external] answer limit
+  std::optional<double> duration_s;       ///< 0: until stopped (real time only)
+  std::vector<std::string> faults;        ///< more fault rules, as `--fault` takes them
+  std::vector<std::string> processes;     ///< [external] processes (every team's that gives none)
+  std::optional<double> answer_limit_s;   ///< every team's [external] answer limit
+  std::optional<std::uint32_t> bit_rate;  ///< the buses' wire (--bit-rate): 0 instant, else bit/s
   // What commands say beyond their command lines:
   std::optional<int> half;                  ///< a match's half (0-based): odd halves change ends (half_scenario)
   std::optional<std::size_t> robots;        ///< only the first N robots (`canhil nodes`: one)

@@ -36,6 +36,12 @@
 //   ball_noise_m = 0.05              #   on the ball
 //   detection_probability = 0.95     #   of each point and ball
 //   latency_s = 0.0                  #   what a frame shows is this old
+//   [bus]                            # the robots' CAN buses (docs/wire.md)
+//   bit_rate = 1000000               #   the wire's bit/s (default: the DBC's Baudrate);
+//                                    #   0: instant, as vcan (no wire time, no errors)
+//   data_bit_rate = 0                #   CAN FD's data phase (0: the bit rate)
+//   restart_ms = 100                 #   a bus-off controller restarts after (0: only on request)
+//   tx_queue = 10                    #   frames a controller queues (can-dev's txqueuelen)
 //   [referee]                        # goals, kick-offs, throw-ins, corners, dropped balls
 //   enabled = true                   #   (default: with two teams); each rule can be off:
 //   kickoff_after_goal = true        #   out_of_play, dropped_ball; stuck_s = 10,
@@ -152,6 +158,15 @@ struct VisionImperfections {
   }
 };
 
+/// The robots' CAN buses ([bus]): what the file says, resolved with the
+/// command line and the message set into BusPhysics by plan_run().
+struct BusSettings {
+  std::optional<std::uint32_t> bit_rate;  ///< 0: instant
+  std::optional<std::uint32_t> data_bit_rate;
+  std::optional<double> restart_ms;  ///< 0: on request only
+  std::optional<std::size_t> tx_queue;
+};
+
 /// At most two teams (CAMBADA's RTDB has two sets of databases).
 inline constexpr std::size_t kMostTeams = 2;
 
@@ -180,6 +195,7 @@ struct Scenario {
   std::vector<Team> teams;     ///< one or two after complete(), covering every robot in order
   RefereeRules referee;        ///< [referee]; on by default with two teams
   VisionImperfections vision;  ///< [vision]
+  BusSettings bus;             ///< [bus]
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
   /// True when some robot leaves a node to a real board (after complete()).

@@ -13,10 +13,21 @@
 
 namespace canhil::emulator {
 
+/// The robots' buses as the run has them (plan_run resolves them from [bus],
+/// --bit-rate and the message set; docs/wire.md).
+struct BusPhysics {
+  std::uint32_t bit_rate = 0;       ///< the wire's bit/s; 0: instant (no wire time, no errors)
+  std::uint32_t data_bit_rate = 0;  ///< CAN FD's data phase; 0: the bit rate
+  std::optional<Nanos> restart = std::chrono::milliseconds(100);  ///< bus-off to restart; nullopt: on request
+  std::size_t tx_queue = 10;                                      ///< frames a controller queues (can-dev's txqueuelen)
+  bool timed() const noexcept { return bit_rate != 0; }
+};
+
 /// What a run needs beyond its scenario: chosen by the command, not the file.
 struct SessionOptions {
   std::shared_ptr<const frames::MessageSet> messages;
-  frames::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames)
+  frames::FttConfig ftt;  ///< EC, bit rate (for wire times and error frames), what stamps mark
+  BusPhysics bus;         ///< the wire (plan_run: with a bit rate, ftt.stamps at the end of frame)
   vision_emu::VisionParams vision;
   bool vision_on = true;  ///< off: no vision and no RTDB (canhil nodes)
   /// The run follows the wall clock, so processes outside it can take part

@@ -24,10 +24,18 @@ namespace canhil::frames {
 
 using namespace std::chrono_literals;
 
+/// What a received frame's time stamp marks: its first bit (an instant bus
+/// such as vcan, where writing a frame is sending it, or a controller's
+/// start-of-frame stamp) or its end of frame (a controller's receive stamp:
+/// a real can0, canhil's timed wire). A slave takes the EC's start from the
+/// TM's stamp accordingly (ftt_slot.hpp, ec_start).
+enum class StampAt : std::uint8_t { kStartOfFrame, kEndOfFrame };
+
 struct FttConfig {
   Nanos elementary_cycle = 10ms;
-  std::uint32_t bit_rate = 1'000'000;  ///< for wire times; vcan itself has none
+  std::uint32_t bit_rate = 1'000'000;  ///< for wire times (on an instant bus too)
   Nanos sync_window_guard = 20us;      ///< added to every synchronous window
+  StampAt stamps = StampAt::kStartOfFrame;
 };
 
 /// One message as the master's rules see it: what it is, its FTT index and

@@ -15,9 +15,16 @@
 #include <optional>
 
 #include "canhil/base/time.hpp"
+#include "canhil/frames/ftt.hpp"
 #include "canhil/frames/messages.hpp"
 
 namespace canhil::frames {
+
+/// The start of the EC a TM opens, from its stamp (`config.stamps`): the
+/// stamp itself, or, stamped at its end of frame, as much earlier as the TM's
+/// own bits up to its end of frame take at `config.bit_rate`. Every "TM time"
+/// below is this start.
+Nanos ec_start(const CanFrame& tm, Nanos stamp, const FttConfig& config) noexcept;
 
 /// The start of the synchronous window of the EC a TM received at `tm_time` opens.
 constexpr Nanos sync_window_start(const Tm& tm, Nanos tm_time, Nanos ec) noexcept {

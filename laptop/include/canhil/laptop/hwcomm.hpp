@@ -69,6 +69,10 @@ class HwComm {
   /// The bus's bit rate, for the TM's wire time (1 Mbit/s unless set): the
   /// asynchronous window opens when the TM has left the wire (frames/ftt_slot.hpp).
   void set_bit_rate(std::uint32_t bit_rate);
+  /// What a received frame's stamp marks (frames::StampAt): its first bit
+  /// (vcan, the default) or its end of frame (a real can0, canhil's timed
+  /// wire); the EC starts at the TM's stamp, or its wire time before it.
+  void set_stamps(frames::StampAt stamps) noexcept { stamps_ = stamps; }
   /// When the handler must act next (the asynchronous window's opening, its M6 slot), or kNever.
   Nanos next_deadline() const noexcept { return std::min(async_at_, m6_at_); }
   /// Acts at `now` (call at or after next_deadline()).
@@ -85,8 +89,8 @@ class HwComm {
   struct Items;
   void send(const frames::CanFrame& f, const frames::MessageCodec& message);
   std::size_t index_of(const frames::MessageCodec& m) const noexcept;
-  void on_tm(const frames::Tm& tm, Nanos rx_time);
-  void send_sporadic(Nanos slot);  // kicker, grabber, pose: in the asynchronous window
+  void on_tm(const frames::Tm& tm, Nanos ec_start);  // ec_start: frames::ec_start of its stamp
+  void send_sporadic(Nanos slot);                    // kicker, grabber, pose: in the asynchronous window
   void on_pose(const frames::M4_2& m4);
   void latency(Nanos rx_time);
   void write_hwerrors();
@@ -101,6 +105,8 @@ class HwComm {
   Nanos m6_at_ = kNever;     // the M6 slot to serve (the last TM's may be replaced by the next)
   Nanos async_at_ = kNever;  // the asynchronous window's opening to serve (likewise)
   Nanos tm_wire_{0};         // the TM's worst-case wire time
+  std::uint32_t bit_rate_ = 1'000'000;
+  frames::StampAt stamps_ = frames::StampAt::kStartOfFrame;
   bool have_tm_ = false;
   std::uint16_t last_ec_ = 0;
   bool have_m4_1_ = false;

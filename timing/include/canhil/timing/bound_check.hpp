@@ -84,6 +84,7 @@ class BoundChecker {
   std::shared_ptr<const frames::MessageSet> set_;
   Nanos slack_;
   Nanos ec_{0};
+  frames::FttConfig ftt_;
   Nanos tm_wire_{0};
   std::map<std::uint64_t, Watch> watch_;  // by (extended << 32 | id)
   bool have_tm_ = false;
