@@ -13,9 +13,10 @@ namespace {
 
 constexpr std::uint32_t kNoId = 0xFFFFFFFF;
 constexpr const char* kSyntax =
-    "; a fault is KIND:TARGET[:ARGS][@SECONDS] with KIND drop, delay, corrupt, duplicate, silence, error or "
-    "battery, e.g. drop:M4_1:0.5, delay:M3_1:3, corrupt:M1:2, duplicate:M9:2, silence:Motor2:5, error:*:0.01, "
-    "battery:power24:2 (see docs/faults.md)";
+    "; a fault is KIND:TARGET[:ARGS][@SECONDS[+SECONDS]] with KIND drop, delay, corrupt, duplicate, silence, error, "
+    "battery or, on a timed wire, ber, noack, stuck, babble, cut, busoff, e.g. drop:M4_1:0.5, delay:M3_1:3, "
+    "corrupt:M1:2, duplicate:M9:2, silence:Motor2:5, error:*:0.01, battery:power24:2, ber:*:1e-5, "
+    "busoff:laptop@3 (see docs/faults.md)";
 
 [[noreturn]] void bad(std::string_view text, const std::string& what) {
   throw SetupError("fault '" + std::string(text) + "': " + what + kSyntax);
@@ -83,7 +84,16 @@ FaultRule parse_fault(std::string_view text) {
   rule.text = std::string(text);
   std::string_view body = text;
   if (const auto at = body.find('@'); at != std::string_view::npos) {
-    rule.from = seconds_into_run(text, body.substr(at + 1), "the start time after @");
+    std::string_view when = body.substr(at + 1);
+    if (const auto plus = when.find('+'); plus != std::string_view::npos) {
+      const Nanos lasting = seconds_into_run(text, when.substr(plus + 1), "the duration after +");
+      if (lasting <= Nanos{0}) bad(text, "the duration after + must be above 0 s");
+      when = when.substr(0, plus);
+      rule.from = seconds_into_run(text, when, "the start time after @");
+      rule.until = rule.from + lasting;
+    } else {
+      rule.from = seconds_into_run(text, when, "the start time after @");
+    }
     body = body.substr(0, at);
   }
   const auto parts = split(body, ':');
@@ -137,9 +147,37 @@ FaultRule parse_fault(std::string_view text) {
     const double percent = number(text, arg(0), "the percent per second");
     if (percent <= 0 || percent > 100) bad(text, "the percent per second must be above 0 and at most 100");
     rule.drain_per_s = percent / 100;
+  } else if (kind == "ber") {
+    rule.kind = FaultKind::kBitErrors;
+    if (rule.target != "*") bad(text, "ber acts on the whole bus: its target is *");
+    if (args != 1) bad(text, "ber takes the probability of each bit flipping");
+    rule.bit_error_rate = probability(text, arg(0));
+  } else if (kind == "noack" || kind == "stuck" || kind == "cut" || kind == "busoff") {
+    rule.kind = kind == "noack"   ? FaultKind::kNoAck
+                : kind == "stuck" ? FaultKind::kStuckDominant
+                : kind == "cut"   ? FaultKind::kCut
+                                  : FaultKind::kBusOff;
+    if (args != 0) bad(text, std::string(kind) + " takes no arguments");
+    if (kind != "noack" && rule.target == "*") bad(text, std::string(kind) + " names one node, or laptop");
+  } else if (kind == "babble") {
+    rule.kind = FaultKind::kBabbling;
+    if (rule.target == "*") bad(text, "babble names one node, or laptop");
+    if (args > 1) bad(text, "babble takes at most the identifier it sends");
+    if (args == 1) {
+      unsigned id = 0;
+      const std::string_view field = arg(0);
+      const bool hex = field.size() > 2 && field[0] == '0' && (field[1] == 'x' || field[1] == 'X');
+      const std::string_view digits = hex ? field.substr(2) : field;
+      const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), id, hex ? 16 : 10);
+      if (ec != std::errc{} || end != digits.data() + digits.size() || id > frames::kStandardIdMask) {
+        bad(text, "the identifier must be 0 to 0x7FF, got '" + std::string(field) + "'");
+      }
+      rule.babble_id = id;
+    }
   } else {
     bad(text, "unknown kind '" + std::string(kind) + "'");
   }
+  if (rule.until != kNever && !wire_only(rule.kind)) bad(text, "only a wire rule takes a duration (@SECONDS+SECONDS)");
   return rule;
 }
 
@@ -154,6 +192,8 @@ std::string describe(const FaultCount& c) {
   char line[96];
   if (c.kind == FaultKind::kBattery) {
     std::snprintf(line, sizeof line, "drained for %.1f s", to_seconds(c.active));
+  } else if (wire_only(c.kind)) {
+    std::snprintf(line, sizeof line, "on the wire: its counts are the controllers' (bus report)");
   } else {
     std::snprintf(line, sizeof line, "matched %8llu frames, applied to %8llu",
                   static_cast<unsigned long long>(c.matched), static_cast<unsigned long long>(c.applied));
@@ -169,7 +209,16 @@ FaultInjector::FaultInjector(const std::vector<FaultRule>& rules, std::shared_pt
 
 std::uint32_t FaultInjector::target_id(const FaultRule& rule) const {
   if (rule.target == "*" || rule.kind == FaultKind::kBattery) return kNoId;
-  if (const frames::MessageCodec* m = set_->codec().find(rule.target)) return m->id();
+  const bool needs_node = rule.kind == FaultKind::kStuckDominant || rule.kind == FaultKind::kBabbling ||
+                          rule.kind == FaultKind::kCut || rule.kind == FaultKind::kBusOff;
+  if (const frames::MessageCodec* m = set_->codec().find(rule.target)) {
+    if (needs_node) {
+      throw SetupError("fault '" + rule.text + "': '" + rule.target +
+                       "' is a message; this fault names a node or laptop");
+    }
+    return m->id();
+  }
+  if (wire_only(rule.kind) && rule.target == kLaptopTarget) return kNoId;
   const bool node = std::any_of(node_names_.begin(), node_names_.end(),
                                 [&](const std::string& n) { return names_node(rule.target, n); });
   if (!node) {
@@ -179,7 +228,8 @@ std::uint32_t FaultInjector::target_id(const FaultRule& rule) const {
       known += fault_node_name(n);
     }
     throw SetupError("fault '" + rule.text + "': '" + rule.target +
-                     "' is neither a message of the message set nor a node; the nodes are" + known);
+                     "' is neither a message of the message set nor a node; the nodes are" + known +
+                     (wire_only(rule.kind) ? std::string(", and laptop (the handler's controller)") : std::string()));
   }
   return kNoId;
 }
@@ -220,7 +270,11 @@ FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanF
   const std::lock_guard lock(mutex_);
   for (std::size_t k = 0; k < rules_.size(); ++k) {
     const FaultRule& rule = rules_[k];
-    if (rule.kind == FaultKind::kBattery || now - start_ < rule.from || !matches(k, node, frame.id)) continue;
+    if (rule.kind == FaultKind::kBattery || wire_only(rule.kind) ||
+        (errors_on_wire_ && rule.kind == FaultKind::kErrorFrame) || now - start_ < rule.from ||
+        !matches(k, node, frame.id)) {
+      continue;  // the wire does these (wire_faults.hpp)
+    }
     ++counts_[k].matched;
     // Every matching rule draws once, so one rule's outcome never shifts another's draws.
     const double draw = uniform();
@@ -248,7 +302,7 @@ FaultDecision FaultInjector::on_send(const std::string& node, const frames::CanF
         d.delay =
             std::max(d.delay, frames::bits_to_time(frames::frame_bits(frame) + frames::kErrorFrameBits, bit_rate_));
         break;
-      case FaultKind::kBattery:
+      default:  // battery and the wire's rules: not here
         break;
     }
   }

@@ -63,7 +63,9 @@ Session::Session(RunPlan plan)
     // Every robot has an injector, rules or not, so a fault injected later needs no new hook.
     rig.faults = std::make_unique<can_nodes::FaultInjector>(scenario_.faults, options_.messages, robot_node_names(),
                                                             scenario_.seed + r, options_.ftt.bit_rate);
+    rig.faults->leave_errors_to_the_wire(options_.bus.timed() && !options_.realtime);
   }
+  for (const can_nodes::FaultRule& rule : scenario_.faults) check_wire_rule(rule);
   if (options_.vision_on) {
     for (std::size_t t = 0; t < scenario_.teams.size(); ++t) {
       const Team& team = scenario_.teams[t];
@@ -351,6 +353,7 @@ void Session::apply(Change change) {
     }
     // The target must exist: the same check the injector makes at start.
     can_nodes::FaultInjector check({rule}, options_.messages, robot_node_names(), 0);
+    check_wire_rule(rule);
   }
   const std::lock_guard lock(changes_mutex_);
   if (bus_changes_.size() + world_changes_.size() >= kMaxPendingChanges) {
@@ -362,6 +365,20 @@ void Session::apply(Change change) {
   } else {
     world_changes_.push_back(std::move(change));
     any_world_change_ = true;
+  }
+}
+
+void Session::check_wire_rule(const can_nodes::FaultRule& rule) const {
+  if (!can_nodes::wire_only(rule.kind)) return;
+  if (!options_.bus.timed()) {
+    throw SetupError("fault '" + rule.text +
+                     "': acts on the wire, and this run's bus is instant: give it a bit rate ([bus] bit_rate in the "
+                     "scenario, or --bit-rate)");
+  }
+  if (options_.realtime || options_.external) {
+    throw SetupError("fault '" + rule.text +
+                     "': acts on canhil's timed wire, which runs in virtual time (canhil run --virtual-time); a run "
+                     "on SocketCAN interfaces has the kernel's or the user-space bus's own");
   }
 }
 
@@ -380,6 +397,9 @@ void Session::apply_now(const Change& change) {
     world_->place_obstacle(o->obstacle, o->x_m, o->y_m);
   } else if (const auto* f = std::get_if<InjectFault>(&change)) {
     for (Rig& rig : rigs_) rig.faults->add_rule(f->rule);
+    const bool on_wire = can_nodes::wire_only(f->rule.kind) || (f->rule.kind == can_nodes::FaultKind::kErrorFrame &&
+                                                                options_.bus.timed() && !options_.realtime);
+    if (on_wire && wire_fault_hook_) wire_fault_hook_(f->rule);
   } else if (const auto* w = std::get_if<RestoreWorld>(&change)) {
     // The world's clock goes on: the saved bodies come back, not the saved time.
     physics::WorldState state = w->state;

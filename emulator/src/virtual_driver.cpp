@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "canhil/can_nodes/wire_faults.hpp"
 #include "canhil/emulator/handler_participant.hpp"
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/laptop/agent.hpp"
@@ -83,9 +84,14 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
       time_.add(buses_.back()->wire_participant());
     }
   }
+  controllers_.resize(n);
   session_.build_nodes(
       [this](std::size_t r, const std::string& node) {
-        return std::unique_ptr<can_nodes::Endpoint>(buses_[r]->attach(node));
+        auto endpoint = buses_[r]->attach(node);
+        if (buses_[r]->wire_bus() != nullptr) {
+          controllers_[r][can_nodes::fault_node_name(node)] = buses_[r]->controller_of(*endpoint);
+        }
+        return std::unique_ptr<can_nodes::Endpoint>(std::move(endpoint));
       },
       Session::IoMode::kDirect, Nanos{0});
   laptop::AgentConfig agent_cfg;
@@ -111,6 +117,9 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
                                                             link.layout(), rig.agent);
       stack->handler->hw().set_bit_rate(session_.options().ftt.bit_rate);
       stack->handler->hw().set_stamps(session_.options().ftt.stamps);
+      if (buses_[r]->wire_bus() != nullptr) {
+        controllers_[r][can_nodes::kLaptopTarget] = buses_[r]->controller_of(stack->handler->endpoint());
+      }
       const double goal_x = session_.scenario().world.field.length_m / 2;
       agent_cfg.goal_x_m = session_.scenario().teams[rig.team].attacks_positive_x ? goal_x : -goal_x;
       stack->agent = std::make_unique<AgentParticipant>(link, rig.agent, agent_cfg);
@@ -127,6 +136,10 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) time_.add(*node);
     if (stacks_[r]->handler) time_.add(*stacks_[r]->handler);
     if (stacks_[r]->agent) time_.add(*stacks_[r]->agent);
+  }
+  if (physics.timed()) {
+    add_wire_faults(session_.scenario().faults);
+    session_.on_wire_fault([this](const can_nodes::FaultRule& rule) { add_wire_faults({rule}); });
   }
   session_.on_detail([this](WorldSnapshot& s) { fill_detail(s); });
   session_.on_vision_frame([this](std::size_t r, Nanos now) {
@@ -153,10 +166,25 @@ void VirtualDriver::set_pose_of_carried_robots() {
   }
 }
 
+void VirtualDriver::add_wire_faults(const std::vector<can_nodes::FaultRule>& rules) {
+  for (std::size_t r = 0; r < buses_.size(); ++r) {
+    const auto& named = controllers_[r];
+    const can_nodes::ControllerOf controller_of = [&named](std::string_view node) -> std::optional<wire::ControllerId> {
+      const auto it = named.find(node);
+      if (it == named.end()) return std::nullopt;
+      return it->second;
+    };
+    for (const wire::FaultRule& w : can_nodes::wire_rules(rules, *session_.options().messages, controller_of)) {
+      buses_[r]->wire_bus()->add_fault(w);
+    }
+  }
+}
+
 VirtualDriver::~VirtualDriver() {
   for (auto& bus : buses_) bus->set_tap({});  // what is sent as the nodes go down is no longer this run's
   session_.on_vision_frame(nullptr);
   session_.on_detail(nullptr);
+  session_.on_wire_fault(nullptr);
   if (rtdb_clock_set_) session_.for_each_laptop([](LaptopLink& link) { link.set_clock(nullptr, nullptr); });
 }
 

@@ -59,12 +59,40 @@ TEST_F(FaultTest, ParsesEveryKind) {
   EXPECT_EQ(battery.from, 10s);
 }
 
+TEST_F(FaultTest, ParsesTheWiresKindsAndTheirDurations) {
+  const FaultRule ber = parse_fault("ber:*:1e-5@2+0.5");
+  EXPECT_EQ(ber.kind, FaultKind::kBitErrors);
+  EXPECT_DOUBLE_EQ(ber.bit_error_rate, 1e-5);
+  EXPECT_EQ(ber.from, 2s);
+  EXPECT_EQ(ber.until, 2500ms);
+  EXPECT_EQ(parse_fault("noack:M6_1").kind, FaultKind::kNoAck);
+  EXPECT_EQ(parse_fault("stuck:Motor1@1+0.01").kind, FaultKind::kStuckDominant);
+  EXPECT_EQ(parse_fault("cut:Pic_odom").until, kNever);
+  const FaultRule off = parse_fault("busoff:laptop@3");
+  EXPECT_EQ(off.kind, FaultKind::kBusOff);
+  EXPECT_EQ(off.target, kLaptopTarget);
+  EXPECT_EQ(parse_fault("babble:Motor2").babble_id, 0u);
+  EXPECT_EQ(parse_fault("babble:Motor2:0x7F0").babble_id, 0x7F0u);
+  EXPECT_EQ(parse_fault("babble:Motor2:16").babble_id, 16u);
+  for (const auto kind : {FaultKind::kBitErrors, FaultKind::kNoAck, FaultKind::kStuckDominant, FaultKind::kBabbling,
+                          FaultKind::kCut, FaultKind::kBusOff}) {
+    EXPECT_TRUE(wire_only(kind));
+  }
+  EXPECT_FALSE(wire_only(FaultKind::kErrorFrame)) << "error works on an instant bus too";
+  // The laptop is a target of the wire's rules only; the injector lets them by.
+  FaultInjector wire_rules = injector({"busoff:laptop", "noack:laptop", "cut:Motor1"});
+  EXPECT_FALSE(wire_rules.on_send("Motor1", frame(0x111), 1s).drop) << "the wire does them, not the injector";
+}
+
 TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
   for (const char* text : {"drop", "explode:M1", "drop:M1:2", "delay:M1", "delay:M1:-1", "corrupt:M1:8", "corrupt:M1:x",
                            "duplicate:M1:0", "silence:Motor1", "drop:M1@soon", "error:M1:1.5", "error:M1:0.5:2",
                            "battery:power48:1", "battery:*", "battery:logic:0", "battery:logic:101",
                            // Times past a year: 1e53 s once overflowed the nanosecond count (found by fuzz.commands).
-                           "drop:M4_1:0.9@1e53", "silence:Motor1:1e53", "drop:M1@31536001", "drop:M1@-1"}) {
+                           "drop:M4_1:0.9@1e53", "silence:Motor1:1e53", "drop:M1@31536001", "drop:M1@-1",
+                           // The wire's kinds: a whole-bus rate, one node, a standard id, a duration above 0.
+                           "ber:Motor1:1e-5", "ber:*", "ber:*:2", "stuck:*", "busoff:*", "cut:Motor1:3",
+                           "babble:Motor1:0x800", "babble:Motor1:x", "cut:Motor1@1+0", "drop:M1@1+2"}) {
     try {
       parse_fault(text);
       ADD_FAILURE() << text << " was accepted";
@@ -79,6 +107,14 @@ TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
     ADD_FAILURE() << "an unknown target was accepted";
   } catch (const SetupError& e) {
     EXPECT_NE(std::string(e.what()).find("FTT_master"), std::string::npos) << e.what();
+  }
+  for (const char* not_a_node : {"drop:laptop", "busoff:M6_1"}) {
+    try {
+      injector({not_a_node});
+      ADD_FAILURE() << not_a_node << " was accepted";
+    } catch (const SetupError& e) {
+      EXPECT_NE(std::string(e.what()).find(not_a_node), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -93,8 +93,29 @@ TEST_F(SessionTest, AMistakenChangeIsRefusedAtOnceAndChangesNothing) {
   } catch (const SetupError& e) {
     EXPECT_NE(std::string(e.what()).find("a CAN adapter"), std::string::npos) << e.what();
   }
+  try {
+    session.apply(InjectFault{can_nodes::parse_fault("busoff:laptop")});
+    FAIL() << "a wire fault on an instant bus";
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("give it a bit rate"), std::string::npos) << e.what();
+  }
   driver.run_for(100ms);
   EXPECT_TRUE(session.fault_counts().empty());
+}
+
+TEST_F(SessionTest, AWireFaultInjectedDuringARunOnTheWireReachesTheWire) {
+  scenario_.bus.bit_rate = 1'000'000;
+  Session session(plan_run(scenario_, options_));
+  VirtualDriver driver(session);
+  driver.run_for(100ms);
+  session.apply(InjectFault{can_nodes::parse_fault("busoff:Motor1")});
+  driver.run_for(100ms);
+  const wire::WireBus& wire = *driver.bus(0).wire_bus();
+  std::uint64_t bus_offs = 0;
+  for (wire::ControllerId c = 0; c < wire.controllers(); ++c) {
+    if (wire.status(c).name == "Motor1") bus_offs = wire.status(c).bus_offs;
+  }
+  EXPECT_EQ(bus_offs, 1u);
 }
 
 TEST_F(SessionTest, AFaultInjectedDuringTheRunActsFromThenOn) {

@@ -218,6 +218,44 @@ TEST_F(VirtualRunTest, OnATimedWireTheSameScenarioGivesTheSameTrace) {
   EXPECT_EQ(again.trace(), first);
 }
 
+TEST_F(VirtualRunTest, TheLaptopsControllerBusOffBrakesTheRobotAndItsRestartResumesIt) {
+  // The handler's controller goes bus-off at 1 s (busoff:laptop), restarts
+  // 800 ms later and recovers 128 x 11 recessive bits after: Pic_base hears
+  // no M6 for more than its 150 ms watchdog and brakes, while the same run
+  // without the fault drives on; after the restart the robot drives again.
+  auto distance = [&](Loop& run, Nanos& now, Nanos from, Nanos to) {
+    run.run_for(from - now);
+    const kinematics::Pose a = run.outcomes()[0].pose;
+    run.run_for(to - from);
+    now = to;
+    const kinematics::Pose b = run.outcomes()[0].pose;
+    return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+  };
+  Config c = on_the_wire();
+  c.scenario.bus.restart_ms = 800;
+  Loop healthy(c);
+  Nanos healthy_now{0};
+  const double healthy_moved = distance(healthy, healthy_now, 1600ms, 1780ms);
+  c.scenario.faults.push_back(can_nodes::parse_fault("busoff:laptop@1"));
+  Loop run(c, &counters);
+  counters.allow("robot0.handler.send_failed");  // its queue fills while it is bus-off
+  counters.allow("robot0.handler.missed_tms");   // it hears no TM then
+  Nanos now{0};
+  EXPECT_GT(distance(run, now, 700ms, 900ms), 0.05) << "driving to the ball before";
+  EXPECT_GT(healthy_moved, 0.05) << "without the fault it drives on";
+  EXPECT_LT(distance(run, now, 1600ms, 1780ms), 0.001) << "braked: no M6 for longer than the watchdog";
+  EXPECT_GT(distance(run, now, 1900ms, 2100ms), 0.05) << "restarted at 1.8 s and recovered: driving again";
+  std::istringstream trace(run.trace());
+  std::string line;
+  int bus_off = 0, restarted = 0;
+  while (std::getline(trace, line)) {
+    bus_off += line.find(" 20000240#") != std::string::npos ? 1 : 0;    // CAN_ERR_BUSOFF | CAN_ERR_CNT
+    restarted += line.find(" 20000300#") != std::string::npos ? 1 : 0;  // CAN_ERR_RESTARTED | CAN_ERR_CNT
+  }
+  EXPECT_EQ(bus_off, 1);
+  EXPECT_EQ(restarted, 1);
+}
+
 TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {
   Loop run(one_robot(), &counters);
   const double start_x = run.world().ball_position().x();

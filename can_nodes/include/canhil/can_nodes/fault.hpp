@@ -12,10 +12,21 @@
 //                                          sender's controller sends it again
 //   battery:RAIL:PERCENT_PER_SECOND        the pack drains that much faster
 //
+// and, on a timed wire only (docs/wire.md: wire::FaultRule does them):
+//
+//   ber:*:RATE                             every bit on the wire flips with this probability
+//   noack:TARGET                           its frames go unacknowledged (ACK errors)
+//   stuck:NODE                             the node holds the bus dominant
+//   babble:NODE[:ID]                       the node sends ID (default 0x000) back to back
+//   cut:NODE                               the node is off the bus (a cut cable)
+//   busoff:NODE                            the node's controller goes bus-off
+//
 // TARGET is a message name of the message set (M3_1, M1, TM), a node name
 // (Motor1, Pic_base, "FTT master" written FTT_master) or * for every frame;
-// for battery, a pack: logic, power12, power24 or * for all three.
-// Any rule may end in @SECONDS to start then, e.g. drop:M4_1:0.5@2. The
+// for battery, a pack: logic, power12, power24 or * for all three; a wire
+// rule's node may also be `laptop`, the controller of the team's handler.
+// Any rule may end in @SECONDS to start then, e.g. drop:M4_1:0.5@2, and a
+// wire rule in @SECONDS+SECONDS to hold that long, e.g. cut:Motor1@2+0.5. The
 // injector draws from its own generator (SplitMix64) seeded by the run's seed,
 // so the same rules and seed give the same faults on every machine.
 #pragma once
@@ -36,18 +47,40 @@
 
 namespace canhil::can_nodes {
 
-enum class FaultKind { kDrop, kDelay, kCorrupt, kDuplicate, kSilence, kErrorFrame, kBattery };
+enum class FaultKind {
+  kDrop,
+  kDelay,
+  kCorrupt,
+  kDuplicate,
+  kSilence,
+  kErrorFrame,
+  kBattery,
+  // On a timed wire only:
+  kBitErrors,
+  kNoAck,
+  kStuckDominant,
+  kBabbling,
+  kCut,
+  kBusOff,
+};
+/// Whether a kind acts on the wire alone (needs a timed bus).
+constexpr bool wire_only(FaultKind kind) noexcept { return kind >= FaultKind::kBitErrors; }
+/// The node name of the team's handler's controller in wire rules.
+inline constexpr const char* kLaptopTarget = "laptop";
 
 struct FaultRule {
   FaultKind kind = FaultKind::kDrop;
   std::string target = "*";
   double probability = 1.0;
-  Nanos delay{0};          ///< kDelay
-  int byte = 0;            ///< kCorrupt: 0..7
-  int copies = 1;          ///< kDuplicate
-  double drain_per_s = 0;  ///< kBattery: fraction of a full pack per second
-  Nanos from{0};           ///< the rule applies from this time on
-  std::string text;        ///< as written
+  Nanos delay{0};               ///< kDelay
+  int byte = 0;                 ///< kCorrupt: 0..7
+  int copies = 1;               ///< kDuplicate
+  double drain_per_s = 0;       ///< kBattery: fraction of a full pack per second
+  double bit_error_rate = 0;    ///< kBitErrors: per bit
+  std::uint32_t babble_id = 0;  ///< kBabbling: the frame's 11-bit id
+  Nanos from{0};                ///< the rule applies from this time on
+  Nanos until = kNever;         ///< and until then (@FROM+SECONDS)
+  std::string text;             ///< as written
 };
 
 /// Parses one rule; throws SetupError saying what is wrong and the syntax.
@@ -92,6 +125,8 @@ class FaultInjector final : public FaultHook {
   void add_rule(const FaultRule& rule);
 
   FaultDecision on_send(const std::string& node, const frames::CanFrame& frame, Nanos now) override;
+  /// On a timed wire the wire does `error` rules too (wire_faults.hpp): on_send leaves them.
+  void leave_errors_to_the_wire(bool on) noexcept { errors_on_wire_ = on; }
   /// The fraction of each full pack (logic, power12, power24) the battery rules
   /// take between the previous call and `now`, for the physics to remove.
   std::array<double, 3> battery_drain_until(Nanos now);
@@ -115,6 +150,7 @@ class FaultInjector final : public FaultHook {
   mutable PiMutex mutex_;  // on_send comes from the node threads (SCHED_FIFO), battery_drain_until from the physics
   Nanos start_{0};
   Nanos drained_until_{0};
+  bool errors_on_wire_ = false;
 };
 
 /// Node names as written in rules: spaces become underscores ("FTT master" -> FTT_master).

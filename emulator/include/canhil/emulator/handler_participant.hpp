@@ -44,6 +44,8 @@ class HandlerParticipant final : public can_nodes::Participant {
   Nanos next_wakeup() const override { return hw_.next_deadline(); }
 
   laptop::HwComm& hw() noexcept { return hw_; }
+  /// Its place on the bus (its controller, on a timed wire).
+  const can_nodes::MemoryEndpoint& endpoint() const noexcept { return *ep_; }
   const laptop::HwComm& hw() const noexcept { return hw_; }
   /// Every frame sent, when kept.
   const std::vector<frames::CanFrame>& sent() const noexcept { return sent_; }

@@ -187,6 +187,8 @@ class Session {
   /// From now on, error-frame faults are refused with this reason (a driver
   /// on CAN hardware, which no software can make send an error frame).
   void refuse_error_frames(std::string why);
+  /// Throws SetupError when `rule` acts on the wire and this run has none in virtual time.
+  void check_wire_rule(const can_nodes::FaultRule& rule) const;
   /// `f(link)` for every team's laptop link, in the teams' order (none without vision).
   template <class F>
   void for_each_laptop(F f) {
@@ -206,6 +208,10 @@ class Session {
   /// The driver's part of a detailed snapshot (its bus measurements), called
   /// on the stepping thread when a watcher asked for details.
   void on_detail(std::function<void(WorldSnapshot&)> hook) { detail_hook_ = std::move(hook); }
+  /// Called with a fault rule injected while the run goes on that acts on
+  /// the wire (can_nodes::wire_only, or `error` on a timed wire), for the
+  /// driver whose buses have the wire; nullptr stops it.
+  void on_wire_fault(std::function<void(const can_nodes::FaultRule&)> hook) { wire_fault_hook_ = std::move(hook); }
   /// Called on the stepping thread at the end of every step, after the
   /// referee (a match's tally reads the world there).
   void on_step(std::function<void(Nanos now)> hook) { step_hook_ = std::move(hook); }
@@ -293,6 +299,7 @@ class Session {
   void write_coaches();
   std::optional<WorldLogWriter> world_log_;  // with a world log period
   std::string no_world_log_;
+  std::function<void(const can_nodes::FaultRule&)> wire_fault_hook_;
   std::string error_frames_refused_;  // empty: allowed
   std::uint64_t steps_ = 0;
   Nanos now_{0};  // the time of the step in progress (the vision's frame time)

@@ -13,6 +13,7 @@
 // may be used from others).
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -87,11 +88,16 @@ class VirtualDriver {
  private:
   void set_pose_of_carried_robots();
   void fill_detail(WorldSnapshot& s);
+  // The rules that act on the wire, on every robot's timed bus.
+  void add_wire_faults(const std::vector<can_nodes::FaultRule>& rules);
 
   Session& session_;
   VirtualOptions options_;
   can_nodes::SimulatedClock clock_;
   std::vector<std::unique_ptr<can_nodes::MemoryBus>> buses_;
+  // On a timed wire, each robot's controllers by the name fault rules give
+  // them (nodes as fault_node_name, "laptop" for the handler).
+  std::vector<std::map<std::string, wire::ControllerId, std::less<>>> controllers_;
   bool listening_ = false;  // the buses' taps count, check or record their frames
   BusWatch watch_;
   std::vector<std::unique_ptr<ReferenceStack>> stacks_;
