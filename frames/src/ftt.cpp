@@ -108,9 +108,15 @@ Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
 
 Nanos ec_start(const CanFrame& tm, Nanos stamp, const FttConfig& config) noexcept {
   if (config.stamps == StampAt::kStartOfFrame || config.bit_rate == 0) return stamp;
-  const FrameBits bits = count_bits(wire_frame(tm));
+  // Every slave on a bus asks about the same TM in turn: its bits are counted once.
+  thread_local CanFrame last{};
+  thread_local std::uint32_t last_bits = 0;
+  if (last_bits == 0 || !(tm == last)) {
+    last = tm;
+    last_bits = count_bits(wire_frame(tm)).total();
+  }
   constexpr std::uint32_t kIntermission = 3;  // the end of frame is before it
-  return stamp - bits_to_time(bits.total() - kIntermission, config.bit_rate);
+  return stamp - bits_to_time(last_bits - kIntermission, config.bit_rate);
 }
 
 }  // namespace canhil::frames

@@ -1,6 +1,7 @@
 #include "canhil/frames/wire.hpp"
 
 #include <algorithm>
+#include <bit>
 
 namespace canhil::frames {
 namespace {
@@ -209,7 +210,124 @@ std::uint32_t can_fd_crc(const std::uint8_t* bits, std::uint32_t count, int widt
   return crc.value();
 }
 
+namespace {
+
+// CRC-15 a byte at a time: the register after 8 more bits, by table.
+struct Crc15Table {
+  std::array<std::uint16_t, 256> t{};
+  constexpr Crc15Table() {
+    for (std::uint32_t byte = 0; byte < 256; ++byte) {
+      std::uint32_t crc = byte << 7;  // the byte at the register's top
+      for (int i = 0; i < 8; ++i) crc = (crc & 0x4000u) != 0 ? ((crc << 1) ^ 0x4599u) & 0x7FFFu : (crc << 1) & 0x7FFFu;
+      t[byte] = static_cast<std::uint16_t>(crc);
+    }
+  }
+};
+constexpr Crc15Table kCrc15Table;
+
+// A classic frame's bits, counted run by run instead of bit by bit (the
+// count every frame on a timed wire and every TM's EC start needs): the
+// stuffed part as one number, its CRC-15 by table, then its runs of equal
+// bits with the stuff bits each run takes. The same count as the encoder's
+// (tests/frames/wire_test.cpp checks both against an independent one).
+// The stuffed part of a classic frame as bits, first bit at the top of w[0].
+class Stream {
+ public:
+  void put(std::uint64_t value, std::uint32_t count) noexcept {  // count <= 32
+    const std::uint32_t pos = n_ & 63u, room = 64 - pos;
+    std::uint64_t& word = w_[n_ >> 6];
+    if (count <= room) {
+      word |= value << (room - count);
+    } else {
+      word |= value >> (count - room);
+      w_[(n_ >> 6) + 1] |= value << (64 - (count - room));
+    }
+    n_ += count;
+  }
+  std::uint32_t size() const noexcept { return n_; }
+  // The 64 bits from bit i on, first at the top (zeros past the end).
+  std::uint64_t window(std::uint32_t i) const noexcept {
+    const std::uint32_t pos = i & 63u;
+    const std::uint64_t hi = w_[i >> 6] << pos;
+    return pos == 0 ? hi : hi | (w_[(i >> 6) + 1] >> (64 - pos));
+  }
+
+ private:
+  std::uint64_t w_[3] = {0, 0, 0};
+  std::uint32_t n_ = 0;
+};
+
+FrameBits count_classic(const WireFrame& f) noexcept {
+  Stream s;
+  const bool remote = f.remote;
+  const std::uint8_t len = std::min<std::uint8_t>(f.len, 8);
+  const std::uint32_t dlc = f.len8_dlc > 8 ? f.len8_dlc : len;
+  s.put(0, 1);  // SOF
+  if (!f.extended) {
+    s.put(f.id & kStandardIdMask, 11);
+    s.put(remote ? 0b100u : 0u, 3);  // RTR, IDE, r0
+  } else {
+    s.put((f.id >> 18) & 0x7FFu, 11);
+    s.put(0b11u, 2);  // SRR, IDE
+    s.put(f.id & 0x3FFFFu, 18);
+    s.put(remote ? 0b100u : 0u, 3);  // RTR, r1, r0
+  }
+  s.put(dlc, 4);
+  if (!remote) {
+    for (std::uint8_t i = 0; i < len; ++i) s.put(f.data[i], 8);
+  }
+  // CRC-15 over the bits so far, first bit first: the odd bits one by one, then whole bytes.
+  const std::uint32_t n = s.size();
+  std::uint32_t crc = 0;
+  std::uint32_t done = 0;
+  for (; (n - done) % 8 != 0; ++done) {
+    const bool bit = (s.window(done) >> 63) != 0;
+    const bool flip = ((crc >> 14) & 1u) != bit;
+    crc = (crc << 1) & 0x7FFFu;
+    if (flip) crc ^= 0x4599u;
+  }
+  for (; done < n; done += 8) {
+    const auto byte = static_cast<std::uint32_t>(s.window(done) >> 56);
+    crc = ((crc << 8) & 0x7FFFu) ^ kCrc15Table.t[((crc >> 7) ^ byte) & 0xFFu];
+  }
+  s.put(crc, 15);
+  // Runs of equal bits, first to last: a run of L bits after `count` equal
+  // ones takes a stuff bit at the fifth and every fifth after; a stuff bit
+  // starts a run of the other value, which the next run continues.
+  const std::uint32_t total = s.size();
+  std::uint32_t stuffed = 0;
+  int last = -1;
+  std::uint32_t count = 0;
+  for (std::uint32_t i = 0; i < total;) {
+    const std::uint64_t w = s.window(i);
+    const int value = static_cast<int>(w >> 63);
+    const std::uint64_t same = value != 0 ? ~w : w;  // leading zeros: the run
+    std::uint32_t run = same == 0 ? 64u : static_cast<std::uint32_t>(std::countl_zero(same));
+    run = std::min(run, total - i);
+    i += run;
+    if (value != last) count = 0;
+    if (count + run < 5) {
+      count += run;
+      last = value;
+      continue;
+    }
+    const std::uint32_t after = run - (5 - count);  // bits of the run after the first stuff bit
+    stuffed += 1 + after / 5;
+    if (after % 5 == 0) {
+      last = 1 - value;  // it ends with a stuff bit
+      count = 1;
+    } else {
+      last = value;
+      count = after % 5;
+    }
+  }
+  return FrameBits{total + stuffed + kTailBits, 0};
+}
+
+}  // namespace
+
 FrameBits count_bits(const WireFrame& frame) noexcept {
+  if (!frame.fd) return count_classic(frame);
   FrameBits bits;
   auto sink = [&bits](const WireBit& b) {
     ++(b.fast ? bits.fast : bits.nominal);

@@ -29,6 +29,23 @@ void WireBus::remove_controller(ControllerId controller) {
   k.restart_at = kNever;
   k.recovering = false;
   if (wire_ && wire_->from == controller) wire_->babble = true;  // its frame finishes; nothing left to pop
+  next_stale_ = true;
+}
+
+frames::FrameBits WireBus::bits_of(const frames::WireFrame& f) noexcept {
+  if (f.fd || f.len > 8) return frames::count_bits(f);
+  // A robot's nodes send the same frames again and again (a status that
+  // does not change): the count of a classic frame is kept by its content.
+  std::uint64_t data = 0;
+  for (std::size_t i = 0; i < 8; ++i) data |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);
+  const std::uint64_t head = (std::uint64_t{f.id} << 16) | (std::uint64_t{f.extended} << 15) |
+                             (std::uint64_t{f.remote} << 14) | (std::uint64_t{f.len8_dlc} << 4) | f.len;
+  const std::uint64_t hash = (head * 0x9E3779B97F4A7C15ull) ^ (data * 0xC2B2AE3D27D4EB4Full);
+  BitsMemo& m = memo_[(hash >> 58) & (memo_.size() - 1)];
+  if (!m.valid || m.head != head || m.data != data) {
+    m = BitsMemo{head, data, frames::count_bits(f), true};
+  }
+  return m.bits;
 }
 
 Nanos WireBus::frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept {
@@ -55,6 +72,7 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
     }
     if (!wire_) arbitrate(now);
   }
+  next_stale_ = true;
   return k.confinement.bus_off() ? Submit::kBusOff : Submit::kQueued;
 }
 
@@ -87,27 +105,41 @@ Nanos WireBus::ready_at(ControllerId c) const noexcept {
 
 bool WireBus::arbitrate(Nanos at) {
   if (wire_) return false;
-  std::optional<OnWire> best;
+  // Each ready controller's next frame: its queue's head, or a babbling node's frame.
+  const FaultRule* best_babble = nullptr;
+  const Queued* best = nullptr;
+  ControllerId from = 0;
+  std::uint64_t best_key = 0, best_seq = 0;
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
     if (ready_at(c) != at) continue;
-    const Controller& k = controllers_[c];
-    OnWire w;
-    w.from = c;
-    if (const FaultRule* b = faults_.babbling(c, at)) {
-      w.babble = true;
-      w.q.frame = b->babble;
-      w.q.key = frames::arbitration_key(b->babble.id, b->babble.extended, b->babble.remote && !b->babble.fd);
-      w.q.tag = kBabbleTag;
-    } else {
-      w.q = k.queue.front();
-    }
-    if (!best || w.q.key < best->q.key || (w.q.key == best->q.key && w.q.seq < best->q.seq)) best = w;
+    const FaultRule* babble = faults_.babbling(c, at);
+    const std::uint64_t key = babble != nullptr ? frames::arbitration_key(babble->babble.id, babble->babble.extended,
+                                                                          babble->babble.remote && !babble->babble.fd)
+                                                : controllers_[c].queue.front().key;
+    const std::uint64_t seq = babble != nullptr ? 0 : controllers_[c].queue.front().seq;
+    if ((best != nullptr || best_babble != nullptr) && (key > best_key || (key == best_key && seq >= best_seq)))
+      continue;
+    best_babble = babble;
+    best = babble != nullptr ? nullptr : &controllers_[c].queue.front();
+    from = c;
+    best_key = key;
+    best_seq = seq;
   }
-  if (!best) return false;
-  OnWire& w = *best;
+  if (best == nullptr && best_babble == nullptr) return false;
+  wire_.emplace();
+  OnWire& w = *wire_;
+  w.from = from;
+  if (best_babble != nullptr) {
+    w.babble = true;
+    w.q.frame = best_babble->babble;
+    w.q.key = best_key;
+    w.q.tag = kBabbleTag;
+  } else {
+    w.q = *best;
+  }
   w.start = at;
   recessive_run_ends(at);
-  const frames::FrameBits all = frames::count_bits(w.q.frame);
+  const frames::FrameBits all = bits_of(w.q.frame);
   std::uint32_t total = all.total();
   if (config_.bits == WireConfig::Bits::kWorstCase && !w.q.frame.fd) {
     total = frames::worst_case_frame_bits(w.q.frame.remote ? 0 : w.q.frame.len, w.q.frame.extended);
@@ -124,7 +156,7 @@ bool WireBus::arbitrate(Nanos at) {
   } else {
     w.end = at + frame_time(w.q.frame, w.plan.bit + 1);  // seen at the bit's end: the flag starts at the next
   }
-  wire_ = w;
+  next_stale_ = true;
   return true;
 }
 
@@ -152,6 +184,14 @@ Nanos WireBus::bus_due() const noexcept {
 }
 
 Nanos WireBus::next_event() const {
+  if (next_stale_) {
+    next_ = earliest_due();
+    next_stale_ = false;
+  }
+  return next_;
+}
+
+Nanos WireBus::earliest_due() const {
   Nanos next = bus_due();
   next = std::min(next, faults_.next_change());
   next = std::min(next, stuck_tick_at_);
@@ -169,8 +209,12 @@ void WireBus::advance(Nanos now, std::vector<WireEvent>& out) {
     if (due > now) break;
     now_ = std::max(now_, due);
     step(due, out);
+    next_stale_ = true;
   }
-  now_ = std::max(now_, now);
+  if (now > now_) {
+    now_ = now;
+    next_stale_ = true;
+  }
   stats_.until = now_;
 }
 
@@ -348,18 +392,24 @@ bool WireBus::restart(ControllerId controller, Nanos now) {
   Controller& k = controllers_.at(controller);
   if (!k.confinement.bus_off()) return false;
   k.restart_at = std::max(now, now_);
+  next_stale_ = true;
   return true;
 }
 
 void WireBus::set_restart_delay(ControllerId controller, std::optional<Nanos> delay) {
   controllers_.at(controller).options.restart_delay = delay;
+  next_stale_ = true;
 }
 
-void WireBus::add_fault(const FaultRule& rule) { faults_.add(rule, now_); }
+void WireBus::add_fault(const FaultRule& rule) {
+  faults_.add(rule, now_);
+  next_stale_ = true;
+}
 
 void WireBus::clear_faults(Nanos now) {
   faults_.clear(std::max(now, now_));
   stuck_tick_at_ = kNever;
+  next_stale_ = true;
 }
 
 ControllerStatus WireBus::status(ControllerId controller) const {

@@ -40,6 +40,7 @@
 // from `seed`). Not thread-safe.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -193,12 +194,14 @@ class WireBus {
   };
 
   Nanos bits(std::uint32_t n) const noexcept { return frames::bits_to_time(n, config_.bit_rate); }
+  frames::FrameBits bits_of(const frames::WireFrame& f) noexcept;  // count_bits, kept for frames seen again
   Nanos frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept;
   // The one thing due at `at` (the earliest), done.
   void step(Nanos at, std::vector<WireEvent>& out);
   // When controller `c` could start its next frame (kNever: it cannot).
   Nanos ready_at(ControllerId c) const noexcept;
   Nanos bus_due() const noexcept;
+  Nanos earliest_due() const;  // next_event(), worked out
   bool arbitrate(Nanos at);
   void finish(std::vector<WireEvent>& out);
   void fail(OnWire& w, std::vector<WireEvent>& out);
@@ -228,6 +231,16 @@ class WireBus {
   Nanos recessive_from_{0};       // the bus has been recessive since then (no SOF, no flag)
   Nanos now_{0};
   WireStats stats_;
+  // next_event(), asked far more often than anything changes: kept until a change.
+  mutable Nanos next_ = kNever;
+  mutable bool next_stale_ = true;
+  struct BitsMemo {
+    std::uint64_t head = 0;  // id, flags, DLC and length
+    std::uint64_t data = 0;
+    frames::FrameBits bits;
+    bool valid = false;
+  };
+  std::array<BitsMemo, 64> memo_{};
 };
 
 }  // namespace canhil::wire
