@@ -19,6 +19,8 @@
 //            target at least 1.8x (bench_jobs.hpp)
 //   analyse  timing --analyse of a 200-message set, FTT-CAN and native; target
 //            at most 50 ms (bench_analyse.hpp)
+//   wire     the five-robot virtual-time run on timed wires against instant
+//            buses; target at least 0.9 of its speed (bench_wire.hpp)
 // The last three need SocketCAN (vcan_setup/with-vcan.sh where the kernel has none).
 #include <sched.h>
 #include <time.h>
@@ -38,6 +40,7 @@
 #include "bench_match.hpp"
 #include "bench_realtime.hpp"
 #include "bench_view.hpp"
+#include "bench_wire.hpp"
 #include "canhil/base/setup_error.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/scenario.hpp"
@@ -156,7 +159,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   const double rt_seconds = number_option(args, "--rt-seconds", 10);
   const double rate_frames = number_option(args, "--frames", 200'000);
   const std::string iface = args.option("--iface").value_or("vcan0");
-  const std::string parts = args.option("--part").value_or("virtual,view,match,jobs,analyse,jitter,vcan,external");
+  const std::string parts = args.option("--part").value_or("virtual,view,match,jobs,analyse,wire,jitter,vcan,external");
   const double priority_option = number_option(args, "--priority", 40);
   const auto config = args.option("--config");
   const double cpu_option = number_option(args, "--cpu", 0);
@@ -168,7 +171,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (!(cpu_option >= -1 && cpu_option < CPU_SETSIZE)) throw UsageError("--cpu takes a core number, or -1 for none");
   const int priority = static_cast<int>(priority_option);
   bool want_virtual = false, want_view = false, want_jitter = false, want_vcan = false, want_external = false,
-       want_match = false, want_analyse = false, want_jobs = false;
+       want_match = false, want_analyse = false, want_jobs = false, want_wire = false;
   {
     std::istringstream in(parts);
     for (std::string part; std::getline(in, part, ',');) {
@@ -188,9 +191,12 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
         want_jobs = true;
       } else if (part == "analyse" || part == "analyze") {
         want_analyse = true;
+      } else if (part == "wire") {
+        want_wire = true;
       } else {
         throw UsageError(
-            "--part takes virtual, view, match, jobs, analyse, jitter, vcan and external, comma-separated; got '" +
+            "--part takes virtual, view, match, jobs, analyse, wire, jitter, vcan and external, comma-separated; got "
+            "'" +
             part + "'");
       }
     }
@@ -209,6 +215,7 @@ int run_bench(Args& args, const std::optional<std::string>& dbc) {
   if (want_match) all_met = bench_match(config, seconds, messages) && all_met;
   if (want_jobs) all_met = bench_jobs(config, seconds, messages) && all_met;
   if (want_analyse) all_met = bench_analyse() && all_met;
+  if (want_wire) all_met = bench_wire(config, seconds, messages) && all_met;
   if (!want_jitter && !want_vcan && !want_external) return all_met ? 0 : 1;
   if (!can_nodes::kernel_has_can()) {
     std::printf(

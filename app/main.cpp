@@ -126,14 +126,16 @@ const Command kCommands[] = {
 )",
      canhil::app::run_play},
     {"bench", "the performance figures against their targets",
-     R"(  canhil bench [--part virtual,view,match,jobs,analyse,jitter,vcan,external] [--seconds 60] [--config S] [--iface vcan0]
+     R"(  canhil bench [--part virtual,view,match,jobs,analyse,wire,jitter,vcan,external] [--seconds 60] [--config S] [--iface vcan0]
                [--rt-seconds 10] [--frames 200000] [--priority 40] [--cpu 0]
                                               the figures against their targets: the five-robot real-time
                                               factor in virtual time; the same with a page on the viewer
                                               (keeps >= 90 %); a ten-robot match half and five
                                               robots on one core (>= 80x and 180x; physics
                                               alone for scale); timing --analyse of a 200-message
-                                              set (<= 50 ms); match halves per minute, --jobs 2
+                                              set (<= 50 ms); the five robots on timed wires at
+                                              1 Mbit/s against instant buses (>= 0.9x);
+                                              match halves per minute, --jobs 2
                                               against --jobs 1 (>= 1.8x); release jitter against a bare
                                               clock_nanosleep loop; lossless vcan rate against cangen -g 0;
                                               the one-robot factor with the reference handler and agent as
