@@ -131,7 +131,56 @@ static bool usable(const frames::TypedCodec<T>& codec, const frames::CanFrame& f
   return true;
 }
 
+const char* controller_state_name(ControllerState state) noexcept {
+  switch (state) {
+    case ControllerState::kErrorActive:
+      return "error-active";
+    case ControllerState::kErrorWarning:
+      return "error-warning";
+    case ControllerState::kErrorPassive:
+      return "error-passive";
+    case ControllerState::kBusOff:
+      return "bus-off";
+  }
+  return "?";
+}
+
+void HwComm::on_error_frame(const frames::CanFrame& f) {
+  ++stats_.error_frames;
+  const std::uint32_t classes = f.id;
+  if ((classes & (frames::kErrorClassProtocol | frames::kErrorClassBusError | frames::kErrorClassNoAck)) != 0) {
+    ++stats_.bus_errors;
+  }
+  if ((classes & frames::kErrorClassController) != 0) {
+    const std::uint8_t s = f.data[1];
+    if ((s & (frames::kControllerTxPassive | frames::kControllerRxPassive)) != 0) {
+      stats_.controller = ControllerState::kErrorPassive;
+    } else if ((s & (frames::kControllerTxWarning | frames::kControllerRxWarning)) != 0) {
+      stats_.controller = ControllerState::kErrorWarning;
+    } else if ((s & frames::kControllerActive) != 0) {
+      stats_.controller = ControllerState::kErrorActive;
+    }
+  }
+  if ((classes & frames::kErrorClassBusOff) != 0) {
+    ++stats_.bus_offs;
+    stats_.controller = ControllerState::kBusOff;
+  }
+  if ((classes & frames::kErrorClassRestarted) != 0) {
+    // Back on the bus: what it queued goes out, and the next TM sets its slots again.
+    ++stats_.restarts;
+    stats_.controller = ControllerState::kErrorActive;
+  }
+  if ((classes & frames::kErrorClassCounters) != 0) {
+    stats_.tec = f.data[6];
+    stats_.rec = f.data[7];
+  }
+}
+
 void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
+  if (f.kind == frames::FrameKind::kError) {
+    on_error_frame(f);
+    return;
+  }
   if (f.kind != frames::FrameKind::kData) return;
   const frames::MessageCodec* m = set_->codec().find(f.id, f.extended);
   if (m == nullptr) {
@@ -348,6 +397,11 @@ std::string HwComm::summary() const {
   os << "\n  kicks sent " << stats_.kicks_sent << ", missed TMs " << stats_.missed_tms << ", wrong length "
      << stats_.wrong_length << ", out of range " << stats_.out_of_range << ", unknown ids " << stats_.unknown_id
      << ", send failures " << stats_.send_failed << "\n";
+  if (stats_.error_frames > 0) {
+    os << "  bus: " << stats_.error_frames << " error frames (" << stats_.bus_errors << " bus errors, "
+       << stats_.bus_offs << " bus-off, " << stats_.restarts << " restarts), controller "
+       << controller_state_name(stats_.controller) << ", TEC " << int{stats_.tec} << " REC " << int{stats_.rec} << "\n";
+  }
   if (!stats_.latencies.empty()) {
     std::vector<Nanos> l = stats_.latencies;
     std::sort(l.begin(), l.end());

@@ -24,6 +24,10 @@ RawCan::RawCan(const std::string& iface) {
   }
   const int one = 1;
   ::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof one);
+  // Every error class: the controller's errors, states, bus-off and restarts
+  // (the handler counts and reports them). An interface that has none sends none.
+  const can_err_mask_t errors = CAN_ERR_MASK;
+  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors);
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(index);

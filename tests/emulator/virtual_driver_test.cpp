@@ -71,6 +71,7 @@ class Loop {
   const std::string& world_log() const { return session_.world_log(); }
   std::vector<can_nodes::FaultCount> fault_counts() const { return session_.fault_counts(); }
   Session& session() { return session_; }
+  const laptop::HwComm* handler(std::size_t robot) const { return driver_.handler(robot); }
 
  private:
   Session session_;
@@ -254,6 +255,11 @@ TEST_F(VirtualRunTest, TheLaptopsControllerBusOffBrakesTheRobotAndItsRestartResu
   }
   EXPECT_EQ(bus_off, 1);
   EXPECT_EQ(restarted, 1);
+  // The handler heard its controller say so (it asks for error frames, as canhil-hwcomm does).
+  ASSERT_NE(run.handler(0), nullptr);
+  EXPECT_EQ(run.handler(0)->stats().bus_offs, 1u);
+  EXPECT_EQ(run.handler(0)->stats().restarts, 1u);
+  EXPECT_EQ(run.handler(0)->stats().controller, laptop::ControllerState::kErrorActive);
 }
 
 TEST_F(VirtualRunTest, TheRobotFindsTheBallAndKicksItTowardsTheGoal) {

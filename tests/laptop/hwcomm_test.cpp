@@ -111,6 +111,39 @@ TEST_F(HwCommUnit, SendsCmdVelInTheM6SlotOfTheTmThatSchedulesIt) {
   EXPECT_EQ(hw_->received("TM"), 2u);
 }
 
+TEST_F(HwCommUnit, ItsControllersErrorFramesAreCountedWithItsStateAndCounters) {
+  // As can-dev reports them (linux/can/error.h): a bus error with the
+  // counters, a change to error-passive, bus-off, the restart.
+  frames::CanFrame e;
+  e.kind = frames::FrameKind::kError;
+  e.len = 8;
+  e.id = frames::kErrorClassProtocol | frames::kErrorClassBusError | frames::kErrorClassCounters;
+  e.data[6] = 8;
+  hw_->on_frame(e, 1ms);
+  EXPECT_EQ(hw_->stats().bus_errors, 1u);
+  EXPECT_EQ(hw_->stats().tec, 8);
+  EXPECT_EQ(hw_->stats().controller, ControllerState::kErrorActive);
+  e.id = frames::kErrorClassController | frames::kErrorClassCounters;
+  e.data[1] = frames::kControllerTxPassive;
+  e.data[6] = 128;
+  hw_->on_frame(e, 2ms);
+  EXPECT_EQ(hw_->stats().controller, ControllerState::kErrorPassive);
+  EXPECT_EQ(hw_->stats().tec, 128);
+  e.id = frames::kErrorClassBusOff;
+  hw_->on_frame(e, 3ms);
+  EXPECT_EQ(hw_->stats().controller, ControllerState::kBusOff);
+  e.id = frames::kErrorClassRestarted | frames::kErrorClassCounters;
+  e.data[6] = 0;
+  hw_->on_frame(e, 4ms);
+  EXPECT_EQ(hw_->stats().controller, ControllerState::kErrorActive);
+  EXPECT_EQ(hw_->stats().error_frames, 4u);
+  EXPECT_EQ(hw_->stats().bus_offs, 1u);
+  EXPECT_EQ(hw_->stats().restarts, 1u);
+  EXPECT_EQ(hw_->stats().unknown_id, 0u) << "an error frame is no message";
+  EXPECT_NE(hw_->summary().find("1 bus-off, 1 restarts), controller error-active"), std::string::npos)
+      << hw_->summary();
+}
+
 TEST_F(HwCommUnit, OdometryBecomesCmdPosWithTheChangeSinceTheLast) {
   hw_->on_frame(set_->m4_2.encode(frames::M4_2{0.5, 0}), 0ms);
   CMD_Pos p{};

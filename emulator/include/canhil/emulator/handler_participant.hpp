@@ -24,7 +24,9 @@ class HandlerParticipant final : public can_nodes::Participant {
         keep_sent_(keep_sent),
         hw_(
             std::move(set), ec, [this](const frames::CanFrame& f) { return send(f); }, [&clock] { return clock.now(); },
-            db, layout, space) {}
+            db, layout, space) {
+    ep_->set_error_mask(frames::kErrorClassMask);  // as canhil-hwcomm's socket: its controller's errors too
+  }
 
   std::size_t poll() override {
     std::size_t n = 0;

@@ -31,6 +31,11 @@ namespace canhil::laptop {
 
 inline constexpr std::size_t kMaxLatencySamples = 1'000'000;
 
+/// The handler's controller as its error frames say (Linux's can_state).
+enum class ControllerState : std::uint8_t { kErrorActive, kErrorWarning, kErrorPassive, kBusOff };
+/// "error-active", "error-warning", "error-passive" or "bus-off", as `ip -details link` words them.
+const char* controller_state_name(ControllerState state) noexcept;
+
 struct HwCommStats {
   /// Per message of the set, in the codec's order (MessageSet::codec().messages()):
   /// counted by index, so a received frame costs no allocation.
@@ -42,6 +47,15 @@ struct HwCommStats {
   std::uint64_t missed_tms = 0;  ///< gaps in the TM's ec_counter
   std::uint64_t send_failed = 0;
   std::uint64_t kicks_sent = 0;
+  // The bus as its controller reports it in error frames (linux/can/error.h),
+  // which the handler asks for (CAN_RAW_ERR_FILTER):
+  std::uint64_t error_frames = 0;                              ///< every one received
+  std::uint64_t bus_errors = 0;                                ///< protocol errors and missing acknowledgements
+  std::uint64_t bus_offs = 0;                                  ///< CAN_ERR_BUSOFF
+  std::uint64_t restarts = 0;                                  ///< CAN_ERR_RESTARTED
+  ControllerState controller = ControllerState::kErrorActive;  ///< as last reported
+  std::uint8_t tec = 0;                                        ///< the counters last reported (CAN_ERR_CNT)
+  std::uint8_t rec = 0;
   std::vector<Nanos> latencies;  ///< receive timestamp -> RTDB write, per update (first kMaxLatencySamples)
 };
 
@@ -89,8 +103,9 @@ class HwComm {
   struct Items;
   void send(const frames::CanFrame& f, const frames::MessageCodec& message);
   std::size_t index_of(const frames::MessageCodec& m) const noexcept;
-  void on_tm(const frames::Tm& tm, Nanos ec_start);  // ec_start: frames::ec_start of its stamp
-  void send_sporadic(Nanos slot);                    // kicker, grabber, pose: in the asynchronous window
+  void on_tm(const frames::Tm& tm, Nanos ec_start);
+  void on_error_frame(const frames::CanFrame& f);  // ec_start: frames::ec_start of its stamp
+  void send_sporadic(Nanos slot);                  // kicker, grabber, pose: in the asynchronous window
   void on_pose(const frames::M4_2& m4);
   void latency(Nanos rx_time);
   void write_hwerrors();
