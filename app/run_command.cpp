@@ -23,6 +23,7 @@
 #include "canhil/external/team_processes.hpp"
 #include "canhil/external/time_shim.hpp"
 #include "canhil/viewer/live_feed.hpp"
+#include "canhil/wire/report.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "log_file.hpp"
@@ -63,6 +64,13 @@ void print_virtual_summary(const emulator::Session& session, const emulator::Vir
                 rig.interface.c_str(), rig.agent, team.c_str(), o.pose.x_m, o.pose.y_m, o.kicks,
                 static_cast<unsigned long long>(o.frames), static_cast<unsigned long long>(o.bad_frames),
                 o.battery.power24_v, 100 * o.charge[2]);
+    if (const wire::WireBus* w = driver.bus(r).wire_bus()) std::fputs(wire::report(*w, "    ").c_str(), stdout);
+    if (const laptop::HwComm* hw = driver.handler(r); hw != nullptr && hw->stats().error_frames > 0) {
+      const laptop::HwCommStats& h = hw->stats();
+      std::printf("    its handler heard %llu error frames: %llu bus-off, %llu restarts; now %s\n",
+                  static_cast<unsigned long long>(h.error_frames), static_cast<unsigned long long>(h.bus_offs),
+                  static_cast<unsigned long long>(h.restarts), laptop::controller_state_name(h.controller));
+    }
   }
   for (const auto& c : session.fault_counts()) {
     std::printf("  fault %-24s %s\n", c.rule.c_str(), can_nodes::describe(c).c_str());

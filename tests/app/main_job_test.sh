@@ -11,7 +11,7 @@ fail() { echo "FAIL: $*"; echo "$out"; exit 1; }
 # grep -q reads a here-string, never a pipe: it leaves at the first match, and
 # under pipefail the writer's SIGPIPE would fail the check that matched.
 lines=$(echo "$out" | wc -l)
-[[ $lines -le 110 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
+[[ $lines -le 116 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
 trace_lines=$(echo "$out" | grep -c '^(1700000000' || true)
 [[ $trace_lines -le 8 ]] || fail "$trace_lines lines of the sample trace (a few are enough)"
 grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log' <<< "$out" || fail "no decode summary"
@@ -20,6 +20,12 @@ grep -q 'FTT compliance: no violations' <<< "$out" || fail "the demo's timing re
 grep -q '^Schedulable: every message meets its deadline' <<< "$out" || fail "the message set's analysis is missing"
 grep -q '^Every observation is inside its bound' <<< "$out" || fail "the demo's trace against the bounds is missing"
 grep -q '^   virtual time: GOAL at' <<< "$out" || fail "no closing line with the outcome"
+# The timed wire (docs/wire.md): the handler's controller bus-off and back, the robot braked and scoring late.
+grep -q 'on the wire at 1000 kbit/s' <<< "$out" || fail "the timed wire's report is missing"
+grep -qE 'handler +error-active, .* 1 bus-off, 1 restarts' <<< "$out" || fail "the handler's bus-off and restart are missing"
+grep -q '^   on a timed wire, with the handler.s controller bus-off from 1 s to 1.8 s: GOAL at' <<< "$out" ||
+  fail "no closing line for the timed wire"
+grep -q 'M6_1   missing' <<< "$out" || fail "the timing report does not show the M6 the bus-off cost"
 grep -qE 'viewer (at|stays up)|no viewer' <<< "$(tail -3 <<< "$out")" || fail "the main job does not end with the viewer's address"
 while IFS= read -r header; do
   [[ "$header" == *"("*")"* ]] || fail "section header without where its files are: $header"

@@ -66,6 +66,7 @@ class VirtualDriver {
 
   /// Robot r's bus, for what a test attaches (a laptop endpoint, a listener).
   can_nodes::MemoryBus& bus(std::size_t robot) { return *buses_.at(robot); }
+  const can_nodes::MemoryBus& bus(std::size_t robot) const { return *buses_.at(robot); }
   /// Another participant (ticked after the nodes and the reference laptop),
   /// such as a node playing a real board; must outlive the driver.
   void add(can_nodes::Participant& p) { time_.add(p); }
