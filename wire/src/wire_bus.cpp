@@ -126,7 +126,7 @@ bool WireBus::arbitrate(Nanos at) {
     best_seq = seq;
   }
   if (best == nullptr && best_babble == nullptr) return false;
-  wire_.emplace();
+  wire_ = OnWire{};
   OnWire& w = *wire_;
   w.from = from;
   if (best_babble != nullptr) {
