@@ -54,8 +54,86 @@ std::string error_classes(std::uint32_t error_id) {
   return out.empty() ? "unspecified" : out;
 }
 
+namespace {
+
+// The names of the set bits of `bits`, in order, comma-separated.
+std::string bit_names(std::uint8_t bits, std::initializer_list<const char*> names) {
+  std::string out;
+  unsigned i = 0;
+  for (const char* name : names) {
+    if ((bits & (1u << i++)) != 0u) out += (out.empty() ? "" : ",") + std::string(name);
+  }
+  return out;
+}
+
+// CAN_ERR_PROT_LOC_* as words.
+const char* location_name(std::uint8_t location) {
+  switch (location) {
+    case kProtocolLocationSof:
+      return "start of frame";
+    case kProtocolLocationId28To21:
+    case kProtocolLocationId20To18:
+    case kProtocolLocationId17To13:
+    case kProtocolLocationId12To05:
+    case kProtocolLocationId04To00:
+      return "identifier";
+    case kProtocolLocationSrtr:
+      return "SRR";
+    case kProtocolLocationIde:
+      return "IDE";
+    case kProtocolLocationRtr:
+      return "RTR";
+    case kProtocolLocationRes1:
+    case kProtocolLocationRes0:
+      return "reserved bit";
+    case kProtocolLocationDlc:
+      return "DLC";
+    case kProtocolLocationData:
+      return "data";
+    case kProtocolLocationCrc:
+      return "CRC";
+    case kProtocolLocationCrcDelimiter:
+      return "CRC delimiter";
+    case kProtocolLocationAck:
+      return "ACK slot";
+    case kProtocolLocationAckDelimiter:
+      return "ACK delimiter";
+    case kProtocolLocationEof:
+      return "end of frame";
+    case kProtocolLocationIntermission:
+      return "intermission";
+    default:
+      return nullptr;
+  }
+}
+
+// What an error frame's data says (linux/can/error.h): the controller's
+// state, the protocol error's kind and place, the counters.
+std::string error_details(const CanFrame& f) {
+  std::string out;
+  auto add = [&out](const std::string& part) {
+    if (!part.empty()) out += "; " + part;
+  };
+  if ((f.id & kErrorClassController) != 0u) {
+    add(bit_names(f.data[1],
+                  {"rx-overflow", "tx-overflow", "rx-warning", "tx-warning", "rx-passive", "tx-passive", "active"}));
+  }
+  if ((f.id & kErrorClassProtocol) != 0u) {
+    std::string kind = bit_names(f.data[2], {"bit", "form", "stuff", "bit0", "bit1", "overload", "active", "tx"});
+    if (const char* where = location_name(f.data[3]))
+      kind += (kind.empty() ? "" : " ") + std::string("in the ") + where;
+    add(kind);
+  }
+  if ((f.id & kErrorClassCounters) != 0u) {
+    add("TEC " + std::to_string(f.data[6]) + " REC " + std::to_string(f.data[7]));
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string describe_text(const CanFrame& frame, const Described& d) {
-  if (frame.kind == FrameKind::kError) return "[error frame: " + error_classes(frame.id) + "]";
+  if (frame.kind == FrameKind::kError) return "[error frame: " + error_classes(frame.id) + error_details(frame) + "]";
   if (d.message == nullptr) return "[unknown id]";
   const MessageDef& m = d.message->def();
   if (frame.kind == FrameKind::kRemote) return "[remote request for " + m.name + "]";

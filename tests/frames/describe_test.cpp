@@ -21,6 +21,12 @@ TEST(Describe, TextShowsNamesValuesUnitsAndProblems) {
   EXPECT_EQ(text_of(c, "7FF#00"), "[unknown id]");
   EXPECT_EQ(text_of(c, "131#F401"), "[wrong length 2, M6_1 has 8]");
   EXPECT_EQ(text_of(c, "20000044#0000000000000000"), "[error frame: controller,bus-off]");
+  // What the data says, as linux/can/error.h lays it out: state, kind and place, counters.
+  EXPECT_EQ(text_of(c, "20000204#0020000000008000"), "[error frame: controller,counters; tx-passive; TEC 128 REC 0]");
+  EXPECT_EQ(text_of(c, "20000288#0000900A00000800"),
+            "[error frame: protocol,bus-error,counters; bit1,tx in the data; TEC 8 REC 0]");
+  EXPECT_EQ(text_of(c, "200002A8#0000801900000800"),
+            "[error frame: protocol,no-ack,bus-error,counters; tx in the ACK slot; TEC 8 REC 0]");
   EXPECT_EQ(text_of(c, "131#R"), "[remote request for M6_1]");
   EXPECT_NE(text_of(c, "100#E8030000000000FF").find("setpoint_1=1000 counts/tick !out-of-range"), std::string::npos);
 }
