@@ -18,7 +18,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 db=build/lint
-files='frames/src|userbus/src|can_nodes/src|kinematics/src|physics/src|emulator/src|rtdb/src|pman/src|laptop/src|vision_emu/src|timing/src|lockstep/src|control/src|viewer/src|app/'
+files='frames/src|wire/src|external/src|userbus/src|can_nodes/src|kinematics/src|physics/src|emulator/src|rtdb/src|pman/src|laptop/src|vision_emu/src|timing/src|lockstep/src|control/src|viewer/src|app/'
 format=1
 while [[ $# -gt 0 ]]; do
   case "$1" in
