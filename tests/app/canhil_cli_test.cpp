@@ -413,11 +413,21 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   const CliRun bad = canhil("bench --part speed");
   EXPECT_EQ(bad.status, 2);
   EXPECT_TRUE(has(
-      bad, "--part takes virtual, view, match, jobs, analyse, jitter, vcan and external, comma-separated; got 'speed'"))
+      bad, "--part takes virtual, view, match, jobs, analyse, wire, jitter, vcan and external, comma-separated; got 'speed'"))
       << bad.out;
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
   EXPECT_TRUE(has(bad_cpu, "--cpu takes a core number, or -1 for none")) << bad_cpu.out;
+}
+
+TEST(CanhilBench, WirePartPrintsTheTimedWiresSpeedAgainstInstantBusesAndWhatItDoesNotMeasure) {
+  // Printed, never judged here: the exit status says met (0) or missed (1).
+  const CliRun r = canhil("bench --part wire --seconds 1");
+  EXPECT_TRUE(r.status == 0 || r.status == 1) << r.out;
+  EXPECT_TRUE(has(r, "speed on the wire / instant:")) << r.out;
+  EXPECT_TRUE(has(r, "target >= 0.9")) << r.out;
+  EXPECT_TRUE(has(r, "on the wire at 1 Mbit/s") || has(r, "first bus")) << r.out;
+  EXPECT_TRUE(has(r, "NOT MEASURED")) << "the user-space bus's delivery is said not measured, not passed over\n" << r.out;
 }
 
 TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOfTheSameRun) {
