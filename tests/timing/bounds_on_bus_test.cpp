@@ -187,5 +187,44 @@ TEST(BoundsOnTheBus, AtTheCriticalInstantTheHighestPriorityReachesItsBound) {
   }
 }
 
+TEST(BoundsOnTheBus, AnUnschedulableMessageMissesItsDeadlineWhereTheAnalysisSaysAndOnlyIt) {
+  // Three 8-byte frames at 125 kbit/s (1080 us each in the worst case):
+  // 0x100 every 2.5 ms, 0x200 every 3 ms, 0x300 every 8 ms. The analysis
+  // (Davis et al. 2007) finds 0x200 unschedulable: 0x300 started just before
+  // it is queued blocks it (CAN does not preempt), then 0x100 wins, and it
+  // ends 3.24 ms after its release, past its 3 ms deadline. At that instant on
+  // the wire, with worst-case bits, it misses by just that; the others meet theirs.
+  RandomSet s;
+  s.bit_rate = 125'000;
+  std::vector<AnalysedMessage> msgs;
+  const std::pair<std::uint32_t, Nanos> set[] = {{0x100, 2500us}, {0x200, 3ms}, {0x300, 8ms}};
+  for (const auto& [id, period] : set) {
+    frames::CanFrame f;
+    f.id = id;
+    f.len = 8;
+    s.frames.push_back(f);
+    s.periods.push_back(period);
+    msgs.push_back({"m" + std::to_string(id), id, false, frame_time(8, false, s.bit_rate).worst, period, {}, {}});
+  }
+  s.analysis = analyse_native_can(msgs, s.bit_rate);
+  ASSERT_FALSE(s.analysis.schedulable());
+  for (const ResponseBound& b : s.analysis.messages) {
+    EXPECT_EQ(b.schedulable, b.id != 0x200) << b.name << ": the analysis names 0x200 alone";
+  }
+  // 0x300, the longest frame below 0x200, takes the bus 1 ns before the others are queued.
+  const std::vector<Nanos> first = {1ms, 1ms, 1ms - 1ns};
+  const auto worst = run(s, first, Wire::Bits::kWorstCase, 200ms);
+  const Nanos intermission = frames::bits_to_time(3, s.bit_rate);
+  for (const ResponseBound& b : s.analysis.messages) {
+    EXPECT_LE(worst.at(b.id), b.worst_response) << b.name;
+    if (b.id == 0x200) {
+      EXPECT_GT(worst.at(b.id), b.deadline) << "it misses its deadline on the wire";
+      EXPECT_EQ(b.worst_response - worst.at(b.id), intermission + 1ns) << "by what the analysis says it will";
+    } else {
+      EXPECT_LE(worst.at(b.id), b.deadline) << b.name << " meets its deadline";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace canhil::timing
