@@ -79,6 +79,11 @@ const Command kCommands[] = {
                                               in the team's layout), each agent woken through PMan; run
                                               your handler and agent (or canhil-hwcomm, canhil-agent) with
                                               AGENT=N next to it (docs/own-software.md)
+  --bit-rate B                                 the buses on a timed wire at B bit/s in virtual time: frames
+                                              take their bits and lose arbitration, controllers go
+                                              bus-off and restart, faults such as busoff:laptop act on
+                                              the wire; 0 (the default unless [bus] says) is instant,
+                                              as vcan (docs/wire.md)
   viewer (every run but --external): [--view-port 8765] [--view-listen 127.0.0.1] [--no-view]
              [--view-hold S] [--save-dir canhil-saves]
                                               a web page at http://127.0.0.1:8765/ shows the world and
@@ -145,7 +150,7 @@ const Command kCommands[] = {
      canhil::app::run_bench},
     {"timing", "periods, jitter and FTT compliance of a log or a live interface",
      R"(  canhil timing SOURCE [--json] [--svg FILE] [--ec-ms 10] [--bit-rate 1000000] [--slack-us 0] [--seconds S]
-                [--allow-empty]
+                [--allow-empty] [--stamps start|end]
                                               periods, jitter, missing/late frames, FTT compliance and
                                               bus load of a candump log or a live interface; exit 1 if
                                               violated, or if the capture has no frames, no trigger
@@ -153,7 +158,7 @@ const Command kCommands[] = {
                                               --allow-empty)
   canhil timing --analyse [TRACE] [--json] [--svg FILE] [--ec-ms MS] [--bit-rate BPS] [--sync-window-us US]
                 [--guard-us 20] [--add "NAME ID DLC PERIOD_MS sync|async"]... [--copies NAME]...
-                [--no-what-if] [--slack-us 0]
+                [--no-what-if] [--slack-us 0] [--stamps start|end]
                                               what the message set allows, from the DBC: frame times,
                                               the FTT master's schedule and its test, every sporadic
                                               message's worst-case response (native CAN's without a
