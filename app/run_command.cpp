@@ -69,7 +69,7 @@ void print_virtual_summary(const emulator::Session& session, const emulator::Vir
       const laptop::HwCommStats& h = hw->stats();
       std::printf("    its handler heard %llu error frames: %llu bus-off, %llu restarts; now %s\n",
                   static_cast<unsigned long long>(h.error_frames), static_cast<unsigned long long>(h.bus_offs),
-                  static_cast<unsigned long long>(h.restarts), laptop::controller_state_name(h.controller));
+                  static_cast<unsigned long long>(h.restarts), frames::state_name(h.controller));
     }
   }
   for (const auto& c : session.fault_counts()) {

@@ -131,20 +131,6 @@ static bool usable(const frames::TypedCodec<T>& codec, const frames::CanFrame& f
   return true;
 }
 
-const char* controller_state_name(ControllerState state) noexcept {
-  switch (state) {
-    case ControllerState::kErrorActive:
-      return "error-active";
-    case ControllerState::kErrorWarning:
-      return "error-warning";
-    case ControllerState::kErrorPassive:
-      return "error-passive";
-    case ControllerState::kBusOff:
-      return "bus-off";
-  }
-  return "?";
-}
-
 void HwComm::on_error_frame(const frames::CanFrame& f) {
   ++stats_.error_frames;
   const std::uint32_t classes = f.id;
@@ -400,7 +386,7 @@ std::string HwComm::summary() const {
   if (stats_.error_frames > 0) {
     os << "  bus: " << stats_.error_frames << " error frames (" << stats_.bus_errors << " bus errors, "
        << stats_.bus_offs << " bus-off, " << stats_.restarts << " restarts), controller "
-       << controller_state_name(stats_.controller) << ", TEC " << int{stats_.tec} << " REC " << int{stats_.rec} << "\n";
+       << frames::state_name(stats_.controller) << ", TEC " << int{stats_.tec} << " REC " << int{stats_.rec} << "\n";
   }
   if (!stats_.latencies.empty()) {
     std::vector<Nanos> l = stats_.latencies;

@@ -17,20 +17,6 @@ ControllerState by_counter(std::uint16_t counter) noexcept {
 
 }  // namespace
 
-const char* state_name(ControllerState state) noexcept {
-  switch (state) {
-    case ControllerState::kErrorActive:
-      return "error-active";
-    case ControllerState::kErrorWarning:
-      return "error-warning";
-    case ControllerState::kErrorPassive:
-      return "error-passive";
-    case ControllerState::kBusOff:
-      return "bus-off";
-  }
-  return "?";
-}
-
 ControllerState Confinement::state() const noexcept {
   if (bus_off_) return ControllerState::kBusOff;
   return std::max(tx_state(), rx_state());

@@ -99,6 +99,24 @@ inline constexpr std::uint8_t kProtocolLocationAckDelimiter = 0x1B;
 inline constexpr std::uint8_t kProtocolLocationEof = 0x1A;
 inline constexpr std::uint8_t kProtocolLocationIntermission = 0x12;
 
+/// A controller's state as Linux has it (can_state, linux/can/netlink.h;
+/// `ip -details link` prints it), worse is larger.
+enum class ControllerState : std::uint8_t { kErrorActive, kErrorWarning, kErrorPassive, kBusOff };
+/// "error-active", "error-warning", "error-passive" or "bus-off".
+constexpr const char* state_name(ControllerState state) noexcept {
+  switch (state) {
+    case ControllerState::kErrorActive:
+      return "error-active";
+    case ControllerState::kErrorWarning:
+      return "error-warning";
+    case ControllerState::kErrorPassive:
+      return "error-passive";
+    case ControllerState::kBusOff:
+      return "bus-off";
+  }
+  return "?";
+}
+
 /// The error frame a bit error in a frame's CRC sequence gives, as SocketCAN
 /// reports it: protocol violation and bus error, all 8 data bytes.
 constexpr CanFrame make_bus_error_frame() {

@@ -32,9 +32,7 @@ namespace canhil::laptop {
 inline constexpr std::size_t kMaxLatencySamples = 1'000'000;
 
 /// The handler's controller as its error frames say (Linux's can_state).
-enum class ControllerState : std::uint8_t { kErrorActive, kErrorWarning, kErrorPassive, kBusOff };
-/// "error-active", "error-warning", "error-passive" or "bus-off", as `ip -details link` words them.
-const char* controller_state_name(ControllerState state) noexcept;
+using frames::ControllerState;
 
 struct HwCommStats {
   /// Per message of the set, in the codec's order (MessageSet::codec().messages()):

@@ -33,12 +33,13 @@
 
 #include <cstdint>
 
+#include "canhil/frames/frame.hpp"
+
 namespace canhil::wire {
 
 /// As Linux's can_state, in its order (worse is larger).
-enum class ControllerState : std::uint8_t { kErrorActive, kErrorWarning, kErrorPassive, kBusOff };
-/// "error-active", "error-warning", "error-passive" or "bus-off".
-const char* state_name(ControllerState state) noexcept;
+using frames::ControllerState;
+using frames::state_name;
 
 inline constexpr std::uint16_t kWarningLimit = 96;               // CAN_ERROR_WARNING_THRESHOLD
 inline constexpr std::uint16_t kPassiveLimit = 128;              // CAN_ERROR_PASSIVE_THRESHOLD
