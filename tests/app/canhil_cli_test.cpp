@@ -412,8 +412,9 @@ TEST(CanhilBench, PrintsTheFiveRobotRealTimeFactor) {
   EXPECT_EQ(canhil("bench --seconds -1").status, 2);
   const CliRun bad = canhil("bench --part speed");
   EXPECT_EQ(bad.status, 2);
-  EXPECT_TRUE(has(
-      bad, "--part takes virtual, view, match, jobs, analyse, wire, jitter, vcan and external, comma-separated; got 'speed'"))
+  EXPECT_TRUE(has(bad,
+                  "--part takes virtual, view, match, jobs, analyse, wire, jitter, vcan and external, comma-separated; "
+                  "got 'speed'"))
       << bad.out;
   const CliRun bad_cpu = canhil("bench --part external --cpu -5");
   EXPECT_EQ(bad_cpu.status, 2);
@@ -427,7 +428,8 @@ TEST(CanhilBench, WirePartPrintsTheTimedWiresSpeedAgainstInstantBusesAndWhatItDo
   EXPECT_TRUE(has(r, "speed on the wire / instant:")) << r.out;
   EXPECT_TRUE(has(r, "target >= 0.9")) << r.out;
   EXPECT_TRUE(has(r, "on the wire at 1 Mbit/s") || has(r, "first bus")) << r.out;
-  EXPECT_TRUE(has(r, "NOT MEASURED")) << "the user-space bus's delivery is said not measured, not passed over\n" << r.out;
+  EXPECT_TRUE(has(r, "NOT MEASURED")) << "the user-space bus's delivery is said not measured, not passed over\n"
+                                      << r.out;
 }
 
 TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOfTheSameRun) {
