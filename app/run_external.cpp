@@ -1,6 +1,8 @@
 // app/run_external.cpp — `canhil run --external` (run_external.hpp).
 #include "run_external.hpp"
 
+#include "run_realtime.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -12,6 +14,7 @@
 #include "canhil/lockstep/conductor.hpp"
 #include "log_file.hpp"
 #include "play_summary.hpp"
+#include "run_realtime.hpp"
 #include "stop_signals.hpp"
 
 namespace canhil::app {
@@ -66,6 +69,7 @@ int run_external(emulator::Session& session, const ExternalRequest& run, const s
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s (%s), seed %llu\n", robots,
               run.length.seconds, run.length.source.c_str(), static_cast<unsigned long long>(session.scenario().seed));
+  say_the_bus_is_instant(stdout, session);
   for (std::size_t r = 0; r < robots; ++r) {
     const emulator::Rig& rig = session.rig(r);
     std::printf("  robot %zu on %s (%s) for agent %d\n", r, rig.interface.c_str(), can_nodes::bus_of(rig.interface),

@@ -41,6 +41,16 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
 
 }  // namespace
 
+void say_the_bus_is_instant(std::FILE* out, const emulator::Session& session) {
+  const emulator::BusPhysics& bus = session.options().bus;
+  if (!bus.timed()) return;
+  std::fprintf(out,
+               "  --bit-rate %u: these buses (%s) deliver every frame at once, with no wire time, arbitration or "
+               "errors; the bit rate times the FTT schedule only (canhil's timed wire runs with --virtual-time: "
+               "docs/wire.md)\n",
+               bus.bit_rate, can_nodes::bus_of(session.rig(0).interface));
+}
+
 int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& options, const RealtimeOutput& output) {
   FILE* out = output.out;
   emulator::RealtimeDriver driver(session, options);
@@ -51,6 +61,7 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   const emulator::Scenario& sc = session.scenario();
   std::fprintf(out, "canhil run: %zu robot(s), real time, %s (%s), seed %llu, %zu fault rule(s)\n", sc.robot_count(),
                length, output.length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
+  say_the_bus_is_instant(out, session);
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
     std::fprintf(out, "  robot %zu on %s (%s) for agent %d (start your handler and agent with AGENT=%d)\n", r,
