@@ -199,6 +199,10 @@ TEST(Scenarios, TheShippedScenariosLoad) {
   EXPECT_EQ(five.world.obstacles.size(), 5u);
   EXPECT_EQ(five.interfaces.size(), 5u);
   EXPECT_TRUE(std::filesystem::exists(shipped_scenario("one_robot.toml")));
+  const Scenario wire = load_scenario(shipped_scenario("one_robot_on_the_wire.toml"));
+  EXPECT_EQ(wire.bus.bit_rate, std::optional<std::uint32_t>(1'000'000)) << "the main job's timed wire";
+  ASSERT_EQ(wire.faults.size(), 1u);
+  EXPECT_EQ(wire.faults[0].kind, can_nodes::FaultKind::kBusOff);
   EXPECT_TRUE(five.referee.enabled.value_or(false)) << "play goes on after a goal: a kick-off";
   const Scenario strict = parse_scenario("[referee]\nin_play_distance_m = 0.2\n", "strict.toml");
   EXPECT_EQ(strict.referee.in_play_distance_m, 0.2);
