@@ -115,8 +115,7 @@ Nanos ec_start(const CanFrame& tm, Nanos stamp, const FttConfig& config) noexcep
     last = tm;
     last_bits = count_bits(wire_frame(tm)).total();
   }
-  constexpr std::uint32_t kIntermission = 3;  // the end of frame is before it
-  return stamp - bits_to_time(last_bits - kIntermission, config.bit_rate);
+  return stamp - bits_to_time(last_bits - kIntermissionBits, config.bit_rate);  // the end of frame is before it
 }
 
 }  // namespace canhil::frames

@@ -34,6 +34,7 @@ struct HwComm::Items {
 HwComm::HwComm(std::shared_ptr<const frames::MessageSet> set, Nanos ec, Send send, Clock clock, rtdb::Database& db,
                const rtdb::Layout& layout, int space)
     : set_(std::move(set)), ec_(ec), send_(std::move(send)), clock_(std::move(clock)) {
+  ftt_.elementary_cycle = ec;
   stats_.received.assign(set_->codec().messages().size(), 0);
   stats_.sent.assign(set_->codec().messages().size(), 0);
   set_bit_rate(frames::FttConfig{}.bit_rate);
@@ -177,13 +178,7 @@ void HwComm::on_frame(const frames::CanFrame& f, Nanos rx) {
   const frames::MessageSet& s = *set_;
   if (frames::is_message(f, s.tm.message())) {
     frames::Tm tm;
-    if (usable(s.tm, f, tm, stats_)) {
-      frames::FttConfig ftt;
-      ftt.elementary_cycle = ec_;
-      ftt.bit_rate = bit_rate_;
-      ftt.stamps = stamps_;
-      on_tm(tm, frames::ec_start(f, rx, ftt));
-    }
+    if (usable(s.tm, f, tm, stats_)) on_tm(tm, frames::ec_start(f, rx, ftt_));
   } else if (frames::is_message(f, s.m4_1.message())) {
     have_m4_1_ = usable(s.m4_1, f, m4_1_, stats_);
   } else if (frames::is_message(f, s.m4_2.message())) {
@@ -296,7 +291,7 @@ void HwComm::on_tm(const frames::Tm& tm, Nanos ec_start) {
 
 void HwComm::set_bit_rate(std::uint32_t bit_rate) {
   if (bit_rate == 0) throw SetupError("the bit rate must be positive");
-  bit_rate_ = bit_rate;
+  ftt_.bit_rate = bit_rate;
   const frames::MessageDef& tm = set_->tm.message().def();
   tm_wire_ = frames::bits_to_time(frames::worst_case_frame_bits(tm.length, tm.extended), bit_rate);
 }

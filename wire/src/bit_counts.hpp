@@ -4,9 +4,11 @@
 
 #include <cstdint>
 
+#include "canhil/frames/wire.hpp"
+
 namespace canhil::wire::bit_counts {
 
-inline constexpr std::uint32_t kIntermission = 3;
+inline constexpr std::uint32_t kIntermission = frames::kIntermissionBits;
 inline constexpr std::uint32_t kErrorFlag = 6;  // an active or passive error flag
 inline constexpr std::uint32_t kErrorDelimiter = 8;
 inline constexpr std::uint32_t kSuspend = 8;         // an error-passive transmitter's suspend transmission

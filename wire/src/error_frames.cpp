@@ -4,33 +4,25 @@
 
 namespace canhil::wire {
 
-std::uint8_t tx_state_bits(ControllerState state) noexcept {
+namespace {
+
+// can_tx_state_to_frame / can_rx_state_to_frame: warning and passive have a
+// bit for each side, active one for both, bus-off none (its own class).
+std::uint8_t state_bits(ControllerState state, bool tx) noexcept {
   switch (state) {
     case ControllerState::kErrorActive:
       return frames::kControllerActive;
     case ControllerState::kErrorWarning:
-      return frames::kControllerTxWarning;
+      return tx ? frames::kControllerTxWarning : frames::kControllerRxWarning;
     case ControllerState::kErrorPassive:
-      return frames::kControllerTxPassive;
+      return tx ? frames::kControllerTxPassive : frames::kControllerRxPassive;
     case ControllerState::kBusOff:
       return 0;
   }
   return 0;
 }
 
-std::uint8_t rx_state_bits(ControllerState state) noexcept {
-  switch (state) {
-    case ControllerState::kErrorActive:
-      return frames::kControllerActive;
-    case ControllerState::kErrorWarning:
-      return frames::kControllerRxWarning;
-    case ControllerState::kErrorPassive:
-      return frames::kControllerRxPassive;
-    case ControllerState::kBusOff:
-      return 0;
-  }
-  return 0;
-}
+}  // namespace
 
 frames::CanFrame error_frame(std::uint32_t classes, std::uint8_t kind, std::uint8_t location, const Confinement& now,
                              ControllerState reported) noexcept {
@@ -47,8 +39,8 @@ frames::CanFrame error_frame(std::uint32_t classes, std::uint8_t kind, std::uint
       classes |= frames::kErrorClassController;
       const ControllerState tx = now.tx_state();
       const ControllerState rx = now.rx_state();
-      if (tx >= rx) f.data[1] |= tx_state_bits(tx);
-      if (tx <= rx) f.data[1] |= rx_state_bits(rx);
+      if (tx >= rx) f.data[1] |= state_bits(tx, true);
+      if (tx <= rx) f.data[1] |= state_bits(rx, false);
     }
   }
   f.id = classes | frames::kErrorClassCounters;

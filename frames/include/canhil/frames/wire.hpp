@@ -34,6 +34,10 @@
 
 namespace canhil::frames {
 
+/// The interframe space's intermission: the 3 recessive bits after a frame's
+/// end of frame (counted in every frame's bits here).
+inline constexpr std::uint32_t kIntermissionBits = 3;
+
 /// CAN FD's largest payload.
 inline constexpr std::size_t kMaxFdDataBytes = 64;
 

@@ -84,7 +84,7 @@ class HwComm {
   /// What a received frame's stamp marks (frames::StampAt): its first bit
   /// (vcan, the default) or its end of frame (a real can0, canhil's timed
   /// wire); the EC starts at the TM's stamp, or its wire time before it.
-  void set_stamps(frames::StampAt stamps) noexcept { stamps_ = stamps; }
+  void set_stamps(frames::StampAt stamps) noexcept { ftt_.stamps = stamps; }
   /// When the handler must act next (the asynchronous window's opening, its M6 slot), or kNever.
   Nanos next_deadline() const noexcept { return std::min(async_at_, m6_at_); }
   /// Acts at `now` (call at or after next_deadline()).
@@ -118,8 +118,7 @@ class HwComm {
   Nanos m6_at_ = kNever;     // the M6 slot to serve (the last TM's may be replaced by the next)
   Nanos async_at_ = kNever;  // the asynchronous window's opening to serve (likewise)
   Nanos tm_wire_{0};         // the TM's worst-case wire time
-  std::uint32_t bit_rate_ = 1'000'000;
-  frames::StampAt stamps_ = frames::StampAt::kStartOfFrame;
+  frames::FttConfig ftt_;    // the EC, the bit rate and what stamps mark, for the EC's start (frames::ec_start)
   bool have_tm_ = false;
   std::uint16_t last_ec_ = 0;
   bool have_m4_1_ = false;

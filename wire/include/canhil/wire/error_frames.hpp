@@ -18,10 +18,6 @@
 
 namespace canhil::wire {
 
-/// The state as a change to it is reported: the tx (or rx) bits of data[1].
-std::uint8_t tx_state_bits(ControllerState state) noexcept;
-std::uint8_t rx_state_bits(ControllerState state) noexcept;
-
 /// The error frame for `classes` (CAN_ERR_*; 0 for a change of state alone)
 /// with protocol `kind` and `location` (data[2], data[3]), the controller as
 /// it is now, and a change of state when `reported` (the state last told)
