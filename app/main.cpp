@@ -197,9 +197,13 @@ const Command kCommands[] = {
                                               run COMMAND and everything it starts on the bus (preloading
                                               libcanhil-bus.so), creating the interfaces it names; a bus
                                               this starts ends with COMMAND
-  canhil bus list                             interfaces and sockets, with processes, filters, counters
+  canhil bus list                             interfaces, sockets and controllers, with their counters
   canhil bus down [IFACE...]                  remove interfaces, or stop the whole bus
-  canhil bus link IFACE up|down               bring an interface up or down (ip link set)
+  canhil bus link IFACE up|down|restart       bring an interface up or down, restart its bus-off controllers
+  canhil bus link IFACE bitrate N [dbitrate N] [restart-ms N] [txqueuelen N]
+                                              give it a wire (0: instant), as ip link's CAN settings
+  canhil bus fault IFACE RULE...|clear        wire faults from now on (ber, error, noack, stuck, babble,
+                                              cut, busoff; a node is a program on the bus: docs/wire.md)
   canhil bus preload                          print the path of libcanhil-bus.so (for LD_PRELOAD)
                                               (docs/vcan.md: the bus, its limits, how to choose)
   broker options, for a bus that up or exec starts:
@@ -209,6 +213,7 @@ const Command kCommands[] = {
                                               while it could, before frames drop for it (0: at once)
     --patience-ms 250                         the longest the bus waits for one full receiver in all
     --rt-priority 45                          the broker's SCHED_FIFO priority (0: normal scheduler)
+    --bit-rate 0                              up, exec: the interfaces' bit rate (0: instant, no wire)
 )",
      canhil::app::run_bus},
     {"experiment", "physics calibration experiments and a vision frame",

@@ -2,13 +2,17 @@
 // every socket whose binding and filters want it, with the kernel's CAN_RAW
 // rules (net/can/af_can.c's filter lists, net/can/raw.c's loopback, own
 // messages and joined filters). One thread, one epoll; each socket a
-// SOCK_SEQPACKET connection.
+// SOCK_SEQPACKET connection. A timed interface's frames go through its wire
+// model first (broker_wire.hpp), and reach their sockets at their end of
+// frame, from a timer.
 #include <linux/can/error.h>
 #include <poll.h>
 #include <sched.h>
 #include <sys/epoll.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
+#include <sys/timerfd.h>
 #include <sys/un.h>
 #include <time.h>
 #include <unistd.h>
@@ -21,6 +25,7 @@
 
 #include "broker_filters.hpp"
 #include "broker_system.hpp"
+#include "broker_wire.hpp"
 #include "canhil/base/preload.hpp"
 #include "canhil/base/process.hpp"
 #include "canhil/userbus/bus.hpp"
@@ -65,6 +70,11 @@ class Broker {
     }
     for (int k = 0; k < kMaxInterfaces; ++k)
       up_[k] = state_.interfaces[k].up.load() != 0 && state_.interfaces[k].in_use.load() != 0;
+    // Past any time shim (a raw system call): the wire runs on the real clock.
+    timer_fd_ = static_cast<int>(syscall(SYS_timerfd_create, CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+    if (timer_fd_ >= 0) watch(timer_fd_);
+    prctl(PR_SET_TIMERSLACK, 1UL);  // a frame's end is due to the microsecond
+    wire_.sync(monotonic_ns());
   }
 
   ~Broker() {
@@ -72,7 +82,7 @@ class Broker {
       if (c.fd >= 0) close(c.fd);
     }
     if (owner_fd_ >= 0) close(owner_fd_);
-    if (asker_fd_ >= 0) close(asker_fd_);
+    if (timer_fd_ >= 0) close(timer_fd_);
     close(epoll_);
   }
   Broker(const Broker&) = delete;
@@ -84,7 +94,7 @@ class Broker {
     // profile refusing it), the owner is looked for twice a second instead.
     const bool look_for_owner = options_.owner > 0 && owner_fd_ < 0;
     while (!stop_) {
-      int n = spin(events);
+      int n = spin_.look(epoll_, events, 64);
       if (n == 0) n = epoll_wait(epoll_, events, 64, look_for_owner ? 500 : -1);
       const int wait_error = errno;
       if (look_for_owner && !process_alive(options_.owner)) return;
@@ -98,6 +108,10 @@ class Broker {
           accept_all();
         } else if (fd == owner_fd_) {
           stop_ = true;
+        } else if (fd == timer_fd_) {
+          std::uint64_t expirations = 0;
+          if (read(timer_fd_, &expirations, sizeof expirations) >= 0) armed_ = INT64_MAX;  // one shot, spent
+          advance_wire();
         } else {
           serve(fd, events[i].events);
         }
@@ -106,47 +120,6 @@ class Broker {
   }
 
  private:
-  // What arrives within the spin a lockstep run asked for (State::spin),
-  // looked for while giving way to any other runnable thread: 0 when nothing
-  // came, or when no living run asks.
-  int spin(epoll_event* events) {
-    const std::uint64_t word = state_.spin.load(std::memory_order_acquire);
-    const std::uint32_t us = spin_us(word);
-    const bool asked = us != 0 && asker_alive(spin_pid(word));
-    // At SCHED_FIFO, sched_yield gives way to no normal process: the broker
-    // looks on at the normal scheduler, and is real-time again once no run asks.
-    if (state_.rt_priority > 0 && asked == fifo_) {
-      fifo_ = !asked;
-      set_fifo(fifo_, state_.rt_priority);
-    }
-    if (!asked) return 0;
-    state_.spins.fetch_add(1, std::memory_order_relaxed);
-    const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(us) * 1000;
-    for (;;) {
-      const int n = epoll_wait(epoll_, events, 64, 0);
-      if (n != 0 || monotonic_ns() >= until) return n;
-      sched_yield();
-    }
-  }
-
-  // Whether the process that asked for the spin still runs: through a pidfd,
-  // which says so once it has ended even before it is reaped, and cannot be
-  // taken for a later process of the same pid; else by kill(pid, 0).
-  bool asker_alive(pid_t pid) {
-    if (pid != asker_pid_) {
-      if (asker_fd_ >= 0) close(asker_fd_);
-      asker_pid_ = pid;
-      asker_fd_ = pid > 0 ? static_cast<int>(syscall(SYS_pidfd_open, pid, 0)) : -1;
-      asker_gone_ = pid <= 0 || (asker_fd_ < 0 && errno == ESRCH);
-    }
-    if (asker_gone_) return false;
-    if (asker_fd_ < 0) return process_alive(pid);
-    pollfd p{asker_fd_, POLLIN, 0};
-    const timespec at_once{0, 0};
-    asker_gone_ = syscall(SYS_ppoll, &p, 1, &at_once, nullptr, 8) != 0;  // readable once it has ended
-    return !asker_gone_;
-  }
-
   void watch(int fd) {
     epoll_event e{};
     e.events = EPOLLIN;
@@ -184,11 +157,16 @@ class Broker {
     }
     epoll_ctl(epoll_, EPOLL_CTL_DEL, c.fd, nullptr);
     close(c.fd);
-    if (c.slot >= 0) {
-      Socket& s = state_.sockets[c.slot];
-      s.in_use.store(0, std::memory_order_release);
-    }
+    const int slot = c.slot;
     c = Connection{};
+    if (slot >= 0) {
+      Socket& s = state_.sockets[slot];
+      s.in_use.store(0, std::memory_order_release);
+      const bool more = std::any_of(connections_.begin(), connections_.end(), [&](const Connection& o) {
+        return o.fd >= 0 && o.slot >= 0 && state_.sockets[o.slot].pid == s.pid;
+      });
+      if (!more) wire_.leave(s.pid);  // its controllers leave the timed buses
+    }
   }
 
   void serve(int fd, std::uint32_t events) {
@@ -251,39 +229,8 @@ class Broker {
       c.control = true;
       return;
     }
-    Welcome w{-ENOBUFS};
-    for (int k = 0; k < kMaxSockets; ++k) {
-      Socket& s = state_.sockets[k];
-      if (s.in_use.load(std::memory_order_acquire) != 0) continue;
-      s.lock.lock();
-      s.pid = h.pid;
-      s.ifindex = 0;
-      s.bound = 0;
-      s.flags = kLoopback;
-      s.err_mask = 0;
-      s.rcvbuf = 0;
-      s.sndbuf = 0;
-      s.filter_count = 1;  // raw_init: one filter that takes every frame
-      s.filters[0] = can_filter{0, 0};
-      sockaddr_un peer{};
-      socklen_t len = sizeof peer;
-      std::memset(s.peer, 0, sizeof s.peer);
-      if (getpeername(c.fd, reinterpret_cast<sockaddr*>(&peer), &len) == 0 && len > sizeof(sa_family_t)) {
-        std::memcpy(s.peer, peer.sun_path, std::min<std::size_t>(len - sizeof(sa_family_t), sizeof s.peer));
-      }
-      s.pending_error.store(0);
-      s.last_stamp_ns.store(-1);
-      s.drops.store(0);
-      s.received.store(0);
-      s.sent.store(0);
-      s.taken.store(0);
-      s.seq.fetch_add(2, std::memory_order_release);
-      s.lock.unlock();
-      s.in_use.store(1, std::memory_order_release);
-      c.slot = k;
-      w.slot = k;
-      break;
-    }
+    Welcome w{claim_socket(state_, h.pid, c.fd)};
+    c.slot = w.slot >= 0 ? w.slot : -1;
     if (send(c.fd, &w, sizeof w, MSG_NOSIGNAL) != static_cast<ssize_t>(sizeof w) || w.slot < 0) drop(c);
   }
 
@@ -299,7 +246,14 @@ class Broker {
       } else if (r.op == kControlStop) {
         stop_ = true;
         answer = 0;
+      } else if (r.op == kControlRestart) {
+        answer = wire_.restart(r.ifindex, r.pid, monotonic_ns());
+      } else if (r.op == kControlFault) {
+        answer = wire_.add_fault(r.ifindex, r.fault, monotonic_ns());
+      } else if (r.op == kControlClearFaults) {
+        answer = wire_.clear_faults(r.ifindex, monotonic_ns());
       }
+      arm_timer();
     }
     if (n > 0) send(c.fd, &answer, sizeof answer, MSG_NOSIGNAL | MSG_DONTWAIT);
     drop(c);
@@ -308,6 +262,9 @@ class Broker {
   /// An interface went down or away: every socket bound to it is told, as
   /// raw.c's notifier tells it (ENETDOWN; ENODEV and unbound when removed).
   void interfaces_changed() {
+    advance_wire();
+    wire_.sync(monotonic_ns());
+    arm_timer();
     for (int k = 0; k < kMaxInterfaces; ++k) {
       const Interface& i = state_.interfaces[k];
       const bool exists = i.in_use.load() != 0;
@@ -350,15 +307,7 @@ class Broker {
     Socket& s = state_.sockets[c.slot];
     const std::uint32_t seq = s.seq.load(std::memory_order_acquire);
     if (seq == c.options.seq) return c.options;
-    for (;;) {
-      const std::uint32_t before = s.seq.load(std::memory_order_acquire);
-      if ((before & 1U) != 0) continue;
-      Options o = options_of(s, before);
-      std::atomic_thread_fence(std::memory_order_acquire);
-      if (s.seq.load(std::memory_order_relaxed) != before) continue;
-      c.options = std::move(o);
-      break;
-    }
+    c.options = read_options(s);
     if (c.options.rcvbuf != c.applied_rcvbuf && c.options.rcvbuf > 0) {
       // What the program asked of its receive buffer is the broker's send buffer towards it.
       const int size = c.options.rcvbuf / 2;
@@ -373,6 +322,18 @@ class Broker {
     if (iface == nullptr || iface->up.load(std::memory_order_relaxed) == 0) return;
     iface->frames.fetch_add(1, std::memory_order_relaxed);
     state_.sockets[sender.slot].sent.fetch_add(1, std::memory_order_relaxed);
+    if (wire_.timed(record.ifindex)) {
+      const std::int64_t now = monotonic_ns();
+      for (Connection& c : connections_) {  // every process on the interface is a controller there
+        if (c.fd < 0 || c.slot < 0) continue;
+        const Options& o = options(c);
+        if (o.bound && (o.ifindex == 0 || o.ifindex == record.ifindex))
+          wire_.join(state_.sockets[c.slot].pid, record.ifindex, now);
+      }
+      wire_.submit(state_.sockets[sender.slot].pid, sender.opened, record, now);
+      arm_timer();
+      return;
+    }
     // A virtual interface has no wire: with loopback off nobody hears the frame.
     if ((options(sender).flags & kLoopback) == 0) return;
     canid_t can_id = 0;
@@ -393,6 +354,65 @@ class Broker {
       out.msg_flags = static_cast<std::uint32_t>(MSG_DONTROUTE) | (own ? static_cast<std::uint32_t>(MSG_CONFIRM) : 0U);
       deliver(c, out);
     }
+  }
+
+  /// What the timed wires have done by now, handed to the sockets.
+  void advance_wire() {
+    wire_done_.clear();
+    wire_.advance(monotonic_ns(), wire_done_);
+    const std::int64_t to_realtime = now_ns() - monotonic_ns();
+    for (const WireDelivery& d : wire_done_) deliver_wire(d, d.at_ns + to_realtime);
+    flush();
+    arm_timer();
+  }
+
+  /// A wire's frame (at its end of frame) or error frame to every socket that
+  /// takes it: on the sender's controller its local echo (loopback, own
+  /// messages, MSG_CONFIRM); on the others the frame as received from a wire,
+  /// unless that controller missed it (bus-off, cut off). An error frame goes
+  /// to the reporting controller's sockets whose CAN_RAW_ERR_FILTER asks.
+  void deliver_wire(const WireDelivery& d, std::int64_t stamp) {
+    canid_t can_id = 0;
+    std::memcpy(&can_id, d.frame, sizeof can_id);
+    const Connection* sender = nullptr;
+    for (const Connection& c : connections_) {
+      if (d.tag != 0 && c.fd >= 0 && c.opened == d.tag) sender = &c;
+    }
+    const bool echo = sender != nullptr && (sender->options.flags & kLoopback) != 0;
+    RxRecord out{};
+    out.stamp_ns = stamp;
+    out.ifindex = d.ifindex;
+    out.size = d.size;
+    std::memcpy(out.frame, d.frame, d.size);
+    for (Connection& c : connections_) {
+      if (c.fd < 0 || c.slot < 0) continue;
+      const Options& o = options(c);
+      if (!o.bound || (o.ifindex != 0 && o.ifindex != d.ifindex)) continue;
+      const std::int32_t pid = state_.sockets[c.slot].pid;
+      const bool local = pid == d.pid;
+      if (d.error ? !local : (local ? !echo : std::count(d.missed.begin(), d.missed.end(), pid) > 0)) continue;
+      const bool own = &c == sender;
+      if (own && (o.flags & kRecvOwn) == 0) continue;
+      if (d.size != CAN_MTU && (o.flags & kFdFrames) == 0) continue;
+      if (!wants(o, can_id)) continue;
+      out.msg_flags = 0;
+      if (!d.error && local) out.msg_flags = MSG_DONTROUTE | (own ? static_cast<std::uint32_t>(MSG_CONFIRM) : 0U);
+      deliver(c, out);
+    }
+  }
+
+  /// The timer set for the wires' next event (none when they have none).
+  void arm_timer() {
+    if (timer_fd_ < 0) return;
+    const std::int64_t due = wire_.next_due();
+    if (due == armed_) return;
+    armed_ = due;
+    itimerspec t{};
+    if (due != INT64_MAX) {
+      const std::int64_t at = std::max<std::int64_t>(due, 1);
+      t.it_value = {static_cast<time_t>(at / 1000000000), static_cast<long>(at % 1000000000)};
+    }
+    syscall(SYS_timerfd_settime, timer_fd_, TFD_TIMER_ABSTIME, &t, nullptr);
   }
 
   /// Queues `r` for `c`, with the count of c's drops so far (SO_RXQ_OVFL).
@@ -553,11 +573,8 @@ class Broker {
   BrokerOptions options_;
   int epoll_ = -1;
   int owner_fd_ = -1;
-  pid_t asker_pid_ = 0;  // the spin's asker, watched through asker_fd_
-  int asker_fd_ = -1;
-  bool asker_gone_ = true;
+  Spin spin_{state_};
   bool stop_ = false;
-  bool fifo_ = true;         // at its SCHED_FIFO priority now (when it has one: State::rt_priority)
   bool round_open_ = false;  // State::rounds is odd: a round under way, or a backlog not yet delivered
   int backlogged_ = 0;       // connections with frames in their backlog
   bool up_[kMaxInterfaces] = {};
@@ -566,6 +583,10 @@ class Broker {
   std::vector<int> dirty_;  // connections with frames queued this round
   std::uint64_t opened_ = 0;
   TxRecord batch_[64];
+  BrokerWire wire_{state_};
+  int timer_fd_ = -1;
+  std::int64_t armed_ = INT64_MAX;  // the timer's due time, INT64_MAX: disarmed
+  std::vector<WireDelivery> wire_done_;
 };
 
 }  // namespace

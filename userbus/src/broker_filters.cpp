@@ -3,8 +3,12 @@
 
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 
 #include "canhil/userbus/state.hpp"
 
@@ -74,6 +78,50 @@ bool wants(const Options& o, canid_t can_id) {
     ++hits;
   }
   return hits > 0 && hits >= o.count;
+}
+
+Options read_options(const Socket& s) {
+  for (;;) {
+    const std::uint32_t before = s.seq.load(std::memory_order_acquire);
+    if ((before & 1U) != 0) continue;
+    Options o = options_of(s, before);
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if (s.seq.load(std::memory_order_relaxed) == before) return o;
+  }
+}
+
+int claim_socket(State& state, std::int32_t pid, int fd) {
+  for (int k = 0; k < kMaxSockets; ++k) {
+    Socket& s = state.sockets[k];
+    if (s.in_use.load(std::memory_order_acquire) != 0) continue;
+    s.lock.lock();
+    s.pid = pid;
+    s.ifindex = 0;
+    s.bound = 0;
+    s.flags = kLoopback;
+    s.err_mask = 0;
+    s.rcvbuf = 0;
+    s.sndbuf = 0;
+    s.filter_count = 1;  // raw_init: one filter that takes every frame
+    s.filters[0] = can_filter{0, 0};
+    sockaddr_un peer{};
+    socklen_t len = sizeof peer;
+    std::memset(s.peer, 0, sizeof s.peer);
+    if (getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &len) == 0 && len > sizeof(sa_family_t)) {
+      std::memcpy(s.peer, peer.sun_path, std::min<std::size_t>(len - sizeof(sa_family_t), sizeof s.peer));
+    }
+    s.pending_error.store(0);
+    s.last_stamp_ns.store(-1);
+    s.drops.store(0);
+    s.received.store(0);
+    s.sent.store(0);
+    s.taken.store(0);
+    s.seq.fetch_add(2, std::memory_order_release);
+    s.lock.unlock();
+    s.in_use.store(1, std::memory_order_release);
+    return k;
+  }
+  return -ENOBUFS;
 }
 
 }  // namespace canhil::userbus

@@ -11,6 +11,7 @@
 namespace canhil::userbus {
 
 struct Socket;
+struct State;
 
 /// A filter as the kernel registers it (af_can.c, can_rcv_list_find): the
 /// mask reduced, the id masked, and its list (error, inverted or plain).
@@ -41,8 +42,16 @@ struct Options {
 /// caller: `seq` is the even value it saw before).
 Options options_of(const Socket& s, std::uint32_t seq);
 
+/// The options of socket `s` as the processes last wrote them: a seqlock read.
+Options read_options(const Socket& s);
+
 /// Whether socket options `o` take a frame of `can_id` (raw_rcv's rules:
 /// any filter, or every filter when they are joined).
 bool wants(const Options& o, canid_t can_id);
+
+/// A new socket of process `pid`, whose connection's broker end is `fd`: a
+/// free slot of `state` with raw_init's options (loopback on, one filter
+/// that takes every frame, no error mask). The slot, or -ENOBUFS when none is free.
+int claim_socket(State& state, std::int32_t pid, int fd);
 
 }  // namespace canhil::userbus

@@ -3,6 +3,9 @@
 
 #include <poll.h>
 #include <sched.h>
+#include <sys/epoll.h>
+#include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -49,6 +52,43 @@ bool room_came(int fd, pid_t pid, const std::atomic<std::uint64_t>& taken, std::
     const int r = poll(&p, 1, static_cast<int>((wait_ns + 999999) / 1000000));
     if (r > 0) return true;
     if (r < 0 && errno != EINTR) return false;
+  }
+}
+
+PidWatch::~PidWatch() {
+  if (fd_ >= 0) close(fd_);
+}
+
+bool PidWatch::alive(pid_t pid) {
+  if (pid != pid_) {
+    if (fd_ >= 0) close(fd_);
+    pid_ = pid;
+    fd_ = pid > 0 ? static_cast<int>(syscall(SYS_pidfd_open, pid, 0)) : -1;
+    gone_ = pid <= 0 || (fd_ < 0 && errno == ESRCH);
+  }
+  if (gone_) return false;
+  if (fd_ < 0) return process_alive(pid);
+  pollfd p{fd_, POLLIN, 0};
+  const timespec at_once{0, 0};
+  gone_ = syscall(SYS_ppoll, &p, 1, &at_once, nullptr, 8) != 0;  // readable once it has ended
+  return !gone_;
+}
+
+int Spin::look(int epoll, epoll_event* events, int max) {
+  const std::uint64_t word = state_.spin.load(std::memory_order_acquire);
+  const std::uint32_t us = spin_us(word);
+  const bool asked = us != 0 && asker_.alive(spin_pid(word));
+  if (state_.rt_priority > 0 && asked == fifo_) {
+    fifo_ = !asked;
+    set_fifo(fifo_, state_.rt_priority);
+  }
+  if (!asked) return 0;
+  state_.spins.fetch_add(1, std::memory_order_relaxed);
+  const std::int64_t until = preload::real_monotonic_ns() + static_cast<std::int64_t>(us) * 1000;
+  for (;;) {
+    const int n = epoll_wait(epoll, events, max, 0);
+    if (n != 0 || preload::real_monotonic_ns() >= until) return n;
+    sched_yield();
   }
 }
 

@@ -4,6 +4,7 @@
 // CPU or for something else: canhil::process_runnable, base/process.hpp).
 #pragma once
 
+#include <sys/epoll.h>
 #include <sys/types.h>
 
 #include <atomic>
@@ -34,5 +35,41 @@ std::string scheduling_text(const State& s);
 /// kernel's immediate drop). Reads the monotonic clock past any time shim.
 bool room_came(int fd, pid_t pid, const std::atomic<std::uint64_t>& taken, std::uint32_t grace_us,
                std::uint32_t patience_us);
+
+/// Whether a process still runs, watched through a pidfd, which says so once
+/// it has ended even before it is reaped and cannot be taken for a later
+/// process of the same pid; else (no pidfd: before Linux 5.3, or a seccomp
+/// profile refusing it) by kill(pid, 0).
+class PidWatch {
+ public:
+  PidWatch() = default;
+  ~PidWatch();
+  PidWatch(const PidWatch&) = delete;
+  PidWatch& operator=(const PidWatch&) = delete;
+  /// Whether `pid` runs (watching it from now on, if it was another).
+  bool alive(pid_t pid);
+
+ private:
+  pid_t pid_ = 0;
+  int fd_ = -1;
+  bool gone_ = true;
+};
+
+/// The spin a lockstep run asks of the broker (State::spin).
+class Spin {
+ public:
+  explicit Spin(State& state) : state_(state) {}
+  /// What arrives on `epoll` within the spin asked for, looked for while
+  /// giving way to any other runnable thread: epoll_wait's answer, 0 when
+  /// nothing came or no living run asks. At SCHED_FIFO, sched_yield gives
+  /// way to no normal process: the broker looks on at the normal scheduler,
+  /// and is real-time again once no run asks.
+  int look(int epoll, epoll_event* events, int max);
+
+ private:
+  State& state_;
+  PidWatch asker_;
+  bool fifo_ = true;  // at its SCHED_FIFO priority now (when it has one: State::rt_priority)
+};
 
 }  // namespace canhil::userbus

@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "broker_system.hpp"
+#include "bus_internal.hpp"
 #include "canhil/base/assets.hpp"
 #include "canhil/base/errno_text.hpp"
 #include "canhil/base/realtime.hpp"
@@ -44,12 +45,12 @@ int connect_to(const BusPaths& paths) {
   return fd;
 }
 
-/// One control request to the running broker; its answer (0 or -errno).
-int ask_broker(const BusPaths& paths, std::uint32_t op) {
+}  // namespace
+
+int ask_broker(const BusPaths& paths, const ControlRequest& r) {
   const int fd = connect_to(paths);
   if (fd < 0) return -errno;
   const Hello h{kHelloControl, getpid()};
-  const ControlRequest r{op};
   int answer = -EIO;
   if (send(fd, &h, sizeof h, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof h) &&
       send(fd, &r, sizeof r, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof r)) {
@@ -58,6 +59,10 @@ int ask_broker(const BusPaths& paths, std::uint32_t op) {
   close(fd);
   return answer;
 }
+
+int ask_broker(const BusPaths& paths, std::uint32_t op) { return ask_broker(paths, ControlRequest{op}); }
+
+namespace {
 
 // When the bus at `paths` was started by a canhil whose state has another
 // layout (State::version): what to tell the user; else empty.
@@ -72,6 +77,8 @@ std::string of_another_canhil(const BusPaths& paths) {
          "): stop it (`canhil bus down`) and start it again";
 }
 
+}  // namespace
+
 std::unique_ptr<MappedState> require_state(const BusPaths& paths) {
   if (!broker_alive(paths)) {
     throw BusError("no user-space CAN bus runs at " + paths.folder + ": start one with `canhil bus up vcan0`");
@@ -81,6 +88,8 @@ std::unique_ptr<MappedState> require_state(const BusPaths& paths) {
   if (const std::string other = of_another_canhil(paths); !other.empty()) throw BusError(other);
   throw BusError("the bus at " + paths.folder + " has no state file: stop it (`canhil bus down`) and start it again");
 }
+
+namespace {
 
 std::string filter_text(const Socket& s) {
   if (s.filter_count == 0) return "no filter (receives nothing)";
@@ -265,6 +274,13 @@ std::vector<std::string> add_interfaces(const BusPaths& paths, const std::vector
     free->mtu.store(kInterfaceMtu);
     free->frames.store(0);
     free->dropped.store(0);
+    free->bit_rate.store(0);  // instant, as a vcan, until `canhil bus link NAME bitrate N`
+    free->data_bit_rate.store(0);
+    free->restart_ms.store(kDefaultRestartMs);
+    free->tx_queue.store(kDefaultTxQueue);
+    free->busy_ns.store(0);
+    free->wire_ns.store(0);
+    free->error_frames.store(0);
     free->up.store(1);
     free->in_use.store(1, std::memory_order_release);
     created.push_back(n);
@@ -329,7 +345,7 @@ std::string describe(const BusPaths& paths) {
     if (i.in_use.load() == 0) continue;
     any = true;
     out << "  " << i.name << "  index " << i.index << "  " << (i.up.load() != 0 ? "up" : "down") << "  mtu "
-        << i.mtu.load() << "  frames " << i.frames.load() << "  dropped " << i.dropped.load() << '\n';
+        << i.mtu.load() << "  frames " << i.frames.load() << "  dropped " << i.dropped.load() << wire_text(i) << '\n';
   }
   if (!any) out << "  no interfaces (add one: canhil bus up vcan0)\n";
   out << "  waited for full receivers " << s.waits.load() << " time(s), "
@@ -356,6 +372,7 @@ std::string describe(const BusPaths& paths) {
         << "  sent " << sk.sent.load() << "  received " << sk.received.load() << "  dropped " << sk.drops.load()
         << '\n';
   }
+  out << controllers_text(paths);
   return out.str();
 }
 

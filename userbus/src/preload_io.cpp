@@ -64,6 +64,26 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     parts[0] = {&r, kTxHeader + size};
     m.msg_iovlen = 1;
   }
+  // A timed interface: the frame waits in its controller's transmit queue
+  // (this process's, on this interface) until the wire has sent it; a full
+  // queue refuses it, as a CAN device's full qdisc does (ENOBUFS).
+  Controller* controller = nullptr;
+  if (iface->bit_rate.load(std::memory_order_relaxed) != 0 && iface->up.load(std::memory_order_relaxed) != 0) {
+    if (State* state = bus_state(false)) controller = find_controller(*state, s.pid, ifindex, true);
+    if (controller != nullptr) {
+      const std::uint32_t limit = iface->tx_queue.load(std::memory_order_relaxed);
+      std::uint32_t q = controller->queued.load(std::memory_order_relaxed);
+      do {
+        if (q >= (limit == 0 ? 1U : limit)) {
+          controller->refused.fetch_add(1, std::memory_order_relaxed);
+          return fail(ENOBUFS);
+        }
+      } while (!controller->queued.compare_exchange_weak(q, q + 1, std::memory_order_acq_rel));
+    }
+  }
+  const auto refund = [controller] {
+    if (controller != nullptr) controller->queued.fetch_sub(1, std::memory_order_acq_rel);
+  };
   CANHIL_REAL(sendmsg);
   ssize_t n = real_sendmsg(fd, &m, MSG_NOSIGNAL | (flags & MSG_DONTWAIT));
   if (n < 0 && errno == EAGAIN) {
@@ -78,7 +98,9 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     if (n < 0 && errno == EAGAIN) errno = ENOBUFS;
   }
   if (n < 0) {
-    if (errno == EPIPE || errno == ECONNRESET || errno == ENOTCONN) errno = ENXIO;  // the bus is gone
+    const int e = errno;
+    refund();
+    errno = (e == EPIPE || e == ECONNRESET || e == ENOTCONN) ? ENXIO : e;  // ENXIO: the bus is gone
     return -1;
   }
   if (m.msg_iovlen > 1) {
@@ -87,7 +109,10 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     std::size_t at = offsetof(can_frame, len);
     for (std::size_t k = 0; k < iovcnt; ++k) {
       if (at < iov[k].iov_len) {
-        if (static_cast<const unsigned char*>(iov[k].iov_base)[at] > max_length) return fail(EINVAL);
+        if (static_cast<const unsigned char*>(iov[k].iov_base)[at] > max_length) {
+          refund();  // the broker drops it
+          return fail(EINVAL);
+        }
         break;
       }
       at -= iov[k].iov_len;

@@ -8,9 +8,14 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+namespace canhil::wire {
+struct FaultRule;
+}
 
 namespace canhil::userbus {
 
@@ -180,6 +185,56 @@ std::string find_preload();
 /// nothing to do or no preload to start with (the kernel then answers); does
 /// not return when it started itself again.
 void join_bus_if_needed(char** argv);
+
+// ---- Timed interfaces (docs/wire.md) --------------------------------------
+
+/// An interface's wire, as `ip link set can0 type can bitrate ...` sets a
+/// CAN device's: what is not given stays as it is.
+struct LinkSettings {
+  std::optional<std::uint32_t> bit_rate;       ///< bit/s; 0: instant delivery, no wire (a vcan)
+  std::optional<std::uint32_t> data_bit_rate;  ///< CAN FD's data phase; 0: the bit rate
+  std::optional<std::int32_t> restart_ms;      ///< after bus-off; 0: only on restart_link
+  std::optional<std::uint32_t> tx_queue;       ///< a controller's transmit queue (txqueuelen), frames
+};
+/// BusError for a missing interface or a value out of range.
+void set_link(const BusPaths& paths, const std::string& name, const LinkSettings& settings);
+/// Settings as `ip link` words: "bitrate 500000 dbitrate 2000000 restart-ms
+/// 100 txqueuelen 10", any of them; BusError naming a word it does not know
+/// or a value that is not a whole number.
+LinkSettings parse_link(const std::vector<std::string>& words);
+
+/// Restarts the bus-off controllers on interface `name` (`ip link set can0
+/// type can restart`); BusError when it has no wire or none is bus-off.
+void restart_link(const BusPaths& paths, const std::string& name);
+
+/// A wire fault on interface `name` (`canhil bus fault`): its times from
+/// now, its controller a process's pid, which must have a controller there.
+/// BusError otherwise.
+void add_bus_fault(const BusPaths& paths, const std::string& name, const wire::FaultRule& rule);
+/// Ends every wire fault on interface `name`.
+void clear_bus_faults(const BusPaths& paths, const std::string& name);
+
+/// A controller on a timed interface as the broker last said.
+struct ControllerView {
+  int pid = 0;
+  std::string program;  ///< /proc/PID/comm
+  std::string interface;
+  std::string state;  ///< "error-active", "error-warning", "error-passive", "bus-off"
+  unsigned tec = 0;
+  unsigned rec = 0;
+  std::uint64_t sent = 0;
+  std::uint64_t received = 0;
+  std::uint64_t errors = 0;
+  std::uint64_t bus_offs = 0;
+  std::uint64_t restarts = 0;
+  std::uint64_t refused = 0;  ///< writes answered ENOBUFS
+  unsigned queued = 0;
+};
+std::vector<ControllerView> controllers(const BusPaths& paths);
+
+/// The process on interface `name` named `who` (its pid, or its program as
+/// /proc/PID/comm says), or 0 when none has a controller there.
+int controller_pid(const BusPaths& paths, const std::string& name, const std::string& who);
 
 /// Runs the broker's loop in this process until it is stopped or its owner
 /// ends (what start_broker's child runs). listen_fd: the bound listening socket.

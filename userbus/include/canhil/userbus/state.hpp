@@ -31,10 +31,16 @@
 namespace canhil::userbus {
 
 inline constexpr std::uint32_t kMagic = 0x43414e42;  // "CANB"
-inline constexpr std::uint32_t kVersion = 4;
+inline constexpr std::uint32_t kVersion = 5;
 inline constexpr int kMaxInterfaces = 32;
 inline constexpr int kMaxSockets = 1024;
 inline constexpr int kMaxFilters = 512;  // CAN_RAW_FILTER_MAX, as the kernel
+/// Controllers on timed interfaces: one per process and interface (docs/wire.md).
+inline constexpr int kMaxControllers = 256;
+/// A new interface's restart delay after bus-off (ms) and transmit queue
+/// (frames: a CAN device's txqueuelen, as can-dev sets it).
+inline constexpr std::int32_t kDefaultRestartMs = 100;
+inline constexpr std::uint32_t kDefaultTxQueue = 10;
 /// The bus's interface indices start here, far above what a machine's kernel
 /// numbers its own interfaces, so that one never stands for the other.
 inline constexpr int kFirstIndex = 1 << 20;
@@ -79,6 +85,42 @@ struct Interface {
   char name[16];                       // IFNAMSIZ, NUL-terminated
   std::atomic<std::uint64_t> frames;   ///< frames sent on it
   std::atomic<std::uint64_t> dropped;  ///< copies dropped at a full receiver
+  // Its wire (docs/wire.md), set by `canhil bus link NAME bitrate ...` and
+  // read by the broker (told through kControlInterfacesChanged) and by the
+  // preload (the transmit queue's length).
+  std::atomic<std::uint32_t> bit_rate;       ///< bit/s; 0: instant delivery, no wire
+  std::atomic<std::uint32_t> data_bit_rate;  ///< CAN FD's data phase; 0: the bit rate
+  std::atomic<std::int32_t> restart_ms;      ///< after bus-off: 0 only on `restart`, else this many ms
+  std::atomic<std::uint32_t> tx_queue;       ///< frames a controller's queue holds (txqueuelen); one more: ENOBUFS
+  /// The wire's figures, written by the broker: time it carried bits and
+  /// time since its wire began (the load is their ratio), errors on it.
+  std::atomic<std::uint64_t> busy_ns;
+  std::atomic<std::uint64_t> wire_ns;
+  std::atomic<std::uint64_t> error_frames;
+};
+
+/// One CAN controller on a timed interface: a process's adapter (every socket
+/// it holds on that interface shares it). Claimed by the first of the
+/// preload (a frame sent) and the broker (a socket bound there) under
+/// State::lock; freed by the broker once the process has no socket left.
+struct Controller {
+  std::atomic<std::uint32_t> in_use;
+  std::int32_t pid;
+  std::int32_t ifindex;
+  /// Frames given and not yet sent or dropped: the preload counts one up
+  /// before it hands a frame to the broker (ENOBUFS at the interface's
+  /// tx_queue), the broker one down at its end of frame.
+  std::atomic<std::uint32_t> queued;
+  std::atomic<std::uint64_t> refused;  ///< writes answered ENOBUFS (the preload counts)
+  // As the broker's wire model last said (ControllerStatus).
+  std::atomic<std::uint32_t> state;  ///< ControllerState: 0 active, 1 warning, 2 passive, 3 bus-off
+  std::atomic<std::uint32_t> tec;
+  std::atomic<std::uint32_t> rec;
+  std::atomic<std::uint64_t> sent;
+  std::atomic<std::uint64_t> received;
+  std::atomic<std::uint64_t> errors;
+  std::atomic<std::uint64_t> bus_offs;
+  std::atomic<std::uint64_t> restarts;
 };
 
 /// Option flags of a socket (Socket::flags).
@@ -159,6 +201,7 @@ struct State {
   std::atomic<std::uint64_t> rounds;
   Interface interfaces[kMaxInterfaces];
   Socket sockets[kMaxSockets];
+  Controller controllers[kMaxControllers];
 };
 
 /// State::spin's word: who asked (a pid) and for how long (microseconds).
@@ -182,6 +225,43 @@ inline Interface* find_interface(State& s, int index) noexcept {
   if (k < 0 || k >= kMaxInterfaces) return nullptr;
   Interface& i = s.interfaces[k];
   return i.in_use.load(std::memory_order_acquire) != 0 ? &i : nullptr;
+}
+
+/// The controller of process `pid` on interface `ifindex`, claimed when
+/// `claim` and there is none yet (under State::lock); nullptr when there is
+/// none (or no free row).
+inline Controller* find_controller(State& s, std::int32_t pid, std::int32_t ifindex, bool claim) noexcept {
+  for (Controller& c : s.controllers) {
+    if (c.in_use.load(std::memory_order_acquire) != 0 && c.pid == pid && c.ifindex == ifindex) return &c;
+  }
+  if (!claim) return nullptr;
+  s.lock.lock();
+  Controller* found = nullptr;
+  for (Controller& c : s.controllers) {
+    const bool used = c.in_use.load(std::memory_order_acquire) != 0;
+    if (used && c.pid == pid && c.ifindex == ifindex) {
+      found = &c;
+      break;
+    }
+    if (!used && found == nullptr) found = &c;
+  }
+  if (found != nullptr && found->in_use.load(std::memory_order_relaxed) == 0) {
+    found->pid = pid;
+    found->ifindex = ifindex;
+    found->queued.store(0);
+    found->refused.store(0);
+    found->state.store(0);
+    found->tec.store(0);
+    found->rec.store(0);
+    found->sent.store(0);
+    found->received.store(0);
+    found->errors.store(0);
+    found->bus_offs.store(0);
+    found->restarts.store(0);
+    found->in_use.store(1, std::memory_order_release);
+  }
+  s.lock.unlock();
+  return found;
 }
 
 // ---- Records on a socket's connection ----------------------------------
@@ -222,11 +302,31 @@ struct RxRecord {
 };
 inline constexpr std::size_t kRxHeader = offsetof(RxRecord, frame);
 
+inline constexpr std::uint32_t kControlInterfacesChanged = 1;  ///< also: an interface's wire settings changed
+inline constexpr std::uint32_t kControlStop = 2;
+inline constexpr std::uint32_t kControlRestart = 3;  ///< restart `ifindex`'s bus-off controllers (`pid`: one, 0: all)
+inline constexpr std::uint32_t kControlFault = 4;    ///< add `fault` on `ifindex`
+inline constexpr std::uint32_t kControlClearFaults = 5;  ///< end every fault on `ifindex`
+
+/// A wire fault for a running bus (`canhil bus fault`): wire::FaultRule's
+/// fields, its times from when the broker takes it, its node a process.
+struct FaultRequest {
+  std::uint32_t kind;  ///< wire::FaultRule::Kind
+  std::int64_t from_ns;
+  std::int64_t until_ns;  ///< -1: for ever
+  double rate;
+  std::int32_t has_id;
+  std::uint32_t id;
+  std::int32_t pid;         ///< the process whose controller it names, 0: none
+  std::uint32_t babble_id;  ///< kBabbling: the 11-bit id of its frames
+};
+
 /// What a control connection asks (one request, one answer: an int, 0 or -errno).
 struct ControlRequest {
-  std::uint32_t op;  ///< kControlInterfacesChanged or kControlStop
+  std::uint32_t op;          ///< kControl*
+  std::int32_t ifindex = 0;  ///< restart, fault, clear: the interface
+  std::int32_t pid = 0;      ///< restart: the process whose controller, 0: every bus-off one
+  FaultRequest fault{};      ///< fault: the rule
 };
-inline constexpr std::uint32_t kControlInterfacesChanged = 1;
-inline constexpr std::uint32_t kControlStop = 2;
 
 }  // namespace canhil::userbus

@@ -1,0 +1,345 @@
+// The broker's timed interfaces (broker_wire.hpp): the wire model in real time.
+#include "broker_wire.hpp"
+
+#include <linux/can/error.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <unordered_map>
+
+#include "canhil/base/time.hpp"
+#include "canhil/frames/wire.hpp"
+#include "canhil/userbus/state.hpp"
+#include "canhil/wire/wire_bus.hpp"
+
+namespace canhil::userbus {
+namespace {
+
+/// The wire's view of a frame as a program wrote it (an FD length the DLC
+/// cannot carry takes the next one up, as a controller pads it).
+frames::WireFrame wire_frame_of(const unsigned char* raw, std::uint32_t size) {
+  canfd_frame f{};
+  std::memcpy(&f, raw, size);
+  frames::WireFrame w;
+  w.extended = (f.can_id & CAN_EFF_FLAG) != 0;
+  w.id = f.can_id & (w.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+  if (size == CANFD_MTU) {
+    w.fd = true;
+    w.brs = (f.flags & CANFD_BRS) != 0;
+    w.esi = (f.flags & CANFD_ESI) != 0;
+    w.len = frames::fd_length(frames::fd_dlc(std::min<std::uint8_t>(f.len, CANFD_MAX_DLEN)));
+  } else {
+    const auto& c = reinterpret_cast<const can_frame&>(f);
+    w.remote = (c.can_id & CAN_RTR_FLAG) != 0;
+    w.len = std::min<std::uint8_t>(c.len, CAN_MAX_DLEN);
+    w.len8_dlc = c.len == CAN_MAX_DLEN && c.len8_dlc > CAN_MAX_DLEN ? c.len8_dlc : 0;
+  }
+  std::copy(f.data, f.data + w.len, w.data.begin());
+  return w;
+}
+
+/// A babbling fault's frame, as a program would read it.
+void raw_of(const frames::WireFrame& w, WireDelivery& d) {
+  can_frame f{};
+  f.can_id = w.id | (w.extended ? CAN_EFF_FLAG : 0U) | (w.remote ? CAN_RTR_FLAG : 0U);
+  f.len = std::min<std::uint8_t>(w.len, CAN_MAX_DLEN);
+  std::copy(w.data.begin(), w.data.begin() + f.len, f.data);
+  d.size = CAN_MTU;
+  std::memcpy(d.frame, &f, sizeof f);
+}
+
+std::optional<Nanos> restart_delay(std::int32_t ms) {
+  if (ms <= 0) return std::nullopt;  // as the kernel's restart-ms 0: only on request
+  return Nanos{static_cast<std::int64_t>(ms) * 1'000'000};
+}
+
+}  // namespace
+
+struct BrokerWire::Wire {
+  std::int32_t ifindex = 0;
+  std::uint32_t bit_rate = 0;
+  std::uint32_t data_bit_rate = 0;
+  std::int32_t restart_ms = 0;
+  std::int64_t origin = 0;  // monotonic ns at the wire's time 0
+  std::unique_ptr<wire::WireBus> bus;
+  struct Member {
+    std::int32_t pid = 0;
+    bool leaving = false;  // its process has gone: it leaves once its queue is empty
+    bool gone = false;
+    // Frames given, sent whole, and lost (the one on the wire when its
+    // controller was forced bus-off): given - sent - waiting.
+    std::uint64_t given = 0;
+    std::uint64_t sent = 0;
+    std::uint64_t lost = 0;
+  };
+  std::vector<Member> members;  // by ControllerId
+  struct Given {
+    std::int32_t pid = 0;
+    std::uint64_t tag = 0;
+    std::uint32_t size = 0;
+    unsigned char frame[CANFD_MTU];
+  };
+  std::unordered_map<std::uint64_t, Given> given;  // by the wire's tag
+  std::uint64_t next_tag = 1;
+  std::vector<wire::WireEvent> events;
+
+  Nanos at(std::int64_t now) const { return Nanos{std::max<std::int64_t>(now - origin, 0)}; }
+  std::optional<wire::ControllerId> controller_of(std::int32_t pid) const {
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      if (!members[k].gone && members[k].pid == pid) return static_cast<wire::ControllerId>(k);
+    }
+    return std::nullopt;
+  }
+};
+
+BrokerWire::BrokerWire(State& state) : state_(state), wires_(kMaxInterfaces) {}
+BrokerWire::~BrokerWire() = default;
+
+BrokerWire::Wire* BrokerWire::wire_of(std::int32_t ifindex) const noexcept {
+  const int k = ifindex - kFirstIndex;
+  if (k < 0 || k >= kMaxInterfaces) return nullptr;
+  return wires_[static_cast<std::size_t>(k)].get();
+}
+
+bool BrokerWire::timed(std::int32_t ifindex) const noexcept { return wire_of(ifindex) != nullptr; }
+
+void BrokerWire::sync(std::int64_t now) {
+  for (int k = 0; k < kMaxInterfaces; ++k) {
+    const Interface& i = state_.interfaces[k];
+    const bool exists = i.in_use.load(std::memory_order_acquire) != 0;
+    const std::uint32_t rate = exists ? i.bit_rate.load() : 0;
+    const std::uint32_t data_rate = exists ? i.data_bit_rate.load() : 0;
+    const std::int32_t restart_ms = i.restart_ms.load();
+    std::unique_ptr<Wire>& w = wires_[static_cast<std::size_t>(k)];
+    if (w && w->bit_rate == rate && w->data_bit_rate == data_rate) {
+      if (w->restart_ms != restart_ms) {
+        w->restart_ms = restart_ms;
+        for (std::size_t c = 0; c < w->members.size(); ++c)
+          if (!w->members[c].gone)
+            w->bus->set_restart_delay(static_cast<wire::ControllerId>(c), restart_delay(restart_ms));
+      }
+      continue;
+    }
+    // A new wire, or none: what waited on the old one is dropped, as when a
+    // CAN interface is set down to change its bit timing.
+    for (Controller& row : state_.controllers) {
+      if (row.in_use.load(std::memory_order_acquire) != 0 && row.ifindex == kFirstIndex + k) row.queued.store(0);
+    }
+    w.reset();
+    if (rate == 0) continue;
+    w = std::make_unique<Wire>();
+    w->ifindex = kFirstIndex + k;
+    w->bit_rate = rate;
+    w->data_bit_rate = data_rate;
+    w->restart_ms = restart_ms;
+    w->origin = now;
+    wire::WireConfig config;
+    config.bit_rate = rate;
+    config.data_bit_rate = data_rate;
+    w->bus = std::make_unique<wire::WireBus>(config);
+  }
+}
+
+void BrokerWire::join(std::int32_t pid, std::int32_t ifindex, std::int64_t /*now*/) {
+  Wire* w = wire_of(ifindex);
+  if (w == nullptr || w->controller_of(pid)) return;
+  wire::ControllerOptions options;
+  options.queue_frames = 1U << 20;  // the preload keeps each at the interface's tx_queue
+  options.restart_delay = restart_delay(w->restart_ms);
+  const wire::ControllerId id = w->bus->add_controller("pid " + std::to_string(pid), options);
+  if (w->members.size() <= id) w->members.resize(id + 1);
+  w->members[id] = {pid, false};
+  find_controller(state_, pid, ifindex, true);
+}
+
+void BrokerWire::leave(std::int32_t pid) {
+  for (std::unique_ptr<Wire>& w : wires_) {
+    if (!w) continue;
+    if (const auto id = w->controller_of(pid)) w->members[*id].leaving = true;
+    retire(*w);
+  }
+}
+
+// `n` frames of `pid`'s have left its transmit queue: room for the preload.
+void BrokerWire::release(Wire& w, std::int32_t pid, std::uint32_t n) {
+  Controller* row = find_controller(state_, pid, w.ifindex, false);
+  if (row == nullptr) return;
+  std::uint32_t q = row->queued.load(std::memory_order_relaxed);
+  while (!row->queued.compare_exchange_weak(q, q - std::min(q, n), std::memory_order_acq_rel)) {
+  }
+}
+
+// Frames the wire dropped without a word (a controller forced bus-off loses
+// the frame it was sending) leave their queue too: the oldest it gave.
+void BrokerWire::account_losses(Wire& w) {
+  for (std::size_t k = 0; k < w.members.size(); ++k) {
+    Wire::Member& m = w.members[k];
+    if (m.gone) continue;
+    const std::uint64_t waiting = w.bus->status(static_cast<wire::ControllerId>(k)).queued;
+    const std::uint64_t lost = m.given - m.sent - std::min<std::uint64_t>(waiting, m.given - m.sent);
+    if (lost <= m.lost) continue;
+    const std::uint64_t n = lost - m.lost;
+    m.lost = lost;
+    release(w, m.pid, static_cast<std::uint32_t>(n));
+    for (std::uint64_t j = 0; j < n; ++j) {
+      auto oldest = w.given.end();
+      for (auto it = w.given.begin(); it != w.given.end(); ++it) {
+        if (it->second.pid == m.pid && (oldest == w.given.end() || it->first < oldest->first)) oldest = it;
+      }
+      if (oldest != w.given.end()) w.given.erase(oldest);
+    }
+  }
+}
+
+// Controllers whose process has gone leave once their queue is empty: what
+// a program wrote before it closed its socket is on its way, as frames in a
+// CAN device's queue outlive the socket that gave them.
+void BrokerWire::retire(Wire& w) {
+  for (std::size_t k = 0; k < w.members.size(); ++k) {
+    Wire::Member& m = w.members[k];
+    if (m.gone || !m.leaving || w.bus->status(static_cast<wire::ControllerId>(k)).queued != 0) continue;
+    w.bus->remove_controller(static_cast<wire::ControllerId>(k));
+    m.gone = true;
+    if (Controller* row = find_controller(state_, m.pid, w.ifindex, false))
+      row->in_use.store(0, std::memory_order_release);
+  }
+}
+
+void BrokerWire::submit(std::int32_t pid, std::uint64_t tag, const TxRecord& record, std::int64_t now) {
+  Wire* w = wire_of(record.ifindex);
+  if (w == nullptr) return;
+  join(pid, record.ifindex, now);
+  const wire::ControllerId id = *w->controller_of(pid);
+  Wire::Given& g = w->given[w->next_tag];
+  g.pid = pid;
+  g.tag = tag;
+  g.size = record.size;
+  std::memcpy(g.frame, record.frame, record.size);
+  w->bus->submit(id, wire_frame_of(record.frame, record.size), w->at(now), w->next_tag);
+  ++w->next_tag;
+  ++w->members[id].given;
+}
+
+std::int64_t BrokerWire::next_due() const noexcept {
+  std::int64_t due = INT64_MAX;
+  for (const std::unique_ptr<Wire>& w : wires_) {
+    if (!w) continue;
+    const Nanos next = w->bus->next_event();
+    if (next != kNever) due = std::min(due, w->origin + next.count());
+  }
+  return due;
+}
+
+void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
+  for (std::unique_ptr<Wire>& wp : wires_) {
+    if (!wp) continue;
+    Wire& w = *wp;
+    const Nanos next = w.bus->next_event();
+    if (next == kNever || w.origin + next.count() > now) continue;
+    w.events.clear();
+    w.bus->advance(w.at(now), w.events);
+    for (const wire::WireEvent& e : w.events) {
+      WireDelivery& d = out.emplace_back();
+      d.ifindex = w.ifindex;
+      d.at_ns = w.origin + e.at.count();
+      const std::int32_t pid = e.controller < w.members.size() ? w.members[e.controller].pid : 0;
+      if (e.kind == wire::WireEvent::Kind::kError) {
+        d.error = true;
+        d.pid = pid;
+        can_frame f{};
+        f.can_id = CAN_ERR_FLAG | (e.error.id & CAN_ERR_MASK);
+        f.len = CAN_ERR_DLC;
+        std::copy(e.error.data.begin(), e.error.data.end(), f.data);
+        d.size = CAN_MTU;
+        std::memcpy(d.frame, &f, sizeof f);
+        continue;
+      }
+      for (const wire::ControllerId m : e.missed) {
+        if (m < w.members.size()) d.missed.push_back(w.members[m].pid);
+      }
+      const auto given = w.given.find(e.tag);
+      if (e.tag == wire::kBabbleTag || given == w.given.end()) {
+        raw_of(e.frame, d);  // a babbling fault's own frame
+        continue;
+      }
+      ++w.members[e.controller].sent;
+      d.pid = given->second.pid;
+      d.tag = given->second.tag;
+      d.size = given->second.size;
+      std::memcpy(d.frame, given->second.frame, d.size);
+      w.given.erase(given);
+      release(w, d.pid, 1);
+    }
+    account_losses(w);
+    retire(w);
+    publish(w, now);
+  }
+}
+
+void BrokerWire::publish(Wire& w, std::int64_t now) {
+  for (std::size_t k = 0; k < w.members.size(); ++k) {
+    if (w.members[k].gone) continue;
+    Controller* row = find_controller(state_, w.members[k].pid, w.ifindex, false);
+    if (row == nullptr) continue;
+    const wire::ControllerStatus s = w.bus->status(static_cast<wire::ControllerId>(k));
+    row->state.store(static_cast<std::uint32_t>(s.state), std::memory_order_relaxed);
+    row->tec.store(s.tec, std::memory_order_relaxed);
+    row->rec.store(s.rec, std::memory_order_relaxed);
+    row->sent.store(s.sent, std::memory_order_relaxed);
+    row->received.store(s.received, std::memory_order_relaxed);
+    row->errors.store(s.errors, std::memory_order_relaxed);
+    row->bus_offs.store(s.bus_offs, std::memory_order_relaxed);
+    row->restarts.store(s.restarts, std::memory_order_relaxed);
+  }
+  if (Interface* i = find_interface(state_, w.ifindex)) {
+    i->busy_ns.store(static_cast<std::uint64_t>(w.bus->stats().busy.count()), std::memory_order_relaxed);
+    i->wire_ns.store(static_cast<std::uint64_t>(w.at(now).count()), std::memory_order_relaxed);
+    i->error_frames.store(w.bus->stats().error_frames, std::memory_order_relaxed);
+  }
+}
+
+int BrokerWire::restart(std::int32_t ifindex, std::int32_t pid, std::int64_t now) {
+  Wire* w = wire_of(ifindex);
+  if (w == nullptr) return -EINVAL;  // as the kernel: restart needs a CAN device
+  bool any = false;
+  for (std::size_t k = 0; k < w->members.size(); ++k) {
+    if (w->members[k].gone || (pid != 0 && w->members[k].pid != pid)) continue;
+    any = w->bus->restart(static_cast<wire::ControllerId>(k), w->at(now)) || any;
+  }
+  return any ? 0 : -EBUSY;  // can_restart_now: EBUSY when the device is not bus-off
+}
+
+int BrokerWire::add_fault(std::int32_t ifindex, const FaultRequest& f, std::int64_t now) {
+  Wire* w = wire_of(ifindex);
+  if (w == nullptr) return -EINVAL;
+  if (f.kind > static_cast<std::uint32_t>(wire::FaultRule::Kind::kBusOff)) return -EINVAL;
+  wire::FaultRule rule;
+  rule.kind = static_cast<wire::FaultRule::Kind>(f.kind);
+  rule.from = w->at(now) + Nanos{std::max<std::int64_t>(f.from_ns, 0)};
+  rule.until = f.until_ns < 0 ? kNever : w->at(now) + Nanos{f.until_ns};
+  rule.rate = f.rate;
+  if (f.has_id != 0) rule.id = f.id;
+  if (f.pid != 0) {
+    rule.controller = w->controller_of(f.pid);
+    if (!rule.controller) return -ESRCH;
+  }
+  if (rule.kind == wire::FaultRule::Kind::kBabbling) {
+    rule.babble.id = f.babble_id & CAN_SFF_MASK;
+    rule.babble.len = 8;
+  }
+  w->bus->add_fault(rule);
+  return 0;
+}
+
+int BrokerWire::clear_faults(std::int32_t ifindex, std::int64_t now) {
+  Wire* w = wire_of(ifindex);
+  if (w == nullptr) return -EINVAL;
+  w->bus->clear_faults(w->at(now));
+  return 0;
+}
+
+}  // namespace canhil::userbus

@@ -1,0 +1,76 @@
+// The broker's timed interfaces: one wire model (wire::WireBus) per interface
+// whose bit rate is set, run in real time on the broker's monotonic clock.
+// Each process with a socket bound to a timed interface (or to every one) is
+// one controller there, as one adapter in one machine: its sockets share the
+// controller's transmit queue, which the preload keeps at the interface's
+// tx_queue (ENOBUFS past it, Controller::queued). What the wire says
+// happened (a frame's end of frame, a controller's error report) goes back to
+// the broker as a WireDelivery, which routes it to the sockets.
+#pragma once
+
+#include <linux/can.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace canhil::userbus {
+
+struct State;
+struct TxRecord;
+struct FaultRequest;
+
+/// A frame at its end of frame, or a controller's error frame.
+struct WireDelivery {
+  bool error = false;
+  std::int32_t ifindex = 0;
+  std::int32_t pid = 0;    ///< frame: the sender's process (0: a fault's babbling); error: the reporter's
+  std::uint64_t tag = 0;   ///< frame: the sending connection (submit's tag); 0 for a babbling fault's
+  std::int64_t at_ns = 0;  ///< monotonic: its last bit, or when the error was seen
+  std::uint32_t size = 0;  ///< CAN_MTU or CANFD_MTU
+  unsigned char frame[CANFD_MTU] = {};
+  std::vector<std::int32_t> missed;  ///< frame: processes that did not receive it (bus-off, cut off)
+};
+
+class BrokerWire {
+ public:
+  explicit BrokerWire(State& state);
+  ~BrokerWire();
+  BrokerWire(const BrokerWire&) = delete;
+  BrokerWire& operator=(const BrokerWire&) = delete;
+
+  /// Takes the interfaces' wire settings as they stand now: a wire begins
+  /// where a bit rate was set, ends where it went to 0 or its interface
+  /// went away (its waiting frames with it), restarts with new rates.
+  void sync(std::int64_t now);
+  bool timed(std::int32_t ifindex) const noexcept;
+  /// Process `pid` has a socket on timed interface `ifindex`: its controller there.
+  void join(std::int32_t pid, std::int32_t ifindex, std::int64_t now);
+  /// Process `pid` holds no socket any more: its controllers leave their
+  /// buses once they have sent what they hold.
+  void leave(std::int32_t pid);
+  /// A frame given by process `pid`'s connection `tag` on a timed interface.
+  void submit(std::int32_t pid, std::uint64_t tag, const TxRecord& record, std::int64_t now);
+  /// When advance() next has something to do (monotonic ns); INT64_MAX: nothing.
+  std::int64_t next_due() const noexcept;
+  /// Runs every wire up to `now`, appending what happened, in order of time per interface.
+  void advance(std::int64_t now, std::vector<WireDelivery>& out);
+
+  /// `canhil bus link IFACE restart`: the bus-off controllers of `pid` (0: all) on `ifindex`; 0 or -errno.
+  int restart(std::int32_t ifindex, std::int32_t pid, std::int64_t now);
+  int add_fault(std::int32_t ifindex, const FaultRequest& fault, std::int64_t now);
+  int clear_faults(std::int32_t ifindex, std::int64_t now);
+
+ private:
+  struct Wire;
+  Wire* wire_of(std::int32_t ifindex) const noexcept;
+  void publish(Wire& w, std::int64_t now);
+  void retire(Wire& w);
+  void release(Wire& w, std::int32_t pid, std::uint32_t n);
+  void account_losses(Wire& w);
+
+  State& state_;
+  std::vector<std::unique_ptr<Wire>> wires_;  // by interface slot
+};
+
+}  // namespace canhil::userbus
