@@ -1,0 +1,187 @@
+// The broker's timed interfaces (userbus/src/broker_wire.hpp) without
+// processes: the broker's clock given by the test, so every figure is exact.
+// The wire's own rules are checked in tests/wire/; here, what the broker adds:
+// a controller per process, frames back as the program wrote them at their
+// end of frame, the shared transmit-queue counts the preload's ENOBUFS reads,
+// error frames as Linux's, losses, restarts and faults.
+#include "broker_wire.hpp"
+
+#include <linux/can/error.h>
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "canhil/frames/wire.hpp"
+#include "canhil/userbus/state.hpp"
+#include "canhil/wire/wire_fault.hpp"
+
+namespace {
+
+namespace ub = canhil::userbus;
+namespace frames = canhil::frames;
+
+constexpr std::int64_t kT0 = 5'000'000'000;  // the broker's monotonic clock at the wire's start
+constexpr std::int32_t kIndex = ub::kFirstIndex;
+
+ub::TxRecord record(canid_t id, std::uint8_t len) {
+  ub::TxRecord r{};
+  r.ifindex = kIndex;
+  r.size = CAN_MTU;
+  can_frame f{};
+  f.can_id = id;
+  f.len = len;
+  for (std::uint8_t k = 0; k < len; ++k) f.data[k] = static_cast<std::uint8_t>(0x11 * k);
+  std::memcpy(r.frame, &f, sizeof f);
+  return r;
+}
+
+canid_t id_of(const ub::WireDelivery& d) {
+  canid_t id = 0;
+  std::memcpy(&id, d.frame, sizeof id);
+  return id;
+}
+
+// A frame's wire time at 1 Mbit/s, in ns, intermission included.
+std::int64_t wire_ns(canid_t id, std::uint8_t len) {
+  frames::WireFrame w;
+  w.id = id;
+  w.len = len;
+  for (std::uint8_t k = 0; k < len; ++k) w.data[k] = static_cast<std::uint8_t>(0x11 * k);
+  return static_cast<std::int64_t>(frames::count_bits(w).total()) * 1000;
+}
+
+class BrokerWireTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ub::Interface& i = state_->interfaces[0];
+    i.index = kIndex;
+    std::strcpy(i.name, "vcan0");
+    i.up.store(1);
+    i.bit_rate.store(1'000'000);
+    i.restart_ms.store(100);
+    i.tx_queue.store(10);
+    i.in_use.store(1);
+    wire_.sync(kT0);
+  }
+  ub::Controller& row(std::int32_t pid) { return *ub::find_controller(*state_, pid, kIndex, false); }
+  // What the preload does before it hands a frame over: one more in its queue.
+  void give(std::int32_t pid, std::uint64_t tag, const ub::TxRecord& r, std::int64_t at) {
+    ub::find_controller(*state_, pid, kIndex, true)->queued.fetch_add(1);
+    wire_.submit(pid, tag, r, at);
+  }
+  std::unique_ptr<ub::State> state_ = std::make_unique<ub::State>();
+  ub::BrokerWire wire_{*state_};
+  std::vector<ub::WireDelivery> out_;
+};
+
+TEST_F(BrokerWireTest, FramesComeBackAtTheirEndOfFrameInTheOrderArbitrationGives) {
+  EXPECT_TRUE(wire_.timed(kIndex));
+  EXPECT_FALSE(wire_.timed(kIndex + 1));
+  wire_.join(200, kIndex, kT0);  // a receiver, so the frames are acknowledged
+  give(100, 1, record(0x300, 8), kT0);
+  give(100, 2, record(0x200, 2), kT0 + 1000);  // waits behind its own first frame
+  give(200, 3, record(0x100, 4), kT0 + 2000);  // another controller's, lower id: wins the next arbitration
+  EXPECT_EQ(row(100).queued.load(), 2U);
+  EXPECT_EQ(wire_.next_due(), kT0 + wire_ns(0x300, 8) - 3000) << "the first frame's end of frame";
+  wire_.advance(kT0 + 10'000'000, out_);
+  ASSERT_EQ(out_.size(), 3U);
+  EXPECT_EQ(id_of(out_[0]), 0x300U);
+  EXPECT_EQ(id_of(out_[1]), 0x100U);
+  EXPECT_EQ(id_of(out_[2]), 0x200U);
+  // Each frame starts 3 bits after the last one's end of frame: its own bits later.
+  EXPECT_EQ(out_[0].at_ns, kT0 + wire_ns(0x300, 8) - 3000);
+  EXPECT_EQ(out_[1].at_ns - out_[0].at_ns, wire_ns(0x100, 4));
+  EXPECT_EQ(out_[2].at_ns - out_[1].at_ns, wire_ns(0x200, 2));
+  EXPECT_EQ(out_[0].pid, 100);
+  EXPECT_EQ(out_[0].tag, 1U);
+  EXPECT_EQ(out_[1].pid, 200);
+  EXPECT_EQ(std::memcmp(out_[2].frame, record(0x200, 2).frame, CAN_MTU), 0) << "the frame as the program wrote it";
+  EXPECT_EQ(row(100).queued.load(), 0U) << "room again in the queue the preload counts";
+  EXPECT_EQ(row(100).sent.load(), 2U);
+  EXPECT_EQ(row(200).received.load(), 2U);
+  EXPECT_EQ(wire_.next_due(), INT64_MAX);
+  EXPECT_GT(state_->interfaces[0].busy_ns.load(), 0U);
+}
+
+TEST_F(BrokerWireTest, ALoneSenderGetsAckErrorsAndStaysErrorPassive) {
+  // ISO 11898-1:2015 12.1.4.2 rule 3, exception 1: an error-passive
+  // transmitter's ACK error does not count, so it never goes bus-off.
+  give(100, 1, record(0x123, 1), kT0);
+  wire_.advance(kT0 + 50'000'000, out_);
+  ASSERT_FALSE(out_.empty());
+  std::size_t acks = 0;
+  for (const ub::WireDelivery& d : out_) {
+    ASSERT_TRUE(d.error);
+    EXPECT_EQ(d.pid, 100);
+    EXPECT_NE(id_of(d) & CAN_ERR_FLAG, 0U);
+    if ((id_of(d) & CAN_ERR_ACK) != 0) ++acks;
+  }
+  EXPECT_GT(acks, 16U);
+  EXPECT_EQ(row(100).state.load(), 2U) << "error-passive";
+  EXPECT_EQ(row(100).tec.load(), 128U);
+  EXPECT_EQ(row(100).bus_offs.load(), 0U);
+  EXPECT_EQ(row(100).queued.load(), 1U) << "still trying";
+}
+
+TEST_F(BrokerWireTest, AForcedBusOffLosesTheFrameOnTheWireAndRestartsOnRequest) {
+  state_->interfaces[0].restart_ms.store(0);  // as the kernel's restart-ms 0: only on request
+  wire_.sync(kT0);
+  wire_.join(200, kIndex, kT0);
+  EXPECT_EQ(wire_.restart(kIndex, 0, kT0), -EBUSY) << "nobody is bus-off";
+  give(100, 1, record(0x123, 8), kT0);
+  give(100, 2, record(0x124, 8), kT0);
+  ub::FaultRequest busoff{};
+  busoff.kind = static_cast<std::uint32_t>(canhil::wire::FaultRule::Kind::kBusOff);
+  busoff.from_ns = 20'000;  // in the middle of the first frame
+  busoff.until_ns = -1;
+  busoff.pid = 100;
+  ASSERT_EQ(wire_.add_fault(kIndex, busoff, kT0), 0);
+  busoff.pid = 999;
+  EXPECT_EQ(wire_.add_fault(kIndex, busoff, kT0), -ESRCH) << "no such controller";
+  wire_.advance(kT0 + 500'000'000, out_);
+  EXPECT_EQ(row(100).state.load(), 3U) << "bus-off";
+  EXPECT_EQ(row(100).queued.load(), 1U) << "the frame on the wire lost, the next one kept";
+  for (const ub::WireDelivery& d : out_) EXPECT_TRUE(d.error) << "nothing sent while bus-off";
+  ASSERT_EQ(wire_.restart(kIndex, 0, kT0 + 500'000'000), 0);
+  out_.clear();
+  wire_.advance(kT0 + 510'000'000, out_);
+  EXPECT_EQ(row(100).state.load(), 0U);
+  EXPECT_EQ(row(100).restarts.load(), 1U);
+  bool restarted = false;
+  bool sent = false;
+  for (const ub::WireDelivery& d : out_) {
+    if (d.error && (id_of(d) & CAN_ERR_RESTARTED) != 0) restarted = true;
+    if (!d.error && id_of(d) == 0x124U) sent = true;
+  }
+  EXPECT_TRUE(restarted);
+  EXPECT_TRUE(sent);
+  EXPECT_EQ(row(100).queued.load(), 0U);
+}
+
+TEST_F(BrokerWireTest, AControllerWhoseProcessEndedSendsWhatItHeldThenLeaves) {
+  wire_.join(200, kIndex, kT0);
+  give(100, 1, record(0x10, 8), kT0);
+  give(100, 2, record(0x11, 8), kT0);
+  wire_.leave(100);
+  EXPECT_NE(ub::find_controller(*state_, 100, kIndex, false), nullptr);
+  wire_.advance(kT0 + 10'000'000, out_);
+  ASSERT_EQ(out_.size(), 2U);
+  EXPECT_EQ(ub::find_controller(*state_, 100, kIndex, false), nullptr) << "gone once its queue is empty";
+}
+
+TEST_F(BrokerWireTest, ANewBitRateIsANewWireAndZeroIsNone) {
+  give(100, 1, record(0x10, 8), kT0);
+  state_->interfaces[0].bit_rate.store(500'000);
+  wire_.sync(kT0 + 1000);
+  EXPECT_TRUE(wire_.timed(kIndex));
+  EXPECT_EQ(row(100).queued.load(), 0U) << "what waited on the old wire is dropped, as on a link set down";
+  state_->interfaces[0].bit_rate.store(0);
+  wire_.sync(kT0 + 2000);
+  EXPECT_FALSE(wire_.timed(kIndex));
+  EXPECT_EQ(wire_.restart(kIndex, 0, kT0), -EINVAL);
+}
+
+}  // namespace

@@ -1,0 +1,77 @@
+// tests/userbus/bus_support.hpp — what the user-space bus's suites share: a
+// shell line's output, a listener beside actions, and a bus of the test's own.
+#pragma once
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "canhil/userbus/bus.hpp"
+#include "support/test_paths.hpp"
+
+namespace canhil::test {
+
+namespace fs = std::filesystem;
+namespace ub = canhil::userbus;
+
+/// `line` run by /bin/sh, its standard output and error; its exit status in `status`.
+inline std::string shell(const std::string& line, int* status = nullptr) {
+  std::string out;
+  FILE* p = popen((line + " 2>&1").c_str(), "r");
+  if (p == nullptr) return out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, p)) > 0) out.append(buffer, n);
+  const int s = pclose(p);
+  if (status != nullptr) *status = WIFEXITED(s) ? WEXITSTATUS(s) : 128 + WTERMSIG(s);
+  return out;
+}
+
+/// A shell line: `listener` started in the background and given 0.3 s to bind
+/// its socket, then `actions`; the listener then stopped with SIGINT when
+/// `interrupt`, else waited for as it ends by itself; then `after`.
+inline std::string beside(const std::string& listener, const std::string& actions, bool interrupt,
+                          const std::string& after = "") {
+  return listener + " & p=$!; sleep 0.3; " + actions + "; " + (interrupt ? "kill -INT $p; " : "") + "wait $p" +
+         (after.empty() ? "" : "; " + after);
+}
+
+/// A bus of this test's own: started in a fresh folder, stopped at the end.
+class OwnBus : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = fs::temp_directory_path() / ("canhil-bus-ut-" + std::to_string(getpid()));
+    fs::remove_all(folder_);
+    setenv("CANHIL_BUS_DIR", folder_.c_str(), 1);
+    paths_ = ub::BusPaths::current();
+  }
+  void TearDown() override {
+    ub::stop_broker(paths_);
+    fs::remove_all(folder_);
+    unsetenv("CANHIL_BUS_DIR");
+  }
+  void start(const std::vector<std::string>& names = {"vcan0", "vcan1"}) {
+    ub::BrokerOptions o;
+    o.owner = getpid();
+    broker_ = ub::start_broker(paths_, o);
+    ub::add_interfaces(paths_, names);
+  }
+  /// `command` run by sh on the bus (the preload and the bus's folder in its environment); its output.
+  std::string on_bus(const std::string& command, int* status = nullptr) const {
+    return shell("cd '" + folder_.string() + "' && LD_PRELOAD=" + canhil::test::bus_preload() + " TIMESHIM=" +
+                     canhil::test::time_shim() + " CANHIL_BUS_DIR='" + folder_.string() + "' sh -c '" + command + "'",
+                 status);
+  }
+  fs::path folder_;
+  ub::BusPaths paths_;
+  pid_t broker_ = 0;
+};
+
+}  // namespace canhil::test
