@@ -60,24 +60,6 @@ ub::BrokerOptions broker_options(Args& args) {
   return options;
 }
 
-/// Every frame the command's receivers lost on the interfaces it used, said
-/// once at its end (each loss was also counted on its socket: SO_RXQ_OVFL).
-void report_drops(const ub::BusPaths& paths, const std::vector<std::string>& names,
-                  const std::vector<ub::InterfaceCounts>& before) {
-  for (const ub::InterfaceCounts& now : ub::interface_counts(paths)) {
-    if (std::find(names.begin(), names.end(), now.name) == names.end()) continue;
-    std::uint64_t dropped = now.dropped;
-    for (const ub::InterfaceCounts& b : before) {
-      if (b.name == now.name) dropped -= std::min(dropped, b.dropped);
-    }
-    if (dropped == 0) continue;
-    std::fprintf(stderr,
-                 "canhil bus exec: %llu frame(s) dropped on %s for receivers whose buffer was full and that read "
-                 "nothing for the bus's grace (each counted on its socket, SO_RXQ_OVFL; canhil bus up --grace-ms)\n",
-                 static_cast<unsigned long long>(dropped), now.name.c_str());
-  }
-}
-
 /// --bit-rate on `bus up` and `bus exec`: the interfaces' wire (docs/wire.md).
 void set_bit_rate(const std::optional<std::string>& rate, const ub::BusPaths& paths,
                   const std::vector<std::string>& names) {
@@ -160,16 +142,7 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   const std::vector<ub::InterfaceCounts> counts_before = ub::interface_counts(paths);
 
   const int status = ub::run_on_bus(paths, command);
-  report_drops(paths, names, counts_before);
-  if (started) {
-    if (const ub::BusWaits w = ub::broker_waits(paths); w.count > 0) {
-      std::fprintf(stderr,
-                   "canhil bus exec: the bus waited %llu time(s) for receivers whose backlog was full, %.1f ms in "
-                   "all, longest %.1f ms\n",
-                   static_cast<unsigned long long>(w.count), static_cast<double>(w.total_us) / 1000.0,
-                   static_cast<double>(w.longest_us) / 1000.0);
-    }
-  }
+  std::fputs(ub::exec_report(paths, names, counts_before, started).c_str(), stderr);
   if (started) {
     ub::stop_broker(paths);
   } else if (!created.empty()) {

@@ -66,8 +66,8 @@ class TimedBus : public OwnBus {
 TEST_F(TimedBus, CangenAsFastAsItCanGoesAtTheWiresRateAndMeetsENOBUFS) {
   timed(1'000'000);
   // cangen -g 0 writes without pause; -i counts the writes a full queue refused.
-  const std::string out =
-      on_bus(beside("candump -L vcan0 > log.txt", "cangen -g 0 -i -n 3000 -L 8 -D r vcan0", true, "cat log.txt"));
+  const std::string out = on_bus(
+      beside("candump -L vcan0 > log.txt", "cangen -g 0 -i -n 100000 -L 8 -D r vcan0; sleep 0.2", true, "cat log.txt"));
   const std::vector<Logged> log = read_log(out);
   ASSERT_GT(log.size(), 10U) << out.substr(0, 400);
   EXPECT_NE(out.find("ENOBUFS return values"), std::string::npos)

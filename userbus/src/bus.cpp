@@ -392,6 +392,32 @@ BusWaits broker_waits(const BusPaths& paths) {
   return {s.waits.load(), s.waited_us.load(), s.longest_wait_us.load()};
 }
 
+std::string exec_report(const BusPaths& paths, const std::vector<std::string>& names,
+                        const std::vector<InterfaceCounts>& before, bool own_bus) {
+  std::ostringstream out;
+  for (const InterfaceCounts& now : interface_counts(paths)) {
+    if (std::find(names.begin(), names.end(), now.name) == names.end()) continue;
+    std::uint64_t dropped = now.dropped;
+    for (const InterfaceCounts& b : before) {
+      if (b.name == now.name) dropped -= std::min(dropped, b.dropped);
+    }
+    if (dropped == 0) continue;
+    out << "canhil bus exec: " << dropped << " frame(s) dropped on " << now.name
+        << " for receivers whose buffer was full and that read nothing for the bus's grace (each counted on its "
+           "socket, SO_RXQ_OVFL; canhil bus up --grace-ms)\n";
+  }
+  if (const BusWaits w = broker_waits(paths); own_bus && w.count > 0) {
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "canhil bus exec: the bus waited %llu time(s) for receivers whose backlog was full, %.1f ms in all, "
+                  "longest %.1f ms\n",
+                  static_cast<unsigned long long>(w.count), static_cast<double>(w.total_us) / 1000.0,
+                  static_cast<double>(w.longest_us) / 1000.0);
+    out << line;
+  }
+  return out.str();
+}
+
 std::string broker_scheduling(const BusPaths& paths) { return scheduling_text(require_state(paths)->state()); }
 
 void start_broker_detached(const BusPaths& paths, const BrokerOptions& options) {

@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace canhil::wire {
@@ -164,6 +165,13 @@ struct BusWaits {
 };
 BusWaits broker_waits(const BusPaths& paths);
 
+/// What `canhil bus exec` says at the end of its command: the frames its
+/// receivers lost on interfaces `names` since `before` (each also counted on
+/// its socket, SO_RXQ_OVFL) and, on a bus of its own (`own_bus`), the
+/// broker's waits for full receivers. Empty when there is nothing to say.
+std::string exec_report(const BusPaths& paths, const std::vector<std::string>& names,
+                        const std::vector<InterfaceCounts>& before, bool own_bus);
+
 /// How the bus's broker is scheduled: "SCHED_FIFO 45, memory locked", or
 /// "normal scheduler" where the system refused a real-time priority.
 std::string broker_scheduling(const BusPaths& paths);
@@ -235,6 +243,26 @@ std::vector<ControllerView> controllers(const BusPaths& paths);
 /// The process on interface `name` named `who` (its pid, or its program as
 /// /proc/PID/comm says), or 0 when none has a controller there.
 int controller_pid(const BusPaths& paths, const std::string& name, const std::string& who);
+
+/// How late the bus delivers, as a receiver sees it: `frames` frames sent
+/// `interval_us` apart on interface `name` by one process and read by
+/// another (this one, at SCHED_FIFO 40 where it may), each read's time
+/// against the frame's write (the whole hop) and against its receive stamp
+/// (on a timed interface: the model's ideal end of frame).
+struct DeliveryProbe {
+  int received = 0;
+  int out_of_order = 0;  ///< frames read before one stamped or written earlier
+  bool fifo = false;     ///< the receiver ran at SCHED_FIFO
+  double after_write_p50_us = 0;
+  double after_write_p99_us = 0;
+  double after_stamp_p50_us = 0;
+  double after_stamp_p99_us = 0;
+  std::int64_t last_written = 0;
+};
+DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us);
+/// probe_delivery on a bus of its own (a fresh folder, vcan0), instant and
+/// then at `bit_rate`, in the same run (`canhil bench --part wire`).
+std::pair<DeliveryProbe, DeliveryProbe> probe_bus(int frames, int interval_us, std::uint32_t bit_rate);
 
 /// Runs the broker's loop in this process until it is stopped or its owner
 /// ends (what start_broker's child runs). listen_fd: the bound listening socket.
