@@ -98,10 +98,11 @@ TEST_F(TimedBus, ErrorFramesReachCandumpAndPythonCanAsCanDevDriversGiveThem) {
   EXPECT_NE(py.find("python-can: 3 error frames, the first 0x2A8"), std::string::npos) << py;
   EXPECT_NE(py.find("python 0"), std::string::npos) << py;
   // candump -e: every frame corrupted for a while, each receiver's error frames.
-  const std::string dumped = on_bus(
-      beside("candump -e vcan0,0:0,#FFFFFFFF > e.txt",
-             canhil::test::canhil_binary() + " bus fault vcan0 error:*:1@0+0.2; cangen -g 2 -n 20 -L 8 -D i vcan0",
-             true, "cat e.txt"));
+  const std::string dumped = on_bus(beside(
+      "candump -e vcan0,0:0,#FFFFFFFF > e.txt",
+      canhil::test::canhil_binary() + " bus fault vcan0 error:*:1; cangen -g 2 -i -n 20 -L 8 -D i vcan0; sleep 0.1; " +
+          canhil::test::canhil_binary() + " bus fault vcan0 clear",
+      true, "cat e.txt"));
   EXPECT_NE(dumped.find("ERRORFRAME"), std::string::npos) << dumped.substr(0, 600);
   EXPECT_NE(dumped.find("20000288   [8]"), std::string::npos)
       << "PROT|BUSERROR|CNT, as can-dev: " << dumped.substr(0, 600);
