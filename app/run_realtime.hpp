@@ -24,7 +24,7 @@ struct RealtimeOutput {
 int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& options, const RealtimeOutput& output);
 
 /// Says, when the run was asked for a timed bus, that its SocketCAN buses
-/// deliver at once: canhil's timed wire runs in virtual time (docs/wire.md).
-void say_the_bus_is_instant(std::FILE* out, const emulator::Session& session);
+/// deliver at once: canhil's timed wire runs `where` (docs/wire.md).
+void say_the_bus_is_instant(std::FILE* out, const emulator::Session& session, const char* where);
 
 }  // namespace canhil::app

@@ -117,11 +117,11 @@ void MemoryBus::detach(MemoryEndpoint* endpoint) {
   }
 }
 
-void MemoryBus::set_wire(const Wire& wire) {
+bool MemoryBus::set_wire(const Wire& wire) {
   wire_ = wire;
   model_.reset();
   controllers_.clear();
-  if (wire.bit_rate == 0) return;
+  if (wire.bit_rate == 0) return true;
   wire::WireConfig config;
   config.bit_rate = wire.bit_rate;
   config.data_bit_rate = wire.data_bit_rate;
@@ -132,6 +132,18 @@ void MemoryBus::set_wire(const Wire& wire) {
     e->controller_ = model_->add_controller(e->name(), wire.controller);
     controllers_.push_back(e);
   }
+  return true;
+}
+
+MediumCounts MemoryBus::counts() const {
+  MediumCounts c;
+  c.frames = carried_;
+  c.timed = model_ != nullptr;
+  if (model_) {
+    c.error_frames = model_->stats().error_frames;
+    c.load = model_->stats().load();
+  }
+  return c;
 }
 
 MemoryEndpoint* MemoryBus::endpoint_of(wire::ControllerId controller) const {

@@ -1,5 +1,6 @@
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/base/errno_text.hpp"
+#include "canhil/can_nodes/medium.hpp"
 #include "canhil/userbus/bus_hook.h"
 
 #include <fcntl.h>
@@ -67,15 +68,9 @@ bool kernel_has_can() {
   return true;
 }
 
-bool on_user_space_bus(const std::string& iface) {
-  // The bus's preload says so itself; canhil does not link it.
-  const auto has = userbus::hooks().interface;
-  return has != nullptr && has(iface.c_str()) != 0;
-}
+bool on_user_space_bus(const std::string& iface) { return SocketCanMedium(iface).kind() == MediumKind::kUserSpace; }
 
-const char* bus_of(const std::string& iface) {
-  return on_user_space_bus(iface) ? "canhil's user-space bus" : "the kernel's SocketCAN";
-}
+const char* bus_of(const std::string& iface) { return medium_name(SocketCanMedium(iface).kind()); }
 
 std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const SocketCanOptions& options) {
   if (iface.empty() || iface.size() >= IFNAMSIZ) {

@@ -43,11 +43,23 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
   // Per robot: a socket per emulated node in NodeId order, the system monitor's watching one last (null: a real
   // board's, or no monitor).
   sockets_.assign(n, std::vector<can_nodes::SocketCanBus*>(can_nodes::kNodeCount + 1, nullptr));
+  can_nodes::SocketCanOptions socket_options;
+  socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
+  const BusPhysics& physics = session_.options().bus;
+  for (std::size_t r = 0; r < n; ++r) {
+    media_.push_back(std::make_unique<can_nodes::SocketCanMedium>(session_.rig(r).interface, socket_options));
+    // The same interface twice (robots sharing a bus) is given its wire once.
+    const bool given = std::any_of(media_.begin(), media_.end() - 1, [&](const auto& m) {
+      return m->interface() == media_.back()->interface() && wired_[static_cast<std::size_t>(&m - &media_[0])] != 0;
+    });
+    // Undone at the end only where the interface was instant before the run.
+    const bool had_wire = media_.back()->counts().timed;
+    wired_.push_back(physics.timed() && !had_wire && (given || media_.back()->set_wire(physics.wire(sc.seed + r))) ? 1
+                                                                                                                   : 0);
+  }
   session_.build_nodes(
       [this](std::size_t r, const std::string& node) {
-        can_nodes::SocketCanOptions socket_options;
-        socket_options.receive_buffer_bytes = options_.receive_buffer_bytes;
-        auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, socket_options);
+        auto bus = media_[r]->open_socket();
         const auto id = can_nodes::node_by_name(node);
         sockets_[r][id ? static_cast<std::size_t>(*id) : can_nodes::kNodeCount] = bus.get();
         return std::unique_ptr<can_nodes::Endpoint>(std::move(bus));
@@ -90,6 +102,9 @@ RealtimeDriver::RealtimeDriver(Session& session, RealtimeOptions options)
 
 RealtimeDriver::~RealtimeDriver() {
   stop();
+  for (std::size_t r = 0; r < media_.size(); ++r) {
+    if (wired_[r] != 0) media_[r]->set_wire(can_nodes::Wire{});  // instant again, as before the run
+  }
   session_.for_each_laptop([](LaptopLink& laptop) { laptop.signal_frames(false); });
 }
 

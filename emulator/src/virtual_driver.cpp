@@ -74,13 +74,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
     buses_.push_back(std::make_unique<can_nodes::MemoryBus>(clock_, session_.rig(r).interface));
     if (physics.timed()) {
       // The robot's wire: every node and the handler a controller on it (docs/wire.md).
-      can_nodes::Wire wire;
-      wire.bit_rate = physics.bit_rate;
-      wire.data_bit_rate = physics.data_bit_rate;
-      wire.seed = session_.scenario().seed + r;
-      wire.controller.queue_frames = physics.tx_queue;
-      wire.controller.restart_delay = physics.restart;
-      buses_.back()->set_wire(wire);
+      buses_.back()->set_wire(physics.wire(session_.scenario().seed + r));
       time_.add(buses_.back()->wire_participant());
     }
   }

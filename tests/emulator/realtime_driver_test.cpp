@@ -5,6 +5,9 @@
 // Outcomes and counts, never timing: real time here may be an emulated machine.
 #include "canhil/emulator/realtime_driver.hpp"
 
+#include "canhil/can_nodes/medium.hpp"
+#include "canhil/emulator/run_plan.hpp"
+
 #include <gtest/gtest.h>
 
 #include "support/counter_watch.hpp"
@@ -57,6 +60,43 @@ TEST(RealtimeDriver, RunsARobotOnVcanAndTakesChangesWhileItRuns) {
   EXPECT_EQ(counts[0].applied, counts[0].matched) << "every M8 since then dropped";
   EXPECT_EQ(session.rig(0).nodes->bad_frames(), 0u);
   EXPECT_GT(driver.physics_stats().physics_steps, 100u);
+}
+
+// --bit-rate in real time: on canhil's user-space bus its broker runs the
+// wire (frames take their bits, each node a controller of its own), for the
+// run only; the kernel's vcan keeps its own timing and says so.
+TEST(RealtimeDriver, ATimedRunGivesTheUserSpaceBusItsWireForTheRunOnly) {
+  SessionOptions options = test::without_vision();
+  RunOverrides overrides;
+  overrides.bit_rate = 1'000'000;
+  Session session(plan_run(test::one_robot_on_vcan0(), options, overrides));
+  ASSERT_TRUE(session.options().bus.timed());
+  const bool user_space = can_nodes::SocketCanMedium("vcan0").kind() == can_nodes::MediumKind::kUserSpace;
+  ASSERT_FALSE(can_nodes::SocketCanMedium("vcan0").counts().timed) << "an instant bus before the run";
+  {
+    RealtimeOptions rt;
+    rt.priority = 0;
+    RealtimeDriver driver(session, rt);
+    EXPECT_EQ(driver.timed_wire(0), user_space);
+    test::CounterWatch watch;
+    const auto watched = watch.watch_session(session);
+    for (const char* load : {".rx_overflow", ".send_dropped", ".send_failed"}) watch.allow_suffix(load);
+    const frames::MessageSet& set = *options.messages;
+    test::DrivingLaptop laptop("vcan0", set, set.m8.message().id());
+    driver.start();
+    EXPECT_TRUE(test::run_until(
+        driver, [&] { return laptop.tms() >= 50 && laptop.watched() >= 20; }, 60s))
+        << "trigger messages and the nodes' frames flow on the wire";
+    laptop.stop();
+    driver.stop();
+    const can_nodes::MediumCounts counts = driver.medium(0).counts();
+    EXPECT_EQ(counts.timed, user_space);
+    if (user_space) {
+      EXPECT_GT(counts.load, 0.0) << "the wire carried bits";
+      EXPECT_EQ(counts.error_frames, 0U) << "every frame acknowledged, none in error";
+    }
+  }
+  EXPECT_FALSE(can_nodes::SocketCanMedium("vcan0").counts().timed) << "instant again after the run";
 }
 
 }  // namespace

@@ -66,11 +66,11 @@ class BrokerWireTest : public ::testing::Test {
     i.in_use.store(1);
     wire_.sync(kT0);
   }
-  ub::Controller& row(std::int32_t pid) { return *ub::find_controller(*state_, pid, kIndex, false); }
+  ub::Controller& row(std::int32_t pid) { return *ub::find_controller(*state_, pid, kIndex, -1, false); }
   // What the preload does before it hands a frame over: one more in its queue.
   void give(std::int32_t pid, std::uint64_t tag, const ub::TxRecord& r, std::int64_t at) {
-    ub::find_controller(*state_, pid, kIndex, true)->queued.fetch_add(1);
-    wire_.submit(pid, tag, r, at);
+    ub::find_controller(*state_, pid, kIndex, -1, true)->queued.fetch_add(1);
+    wire_.submit(ub::ControllerKey{pid, -1}, tag, r, at);
   }
   std::unique_ptr<ub::State> state_ = std::make_unique<ub::State>();
   ub::BrokerWire wire_{*state_};
@@ -80,7 +80,7 @@ class BrokerWireTest : public ::testing::Test {
 TEST_F(BrokerWireTest, FramesComeBackAtTheirEndOfFrameInTheOrderArbitrationGives) {
   EXPECT_TRUE(wire_.timed(kIndex));
   EXPECT_FALSE(wire_.timed(kIndex + 1));
-  wire_.join(200, kIndex, kT0);  // a receiver, so the frames are acknowledged
+  wire_.join(ub::ControllerKey{200, -1}, kIndex);  // a receiver, so the frames are acknowledged
   give(100, 1, record(0x300, 8), kT0);
   give(100, 2, record(0x200, 2), kT0 + 1000);  // waits behind its own first frame
   give(200, 3, record(0x100, 4), kT0 + 2000);  // another controller's, lower id: wins the next arbitration
@@ -95,9 +95,9 @@ TEST_F(BrokerWireTest, FramesComeBackAtTheirEndOfFrameInTheOrderArbitrationGives
   EXPECT_EQ(out_[0].at_ns, kT0 + wire_ns(0x300, 8) - 3000);
   EXPECT_EQ(out_[1].at_ns - out_[0].at_ns, wire_ns(0x100, 4));
   EXPECT_EQ(out_[2].at_ns - out_[1].at_ns, wire_ns(0x200, 2));
-  EXPECT_EQ(out_[0].pid, 100);
+  EXPECT_EQ(out_[0].from.pid, 100);
   EXPECT_EQ(out_[0].tag, 1U);
-  EXPECT_EQ(out_[1].pid, 200);
+  EXPECT_EQ(out_[1].from.pid, 200);
   EXPECT_EQ(std::memcmp(out_[2].frame, record(0x200, 2).frame, CAN_MTU), 0) << "the frame as the program wrote it";
   EXPECT_EQ(row(100).queued.load(), 0U) << "room again in the queue the preload counts";
   EXPECT_EQ(row(100).sent.load(), 2U);
@@ -115,7 +115,7 @@ TEST_F(BrokerWireTest, ALoneSenderGetsAckErrorsAndStaysErrorPassive) {
   std::size_t acks = 0;
   for (const ub::WireDelivery& d : out_) {
     ASSERT_TRUE(d.error);
-    EXPECT_EQ(d.pid, 100);
+    EXPECT_EQ(d.from.pid, 100);
     EXPECT_NE(id_of(d) & CAN_ERR_FLAG, 0U);
     if ((id_of(d) & CAN_ERR_ACK) != 0) ++acks;
   }
@@ -129,7 +129,7 @@ TEST_F(BrokerWireTest, ALoneSenderGetsAckErrorsAndStaysErrorPassive) {
 TEST_F(BrokerWireTest, AForcedBusOffLosesTheFrameOnTheWireAndRestartsOnRequest) {
   state_->interfaces[0].restart_ms.store(0);  // as the kernel's restart-ms 0: only on request
   wire_.sync(kT0);
-  wire_.join(200, kIndex, kT0);
+  wire_.join(ub::ControllerKey{200, -1}, kIndex);
   EXPECT_EQ(wire_.restart(kIndex, 0, kT0), -EBUSY) << "nobody is bus-off";
   give(100, 1, record(0x123, 8), kT0);
   give(100, 2, record(0x124, 8), kT0);
@@ -138,6 +138,7 @@ TEST_F(BrokerWireTest, AForcedBusOffLosesTheFrameOnTheWireAndRestartsOnRequest) 
   busoff.from_ns = 20'000;  // in the middle of the first frame
   busoff.until_ns = -1;
   busoff.pid = 100;
+  busoff.slot = -1;
   ASSERT_EQ(wire_.add_fault(kIndex, busoff, kT0), 0);
   busoff.pid = 999;
   EXPECT_EQ(wire_.add_fault(kIndex, busoff, kT0), -ESRCH) << "no such controller";
@@ -162,14 +163,14 @@ TEST_F(BrokerWireTest, AForcedBusOffLosesTheFrameOnTheWireAndRestartsOnRequest) 
 }
 
 TEST_F(BrokerWireTest, AControllerWhoseProcessEndedSendsWhatItHeldThenLeaves) {
-  wire_.join(200, kIndex, kT0);
+  wire_.join(ub::ControllerKey{200, -1}, kIndex);
   give(100, 1, record(0x10, 8), kT0);
   give(100, 2, record(0x11, 8), kT0);
-  wire_.leave(100);
-  EXPECT_NE(ub::find_controller(*state_, 100, kIndex, false), nullptr);
+  wire_.leave(ub::ControllerKey{100, -1});
+  EXPECT_NE(ub::find_controller(*state_, 100, kIndex, -1, false), nullptr);
   wire_.advance(kT0 + 10'000'000, out_);
   ASSERT_EQ(out_.size(), 2U);
-  EXPECT_EQ(ub::find_controller(*state_, 100, kIndex, false), nullptr) << "gone once its queue is empty";
+  EXPECT_EQ(ub::find_controller(*state_, 100, kIndex, -1, false), nullptr) << "gone once its queue is empty";
 }
 
 TEST_F(BrokerWireTest, ANewBitRateIsANewWireAndZeroIsNone) {
@@ -177,7 +178,8 @@ TEST_F(BrokerWireTest, ANewBitRateIsANewWireAndZeroIsNone) {
   state_->interfaces[0].bit_rate.store(500'000);
   wire_.sync(kT0 + 1000);
   EXPECT_TRUE(wire_.timed(kIndex));
-  EXPECT_EQ(row(100).queued.load(), 0U) << "what waited on the old wire is dropped, as on a link set down";
+  EXPECT_EQ(ub::find_controller(*state_, 100, kIndex, -1, false), nullptr)
+      << "its controllers and what waited on the old wire go with it, as on a link set down";
   state_->interfaces[0].bit_rate.store(0);
   wire_.sync(kT0 + 2000);
   EXPECT_FALSE(wire_.timed(kIndex));

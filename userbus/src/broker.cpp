@@ -167,14 +167,14 @@ class Broker {
     epoll_ctl(epoll_, EPOLL_CTL_DEL, c.fd, nullptr);
     close(c.fd);
     const int slot = c.slot;
+    const ControllerKey key = slot >= 0 ? key_of(c) : ControllerKey{};
     c = Connection{};
     if (slot >= 0) {
-      Socket& s = state_.sockets[slot];
-      s.in_use.store(0, std::memory_order_release);
-      const bool more = std::any_of(connections_.begin(), connections_.end(), [&](const Connection& o) {
-        return o.fd >= 0 && o.slot >= 0 && state_.sockets[o.slot].pid == s.pid;
-      });
-      if (!more) wire_.leave(s.pid);  // its controllers leave the timed buses
+      state_.sockets[slot].in_use.store(0, std::memory_order_release);
+      // Its controllers leave the timed buses: its own, or its process's with its last socket.
+      const bool more = std::any_of(connections_.begin(), connections_.end(),
+                                    [&](Connection& o) { return o.fd >= 0 && o.slot >= 0 && key_of(o) == key; });
+      if (!more) wire_.leave(key);
     }
   }
 
@@ -336,10 +336,9 @@ class Broker {
       for (Connection& c : connections_) {  // every process on the interface is a controller there
         if (c.fd < 0 || c.slot < 0) continue;
         const Options& o = options(c);
-        if (o.bound && (o.ifindex == 0 || o.ifindex == record.ifindex))
-          wire_.join(state_.sockets[c.slot].pid, record.ifindex, now);
+        if (o.bound && (o.ifindex == 0 || o.ifindex == record.ifindex)) wire_.join(key_of(c), record.ifindex);
       }
-      wire_.submit(state_.sockets[sender.slot].pid, sender.opened, record, now);
+      wire_.submit(key_of(sender), sender.opened, record, now);
       arm_timer();
       return;
     }
@@ -397,9 +396,9 @@ class Broker {
       if (c.fd < 0 || c.slot < 0) continue;
       const Options& o = options(c);
       if (!o.bound || (o.ifindex != 0 && o.ifindex != d.ifindex)) continue;
-      const std::int32_t pid = state_.sockets[c.slot].pid;
-      const bool local = pid == d.pid;
-      if (d.error ? !local : (local ? !echo : std::count(d.missed.begin(), d.missed.end(), pid) > 0)) continue;
+      const ControllerKey key = key_of(c);
+      const bool local = key == d.from;
+      if (d.error ? !local : (local ? !echo : std::count(d.missed.begin(), d.missed.end(), key) > 0)) continue;
       const bool own = &c == sender;
       if (own && (o.flags & kRecvOwn) == 0) continue;
       if (d.size != CAN_MTU && (o.flags & kFdFrames) == 0) continue;
@@ -422,6 +421,12 @@ class Broker {
       t.it_value = {static_cast<time_t>(at / 1000000000), static_cast<long>(at % 1000000000)};
     }
     syscall(SYS_timerfd_settime, timer_fd_, TFD_TIMER_ABSTIME, &t, nullptr);
+  }
+
+  /// The controller c's frames go through on a timed interface: its own, or its process's.
+  ControllerKey key_of(Connection& c) {
+    const bool own = (options(c).flags & kOwnController) != 0;
+    return ControllerKey{state_.sockets[c.slot].pid, own ? c.slot : -1};
   }
 
   /// Queues `r` for `c`, with the count of c's drops so far (SO_RXQ_OVFL).

@@ -67,7 +67,7 @@ struct BrokerWire::Wire {
   std::int64_t origin = 0;  // monotonic ns at the wire's time 0
   std::unique_ptr<wire::WireBus> bus;
   struct Member {
-    std::int32_t pid = 0;
+    ControllerKey key;
     bool leaving = false;  // its process has gone: it leaves once its queue is empty
     bool gone = false;
     // Frames given, sent whole, and lost (the one on the wire when its
@@ -78,7 +78,7 @@ struct BrokerWire::Wire {
   };
   std::vector<Member> members;  // by ControllerId
   struct Given {
-    std::int32_t pid = 0;
+    ControllerKey key;
     std::uint64_t tag = 0;
     std::uint32_t size = 0;
     unsigned char frame[CANFD_MTU];
@@ -88,12 +88,13 @@ struct BrokerWire::Wire {
   std::vector<wire::WireEvent> events;
 
   Nanos at(std::int64_t now) const { return Nanos{std::max<std::int64_t>(now - origin, 0)}; }
-  std::optional<wire::ControllerId> controller_of(std::int32_t pid) const {
+  std::optional<wire::ControllerId> controller_of(ControllerKey key) const {
     for (std::size_t k = 0; k < members.size(); ++k) {
-      if (!members[k].gone && members[k].pid == pid) return static_cast<wire::ControllerId>(k);
+      if (!members[k].gone && members[k].key == key) return static_cast<wire::ControllerId>(k);
     }
     return std::nullopt;
   }
+  ControllerKey key_of(wire::ControllerId c) const { return c < members.size() ? members[c].key : ControllerKey{}; }
 };
 
 BrokerWire::BrokerWire(State& state) : state_(state), wires_(kMaxInterfaces) {}
@@ -126,8 +127,11 @@ void BrokerWire::sync(std::int64_t now) {
     }
     // A new wire, or none: what waited on the old one is dropped, as when a
     // CAN interface is set down to change its bit timing.
+    // Its controllers go with it (those of a new wire join as their sockets send).
     for (Controller& row : state_.controllers) {
-      if (row.in_use.load(std::memory_order_acquire) != 0 && row.ifindex == kFirstIndex + k) row.queued.store(0);
+      if (row.in_use.load(std::memory_order_acquire) == 0 || row.ifindex != kFirstIndex + k) continue;
+      row.queued.store(0);
+      row.in_use.store(0, std::memory_order_release);
     }
     w.reset();
     if (rate == 0) continue;
@@ -144,32 +148,38 @@ void BrokerWire::sync(std::int64_t now) {
   }
 }
 
-void BrokerWire::join(std::int32_t pid, std::int32_t ifindex, std::int64_t /*now*/) {
+Controller* BrokerWire::row(ControllerKey key, std::int32_t ifindex, bool claim) {
+  return find_controller(state_, key.pid, ifindex, key.slot, claim);
+}
+
+void BrokerWire::join(ControllerKey key, std::int32_t ifindex) {
   Wire* w = wire_of(ifindex);
-  if (w == nullptr || w->controller_of(pid)) return;
+  if (w == nullptr || w->controller_of(key)) return;
   wire::ControllerOptions options;
   options.queue_frames = 1U << 20;  // the preload keeps each at the interface's tx_queue
   options.restart_delay = restart_delay(w->restart_ms);
-  const wire::ControllerId id = w->bus->add_controller("pid " + std::to_string(pid), options);
+  const wire::ControllerId id = w->bus->add_controller(
+      "pid " + std::to_string(key.pid) + (key.slot >= 0 ? " socket " + std::to_string(key.slot) : ""), options);
   if (w->members.size() <= id) w->members.resize(id + 1);
-  w->members[id] = {pid, false};
-  find_controller(state_, pid, ifindex, true);
+  w->members[id] = Wire::Member{};
+  w->members[id].key = key;
+  row(key, ifindex, true);
 }
 
-void BrokerWire::leave(std::int32_t pid) {
+void BrokerWire::leave(ControllerKey key) {
   for (std::unique_ptr<Wire>& w : wires_) {
     if (!w) continue;
-    if (const auto id = w->controller_of(pid)) w->members[*id].leaving = true;
+    if (const auto id = w->controller_of(key)) w->members[*id].leaving = true;
     retire(*w);
   }
 }
 
 // `n` frames of `pid`'s have left its transmit queue: room for the preload.
-void BrokerWire::release(Wire& w, std::int32_t pid, std::uint32_t n) {
-  Controller* row = find_controller(state_, pid, w.ifindex, false);
-  if (row == nullptr) return;
-  std::uint32_t q = row->queued.load(std::memory_order_relaxed);
-  while (!row->queued.compare_exchange_weak(q, q - std::min(q, n), std::memory_order_acq_rel)) {
+void BrokerWire::release(Wire& w, ControllerKey key, std::uint32_t n) {
+  Controller* r = row(key, w.ifindex, false);
+  if (r == nullptr) return;
+  std::uint32_t q = r->queued.load(std::memory_order_relaxed);
+  while (!r->queued.compare_exchange_weak(q, q - std::min(q, n), std::memory_order_acq_rel)) {
   }
 }
 
@@ -184,11 +194,11 @@ void BrokerWire::account_losses(Wire& w) {
     if (lost <= m.lost) continue;
     const std::uint64_t n = lost - m.lost;
     m.lost = lost;
-    release(w, m.pid, static_cast<std::uint32_t>(n));
+    release(w, m.key, static_cast<std::uint32_t>(n));
     for (std::uint64_t j = 0; j < n; ++j) {
       auto oldest = w.given.end();
       for (auto it = w.given.begin(); it != w.given.end(); ++it) {
-        if (it->second.pid == m.pid && (oldest == w.given.end() || it->first < oldest->first)) oldest = it;
+        if (it->second.key == m.key && (oldest == w.given.end() || it->first < oldest->first)) oldest = it;
       }
       if (oldest != w.given.end()) w.given.erase(oldest);
     }
@@ -204,18 +214,17 @@ void BrokerWire::retire(Wire& w) {
     if (m.gone || !m.leaving || w.bus->status(static_cast<wire::ControllerId>(k)).queued != 0) continue;
     w.bus->remove_controller(static_cast<wire::ControllerId>(k));
     m.gone = true;
-    if (Controller* row = find_controller(state_, m.pid, w.ifindex, false))
-      row->in_use.store(0, std::memory_order_release);
+    if (Controller* r = row(m.key, w.ifindex, false)) r->in_use.store(0, std::memory_order_release);
   }
 }
 
-void BrokerWire::submit(std::int32_t pid, std::uint64_t tag, const TxRecord& record, std::int64_t now) {
+void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now) {
   Wire* w = wire_of(record.ifindex);
   if (w == nullptr) return;
-  join(pid, record.ifindex, now);
-  const wire::ControllerId id = *w->controller_of(pid);
+  join(key, record.ifindex);
+  const wire::ControllerId id = *w->controller_of(key);
   Wire::Given& g = w->given[w->next_tag];
-  g.pid = pid;
+  g.key = key;
   g.tag = tag;
   g.size = record.size;
   std::memcpy(g.frame, record.frame, record.size);
@@ -246,10 +255,9 @@ void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
       WireDelivery& d = out.emplace_back();
       d.ifindex = w.ifindex;
       d.at_ns = w.origin + e.at.count();
-      const std::int32_t pid = e.controller < w.members.size() ? w.members[e.controller].pid : 0;
       if (e.kind == wire::WireEvent::Kind::kError) {
         d.error = true;
-        d.pid = pid;
+        d.from = w.key_of(e.controller);
         can_frame f{};
         f.can_id = CAN_ERR_FLAG | (e.error.id & CAN_ERR_MASK);
         f.len = CAN_ERR_DLC;
@@ -258,21 +266,19 @@ void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
         std::memcpy(d.frame, &f, sizeof f);
         continue;
       }
-      for (const wire::ControllerId m : e.missed) {
-        if (m < w.members.size()) d.missed.push_back(w.members[m].pid);
-      }
+      for (const wire::ControllerId m : e.missed) d.missed.push_back(w.key_of(m));
       const auto given = w.given.find(e.tag);
       if (e.tag == wire::kBabbleTag || given == w.given.end()) {
         raw_of(e.frame, d);  // a babbling fault's own frame
         continue;
       }
       ++w.members[e.controller].sent;
-      d.pid = given->second.pid;
+      d.from = given->second.key;
       d.tag = given->second.tag;
       d.size = given->second.size;
       std::memcpy(d.frame, given->second.frame, d.size);
       w.given.erase(given);
-      release(w, d.pid, 1);
+      release(w, d.from, 1);
     }
     account_losses(w);
     retire(w);
@@ -283,7 +289,7 @@ void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
 void BrokerWire::publish(Wire& w, std::int64_t now) {
   for (std::size_t k = 0; k < w.members.size(); ++k) {
     if (w.members[k].gone) continue;
-    Controller* row = find_controller(state_, w.members[k].pid, w.ifindex, false);
+    Controller* row = this->row(w.members[k].key, w.ifindex, false);
     if (row == nullptr) continue;
     const wire::ControllerStatus s = w.bus->status(static_cast<wire::ControllerId>(k));
     row->state.store(static_cast<std::uint32_t>(s.state), std::memory_order_relaxed);
@@ -307,7 +313,7 @@ int BrokerWire::restart(std::int32_t ifindex, std::int32_t pid, std::int64_t now
   if (w == nullptr) return -EINVAL;  // as the kernel: restart needs a CAN device
   bool any = false;
   for (std::size_t k = 0; k < w->members.size(); ++k) {
-    if (w->members[k].gone || (pid != 0 && w->members[k].pid != pid)) continue;
+    if (w->members[k].gone || (pid != 0 && w->members[k].key.pid != pid)) continue;
     any = w->bus->restart(static_cast<wire::ControllerId>(k), w->at(now)) || any;
   }
   return any ? 0 : -EBUSY;  // can_restart_now: EBUSY when the device is not bus-off
@@ -324,7 +330,7 @@ int BrokerWire::add_fault(std::int32_t ifindex, const FaultRequest& f, std::int6
   rule.rate = f.rate;
   if (f.has_id != 0) rule.id = f.id;
   if (f.pid != 0) {
-    rule.controller = w->controller_of(f.pid);
+    rule.controller = w->controller_of(ControllerKey{f.pid, f.slot});
     if (!rule.controller) return -ESRCH;
   }
   if (rule.kind == wire::FaultRule::Kind::kBabbling) {

@@ -17,19 +17,27 @@
 namespace canhil::userbus {
 
 struct State;
+struct Controller;
 struct TxRecord;
 struct FaultRequest;
+
+/// A controller on a timed interface: a process's (slot -1), or one socket's own (kOwnController).
+struct ControllerKey {
+  std::int32_t pid = 0;
+  std::int32_t slot = -1;
+  friend bool operator==(const ControllerKey&, const ControllerKey&) = default;
+};
 
 /// A frame at its end of frame, or a controller's error frame.
 struct WireDelivery {
   bool error = false;
   std::int32_t ifindex = 0;
-  std::int32_t pid = 0;    ///< frame: the sender's process (0: a fault's babbling); error: the reporter's
+  ControllerKey from;      ///< frame: the sender (pid 0: a fault's babbling); error: the reporter
   std::uint64_t tag = 0;   ///< frame: the sending connection (submit's tag); 0 for a babbling fault's
   std::int64_t at_ns = 0;  ///< monotonic: its last bit, or when the error was seen
   std::uint32_t size = 0;  ///< CAN_MTU or CANFD_MTU
   unsigned char frame[CANFD_MTU] = {};
-  std::vector<std::int32_t> missed;  ///< frame: processes that did not receive it (bus-off, cut off)
+  std::vector<ControllerKey> missed;  ///< frame: controllers that did not receive it (bus-off, cut off)
 };
 
 class BrokerWire {
@@ -44,13 +52,13 @@ class BrokerWire {
   /// went away (its waiting frames with it), restarts with new rates.
   void sync(std::int64_t now);
   bool timed(std::int32_t ifindex) const noexcept;
-  /// Process `pid` has a socket on timed interface `ifindex`: its controller there.
-  void join(std::int32_t pid, std::int32_t ifindex, std::int64_t now);
-  /// Process `pid` holds no socket any more: its controllers leave their
-  /// buses once they have sent what they hold.
-  void leave(std::int32_t pid);
-  /// A frame given by process `pid`'s connection `tag` on a timed interface.
-  void submit(std::int32_t pid, std::uint64_t tag, const TxRecord& record, std::int64_t now);
+  /// A socket on timed interface `ifindex`: its controller `key` there.
+  void join(ControllerKey key, std::int32_t ifindex);
+  /// Controller `key` has no socket any more: it leaves its buses once it
+  /// has sent what it holds.
+  void leave(ControllerKey key);
+  /// A frame given on a timed interface by connection `tag`, of controller `key`.
+  void submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now);
   /// When advance() next has something to do (monotonic ns); INT64_MAX: nothing.
   std::int64_t next_due() const noexcept;
   /// Runs every wire up to `now`, appending what happened, in order of time per interface.
@@ -66,7 +74,8 @@ class BrokerWire {
   Wire* wire_of(std::int32_t ifindex) const noexcept;
   void publish(Wire& w, std::int64_t now);
   void retire(Wire& w);
-  void release(Wire& w, std::int32_t pid, std::uint32_t n);
+  void release(Wire& w, ControllerKey key, std::uint32_t n);
+  Controller* row(ControllerKey key, std::int32_t ifindex, bool claim);
   void account_losses(Wire& w);
 
   State& state_;

@@ -113,6 +113,7 @@ void add_bus_fault(const BusPaths& paths, const std::string& name, const wire::F
   r.fault.has_id = rule.id ? 1 : 0;
   r.fault.id = rule.id.value_or(0);
   r.fault.pid = rule.controller ? static_cast<std::int32_t>(*rule.controller) : 0;
+  r.fault.slot = -1;  // a process's controller (its sockets' own ones are canhil's nodes')
   r.fault.babble_id = rule.babble.id;
   ask_about(paths, name, r, "take the fault");
 }
@@ -129,6 +130,7 @@ std::vector<ControllerView> controllers(const BusPaths& paths) {
     if (c.in_use.load(std::memory_order_acquire) == 0) continue;
     ControllerView v;
     v.pid = c.pid;
+    v.socket = c.slot;
     v.program = program_of(c.pid);
     const Interface* i = find_interface(s, c.ifindex);
     v.interface = i != nullptr ? i->name : "index " + std::to_string(c.ifindex);
@@ -149,7 +151,7 @@ std::vector<ControllerView> controllers(const BusPaths& paths) {
 
 int controller_pid(const BusPaths& paths, const std::string& name, const std::string& who) {
   for (const ControllerView& v : controllers(paths)) {
-    if (v.interface == name && (std::to_string(v.pid) == who || v.program == who)) return v.pid;
+    if (v.socket < 0 && v.interface == name && (std::to_string(v.pid) == who || v.program == who)) return v.pid;
   }
   return 0;
 }
@@ -172,10 +174,11 @@ std::string wire_text(const Interface& i) {
 std::string controllers_text(const BusPaths& paths) {
   std::ostringstream out;
   for (const ControllerView& v : controllers(paths)) {
-    out << "  controller pid " << v.pid << " (" << v.program << ")  " << v.interface << "  " << v.state << "  tec "
-        << v.tec << " rec " << v.rec << "  sent " << v.sent << "  received " << v.received << "  errors " << v.errors
-        << "  bus-off " << v.bus_offs << "  restarts " << v.restarts << "  queued " << v.queued << "  ENOBUFS "
-        << v.refused << '\n';
+    out << "  controller pid " << v.pid << " (" << v.program << ")"
+        << (v.socket >= 0 ? "  socket " + std::to_string(v.socket) : std::string()) << "  " << v.interface << "  "
+        << v.state << "  tec " << v.tec << " rec " << v.rec << "  sent " << v.sent << "  received " << v.received
+        << "  errors " << v.errors << "  bus-off " << v.bus_offs << "  restarts " << v.restarts << "  queued "
+        << v.queued << "  ENOBUFS " << v.refused << '\n';
   }
   return out.str();
 }

@@ -8,6 +8,7 @@
 #include <sys/ioctl.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstring>
 
 #include "canhil/base/preload.hpp"
@@ -96,6 +97,42 @@ long long canhil_userbus_waiting(int fd) {
   const std::uint64_t taken = s->taken.load(std::memory_order_relaxed);
   const std::uint64_t given = s->received.load(std::memory_order_acquire);
   return given > taken ? static_cast<long long>(given - taken) : 0;
+}
+
+int canhil_userbus_set_wire(const char* name, unsigned int bit_rate, unsigned int data_bit_rate, int restart_ms,
+                            unsigned int tx_queue) {
+  if (name == nullptr || bus::bus_state(false) == nullptr) return -ENODEV;
+  canhil::userbus::Interface* i = bus::interface_named(name);
+  if (i == nullptr) return -ENODEV;
+  i->bit_rate.store(bit_rate);
+  i->data_bit_rate.store(data_bit_rate);
+  i->restart_ms.store(restart_ms);
+  i->tx_queue.store(tx_queue == 0 ? 1 : tx_queue);
+  bus::interfaces_changed();  // the broker takes them before this returns
+  return 0;
+}
+
+int canhil_userbus_own_controller(int fd) {
+  canhil::userbus::Socket* s = bus::socket_of(fd);
+  if (s == nullptr) return -1;
+  s->lock.lock();
+  s->seq.fetch_add(1, std::memory_order_acq_rel);
+  s->flags |= canhil::userbus::kOwnController;
+  s->seq.fetch_add(1, std::memory_order_release);
+  s->lock.unlock();
+  return 0;
+}
+
+int canhil_userbus_wire_counts(const char* name, unsigned long long* counts) {
+  const canhil::userbus::Interface* i =
+      name != nullptr && bus::bus_state(false) != nullptr ? bus::interface_named(name) : nullptr;
+  if (i == nullptr || counts == nullptr) return -1;
+  counts[0] = i->frames.load();
+  counts[1] = i->dropped.load();
+  counts[2] = i->error_frames.load();
+  counts[3] = i->busy_ns.load();
+  counts[4] = i->wire_ns.load();
+  return i->bit_rate.load() != 0 ? 1 : 0;
 }
 
 char* if_indextoname(unsigned int index, char* name) {

@@ -69,7 +69,10 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
   // queue refuses it, as a CAN device's full qdisc does (ENOBUFS).
   Controller* controller = nullptr;
   if (iface->bit_rate.load(std::memory_order_relaxed) != 0 && iface->up.load(std::memory_order_relaxed) != 0) {
-    if (State* state = bus_state(false)) controller = find_controller(*state, s.pid, ifindex, true);
+    if (State* state = bus_state(false)) {
+      const std::int32_t slot = (s.flags & kOwnController) != 0 ? static_cast<std::int32_t>(&s - state->sockets) : -1;
+      controller = find_controller(*state, s.pid, ifindex, slot, true);
+    }
     if (controller != nullptr) {
       const std::uint32_t limit = iface->tx_queue.load(std::memory_order_relaxed);
       std::uint32_t q = controller->queued.load(std::memory_order_relaxed);

@@ -1,6 +1,6 @@
 // canhil/can_nodes/memory_bus.hpp — an in-process CAN bus for virtual time.
 //
-// A MemoryBus is the medium; attach() gives endpoints (each an Endpoint). A frame
+// A MemoryBus is a medium (medium.hpp): attach() gives endpoints (each an Endpoint). A frame
 // sent on one endpoint is delivered, stamped with the injected clock's time,
 // to every other attached endpoint whose filters pass it, in attach order,
 // like SocketCAN with loopback on and own messages off (`receive_own` turns
@@ -30,6 +30,7 @@
 #include "canhil/can_nodes/bus.hpp"
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/doorbell.hpp"
+#include "canhil/can_nodes/medium.hpp"
 #include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/wire/wire_bus.hpp"
 
@@ -92,29 +93,11 @@ class MemoryEndpoint final : public Endpoint {
       std::bitset<kStandardIds>().set()};  // the filters' verdict on each 11-bit data frame
 };
 
-/// A bit-timed wire: its bit rate (0: none, frames delivered at once),
-/// whether a frame takes its exact bits or the worst case of its shape, and
-/// what its time stamp says: its end of frame (a controller's receive stamp)
-/// or its first bit (a controller's start-of-frame stamp, and what canhil's
-/// FTT slaves take a TM's stamp to be: frames/ftt_slot.hpp). Either way a
-/// frame is delivered when its end of frame has passed. The rest as
-/// wire::WireConfig and wire::ControllerOptions, for every endpoint.
-struct Wire {
-  enum class Bits : std::uint8_t { kExact, kWorstCase };
-  enum class Stamp : std::uint8_t { kEndOfFrame, kStartOfFrame };
-  std::uint32_t bit_rate = 0;
-  Bits bits = Bits::kExact;
-  Stamp stamp = Stamp::kEndOfFrame;
-  std::uint32_t data_bit_rate = 0;
-  std::uint64_t seed = 1;
-  wire::ControllerOptions controller{};
-};
-
-class MemoryBus {
+class MemoryBus final : public Medium {
  public:
   /// `clock` stamps every delivered frame; it must outlive the bus.
   explicit MemoryBus(const Clock& clock, std::string name = "mem0");
-  ~MemoryBus();
+  ~MemoryBus() override;
   MemoryBus(const MemoryBus&) = delete;
   MemoryBus& operator=(const MemoryBus&) = delete;
 
@@ -122,9 +105,14 @@ class MemoryBus {
   /// The endpoint must not outlive the bus.
   std::unique_ptr<MemoryEndpoint> attach(std::string endpoint_name, std::size_t queue_capacity = 4096);
 
+  // As a Medium: open() is attach() with the default queue; set_wire() always carries it.
+  MediumKind kind() const noexcept override { return MediumKind::kMemory; }
+  std::unique_ptr<Endpoint> open(const std::string& name) override { return attach(name); }
+  MediumCounts counts() const override;
+
   /// Bit-times the bus (see the top of this file); Wire{} delivers at once again.
   /// Set it before frames are sent.
-  void set_wire(const Wire& wire);
+  bool set_wire(const Wire& wire) override;
   /// The wire as a participant of the virtual-time runner: it delivers each
   /// frame when its end of frame has passed and starts the next arbitration.
   Participant& wire_participant() noexcept { return wire_driver_; }

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "canhil/can_nodes/medium.hpp"
 #include "canhil/can_nodes/realtime.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/emulator/realtime_physics.hpp"
@@ -66,6 +67,13 @@ class RealtimeDriver {
   /// Interfaces whose state changed since the last call: (robot, new state).
   std::vector<std::pair<std::size_t, can_nodes::BusState>> bus_state_changes();
   RealtimeStats physics_stats() const { return physics_.stats(); }
+  /// Whether robot r's bus carries the run's timed wire (the session's
+  /// BusPhysics): on canhil's user-space bus, whose broker runs it, it does
+  /// for the run (the interface is instant again after it); the kernel's
+  /// vcan and adapters keep their own timing.
+  bool timed_wire(std::size_t robot) const { return wired_.at(robot) != 0; }
+  /// The medium of robot r's bus (its kind, its counts).
+  const can_nodes::SocketCanMedium& medium(std::size_t robot) const { return *media_.at(robot); }
   /// Why the node loop could not get its SCHED_FIFO priority (empty: it did).
   const std::string& priority_problem() const noexcept { return priority_problem_; }
   /// Robot r's socket for node i (in can_nodes::NodeId order; kNodeCount: the
@@ -81,6 +89,8 @@ class RealtimeDriver {
   RealtimeOptions options_;
   can_nodes::WallClock clock_;
   Nanos start_{0};
+  std::vector<std::unique_ptr<can_nodes::SocketCanMedium>> media_;  // per robot
+  std::vector<std::uint8_t> wired_;  // per robot: its medium carries the run's timed wire (set here, undone at the end)
   std::vector<std::vector<can_nodes::SocketCanBus*>> sockets_;  // [robot][NodeId, watch]; null: not emulated
   std::vector<can_nodes::SocketCanBus*> watched_;               // per robot, the socket whose state is read
   std::vector<can_nodes::BusState> states_;

@@ -2,6 +2,8 @@
 // scenario, chosen by the command, not the file (part of a RunPlan).
 #pragma once
 
+#include "canhil/can_nodes/medium.hpp"
+
 #include <memory>
 #include <optional>
 
@@ -21,6 +23,16 @@ struct BusPhysics {
   std::optional<Nanos> restart = std::chrono::milliseconds(100);  ///< bus-off to restart; nullopt: on request
   std::size_t tx_queue = 10;                                      ///< frames a controller queues (can-dev's txqueuelen)
   bool timed() const noexcept { return bit_rate != 0; }
+  /// As a medium's wire (can_nodes::Wire), its faults drawn from `seed`.
+  can_nodes::Wire wire(std::uint64_t seed) const {
+    can_nodes::Wire w;
+    w.bit_rate = bit_rate;
+    w.data_bit_rate = data_bit_rate;
+    w.seed = seed;
+    w.controller.queue_frames = tx_queue;
+    w.controller.restart_delay = restart;
+    return w;
+  }
 };
 
 /// What a run needs beyond its scenario: chosen by the command, not the file.

@@ -225,6 +225,7 @@ void clear_bus_faults(const BusPaths& paths, const std::string& name);
 /// A controller on a timed interface as the broker last said.
 struct ControllerView {
   int pid = 0;
+  int socket = -1;      ///< the socket whose own controller it is (canhil's emulated nodes), -1: the process's
   std::string program;  ///< /proc/PID/comm
   std::string interface;
   std::string state;  ///< "error-active", "error-warning", "error-passive", "bus-off"

@@ -1,7 +1,8 @@
 /* canhil/userbus/bus_hook.h — what the user-space bus's preload
  * (libcanhil-bus.so) tells the process it is loaded into, beyond the sockets
  * it serves: whether an interface is on the bus, when a frame has reached
- * every socket, and what a socket has waiting. canhil's lockstep and reports
+ * every socket, what a socket has waiting, an interface's wire and counts,
+ * and a socket that is a controller of its own. canhil's lockstep and reports
  * ask (can_nodes: on_user_space_bus, DeliveryFence, SocketCanBus::waiting).
  *
  * The preload exports these functions with C linkage. canhil does not link
@@ -39,6 +40,31 @@ long long canhil_userbus_waiting(int fd);
 typedef long long (*canhil_userbus_waiting_fn)(int fd);
 #define CANHIL_USERBUS_WAITING "canhil_userbus_waiting"
 
+/* Gives interface `name` a wire (userbus/state.hpp's Interface; bit_rate 0:
+ * instant again), as `canhil bus link NAME bitrate ...` does, and returns
+ * once the broker has taken it (one round trip): 0, or -ENODEV when the
+ * interface is not on the bus. */
+int canhil_userbus_set_wire(const char* name, unsigned int bit_rate, unsigned int data_bit_rate, int restart_ms,
+                            unsigned int tx_queue);
+typedef int (*canhil_userbus_set_wire_fn)(const char* name, unsigned int bit_rate, unsigned int data_bit_rate,
+                                          int restart_ms, unsigned int tx_queue);
+#define CANHIL_USERBUS_SET_WIRE "canhil_userbus_set_wire"
+
+/* Bus socket `fd` becomes a controller of its own on timed interfaces (an
+ * emulated node is a board of its own), not one with every other socket of
+ * its process; 0, or -1 when `fd` is not a bus socket. */
+int canhil_userbus_own_controller(int fd);
+typedef int (*canhil_userbus_own_controller_fn)(int fd);
+#define CANHIL_USERBUS_OWN_CONTROLLER "canhil_userbus_own_controller"
+
+/* What interface `name` has carried: counts[0] frames, [1] copies dropped at
+ * full receivers, [2] error frames on its wire, [3] ns its wire carried bits,
+ * [4] ns since its wire began. 1 with a wire, 0 without, -1 when it is not
+ * on the bus. */
+int canhil_userbus_wire_counts(const char* name, unsigned long long* counts);
+typedef int (*canhil_userbus_wire_counts_fn)(const char* name, unsigned long long* counts);
+#define CANHIL_USERBUS_WIRE_COUNTS "canhil_userbus_wire_counts"
+
 #ifdef __cplusplus
 }
 
@@ -52,14 +78,21 @@ struct Hooks {
   canhil_userbus_interface_fn interface = nullptr;
   canhil_userbus_rounds_fn rounds = nullptr;
   canhil_userbus_waiting_fn waiting = nullptr;
+  canhil_userbus_set_wire_fn set_wire = nullptr;
+  canhil_userbus_own_controller_fn own_controller = nullptr;
+  canhil_userbus_wire_counts_fn wire_counts = nullptr;
   bool loaded() const noexcept { return interface != nullptr; }
 };
 
 /// This process's hooks (the preload is loaded before main() or never).
 inline const Hooks& hooks() {
-  static const Hooks found{::canhil::preload::any_symbol<canhil_userbus_interface_fn>(CANHIL_USERBUS_INTERFACE),
-                           ::canhil::preload::any_symbol<canhil_userbus_rounds_fn>(CANHIL_USERBUS_ROUNDS),
-                           ::canhil::preload::any_symbol<canhil_userbus_waiting_fn>(CANHIL_USERBUS_WAITING)};
+  static const Hooks found{
+      ::canhil::preload::any_symbol<canhil_userbus_interface_fn>(CANHIL_USERBUS_INTERFACE),
+      ::canhil::preload::any_symbol<canhil_userbus_rounds_fn>(CANHIL_USERBUS_ROUNDS),
+      ::canhil::preload::any_symbol<canhil_userbus_waiting_fn>(CANHIL_USERBUS_WAITING),
+      ::canhil::preload::any_symbol<canhil_userbus_set_wire_fn>(CANHIL_USERBUS_SET_WIRE),
+      ::canhil::preload::any_symbol<canhil_userbus_own_controller_fn>(CANHIL_USERBUS_OWN_CONTROLLER),
+      ::canhil::preload::any_symbol<canhil_userbus_wire_counts_fn>(CANHIL_USERBUS_WIRE_COUNTS)};
   return found;
 }
 

@@ -100,13 +100,16 @@ struct Interface {
 };
 
 /// One CAN controller on a timed interface: a process's adapter (every socket
-/// it holds on that interface shares it). Claimed by the first of the
-/// preload (a frame sent) and the broker (a socket bound there) under
-/// State::lock; freed by the broker once the process has no socket left.
+/// it holds on that interface shares it), or one socket's own (kOwnController:
+/// each of canhil's emulated nodes, as each is a board of its own). Claimed
+/// by the first of the preload (a frame sent) and the broker (a socket bound
+/// there) under State::lock; freed by the broker once its process holds no
+/// socket there and its queue is empty.
 struct Controller {
   std::atomic<std::uint32_t> in_use;
   std::int32_t pid;
   std::int32_t ifindex;
+  std::int32_t slot;  ///< the socket whose own controller it is, -1: the process's
   /// Frames given and not yet sent or dropped: the preload counts one up
   /// before it hands a frame to the broker (ENOBUFS at the interface's
   /// tx_queue), the broker one down at its end of frame.
@@ -125,15 +128,16 @@ struct Controller {
 
 /// Option flags of a socket (Socket::flags).
 enum SocketFlag : std::uint32_t {
-  kLoopback = 1U << 0,      ///< CAN_RAW_LOOPBACK (default on)
-  kRecvOwn = 1U << 1,       ///< CAN_RAW_RECV_OWN_MSGS
-  kFdFrames = 1U << 2,      ///< CAN_RAW_FD_FRAMES
-  kJoinFilters = 1U << 3,   ///< CAN_RAW_JOIN_FILTERS
-  kTimestamp = 1U << 4,     ///< SO_TIMESTAMP or SO_TIMESTAMPNS
-  kTimestampNs = 1U << 5,   ///< SO_TIMESTAMPNS (nanoseconds win, as in the kernel)
-  kRxqOverflow = 1U << 6,   ///< SO_RXQ_OVFL
-  kTimestampNew = 1U << 7,  ///< set with SO_TIMESTAMP(NS)_NEW: 64-bit time in the control message's type
-  kStampKept = 1U << 8,     ///< SOCK_TIMESTAMP: a read keeps its frame's time for SIOCGSTAMP
+  kLoopback = 1U << 0,       ///< CAN_RAW_LOOPBACK (default on)
+  kRecvOwn = 1U << 1,        ///< CAN_RAW_RECV_OWN_MSGS
+  kFdFrames = 1U << 2,       ///< CAN_RAW_FD_FRAMES
+  kJoinFilters = 1U << 3,    ///< CAN_RAW_JOIN_FILTERS
+  kTimestamp = 1U << 4,      ///< SO_TIMESTAMP or SO_TIMESTAMPNS
+  kTimestampNs = 1U << 5,    ///< SO_TIMESTAMPNS (nanoseconds win, as in the kernel)
+  kRxqOverflow = 1U << 6,    ///< SO_RXQ_OVFL
+  kTimestampNew = 1U << 7,   ///< set with SO_TIMESTAMP(NS)_NEW: 64-bit time in the control message's type
+  kStampKept = 1U << 8,      ///< SOCK_TIMESTAMP: a read keeps its frame's time for SIOCGSTAMP
+  kOwnController = 1U << 9,  ///< a controller of its own on a timed interface (canhil_userbus_own_controller)
 };
 
 /// One CAN_RAW socket's options, written by the processes that hold it (under
@@ -227,19 +231,21 @@ inline Interface* find_interface(State& s, int index) noexcept {
   return i.in_use.load(std::memory_order_acquire) != 0 ? &i : nullptr;
 }
 
-/// The controller of process `pid` on interface `ifindex`, claimed when
+/// The controller of process `pid` (socket `slot`'s own, -1: the process's) on interface `ifindex`, claimed when
 /// `claim` and there is none yet (under State::lock); nullptr when there is
 /// none (or no free row).
-inline Controller* find_controller(State& s, std::int32_t pid, std::int32_t ifindex, bool claim) noexcept {
+inline Controller* find_controller(State& s, std::int32_t pid, std::int32_t ifindex, std::int32_t slot,
+                                   bool claim) noexcept {
+  const auto is = [&](const Controller& c) { return c.pid == pid && c.ifindex == ifindex && c.slot == slot; };
   for (Controller& c : s.controllers) {
-    if (c.in_use.load(std::memory_order_acquire) != 0 && c.pid == pid && c.ifindex == ifindex) return &c;
+    if (c.in_use.load(std::memory_order_acquire) != 0 && is(c)) return &c;
   }
   if (!claim) return nullptr;
   s.lock.lock();
   Controller* found = nullptr;
   for (Controller& c : s.controllers) {
     const bool used = c.in_use.load(std::memory_order_acquire) != 0;
-    if (used && c.pid == pid && c.ifindex == ifindex) {
+    if (used && is(c)) {
       found = &c;
       break;
     }
@@ -248,6 +254,7 @@ inline Controller* find_controller(State& s, std::int32_t pid, std::int32_t ifin
   if (found != nullptr && found->in_use.load(std::memory_order_relaxed) == 0) {
     found->pid = pid;
     found->ifindex = ifindex;
+    found->slot = slot;
     found->queued.store(0);
     found->refused.store(0);
     found->state.store(0);
@@ -318,6 +325,7 @@ struct FaultRequest {
   std::int32_t has_id;
   std::uint32_t id;
   std::int32_t pid;         ///< the process whose controller it names, 0: none
+  std::int32_t slot;        ///< that process's socket whose own controller it is, -1: the process's
   std::uint32_t babble_id;  ///< kBabbling: the 11-bit id of its frames
 };
 
