@@ -1,6 +1,7 @@
 #include "canhil/can_nodes/medium.hpp"
 
 #include <chrono>
+#include <cstdint>
 
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/userbus/bus_hook.h"
@@ -46,12 +47,16 @@ bool SocketCanMedium::set_wire(const Wire& wire) {
   const int restart_ms =
       restart ? static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(*restart).count()) : 0;
   return set(iface_.c_str(), wire.bit_rate, wire.data_bit_rate, restart && restart_ms == 0 ? 1 : restart_ms,
-             static_cast<unsigned>(wire.controller.queue_frames)) == 0;
+             static_cast<unsigned>(wire.controller.queue_frames), wire.driven ? 1 : 0) == 0;
+}
+
+void SocketCanMedium::drive(Nanos now) {
+  if (const auto time = userbus::hooks().wire_time) time(iface_.c_str(), now.count());
 }
 
 MediumCounts SocketCanMedium::counts() const {
   MediumCounts c;
-  unsigned long long n[5] = {};
+  unsigned long long n[7] = {};
   const auto read = userbus::hooks().wire_counts;
   const int timed = read != nullptr ? read(iface_.c_str(), n) : -1;
   if (timed < 0) return c;  // the kernel's: its counters are the interface's own (ip -s link)
@@ -59,6 +64,8 @@ MediumCounts SocketCanMedium::counts() const {
   c.error_frames = n[2];
   c.timed = timed == 1;
   c.load = n[4] > 0 ? static_cast<double>(n[3]) / static_cast<double>(n[4]) : 0.0;
+  c.delivered = n[5];
+  c.next_event = n[6] >= static_cast<unsigned long long>(INT64_MAX) ? kNever : Nanos{static_cast<std::int64_t>(n[6])};
   return c;
 }
 

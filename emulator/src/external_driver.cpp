@@ -36,6 +36,29 @@ class ExternalDriver::Processes final : public can_nodes::Participant {
   ExternalDriver& d_;
 };
 
+// The buses' driven wires (the user-space bus's broker runs each on this
+// run's clock): due at the next event of any, when each due is run to now
+// and what it delivers then is in the sockets before the processes settle.
+class ExternalDriver::WireClock final : public can_nodes::Participant {
+ public:
+  explicit WireClock(ExternalDriver& driver) : d_(driver) {}
+  std::size_t poll() override { return 0; }
+  bool may_have_frames() const override { return false; }
+  void tick(Nanos now) override {
+    for (const auto& m : d_.media_) {
+      if (m->counts().next_event <= now) m->drive(now);
+    }
+  }
+  Nanos next_wakeup() const override {
+    Nanos next = kNever;
+    for (const auto& m : d_.media_) next = std::min(next, m->counts().next_event);
+    return next;
+  }
+
+ private:
+  ExternalDriver& d_;
+};
+
 ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor, ExternalOptions options)
     : session_(session),
       conductor_(conductor),
@@ -69,6 +92,24 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
       throw SetupError(iface + " is down; bring it up with `ip link set " + iface + " up`");
     }
   }
+  // A timed bus (--bit-rate) is the user-space bus's wire on this run's clock,
+  // where every robot's bus is on it; elsewhere the buses deliver at once.
+  const BusPhysics& physics = session_.options().bus;
+  for (std::size_t r = 0; r < n; ++r) {
+    const std::string& iface = session_.rig(r).interface;
+    const bool seen = std::any_of(media_.begin(), media_.end(), [&](const auto& m) { return m->interface() == iface; });
+    if (!seen) media_.push_back(std::make_unique<can_nodes::SocketCanMedium>(iface, socket_options));
+  }
+  timed_ = physics.timed() && std::all_of(media_.begin(), media_.end(), [](const auto& m) {
+             return m->kind() == can_nodes::MediumKind::kUserSpace && !m->counts().timed;
+           });
+  for (std::size_t k = 0; timed_ && k < media_.size(); ++k) {
+    can_nodes::Wire wire = physics.wire(session_.scenario().seed + k);
+    wire.driven = true;
+    timed_ = media_[k]->set_wire(wire);
+    taken0_.push_back(media_[k]->counts().frames);
+    delivered0_.push_back(media_[k]->counts().delivered);
+  }
   // canhil waits for frames in flight on these, not on a timer.
   arrivals_ = ::epoll_create1(EPOLL_CLOEXEC);
   if (arrivals_ < 0) throw SetupError("cannot create an epoll instance for the lockstep's waits");
@@ -86,7 +127,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   node_options.fed = true;
   session_.build_nodes(
       [this, &node_options](std::size_t r, const std::string&) {
-        auto bus = can_nodes::SocketCanBus::open(session_.rig(r).interface, node_options);
+        auto bus = can_nodes::SocketCanMedium(session_.rig(r).interface, node_options).open_socket();
         sockets_[r].push_back(bus.get());
         return std::unique_ptr<can_nodes::Endpoint>(std::move(bus));
       },
@@ -94,6 +135,10 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
   processes_ = std::make_unique<Processes>(*this);
   for (std::size_t r = 0; r < n; ++r) {
     for (can_nodes::Node* node : session_.rig(r).nodes->nodes()) time_.add(*node);
+  }
+  if (timed_) {
+    wire_clock_ = std::make_unique<WireClock>(*this);
+    time_.add(*wire_clock_);  // its deliveries before the processes settle the instant
   }
   time_.add(*processes_);
   // A team's agent is activated through its PMan table; canhil's own waits on
@@ -111,13 +156,16 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     arrived_ = [this] {
       const bool at_an_observer =
           std::any_of(observers_.begin(), observers_.end(), [](const auto& o) { return o->waiting() == true; });
-      return at_an_observer || (waiting_on_fence_ && !unfenced());
+      return at_an_observer || (waiting_on_fence_ && !unfenced()) || (wire_wanted_ > 0 && taken() >= wire_wanted_);
     };
   }
   time_.set_step(session_.step_period(), [this](Nanos now) { session_.step(now); });
 }
 
 ExternalDriver::~ExternalDriver() {
+  if (timed_) {
+    for (const auto& m : media_) m->set_wire(can_nodes::Wire{});  // instant again, as before the run
+  }
   if (arrivals_ >= 0) ::close(arrivals_);
   session_.on_vision_frame(nullptr);
   session_.for_each_laptop([](LaptopLink& laptop) {
@@ -152,6 +200,7 @@ void ExternalDriver::observe() {
   for (std::size_t r = 0; r < observers_.size(); ++r) {
     while (auto f = observers_[r]->receive()) {
       ++observed_;
+      if (f->frame.kind != frames::FrameKind::kError) ++observed_frames_;
       if (can_nodes::DeliveryFence::counts(f->frame)) ++fenced_[r];
       for (can_nodes::SocketCanBus* s : sockets_[r]) s->feed(f->frame);
       watch_.add(r, {f->frame, clock_.now()});
@@ -161,8 +210,17 @@ void ExternalDriver::observe() {
 
 std::string ExternalDriver::in_flight(std::uint64_t sent) {
   waiting_on_fence_ = false;
+  wire_wanted_ = 0;
   observe();
-  if (observed_ < sent) return "the frames sent to reach the bus";
+  if (timed_) {
+    if (taken() < sent) {
+      wire_wanted_ = sent;
+      return "the frames sent to reach the bus's wire";
+    }
+    if (observed_frames_ < delivered()) return "the frames the wire delivered to reach the bus";
+  } else if (observed_ < sent) {
+    return "the frames sent to reach the bus";
+  }
   // The observer may have a frame that later sockets have not yet: the fence says when all have it.
   fence_.drain();
   if (const auto r = unfenced()) {
@@ -170,6 +228,18 @@ std::string ExternalDriver::in_flight(std::uint64_t sent) {
     return "the frames on " + session_.rig(*r).interface + " to reach every socket";
   }
   return {};
+}
+
+std::uint64_t ExternalDriver::taken() const {
+  std::uint64_t n = 0;
+  for (std::size_t k = 0; k < taken0_.size(); ++k) n += media_[k]->counts().frames - taken0_[k];
+  return n;
+}
+
+std::uint64_t ExternalDriver::delivered() const {
+  std::uint64_t n = 0;
+  for (std::size_t k = 0; k < delivered0_.size(); ++k) n += media_[k]->counts().delivered - delivered0_[k];
+  return n;
 }
 
 std::optional<std::size_t> ExternalDriver::unfenced() {
@@ -185,7 +255,9 @@ std::size_t ExternalDriver::settle() {
   const std::uint64_t ours = canhil_sent();
   bool woke = false;
   for (const bool w : woken_) woke = woke || w;
-  if (settled_once_ && !woke && conductor_.epoch() == settled_epoch_ && ours + conductor_.frames_sent() == announced_) {
+  const std::uint64_t sent_now = ours + conductor_.frames_sent();
+  if (settled_once_ && !woke && conductor_.epoch() == settled_epoch_ && on_buses(sent_now) == announced_ &&
+      (!timed_ || taken() >= sent_now)) {
     // Nothing happened since the processes were last quiet: no frame, no
     // activation, no wake-up due (set_time() nudges then). Most instants.
     return 0;
@@ -224,8 +296,9 @@ std::size_t ExternalDriver::settle() {
       observe();  // what reached the bus up to the stop belongs in the trace
       throw ProcessStuck(stuck);
     }
-    if (sent == announced_ && !woke) break;
-    announced_ = sent;
+    const std::uint64_t arrived = on_buses(sent);
+    if (arrived == announced_ && !woke) break;
+    announced_ = arrived;
     agents_due = agents_due || woke;
     // New frames concern only the threads waiting on descriptors; an
     // activation (a semaphore, a signal, a team's own means) every thread.

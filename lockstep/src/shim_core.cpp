@@ -478,6 +478,11 @@ extern "C" __attribute__((visibility("default"))) void canhil_shim_frames_sent(l
     slot->frames_sent.fetch_add(static_cast<std::uint64_t>(frames), std::memory_order_release);
 }
 
+extern "C" __attribute__((visibility("default"))) long long canhil_shim_board_now(void) {
+  using namespace canhil::lockstep::shim;
+  return board() != nullptr ? static_cast<long long>(now_ns()) : -1;
+}
+
 extern "C" __attribute__((visibility("default"))) void canhil_shim_descriptor_readable(int /*fd*/) {
   // The conductor's next change wakes every thread waiting on descriptors.
   canhil::lockstep::shim::post_change(canhil::lockstep::kDescriptors);

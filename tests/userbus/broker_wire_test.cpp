@@ -70,7 +70,7 @@ class BrokerWireTest : public ::testing::Test {
   // What the preload does before it hands a frame over: one more in its queue.
   void give(std::int32_t pid, std::uint64_t tag, const ub::TxRecord& r, std::int64_t at) {
     ub::find_controller(*state_, pid, kIndex, -1, true)->queued.fetch_add(1);
-    wire_.submit(ub::ControllerKey{pid, -1}, tag, r, at);
+    wire_.submit(ub::ControllerKey{pid, -1}, tag, r, at, out_);
   }
   std::unique_ptr<ub::State> state_ = std::make_unique<ub::State>();
   ub::BrokerWire wire_{*state_};

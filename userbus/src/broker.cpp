@@ -9,10 +9,8 @@
 #include <poll.h>
 #include <sched.h>
 #include <sys/epoll.h>
-#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
-#include <sys/timerfd.h>
 #include <sys/un.h>
 #include <time.h>
 #include <unistd.h>
@@ -23,6 +21,7 @@
 #include <deque>
 #include <vector>
 
+#include "broker_connection.hpp"
 #include "broker_filters.hpp"
 #include "broker_system.hpp"
 #include "broker_wire.hpp"
@@ -34,20 +33,6 @@
 namespace canhil::userbus {
 namespace {
 
-struct Connection {
-  int fd = -1;
-  int slot = -1;  // -1 until its hello, and for a control connection
-  bool control = false;
-  bool hello = false;
-  bool overrun = false;  // stuck with a full backlog past the grace: drop at once until it reads
-  std::int32_t applied_rcvbuf = 0;
-  Options options;
-  std::vector<RxRecord> queued;  // routed in this round, sent together at its end
-  std::deque<RxRecord> backlog;  // routed, but its buffer was full: sent, in order, as it reads
-  bool backlogged = false;       // backlog not empty (EPOLLOUT watched)
-  std::uint64_t opened = 0;      // the order connections were opened in
-};
-
 std::int64_t now_ns() {
   timespec t{};
   clock_gettime(CLOCK_REALTIME, &t);
@@ -57,11 +42,6 @@ std::int64_t now_ns() {
 // Past the time shim: a broker started by a process with the shim preloaded
 // must not read a virtual clock that stands still.
 std::int64_t monotonic_ns() { return ::canhil::preload::real_monotonic_ns(); }
-
-// How early the timer wakes the broker before a wire's event: about what a
-// wake-up costs where idle cores halt (a virtual machine's), so that the
-// frame is handed over at its end of frame, not a wake-up later.
-constexpr std::int64_t kWireLead = 60'000;
 
 class Broker {
  public:
@@ -75,10 +55,7 @@ class Broker {
     }
     for (int k = 0; k < kMaxInterfaces; ++k)
       up_[k] = state_.interfaces[k].up.load() != 0 && state_.interfaces[k].in_use.load() != 0;
-    // Past any time shim (a raw system call): the wire runs on the real clock.
-    timer_fd_ = static_cast<int>(syscall(SYS_timerfd_create, CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
-    if (timer_fd_ >= 0) watch(timer_fd_);
-    prctl(PR_SET_TIMERSLACK, 1UL);  // a frame's end is due to the microsecond
+    if (timer_.fd() >= 0) watch(timer_.fd());
     wire_.sync(monotonic_ns());
   }
 
@@ -87,7 +64,6 @@ class Broker {
       if (c.fd >= 0) close(c.fd);
     }
     if (owner_fd_ >= 0) close(owner_fd_);
-    if (timer_fd_ >= 0) close(timer_fd_);
     close(epoll_);
   }
   Broker(const Broker&) = delete;
@@ -113,13 +89,8 @@ class Broker {
           accept_all();
         } else if (fd == owner_fd_) {
           stop_ = true;
-        } else if (fd == timer_fd_) {
-          std::uint64_t expirations = 0;
-          if (read(timer_fd_, &expirations, sizeof expirations) >= 0) armed_ = INT64_MAX;  // one shot, spent
-          // Woken kWireLead early (a wake-up's own latency): the rest looked on for.
-          for (const std::int64_t due = wire_.next_due();
-               due - monotonic_ns() > 0 && due - monotonic_ns() <= kWireLead;) {
-          }
+        } else if (fd == timer_.fd()) {
+          timer_.fired(wire_.next_due());
           advance_wire();
         } else {
           serve(fd, events[i].events);
@@ -255,12 +226,10 @@ class Broker {
       } else if (r.op == kControlStop) {
         stop_ = true;
         answer = 0;
-      } else if (r.op == kControlRestart) {
-        answer = wire_.restart(r.ifindex, r.pid, monotonic_ns());
-      } else if (r.op == kControlFault) {
-        answer = wire_.add_fault(r.ifindex, r.fault, monotonic_ns());
-      } else if (r.op == kControlClearFaults) {
-        answer = wire_.clear_faults(r.ifindex, monotonic_ns());
+      } else {
+        wire_done_.clear();  // a lockstep instant's deliveries are in the sockets before the answer
+        answer = wire_.control(r, monotonic_ns(), wire_done_);
+        hand_wire(false);
       }
       arm_timer();
     }
@@ -329,8 +298,8 @@ class Broker {
   void route(Connection& sender, const TxRecord& record) {
     Interface* iface = find_interface(state_, record.ifindex);
     if (iface == nullptr || iface->up.load(std::memory_order_relaxed) == 0) return;
-    iface->frames.fetch_add(1, std::memory_order_relaxed);
     state_.sockets[sender.slot].sent.fetch_add(1, std::memory_order_relaxed);
+    if (!wire_.timed(record.ifindex)) iface->frames.fetch_add(1, std::memory_order_relaxed);
     if (wire_.timed(record.ifindex)) {
       const std::int64_t now = monotonic_ns();
       for (Connection& c : connections_) {  // every process on the interface is a controller there
@@ -338,7 +307,10 @@ class Broker {
         const Options& o = options(c);
         if (o.bound && (o.ifindex == 0 || o.ifindex == record.ifindex)) wire_.join(key_of(c), record.ifindex);
       }
-      wire_.submit(key_of(sender), sender.opened, record, now);
+      wire_done_.clear();
+      wire_.submit(key_of(sender), sender.opened, record, now, wire_done_);
+      if (!wire_done_.empty()) hand_wire(false);
+      iface->frames.fetch_add(1, std::memory_order_release);  // after its next event is published
       arm_timer();
       return;
     }
@@ -368,10 +340,16 @@ class Broker {
   void advance_wire() {
     wire_done_.clear();
     wire_.advance(monotonic_ns(), wire_done_);
-    const std::int64_t to_realtime = now_ns() - monotonic_ns();
-    for (const WireDelivery& d : wire_done_) deliver_wire(d, d.at_ns + to_realtime);
-    flush();
+    hand_wire(true);
     arm_timer();
+  }
+
+  /// wire_done_ to the sockets, stamped at its time (`at_their_time`: a real
+  /// wire's end of frame) or now (a driven wire's, in a lockstep run's time).
+  void hand_wire(bool at_their_time) {
+    const std::int64_t to_realtime = now_ns() - monotonic_ns();
+    for (const WireDelivery& d : wire_done_) deliver_wire(d, at_their_time ? d.at_ns + to_realtime : now_ns());
+    flush();
   }
 
   /// A wire's frame (at its end of frame) or error frame to every socket that
@@ -410,18 +388,7 @@ class Broker {
   }
 
   /// The timer set for the wires' next event (none when they have none).
-  void arm_timer() {
-    if (timer_fd_ < 0) return;
-    const std::int64_t due = wire_.next_due();
-    if (due == armed_) return;
-    armed_ = due;
-    itimerspec t{};
-    if (due != INT64_MAX) {
-      const std::int64_t at = std::max<std::int64_t>(due - kWireLead, 1);
-      t.it_value = {static_cast<time_t>(at / 1000000000), static_cast<long>(at % 1000000000)};
-    }
-    syscall(SYS_timerfd_settime, timer_fd_, TFD_TIMER_ABSTIME, &t, nullptr);
-  }
+  void arm_timer() { timer_.arm(wire_.next_due()); }
 
   /// The controller c's frames go through on a timed interface: its own, or its process's.
   ControllerKey key_of(Connection& c) {
@@ -598,8 +565,7 @@ class Broker {
   std::uint64_t opened_ = 0;
   TxRecord batch_[64];
   BrokerWire wire_{state_};
-  int timer_fd_ = -1;
-  std::int64_t armed_ = INT64_MAX;  // the timer's due time, INT64_MAX: disarmed
+  WireTimer timer_;
   std::vector<WireDelivery> wire_done_;
 };
 

@@ -4,7 +4,9 @@
 #include <poll.h>
 #include <sched.h>
 #include <sys/epoll.h>
+#include <sys/prctl.h>
 #include <sys/syscall.h>
+#include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -90,6 +92,33 @@ int Spin::look(int epoll, epoll_event* events, int max) {
     if (n != 0 || preload::real_monotonic_ns() >= until) return n;
     sched_yield();
   }
+}
+
+WireTimer::WireTimer() {
+  fd_ = static_cast<int>(syscall(SYS_timerfd_create, CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  prctl(PR_SET_TIMERSLACK, 1UL);  // a frame's end is due to the microsecond
+}
+
+WireTimer::~WireTimer() {
+  if (fd_ >= 0) close(fd_);
+}
+
+void WireTimer::arm(std::int64_t due) {
+  if (fd_ < 0 || due == armed_) return;
+  armed_ = due;
+  itimerspec t{};
+  if (due != INT64_MAX) {
+    const std::int64_t at = std::max<std::int64_t>(due - kLead, 1);
+    t.it_value = {static_cast<time_t>(at / 1'000'000'000), static_cast<long>(at % 1'000'000'000)};
+  }
+  syscall(SYS_timerfd_settime, fd_, TFD_TIMER_ABSTIME, &t, nullptr);
+}
+
+void WireTimer::fired(std::int64_t due) {
+  std::uint64_t expirations = 0;
+  if (read(fd_, &expirations, sizeof expirations) >= 0) armed_ = INT64_MAX;  // one shot, spent
+  for (std::int64_t now = preload::real_monotonic_ns(); due - now > 0 && due - now <= kLead;)
+    now = preload::real_monotonic_ns();
 }
 
 }  // namespace canhil::userbus

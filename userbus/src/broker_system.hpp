@@ -72,4 +72,28 @@ class Spin {
   bool fifo_ = true;  // at its SCHED_FIFO priority now (when it has one: State::rt_priority)
 };
 
+/// The timer of the broker's timed interfaces: a timerfd on the real
+/// monotonic clock (a raw system call, past any time shim), one shot, set
+/// kLead before the wire's next event: about what a wake-up costs where idle
+/// cores halt (a virtual machine's), so that the frame is handed over at its
+/// end of frame, not a wake-up later; the rest is looked on for.
+class WireTimer {
+ public:
+  static constexpr std::int64_t kLead = 60'000;
+  WireTimer();
+  ~WireTimer();
+  WireTimer(const WireTimer&) = delete;
+  WireTimer& operator=(const WireTimer&) = delete;
+  int fd() const noexcept { return fd_; }
+  /// Set for `due` (monotonic ns; INT64_MAX: none), when that changed.
+  void arm(std::int64_t due);
+  /// It fired (read, spent): returns once the monotonic clock reads `due`
+  /// when that is at most kLead away.
+  void fired(std::int64_t due);
+
+ private:
+  int fd_ = -1;
+  std::int64_t armed_ = INT64_MAX;  // its due time, INT64_MAX: disarmed
+};
+
 }  // namespace canhil::userbus

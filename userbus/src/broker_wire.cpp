@@ -65,6 +65,8 @@ struct BrokerWire::Wire {
   std::uint32_t data_bit_rate = 0;
   std::int32_t restart_ms = 0;
   std::int64_t origin = 0;  // monotonic ns at the wire's time 0
+  bool driven = false;      // its clock a lockstep run's: at `driven_now`, moved by drive()
+  std::int64_t driven_now = 0;
   std::unique_ptr<wire::WireBus> bus;
   struct Member {
     ControllerKey key;
@@ -87,7 +89,7 @@ struct BrokerWire::Wire {
   std::uint64_t next_tag = 1;
   std::vector<wire::WireEvent> events;
 
-  Nanos at(std::int64_t now) const { return Nanos{std::max<std::int64_t>(now - origin, 0)}; }
+  Nanos at(std::int64_t now) const { return Nanos{driven ? driven_now : std::max<std::int64_t>(now - origin, 0)}; }
   std::optional<wire::ControllerId> controller_of(ControllerKey key) const {
     for (std::size_t k = 0; k < members.size(); ++k) {
       if (!members[k].gone && members[k].key == key) return static_cast<wire::ControllerId>(k);
@@ -115,8 +117,9 @@ void BrokerWire::sync(std::int64_t now) {
     const std::uint32_t rate = exists ? i.bit_rate.load() : 0;
     const std::uint32_t data_rate = exists ? i.data_bit_rate.load() : 0;
     const std::int32_t restart_ms = i.restart_ms.load();
+    const bool driven = exists && i.driven.load() != 0;
     std::unique_ptr<Wire>& w = wires_[static_cast<std::size_t>(k)];
-    if (w && w->bit_rate == rate && w->data_bit_rate == data_rate) {
+    if (w && w->bit_rate == rate && w->data_bit_rate == data_rate && w->driven == driven) {
       if (w->restart_ms != restart_ms) {
         w->restart_ms = restart_ms;
         for (std::size_t c = 0; c < w->members.size(); ++c)
@@ -141,6 +144,7 @@ void BrokerWire::sync(std::int64_t now) {
     w->data_bit_rate = data_rate;
     w->restart_ms = restart_ms;
     w->origin = now;
+    w->driven = driven;
     wire::WireConfig config;
     config.bit_rate = rate;
     config.data_bit_rate = data_rate;
@@ -218,9 +222,16 @@ void BrokerWire::retire(Wire& w) {
   }
 }
 
-void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now) {
+void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now,
+                        std::vector<WireDelivery>& out) {
   Wire* w = wire_of(record.ifindex);
   if (w == nullptr) return;
+  if (w->driven && record.at_ns > w->driven_now) {
+    // Written at a later instant of the run than the wire has been run to:
+    // it is run there first (normally nothing is due: the run drove it).
+    w->driven_now = record.at_ns;
+    collect(*w, now, out);
+  }
   join(key, record.ifindex);
   const wire::ControllerId id = *w->controller_of(key);
   Wire::Given& g = w->given[w->next_tag];
@@ -231,24 +242,39 @@ void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& re
   w->bus->submit(id, wire_frame_of(record.frame, record.size), w->at(now), w->next_tag);
   ++w->next_tag;
   ++w->members[id].given;
+  publish_due(*w);
 }
 
 std::int64_t BrokerWire::next_due() const noexcept {
   std::int64_t due = INT64_MAX;
   for (const std::unique_ptr<Wire>& w : wires_) {
-    if (!w) continue;
+    if (!w || w->driven) continue;  // a driven wire's time is the run's: drive()
     const Nanos next = w->bus->next_event();
     if (next != kNever) due = std::min(due, w->origin + next.count());
   }
   return due;
 }
 
+void BrokerWire::drive(std::int32_t ifindex, std::int64_t time_ns, std::vector<WireDelivery>& out) {
+  Wire* w = wire_of(ifindex);
+  if (w == nullptr || !w->driven) return;
+  w->driven_now = std::max(w->driven_now, time_ns);
+  collect(*w, 0, out);
+}
+
 void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
   for (std::unique_ptr<Wire>& wp : wires_) {
-    if (!wp) continue;
-    Wire& w = *wp;
-    const Nanos next = w.bus->next_event();
-    if (next == kNever || w.origin + next.count() > now) continue;
+    if (!wp || wp->driven) continue;
+    const Nanos next = wp->bus->next_event();
+    if (next == kNever || wp->origin + next.count() > now) continue;
+    collect(*wp, now, out);
+  }
+}
+
+// What wire `w` did up to `now` (its own time when driven), as deliveries.
+void BrokerWire::collect(Wire& w, std::int64_t now, std::vector<WireDelivery>& out) {
+  Interface* iface = find_interface(state_, w.ifindex);
+  {
     w.events.clear();
     w.bus->advance(w.at(now), w.events);
     for (const wire::WireEvent& e : w.events) {
@@ -267,6 +293,7 @@ void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
         continue;
       }
       for (const wire::ControllerId m : e.missed) d.missed.push_back(w.key_of(m));
+      if (iface != nullptr) iface->delivered.fetch_add(1, std::memory_order_relaxed);
       const auto given = w.given.find(e.tag);
       if (e.tag == wire::kBabbleTag || given == w.given.end()) {
         raw_of(e.frame, d);  // a babbling fault's own frame
@@ -305,6 +332,30 @@ void BrokerWire::publish(Wire& w, std::int64_t now) {
     i->busy_ns.store(static_cast<std::uint64_t>(w.bus->stats().busy.count()), std::memory_order_relaxed);
     i->wire_ns.store(static_cast<std::uint64_t>(w.at(now).count()), std::memory_order_relaxed);
     i->error_frames.store(w.bus->stats().error_frames, std::memory_order_relaxed);
+  }
+  publish_due(w);
+}
+
+void BrokerWire::publish_due(Wire& w) {
+  Interface* i = find_interface(state_, w.ifindex);
+  if (i == nullptr) return;
+  const Nanos next = w.bus->next_event();
+  i->next_due_ns.store(next == kNever ? INT64_MAX : next.count(), std::memory_order_release);
+}
+
+int BrokerWire::control(const ControlRequest& r, std::int64_t now, std::vector<WireDelivery>& out) {
+  switch (r.op) {
+    case kControlRestart:
+      return restart(r.ifindex, r.pid, now);
+    case kControlFault:
+      return add_fault(r.ifindex, r.fault, now);
+    case kControlClearFaults:
+      return clear_faults(r.ifindex, now);
+    case kControlWireTime:
+      drive(r.ifindex, r.time_ns, out);
+      return 0;
+    default:
+      return -EINVAL;
   }
 }
 

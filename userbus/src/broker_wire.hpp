@@ -20,6 +20,7 @@ struct State;
 struct Controller;
 struct TxRecord;
 struct FaultRequest;
+struct ControlRequest;
 
 /// A controller on a timed interface: a process's (slot -1), or one socket's own (kOwnController).
 struct ControllerKey {
@@ -57,13 +58,23 @@ class BrokerWire {
   /// Controller `key` has no socket any more: it leaves its buses once it
   /// has sent what it holds.
   void leave(ControllerKey key);
-  /// A frame given on a timed interface by connection `tag`, of controller `key`.
-  void submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now);
+  /// A frame given on a timed interface by connection `tag`, of controller
+  /// `key`; on a driven wire at the record's time (what the wire did up to
+  /// then appended to `out`).
+  void submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now,
+              std::vector<WireDelivery>& out);
   /// When advance() next has something to do (monotonic ns); INT64_MAX: nothing.
   std::int64_t next_due() const noexcept;
   /// Runs every wire up to `now`, appending what happened, in order of time per interface.
   void advance(std::int64_t now, std::vector<WireDelivery>& out);
+  /// A driven wire (Interface::driven: a lockstep run's clock) run to its
+  /// own time `time_ns`; its deliveries' at_ns are in that time.
+  void drive(std::int32_t ifindex, std::int64_t time_ns, std::vector<WireDelivery>& out);
 
+  /// A control request about a timed interface (restart, fault, clear, a
+  /// driven wire's time): its answer, 0 or -errno (-EINVAL: not one of
+  /// those); what a driven wire delivered appended to `out`.
+  int control(const ControlRequest& request, std::int64_t now, std::vector<WireDelivery>& out);
   /// `canhil bus link IFACE restart`: the bus-off controllers of `pid` (0: all) on `ifindex`; 0 or -errno.
   int restart(std::int32_t ifindex, std::int32_t pid, std::int64_t now);
   int add_fault(std::int32_t ifindex, const FaultRequest& fault, std::int64_t now);
@@ -73,6 +84,8 @@ class BrokerWire {
   struct Wire;
   Wire* wire_of(std::int32_t ifindex) const noexcept;
   void publish(Wire& w, std::int64_t now);
+  void publish_due(Wire& w);
+  void collect(Wire& w, std::int64_t now, std::vector<WireDelivery>& out);
   void retire(Wire& w);
   void release(Wire& w, ControllerKey key, std::uint32_t n);
   Controller* row(ControllerKey key, std::int32_t ifindex, bool claim);

@@ -281,6 +281,9 @@ std::vector<std::string> add_interfaces(const BusPaths& paths, const std::vector
     free->busy_ns.store(0);
     free->wire_ns.store(0);
     free->error_frames.store(0);
+    free->driven.store(0);
+    free->delivered.store(0);
+    free->next_due_ns.store(INT64_MAX);
     free->up.store(1);
     free->in_use.store(1, std::memory_order_release);
     created.push_back(n);

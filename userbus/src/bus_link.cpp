@@ -63,6 +63,7 @@ void set_link(const BusPaths& paths, const std::string& name, const LinkSettings
     throw BusError("txqueuelen takes 1 to 100000 frames, got " + std::to_string(*settings.tx_queue));
   auto mapped = require_state(paths);
   Interface& i = interface_named(mapped->state(), name);
+  i.driven.store(0);  // the broker's own clock (a lockstep run's canhil drives its own)
   if (settings.bit_rate) i.bit_rate.store(*settings.bit_rate);
   if (settings.data_bit_rate) i.data_bit_rate.store(*settings.data_bit_rate);
   if (settings.restart_ms) i.restart_ms.store(*settings.restart_ms);

@@ -223,22 +223,24 @@ int open_socket(int extra) noexcept {
   return fd;
 }
 
-void interfaces_changed() noexcept {
+void interfaces_changed() noexcept { ask_broker(ControlRequest{kControlInterfacesChanged}); }
+
+int ask_broker(const ControlRequest& r) noexcept {
   const Paths p = paths();
   const int fd = static_cast<int>(syscall(SYS_socket, AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
-  if (fd < 0) return;
+  if (fd < 0) return -errno;
   sockaddr_un a{};
   a.sun_family = AF_UNIX;
   std::memcpy(a.sun_path, p.socket, sizeof a.sun_path);
   const Hello h{kHelloControl, static_cast<std::int32_t>(getpid())};
-  const ControlRequest r{kControlInterfacesChanged};
-  int answer = 0;
+  int answer = -EIO;
   if (syscall(SYS_connect, fd, &a, sizeof a) == 0 &&
       syscall(SYS_sendto, fd, &h, sizeof h, MSG_NOSIGNAL, nullptr, 0) > 0 &&
       syscall(SYS_sendto, fd, &r, sizeof r, MSG_NOSIGNAL, nullptr, 0) > 0) {
     syscall(SYS_recvfrom, fd, &answer, sizeof answer, 0, nullptr, nullptr);
   }
   syscall(SYS_close, fd);
+  return answer;
 }
 
 bool copy_in(void* to, const void* from, std::size_t n) noexcept {
@@ -271,6 +273,11 @@ Interface* interface_at(int index) noexcept {
 Interface* interface_named(const char* name) noexcept {
   State* s = bus_state(true);
   return s == nullptr ? nullptr : find_interface(*s, name);
+}
+
+long long board_now() noexcept {
+  static const auto hook = ::canhil::preload::any_symbol<canhil_shim_board_now_fn>("canhil_shim_board_now");
+  return hook != nullptr ? hook() : -1;
 }
 
 void count_sent(long long frames) noexcept {

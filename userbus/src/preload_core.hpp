@@ -39,6 +39,8 @@ int open_socket(int extra) noexcept;
 
 /// Tells the broker that interfaces changed (one went down or up).
 void interfaces_changed() noexcept;
+/// One request to the broker on a control connection of its own; its answer (0 or -errno).
+int ask_broker(const ControlRequest& request) noexcept;
 
 /// Copies `n` bytes from the program's `from` to `to`, or false when `from`
 /// is not readable memory (the kernel's EFAULT), without a fault.
@@ -62,7 +64,9 @@ inline int fail(int e) noexcept {
 /// the bus's (the kernel answers).
 int interface_ioctl(unsigned long request, void* arg) noexcept;
 
-/// The lockstep time shim's hook, when it is loaded beside this preload.
+/// The lockstep time shim's hooks, when it is loaded beside this preload.
 void count_sent(long long frames) noexcept;
+/// The run's virtual time, or -1 (no shim, or not in a lockstep run).
+long long board_now() noexcept;
 
 }  // namespace canhil::userbus::preload

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 
 #include "canhil/base/preload.hpp"
@@ -100,10 +101,12 @@ long long canhil_userbus_waiting(int fd) {
 }
 
 int canhil_userbus_set_wire(const char* name, unsigned int bit_rate, unsigned int data_bit_rate, int restart_ms,
-                            unsigned int tx_queue) {
+                            unsigned int tx_queue, int driven) {
   if (name == nullptr || bus::bus_state(false) == nullptr) return -ENODEV;
   canhil::userbus::Interface* i = bus::interface_named(name);
   if (i == nullptr) return -ENODEV;
+  i->driven.store(driven != 0 ? 1 : 0);
+  i->next_due_ns.store(INT64_MAX);
   i->bit_rate.store(bit_rate);
   i->data_bit_rate.store(data_bit_rate);
   i->restart_ms.store(restart_ms);
@@ -132,7 +135,19 @@ int canhil_userbus_wire_counts(const char* name, unsigned long long* counts) {
   counts[2] = i->error_frames.load();
   counts[3] = i->busy_ns.load();
   counts[4] = i->wire_ns.load();
+  counts[5] = i->delivered.load(std::memory_order_acquire);
+  counts[6] = static_cast<unsigned long long>(i->next_due_ns.load(std::memory_order_acquire));
   return i->bit_rate.load() != 0 ? 1 : 0;
+}
+
+int canhil_userbus_wire_time(const char* name, long long time_ns) {
+  const canhil::userbus::Interface* i =
+      name != nullptr && bus::bus_state(false) != nullptr ? bus::interface_named(name) : nullptr;
+  if (i == nullptr) return -ENODEV;
+  canhil::userbus::ControlRequest r{canhil::userbus::kControlWireTime};
+  r.ifindex = i->index;
+  r.time_ns = time_ns;
+  return bus::ask_broker(r);
 }
 
 char* if_indextoname(unsigned int index, char* name) {

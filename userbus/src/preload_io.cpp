@@ -40,6 +40,7 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
   const bool fd_frames = (s.flags & kFdFrames) != 0 && iface->mtu.load(std::memory_order_relaxed) == CANFD_MTU;
   if (size != CAN_MTU && !(fd_frames && size == CANFD_MTU)) return fail(EINVAL);
   TxRecord r{};
+  r.at_ns = iface->driven.load(std::memory_order_relaxed) != 0 ? board_now() : -1;
   r.ifindex = ifindex;
   r.size = static_cast<std::uint32_t>(size);
   const unsigned max_length = size == CAN_MTU ? CAN_MAX_DLEN : CANFD_MAX_DLEN;

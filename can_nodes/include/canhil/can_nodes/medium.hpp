@@ -46,6 +46,9 @@ struct Wire {
   std::uint32_t data_bit_rate = 0;
   std::uint64_t seed = 1;
   wire::ControllerOptions controller{};
+  /// Its clock is the caller's, moved by SocketCanMedium::drive (a lockstep
+  /// run's virtual time), not the medium's own (the user-space bus only).
+  bool driven = false;
 };
 
 /// What a medium has carried.
@@ -54,6 +57,8 @@ struct MediumCounts {
   std::uint64_t error_frames = 0;  ///< errors on its wire
   double load = 0;                 ///< the share of time its wire carried bits; 0 without a wire
   bool timed = false;              ///< it has a wire
+  std::uint64_t delivered = 0;     ///< frames its wire delivered whole
+  Nanos next_event = kNever;       ///< a driven wire's next event, in its time
 };
 
 class Medium {
@@ -81,8 +86,12 @@ class SocketCanMedium final : public Medium {
   std::unique_ptr<Endpoint> open(const std::string& name) override;
   /// open(), as the socket it is (for poll and the kernel's counters).
   std::unique_ptr<SocketCanBus> open_socket();
-  /// The user-space bus only (its broker runs the wire, in real time).
+  /// The user-space bus only (its broker runs the wire, in real time, or
+  /// on the caller's clock when `wire.driven`).
   bool set_wire(const Wire& wire) override;
+  /// A driven wire run to `now` (its time): what it delivers by then is in
+  /// the sockets when this returns.
+  void drive(Nanos now);
   MediumCounts counts() const override;
   const std::string& interface() const noexcept { return iface_; }
 

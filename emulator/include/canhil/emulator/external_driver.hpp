@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "canhil/can_nodes/delivery_fence.hpp"
+#include "canhil/can_nodes/medium.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/emulator/bus_watch.hpp"
@@ -75,12 +76,25 @@ class ExternalDriver {
   std::uint64_t trace_hash() const noexcept;
 
   class Processes;  // the external processes as one participant
+  class WireClock;  // the buses' driven wires as one participant
+
+  /// Whether every robot's bus is on a timed wire in lockstep (the session's
+  /// BusPhysics, on canhil's user-space bus: its broker's wire on this
+  /// run's virtual clock).
+  bool timed_wire() const noexcept { return timed_; }
 
  private:
   void observe();
   /// What is still on its way: empty once every frame sent so far has reached
   /// every socket (the observers and the fence agree).
   std::string in_flight(std::uint64_t sent);
+  /// On a timed wire: frames the broker has taken onto the wire, and frames
+  /// the wire delivered, on the run's buses since it began.
+  std::uint64_t taken() const;
+  std::uint64_t delivered() const;
+  /// What the processes have on the buses: frames sent, or on a timed wire
+  /// frames delivered (a frame sent is on the wire until its end of frame).
+  std::uint64_t on_buses(std::uint64_t sent) const { return timed_ ? delivered() : sent; }
   /// The first robot whose observed frames the fence does not yet say are
   /// in every socket of its interface; none when every one's are.
   std::optional<std::size_t> unfenced();
@@ -99,6 +113,12 @@ class ExternalDriver {
   std::vector<std::vector<can_nodes::SocketCanBus*>> sockets_;       // per robot, per node
   can_nodes::DeliveryFence fence_;                                   // opened before any other socket
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
+  std::vector<std::unique_ptr<can_nodes::SocketCanMedium>> media_;   // per distinct interface
+  std::vector<std::uint64_t> taken0_, delivered0_;                   // per medium: its counts when the run began
+  bool timed_ = false;
+  std::uint64_t wire_wanted_ = 0;      // in_flight() last waited for the broker to take this many frames
+  std::uint64_t observed_frames_ = 0;  // observed_ less error frames (the wire's deliveries)
+  std::unique_ptr<WireClock> wire_clock_;
   std::vector<std::uint64_t> fenced_;  // per robot: frames the observer saw that the fence tells about
   // epoll: readable when a frame reaches an observer or the kernel's fence (wait_quiet's ready_fd)
   int arrivals_ = -1;

@@ -39,6 +39,13 @@ extern "C" {
 void canhil_shim_frames_sent(long long frames);
 typedef void (*canhil_shim_frames_sent_fn)(long long frames);
 
+/* The run's virtual time (the board's, ns from the run's start, without the
+ * clocks' bases), or -1 outside a lockstep run: a user-space bus stamps the
+ * frames this process writes with it, so that a wire on the run's clock
+ * takes each frame at the instant it was written. */
+long long canhil_shim_board_now(void);
+typedef long long (*canhil_shim_board_now_fn)(void);
+
 /* Descriptor `fd` has become readable without the kernel waking anyone (a
  * user-space bus put a frame in a descriptor the shim's waits poll). Every
  * thread of the run that waits in virtual time (poll, select, epoll, a

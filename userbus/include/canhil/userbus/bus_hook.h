@@ -43,11 +43,12 @@ typedef long long (*canhil_userbus_waiting_fn)(int fd);
 /* Gives interface `name` a wire (userbus/state.hpp's Interface; bit_rate 0:
  * instant again), as `canhil bus link NAME bitrate ...` does, and returns
  * once the broker has taken it (one round trip): 0, or -ENODEV when the
- * interface is not on the bus. */
+ * interface is not on the bus. `driven`: the wire's clock is the caller's
+ * (a lockstep run's), moved by canhil_userbus_wire_time, not the broker's. */
 int canhil_userbus_set_wire(const char* name, unsigned int bit_rate, unsigned int data_bit_rate, int restart_ms,
-                            unsigned int tx_queue);
+                            unsigned int tx_queue, int driven);
 typedef int (*canhil_userbus_set_wire_fn)(const char* name, unsigned int bit_rate, unsigned int data_bit_rate,
-                                          int restart_ms, unsigned int tx_queue);
+                                          int restart_ms, unsigned int tx_queue, int driven);
 #define CANHIL_USERBUS_SET_WIRE "canhil_userbus_set_wire"
 
 /* Bus socket `fd` becomes a controller of its own on timed interfaces (an
@@ -59,11 +60,20 @@ typedef int (*canhil_userbus_own_controller_fn)(int fd);
 
 /* What interface `name` has carried: counts[0] frames, [1] copies dropped at
  * full receivers, [2] error frames on its wire, [3] ns its wire carried bits,
- * [4] ns since its wire began. 1 with a wire, 0 without, -1 when it is not
- * on the bus. */
+ * [4] ns since its wire began, [5] frames its wire delivered whole, [6] a
+ * driven wire's next event in its own time (ns; 2^63 - 1: none), published
+ * before the frame that moved it is counted in [0]. 1 with a wire, 0
+ * without, -1 when it is not on the bus. */
 int canhil_userbus_wire_counts(const char* name, unsigned long long* counts);
 typedef int (*canhil_userbus_wire_counts_fn)(const char* name, unsigned long long* counts);
 #define CANHIL_USERBUS_WIRE_COUNTS "canhil_userbus_wire_counts"
+
+/* Runs interface `name`'s driven wire to `time_ns` (its own time) and
+ * returns once what it delivered by then is in the sockets (one round
+ * trip): 0, or -ENODEV. */
+int canhil_userbus_wire_time(const char* name, long long time_ns);
+typedef int (*canhil_userbus_wire_time_fn)(const char* name, long long time_ns);
+#define CANHIL_USERBUS_WIRE_TIME "canhil_userbus_wire_time"
 
 #ifdef __cplusplus
 }
@@ -81,6 +91,7 @@ struct Hooks {
   canhil_userbus_set_wire_fn set_wire = nullptr;
   canhil_userbus_own_controller_fn own_controller = nullptr;
   canhil_userbus_wire_counts_fn wire_counts = nullptr;
+  canhil_userbus_wire_time_fn wire_time = nullptr;
   bool loaded() const noexcept { return interface != nullptr; }
 };
 
@@ -92,7 +103,8 @@ inline const Hooks& hooks() {
       ::canhil::preload::any_symbol<canhil_userbus_waiting_fn>(CANHIL_USERBUS_WAITING),
       ::canhil::preload::any_symbol<canhil_userbus_set_wire_fn>(CANHIL_USERBUS_SET_WIRE),
       ::canhil::preload::any_symbol<canhil_userbus_own_controller_fn>(CANHIL_USERBUS_OWN_CONTROLLER),
-      ::canhil::preload::any_symbol<canhil_userbus_wire_counts_fn>(CANHIL_USERBUS_WIRE_COUNTS)};
+      ::canhil::preload::any_symbol<canhil_userbus_wire_counts_fn>(CANHIL_USERBUS_WIRE_COUNTS),
+      ::canhil::preload::any_symbol<canhil_userbus_wire_time_fn>(CANHIL_USERBUS_WIRE_TIME)};
   return found;
 }
 

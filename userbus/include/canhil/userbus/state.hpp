@@ -31,7 +31,7 @@
 namespace canhil::userbus {
 
 inline constexpr std::uint32_t kMagic = 0x43414e42;  // "CANB"
-inline constexpr std::uint32_t kVersion = 5;
+inline constexpr std::uint32_t kVersion = 6;
 inline constexpr int kMaxInterfaces = 32;
 inline constexpr int kMaxSockets = 1024;
 inline constexpr int kMaxFilters = 512;  // CAN_RAW_FILTER_MAX, as the kernel
@@ -97,6 +97,12 @@ struct Interface {
   std::atomic<std::uint64_t> busy_ns;
   std::atomic<std::uint64_t> wire_ns;
   std::atomic<std::uint64_t> error_frames;
+  /// The wire's clock is a lockstep run's (kControlWireTime), not the broker's own.
+  std::atomic<std::uint32_t> driven;
+  std::atomic<std::uint64_t> delivered;  ///< frames its wire has delivered whole (at their end of frame)
+  /// A driven wire's next event in its own time (ns), written by the broker
+  /// before it counts the frame that moved it in `frames`; INT64_MAX: none.
+  std::atomic<std::int64_t> next_due_ns;
 };
 
 /// One CAN controller on a timed interface: a process's adapter (every socket
@@ -290,6 +296,9 @@ struct Welcome {
 /// A frame a process sends: the interface (the socket's bound one, or the
 /// one sendto named) and the frame as the program wrote it.
 struct TxRecord {
+  /// The writer's lockstep time (canhil_shim_board_now), -1 outside a
+  /// lockstep run: a driven wire takes the frame then.
+  std::int64_t at_ns;
   std::int32_t ifindex;
   std::uint32_t size;  ///< CAN_MTU or CANFD_MTU
   unsigned char frame[CANFD_MTU];
@@ -314,6 +323,7 @@ inline constexpr std::uint32_t kControlStop = 2;
 inline constexpr std::uint32_t kControlRestart = 3;  ///< restart `ifindex`'s bus-off controllers (`pid`: one, 0: all)
 inline constexpr std::uint32_t kControlFault = 4;    ///< add `fault` on `ifindex`
 inline constexpr std::uint32_t kControlClearFaults = 5;  ///< end every fault on `ifindex`
+inline constexpr std::uint32_t kControlWireTime = 6;     ///< run `ifindex`'s driven wire to `time_ns`, delivering
 
 /// A wire fault for a running bus (`canhil bus fault`): wire::FaultRule's
 /// fields, its times from when the broker takes it, its node a process.
@@ -335,6 +345,7 @@ struct ControlRequest {
   std::int32_t ifindex = 0;  ///< restart, fault, clear: the interface
   std::int32_t pid = 0;      ///< restart: the process whose controller, 0: every bus-off one
   FaultRequest fault{};      ///< fault: the rule
+  std::int64_t time_ns = 0;  ///< wire time: the driven wire's time to run to
 };
 
 }  // namespace canhil::userbus
