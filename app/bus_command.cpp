@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -22,19 +23,6 @@ namespace canhil::app {
 namespace {
 
 namespace ub = canhil::userbus;
-
-std::vector<std::string> split_names(const std::string& list) {
-  std::vector<std::string> names;
-  std::size_t at = 0;
-  while (at <= list.size()) {
-    const std::size_t comma = list.find(',', at);
-    const std::string one = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
-    if (!one.empty()) names.push_back(one);
-    if (comma == std::string::npos) break;
-    at = comma + 1;
-  }
-  return names;
-}
 
 /// The broker's options from --backlog, --grace-ms, --patience-ms and --rt-priority.
 ub::BrokerOptions broker_options(Args& args) {
@@ -129,7 +117,11 @@ int bus_exec(Args& args, const ub::BusPaths& paths) {
   if (rest.size() > 2) throw UsageError("`canhil bus exec` takes the command after --, not \"" + rest[2] + "\"");
   const std::vector<std::string>& command = args.after_dashes();
   if (command.empty()) throw UsageError("`canhil bus exec` needs a command after --: canhil bus exec -- candump vcan0");
-  const std::vector<std::string> names = split_names(ifaces.value_or("vcan0"));
+  std::vector<std::string> names;
+  std::istringstream list(ifaces.value_or("vcan0"));
+  for (std::string one; std::getline(list, one, ',');) {
+    if (!one.empty()) names.push_back(one);
+  }
   for (const std::string& n : names) ub::check_interface_name(n);
   ub::find_preload();  // before a bus is started: none, no command
 

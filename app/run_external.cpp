@@ -69,14 +69,7 @@ int run_external(emulator::Session& session, const ExternalRequest& run, const s
   const std::size_t robots = session.robot_count();
   std::printf("canhil run: %zu robot(s), virtual time with external processes, %g s (%s), seed %llu\n", robots,
               run.length.seconds, run.length.source.c_str(), static_cast<unsigned long long>(session.scenario().seed));
-  if (started.driver().timed_wire()) {
-    std::printf(
-        "  --bit-rate %u: each robot's bus on a timed wire, the user-space bus's broker on this run's clock "
-        "(docs/wire.md)\n",
-        session.options().bus.bit_rate);
-  } else {
-    say_the_bus_is_instant(stdout, session, "with --virtual-time and on canhil's user-space bus");
-  }
+  say_the_wire(stdout, session, started.driver().timed_wire(), "this run's clock");
   for (std::size_t r = 0; r < robots; ++r) {
     const emulator::Rig& rig = session.rig(r);
     std::printf("  robot %zu on %s (%s) for agent %d\n", r, rig.interface.c_str(), can_nodes::bus_of(rig.interface),

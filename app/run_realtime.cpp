@@ -41,13 +41,20 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
 
 }  // namespace
 
-void say_the_bus_is_instant(std::FILE* out, const emulator::Session& session, const char* where) {
+void say_the_wire(std::FILE* out, const emulator::Session& session, bool timed, const char* clock) {
   const emulator::BusPhysics& bus = session.options().bus;
   if (!bus.timed()) return;
+  if (timed) {
+    std::fprintf(
+        out, "  --bit-rate %u: each robot's bus on a timed wire, the user-space bus's broker on %s (docs/wire.md)\n",
+        bus.bit_rate, clock);
+    return;
+  }
   std::fprintf(out,
                "  --bit-rate %u: these buses (%s) deliver every frame at once, with no wire time, arbitration or "
-               "errors; the bit rate times the FTT schedule only (canhil's timed wire runs %s: docs/wire.md)\n",
-               bus.bit_rate, can_nodes::bus_of(session.rig(0).interface), where);
+               "errors; the bit rate times the FTT schedule only (canhil's timed wire runs with --virtual-time and "
+               "on canhil's user-space bus: docs/wire.md)\n",
+               bus.bit_rate, can_nodes::bus_of(session.rig(0).interface));
 }
 
 int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& options, const RealtimeOutput& output) {
@@ -60,13 +67,7 @@ int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& op
   const emulator::Scenario& sc = session.scenario();
   std::fprintf(out, "canhil run: %zu robot(s), real time, %s (%s), seed %llu, %zu fault rule(s)\n", sc.robot_count(),
                length, output.length.source.c_str(), static_cast<unsigned long long>(sc.seed), sc.faults.size());
-  if (session.robot_count() > 0 && driver.timed_wire(0)) {
-    std::fprintf(
-        out, "  --bit-rate %u: each robot's bus on a timed wire, run by the user-space bus's broker (docs/wire.md)\n",
-        session.options().bus.bit_rate);
-  } else {
-    say_the_bus_is_instant(out, session, "with --virtual-time and on canhil's user-space bus");
-  }
+  say_the_wire(out, session, session.robot_count() > 0 && driver.timed_wire(0), "the wall clock");
   for (std::size_t r = 0; r < session.robot_count(); ++r) {
     const emulator::Rig& rig = session.rig(r);
     std::fprintf(out, "  robot %zu on %s (%s) for agent %d (start your handler and agent with AGENT=%d)\n", r,

@@ -23,8 +23,9 @@ struct RealtimeOutput {
 /// cannot be written costs no result.
 int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& options, const RealtimeOutput& output);
 
-/// Says, when the run was asked for a timed bus, that its SocketCAN buses
-/// deliver at once: canhil's timed wire runs `where` (docs/wire.md).
-void say_the_bus_is_instant(std::FILE* out, const emulator::Session& session, const char* where);
+/// Says, when the run was asked for a timed bus, whether its SocketCAN buses
+/// carry it (`timed`: the user-space bus's broker runs the wire on `clock`)
+/// or deliver at once (the kernel's: docs/wire.md).
+void say_the_wire(std::FILE* out, const emulator::Session& session, bool timed, const char* clock);
 
 }  // namespace canhil::app
