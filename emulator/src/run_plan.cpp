@@ -146,8 +146,9 @@ void resolve_bus(const BusSettings& file, std::optional<std::uint32_t> flag, Ses
   bus.tx_queue = file.tx_queue.value_or(bus.tx_queue);
   if (bus.timed()) {
     options.ftt.bit_rate = bus.bit_rate;  // the schedule's wire times at the wire's rate
-    // In virtual time the wire is canhil's and stamps frames at their end of frame.
-    if (!options.realtime) options.ftt.stamps = frames::StampAt::kEndOfFrame;
+    // A timed wire stamps frames at their end of frame: canhil's in virtual
+    // time and on the user-space bus, and a real adapter's controller.
+    options.ftt.stamps = frames::StampAt::kEndOfFrame;
   }
 }
 

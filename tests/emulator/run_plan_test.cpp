@@ -103,6 +103,10 @@ TEST_F(RunPlanTest, TheBusIsInstantUnlessBitRateOrTheBusTableTimesIt) {
   EXPECT_EQ(file.options.bus.tx_queue, 32u);
   o.bit_rate = 0;
   EXPECT_FALSE(plan(o).options.bus.timed()) << "--bit-rate 0 over the file: instant";
+  o.bit_rate = 1'000'000;
+  o.mode = RunMode::kRealtime;
+  EXPECT_EQ(plan(o).options.ftt.stamps, frames::StampAt::kEndOfFrame)
+      << "in real time too: the user-space bus's wire and a real adapter stamp the end of frame";
 }
 
 TEST_F(RunPlanTest, Duration) {
