@@ -316,24 +316,10 @@ class Broker {
     }
     // A virtual interface has no wire: with loopback off nobody hears the frame.
     if ((options(sender).flags & kLoopback) == 0) return;
-    canid_t can_id = 0;
-    std::memcpy(&can_id, record.frame, sizeof can_id);
-    RxRecord out{};
-    out.stamp_ns = now_ns();
-    out.ifindex = record.ifindex;
-    out.size = record.size;
-    std::memcpy(out.frame, record.frame, record.size);
-    for (Connection& c : connections_) {
-      if (c.fd < 0 || c.slot < 0) continue;
-      const Options& o = options(c);
-      if (!o.bound || (o.ifindex != 0 && o.ifindex != record.ifindex)) continue;
-      const bool own = &c == &sender;
-      if (own && (o.flags & kRecvOwn) == 0) continue;
-      if (record.size != CAN_MTU && (o.flags & kFdFrames) == 0) continue;
-      if (!wants(o, can_id)) continue;
-      out.msg_flags = static_cast<std::uint32_t>(MSG_DONTROUTE) | (own ? static_cast<std::uint32_t>(MSG_CONFIRM) : 0U);
-      deliver(c, out);
-    }
+    instant_.ifindex = record.ifindex;
+    instant_.size = record.size;
+    std::memcpy(instant_.frame, record.frame, record.size);
+    to_sockets(instant_, &sender, now_ns(), true);
   }
 
   /// What the timed wires have done by now, handed to the sockets.
@@ -347,9 +333,30 @@ class Broker {
   /// wire_done_ to the sockets, stamped at its time (`at_their_time`: a real
   /// wire's end of frame) or now (a driven wire's, in a lockstep run's time).
   void hand_wire(bool at_their_time) {
-    const std::int64_t to_realtime = now_ns() - monotonic_ns();
+    const std::int64_t to_realtime = at_their_time ? realtime_offset() : 0;
     for (const WireDelivery& d : wire_done_) deliver_wire(d, at_their_time ? d.at_ns + to_realtime : now_ns());
     flush();
+  }
+
+  /// CLOCK_REALTIME less the monotonic clock, read between two monotonic
+  /// readings close together (a preemption between the reads would move
+  /// every stamp), once a second: a stamp is the frame's end on both clocks.
+  std::int64_t realtime_offset() {
+    const std::int64_t now = monotonic_ns();
+    if (now - offset_read_at_ < 1'000'000'000 && offset_read_at_ != 0) return to_realtime_;
+    std::int64_t best = INT64_MAX;
+    for (int k = 0; k < 8; ++k) {
+      const std::int64_t before = monotonic_ns();
+      const std::int64_t real = now_ns();
+      const std::int64_t after = monotonic_ns();
+      if (after - before < best) {
+        best = after - before;
+        to_realtime_ = real - before / 2 - after / 2;
+      }
+      if (best < 2000) break;
+    }
+    offset_read_at_ = now;
+    return to_realtime_;
   }
 
   /// A wire's frame (at its end of frame) or error frame to every socket that
@@ -358,12 +365,18 @@ class Broker {
   /// unless that controller missed it (bus-off, cut off). An error frame goes
   /// to the reporting controller's sockets whose CAN_RAW_ERR_FILTER asks.
   void deliver_wire(const WireDelivery& d, std::int64_t stamp) {
-    canid_t can_id = 0;
-    std::memcpy(&can_id, d.frame, sizeof can_id);
     const Connection* sender = nullptr;
     for (const Connection& c : connections_) {
       if (d.tag != 0 && c.fd >= 0 && c.opened == d.tag) sender = &c;
     }
+    to_sockets(d, sender, stamp, false);
+  }
+
+  /// `d` to every socket that takes it, stamped `stamp`; `instant`: a
+  /// virtual interface's frame, which every socket gets as a local echo.
+  void to_sockets(const WireDelivery& d, const Connection* sender, std::int64_t stamp, bool instant) {
+    canid_t can_id = 0;
+    std::memcpy(&can_id, d.frame, sizeof can_id);
     const bool echo = sender != nullptr && (sender->options.flags & kLoopback) != 0;
     RxRecord out{};
     out.stamp_ns = stamp;
@@ -374,9 +387,12 @@ class Broker {
       if (c.fd < 0 || c.slot < 0) continue;
       const Options& o = options(c);
       if (!o.bound || (o.ifindex != 0 && o.ifindex != d.ifindex)) continue;
-      const ControllerKey key = key_of(c);
-      const bool local = key == d.from;
-      if (d.error ? !local : (local ? !echo : std::count(d.missed.begin(), d.missed.end(), key) > 0)) continue;
+      bool local = true;
+      if (!instant) {
+        const ControllerKey key = key_of(c);
+        local = key == d.from;
+        if (d.error ? !local : (local ? !echo : std::count(d.missed.begin(), d.missed.end(), key) > 0)) continue;
+      }
       const bool own = &c == sender;
       if (own && (o.flags & kRecvOwn) == 0) continue;
       if (d.size != CAN_MTU && (o.flags & kFdFrames) == 0) continue;
@@ -566,6 +582,9 @@ class Broker {
   TxRecord batch_[64];
   BrokerWire wire_{state_};
   WireTimer timer_;
+  WireDelivery instant_;             // a virtual interface's frame, routed at once (reused)
+  std::int64_t to_realtime_ = 0;     // realtime_offset()'s last reading,
+  std::int64_t offset_read_at_ = 0;  // taken then (monotonic)
   std::vector<WireDelivery> wire_done_;
 };
 
