@@ -100,15 +100,22 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     const bool seen = std::any_of(media_.begin(), media_.end(), [&](const auto& m) { return m->interface() == iface; });
     if (!seen) media_.push_back(std::make_unique<can_nodes::SocketCanMedium>(iface, socket_options));
   }
-  timed_ = physics.timed() && std::all_of(media_.begin(), media_.end(), [](const auto& m) {
+  // canhil's own frames are stamped with the run's time by the shim it runs under.
+  timed_ = physics.timed() && conductor_.clocks_virtual_here() &&
+           std::all_of(media_.begin(), media_.end(), [](const auto& m) {
              return m->kind() == can_nodes::MediumKind::kUserSpace && !m->counts().timed;
            });
   for (std::size_t k = 0; timed_ && k < media_.size(); ++k) {
     can_nodes::Wire wire = physics.wire(session_.scenario().seed + k);
     wire.driven = true;
     timed_ = media_[k]->set_wire(wire);
+    if (timed_) driven_.given.push_back(media_[k].get());
     taken0_.push_back(media_[k]->counts().frames);
     delivered0_.push_back(media_[k]->counts().delivered);
+  }
+  if (!timed_) {
+    for (can_nodes::SocketCanMedium* m : driven_.given) m->set_wire(can_nodes::Wire{});
+    driven_.given.clear();
   }
   // canhil waits for frames in flight on these, not on a timer.
   arrivals_ = ::epoll_create1(EPOLL_CLOEXEC);
@@ -163,9 +170,6 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
 }
 
 ExternalDriver::~ExternalDriver() {
-  if (timed_) {
-    for (const auto& m : media_) m->set_wire(can_nodes::Wire{});  // instant again, as before the run
-  }
   if (arrivals_ >= 0) ::close(arrivals_);
   session_.on_vision_frame(nullptr);
   session_.for_each_laptop([](LaptopLink& laptop) {

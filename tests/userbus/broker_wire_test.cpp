@@ -173,6 +173,34 @@ TEST_F(BrokerWireTest, AControllerWhoseProcessEndedSendsWhatItHeldThenLeaves) {
   EXPECT_EQ(ub::find_controller(*state_, 100, kIndex, -1, false), nullptr) << "gone once its queue is empty";
 }
 
+TEST_F(BrokerWireTest, AControllerThatCanNeverSendLeavesWithItsProcessAndOneThatComesBackStays) {
+  give(100, 1, record(0x10, 8), kT0);  // alone: never acknowledged
+  wire_.advance(kT0 + 5'000'000, out_);
+  wire_.leave(ub::ControllerKey{100, -1});
+  wire_.advance(kT0 + 6'000'000, out_);
+  EXPECT_EQ(ub::find_controller(*state_, 100, kIndex, -1, false), nullptr)
+      << "an unacknowledged lone sender whose process ended does not retry for ever";
+  wire_.join(ub::ControllerKey{200, -1}, kIndex);
+  give(300, 2, record(0x20, 8), kT0 + 7'000'000);
+  wire_.leave(ub::ControllerKey{300, -1});
+  wire_.join(ub::ControllerKey{300, -1}, kIndex);  // a socket of its own again before its queue emptied
+  wire_.advance(kT0 + 20'000'000, out_);
+  EXPECT_NE(ub::find_controller(*state_, 300, kIndex, -1, false), nullptr) << "it came back: it stays";
+}
+
+TEST_F(BrokerWireTest, AFaultThatNeedsANodeAndNamesNoneIsRefused) {
+  ub::FaultRequest f{};
+  f.kind = static_cast<std::uint32_t>(canhil::wire::FaultRule::Kind::kBusOff);
+  f.until_ns = -1;
+  f.slot = -1;
+  EXPECT_EQ(wire_.add_fault(kIndex, f, kT0), -EINVAL) << "bus-off of nobody";
+  f.kind = static_cast<std::uint32_t>(canhil::wire::FaultRule::Kind::kNoAck);
+  f.from_ns = INT64_MAX;  // far beyond any run: clamped, no overflow
+  EXPECT_EQ(wire_.add_fault(kIndex, f, kT0), 0);
+  f.kind = 99;
+  EXPECT_EQ(wire_.add_fault(kIndex, f, kT0), -EINVAL);
+}
+
 TEST_F(BrokerWireTest, ANewBitRateIsANewWireAndZeroIsNone) {
   give(100, 1, record(0x10, 8), kT0);
   state_->interfaces[0].bit_rate.store(500'000);

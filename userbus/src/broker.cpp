@@ -39,8 +39,7 @@ std::int64_t now_ns() {
   return static_cast<std::int64_t>(t.tv_sec) * 1000000000 + t.tv_nsec;
 }
 
-// Past the time shim: a broker started by a process with the shim preloaded
-// must not read a virtual clock that stands still.
+// Past the time shim (a broker started under it must not read a clock that stands still).
 std::int64_t monotonic_ns() { return ::canhil::preload::real_monotonic_ns(); }
 
 class Broker {
@@ -297,7 +296,9 @@ class Broker {
 
   void route(Connection& sender, const TxRecord& record) {
     Interface* iface = find_interface(state_, record.ifindex);
-    if (iface == nullptr || iface->up.load(std::memory_order_relaxed) == 0) return;
+    if (iface == nullptr || iface->up.load(std::memory_order_relaxed) == 0) {
+      return wire_.refund(key_of(sender), record.ifindex);  // the preload counted it into a timed queue
+    }
     state_.sockets[sender.slot].sent.fetch_add(1, std::memory_order_relaxed);
     if (!wire_.timed(record.ifindex)) iface->frames.fetch_add(1, std::memory_order_relaxed);
     if (wire_.timed(record.ifindex)) {

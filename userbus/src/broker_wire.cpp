@@ -158,7 +158,11 @@ Controller* BrokerWire::row(ControllerKey key, std::int32_t ifindex, bool claim)
 
 void BrokerWire::join(ControllerKey key, std::int32_t ifindex) {
   Wire* w = wire_of(ifindex);
-  if (w == nullptr || w->controller_of(key)) return;
+  if (w == nullptr) return;
+  if (const auto id = w->controller_of(key)) {
+    w->members[*id].leaving = false;  // its process has a socket there again
+    return;
+  }
   wire::ControllerOptions options;
   options.queue_frames = 1U << 20;  // the preload keeps each at the interface's tx_queue
   options.restart_delay = restart_delay(w->restart_ms);
@@ -176,6 +180,10 @@ void BrokerWire::leave(ControllerKey key) {
     if (const auto id = w->controller_of(key)) w->members[*id].leaving = true;
     retire(*w);
   }
+}
+
+void BrokerWire::refund(ControllerKey key, std::int32_t ifindex) {
+  if (Wire* w = wire_of(ifindex)) release(*w, key, 1);
 }
 
 // `n` frames of `pid`'s have left its transmit queue: room for the preload.
@@ -209,13 +217,26 @@ void BrokerWire::account_losses(Wire& w) {
   }
 }
 
+std::size_t BrokerWire::live_members(const Wire& w) {
+  return static_cast<std::size_t>(
+      std::count_if(w.members.begin(), w.members.end(), [](const Wire::Member& m) { return !m.gone; }));
+}
+
 // Controllers whose process has gone leave once their queue is empty: what
 // a program wrote before it closed its socket is on its way, as frames in a
 // CAN device's queue outlive the socket that gave them.
 void BrokerWire::retire(Wire& w) {
   for (std::size_t k = 0; k < w.members.size(); ++k) {
     Wire::Member& m = w.members[k];
-    if (m.gone || !m.leaving || w.bus->status(static_cast<wire::ControllerId>(k)).queued != 0) continue;
+    if (m.gone || !m.leaving) continue;
+    // Its queue sent, or nothing will ever send it: bus-off, or unacknowledged (error-passive, nobody else on the
+    // wire).
+    const wire::ControllerStatus st = w.bus->status(static_cast<wire::ControllerId>(k));
+    const bool stuck = st.state == frames::ControllerState::kBusOff ||
+                       (st.state == frames::ControllerState::kErrorPassive && live_members(w) <= 1);
+    if (st.queued != 0 && !stuck) continue;
+    for (auto it = w.given.begin(); it != w.given.end();)
+      it = it->second.key == m.key ? w.given.erase(it) : std::next(it);
     w.bus->remove_controller(static_cast<wire::ControllerId>(k));
     m.gone = true;
     if (Controller* r = row(m.key, w.ifindex, false)) r->in_use.store(0, std::memory_order_release);
@@ -226,7 +247,8 @@ void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& re
                         std::vector<WireDelivery>& out) {
   Wire* w = wire_of(record.ifindex);
   if (w == nullptr) return;
-  if (w->driven && record.at_ns > w->driven_now) {
+  constexpr std::int64_t kHour = 3600LL * 1'000'000'000;  // a later stamp is nobody's instant: taken now
+  if (w->driven && record.at_ns > w->driven_now && record.at_ns - w->driven_now < kHour) {
     // Written at a later instant of the run than the wire has been run to:
     // it is run there first (normally nothing is due: the run drove it).
     w->driven_now = record.at_ns;
@@ -257,7 +279,7 @@ std::int64_t BrokerWire::next_due() const noexcept {
 
 void BrokerWire::drive(std::int32_t ifindex, std::int64_t time_ns, std::vector<WireDelivery>& out) {
   Wire* w = wire_of(ifindex);
-  if (w == nullptr || !w->driven) return;
+  if (w == nullptr || !w->driven || time_ns - w->driven_now > 3600LL * 1'000'000'000) return;
   w->driven_now = std::max(w->driven_now, time_ns);
   collect(*w, 0, out);
 }
@@ -376,8 +398,9 @@ int BrokerWire::add_fault(std::int32_t ifindex, const FaultRequest& f, std::int6
   if (f.kind > static_cast<std::uint32_t>(wire::FaultRule::Kind::kBusOff)) return -EINVAL;
   wire::FaultRule rule;
   rule.kind = static_cast<wire::FaultRule::Kind>(f.kind);
-  rule.from = w->at(now) + Nanos{std::max<std::int64_t>(f.from_ns, 0)};
-  rule.until = f.until_ns < 0 ? kNever : w->at(now) + Nanos{f.until_ns};
+  constexpr std::int64_t kYear = 365LL * 24 * 3600 * 1'000'000'000;  // later than that: for ever
+  rule.from = w->at(now) + Nanos{std::clamp<std::int64_t>(f.from_ns, 0, kYear)};
+  rule.until = f.until_ns < 0 || f.until_ns > kYear ? kNever : w->at(now) + Nanos{f.until_ns};
   rule.rate = f.rate;
   if (f.has_id != 0) rule.id = f.id;
   if (f.pid != 0) {
@@ -388,8 +411,7 @@ int BrokerWire::add_fault(std::int32_t ifindex, const FaultRequest& f, std::int6
     rule.babble.id = f.babble_id & CAN_SFF_MASK;
     rule.babble.len = 8;
   }
-  w->bus->add_fault(rule);
-  return 0;
+  return w->bus->add_fault(rule) ? 0 : -EINVAL;
 }
 
 int BrokerWire::clear_faults(std::int32_t ifindex, std::int64_t now) {

@@ -63,6 +63,9 @@ class BrokerWire {
   /// then appended to `out`).
   void submit(ControllerKey key, std::uint64_t tag, const TxRecord& record, std::int64_t now,
               std::vector<WireDelivery>& out);
+  /// A frame controller `key` counted into its queue on `ifindex` that the
+  /// broker dropped before the wire (its interface down): counted out again.
+  void refund(ControllerKey key, std::int32_t ifindex);
   /// When advance() next has something to do (monotonic ns); INT64_MAX: nothing.
   std::int64_t next_due() const noexcept;
   /// Runs every wire up to `now`, appending what happened, in order of time per interface.
@@ -90,6 +93,7 @@ class BrokerWire {
   void release(Wire& w, ControllerKey key, std::uint32_t n);
   Controller* row(ControllerKey key, std::int32_t ifindex, bool claim);
   void account_losses(Wire& w);
+  static std::size_t live_members(const Wire& w);
 
   State& state_;
   std::vector<std::unique_ptr<Wire>> wires_;  // by interface slot

@@ -108,6 +108,10 @@ int canhil_userbus_set_wire(const char* name, unsigned int bit_rate, unsigned in
   i->driven.store(driven != 0 ? 1 : 0);
   i->next_due_ns.store(INT64_MAX);
   i->bit_rate.store(bit_rate);
+  if (bit_rate == 0) {  // instant again: the interface's other settings kept for its next wire
+    bus::interfaces_changed();
+    return 0;
+  }
   i->data_bit_rate.store(data_bit_rate);
   i->restart_ms.store(restart_ms);
   i->tx_queue.store(tx_queue == 0 ? 1 : tx_queue);

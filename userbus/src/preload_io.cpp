@@ -86,7 +86,10 @@ ssize_t send_frame(int fd, Socket& s, const iovec* iov, std::size_t iovcnt, cons
     }
   }
   const auto refund = [controller] {
-    if (controller != nullptr) controller->queued.fetch_sub(1, std::memory_order_acq_rel);
+    if (controller == nullptr) return;
+    std::uint32_t q = controller->queued.load(std::memory_order_relaxed);
+    while (q > 0 && !controller->queued.compare_exchange_weak(q, q - 1, std::memory_order_acq_rel)) {
+    }
   };
   CANHIL_REAL(sendmsg);
   ssize_t n = real_sendmsg(fd, &m, MSG_NOSIGNAL | (flags & MSG_DONTWAIT));

@@ -401,9 +401,13 @@ void WireBus::set_restart_delay(ControllerId controller, std::optional<Nanos> de
   next_stale_ = true;
 }
 
-void WireBus::add_fault(const FaultRule& rule) {
+bool WireBus::add_fault(const FaultRule& rule) {
+  const bool needs_node = rule.kind == FaultRule::Kind::kBusOff || rule.kind == FaultRule::Kind::kBabbling ||
+                          rule.kind == FaultRule::Kind::kCut;
+  if ((needs_node && !rule.controller) || (rule.controller && *rule.controller >= controllers_.size())) return false;
   faults_.add(rule, now_);
   next_stale_ = true;
+  return true;
 }
 
 void WireBus::clear_faults(Nanos now) {

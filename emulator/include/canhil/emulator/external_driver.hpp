@@ -114,7 +114,18 @@ class ExternalDriver {
   can_nodes::DeliveryFence fence_;                                   // opened before any other socket
   std::vector<std::unique_ptr<can_nodes::SocketCanBus>> observers_;  // per robot
   std::vector<std::unique_ptr<can_nodes::SocketCanMedium>> media_;   // per distinct interface
-  std::vector<std::uint64_t> taken0_, delivered0_;                   // per medium: its counts when the run began
+  // The media this run gave a driven wire: instant again when the driver
+  // goes, however it goes (a constructor that throws included).
+  struct DrivenWires {
+    std::vector<can_nodes::SocketCanMedium*> given;
+    DrivenWires() = default;
+    DrivenWires(const DrivenWires&) = delete;
+    DrivenWires& operator=(const DrivenWires&) = delete;
+    ~DrivenWires() {
+      for (can_nodes::SocketCanMedium* m : given) m->set_wire(can_nodes::Wire{});
+    }
+  } driven_;
+  std::vector<std::uint64_t> taken0_, delivered0_;  // per medium: its counts when the run began
   bool timed_ = false;
   std::uint64_t wire_wanted_ = 0;      // in_flight() last waited for the broker to take this many frames
   std::uint64_t observed_frames_ = 0;  // observed_ less error frames (the wire's deliveries)

@@ -149,8 +149,10 @@ class WireBus {
   /// can restart`); false when it is not bus-off.
   bool restart(ControllerId controller, Nanos now);
   void set_restart_delay(ControllerId controller, std::optional<Nanos> delay);
-  /// A fault rule from `rule.from` to `rule.until` (wire_fault.hpp).
-  void add_fault(const FaultRule& rule);
+  /// A fault rule from `rule.from` to `rule.until` (wire_fault.hpp); false,
+  /// and nothing added, when it names no controller where its kind needs one
+  /// (bus-off, babbling, cut) or one this bus does not have.
+  bool add_fault(const FaultRule& rule);
   /// Ends every fault rule (live: `canhil bus fault clear`).
   void clear_faults(Nanos now);
 
