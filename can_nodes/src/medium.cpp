@@ -25,11 +25,13 @@ SocketCanMedium::SocketCanMedium(std::string iface, const SocketCanOptions& opti
     : iface_(std::move(iface)), options_(std::make_unique<SocketCanOptions>(options)) {}
 SocketCanMedium::~SocketCanMedium() = default;
 
-MediumKind SocketCanMedium::kind() const noexcept {
+MediumKind socketcan_medium_kind(const std::string& iface) noexcept {
   // The bus's preload says so itself; canhil does not link it.
   const auto has = userbus::hooks().interface;
-  return has != nullptr && has(iface_.c_str()) != 0 ? MediumKind::kUserSpace : MediumKind::kKernel;
+  return has != nullptr && has(iface.c_str()) != 0 ? MediumKind::kUserSpace : MediumKind::kKernel;
 }
+
+MediumKind SocketCanMedium::kind() const noexcept { return socketcan_medium_kind(iface_); }
 
 std::unique_ptr<SocketCanBus> SocketCanMedium::open_socket() {
   auto socket = SocketCanBus::open(iface_, *options_);

@@ -68,9 +68,9 @@ bool kernel_has_can() {
   return true;
 }
 
-bool on_user_space_bus(const std::string& iface) { return SocketCanMedium(iface).kind() == MediumKind::kUserSpace; }
+bool on_user_space_bus(const std::string& iface) { return socketcan_medium_kind(iface) == MediumKind::kUserSpace; }
 
-const char* bus_of(const std::string& iface) { return medium_name(SocketCanMedium(iface).kind()); }
+const char* bus_of(const std::string& iface) { return medium_name(socketcan_medium_kind(iface)); }
 
 std::unique_ptr<SocketCanBus> SocketCanBus::open(const std::string& iface, const SocketCanOptions& options) {
   if (iface.empty() || iface.size() >= IFNAMSIZ) {

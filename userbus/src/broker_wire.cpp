@@ -7,9 +7,9 @@
 #include <cerrno>
 #include <climits>
 #include <cstring>
+#include <deque>
 #include <optional>
 #include <string>
-#include <unordered_map>
 
 #include "canhil/base/time.hpp"
 #include "canhil/frames/wire.hpp"
@@ -68,25 +68,22 @@ struct BrokerWire::Wire {
   bool driven = false;      // its clock a lockstep run's: at `driven_now`, moved by drive()
   std::int64_t driven_now = 0;
   std::unique_ptr<wire::WireBus> bus;
+  // A frame as its program wrote it, waiting in its controller's queue.
+  struct Given {
+    std::uint64_t tag = 0;  // its connection
+    std::uint32_t size = 0;
+    unsigned char frame[CANFD_MTU];
+  };
   struct Member {
     ControllerKey key;
     bool leaving = false;  // its process has gone: it leaves once its queue is empty
     bool gone = false;
-    // Frames given, sent whole, and lost (the one on the wire when its
-    // controller was forced bus-off): given - sent - waiting.
-    std::uint64_t given = 0;
-    std::uint64_t sent = 0;
-    std::uint64_t lost = 0;
+    // Its frames in the model's queue, in the same order: a controller sends
+    // its own first to last, so the front is the one the wire ends or loses.
+    std::deque<Given> given;
+    std::uint64_t lost = 0;  // ControllerStatus::lost, as last seen
   };
   std::vector<Member> members;  // by ControllerId
-  struct Given {
-    ControllerKey key;
-    std::uint64_t tag = 0;
-    std::uint32_t size = 0;
-    unsigned char frame[CANFD_MTU];
-  };
-  std::unordered_map<std::uint64_t, Given> given;  // by the wire's tag
-  std::uint64_t next_tag = 1;
   std::vector<wire::WireEvent> events;
 
   Nanos at(std::int64_t now) const { return Nanos{driven ? driven_now : std::max<std::int64_t>(now - origin, 0)}; }
@@ -195,25 +192,17 @@ void BrokerWire::release(Wire& w, ControllerKey key, std::uint32_t n) {
   }
 }
 
-// Frames the wire dropped without a word (a controller forced bus-off loses
-// the frame it was sending) leave their queue too: the oldest it gave.
+// Frames the wire lost (ControllerStatus::lost: the one on the wire when its
+// controller was forced bus-off) leave their queue too: the front one.
 void BrokerWire::account_losses(Wire& w) {
   for (std::size_t k = 0; k < w.members.size(); ++k) {
     Wire::Member& m = w.members[k];
     if (m.gone) continue;
-    const std::uint64_t waiting = w.bus->status(static_cast<wire::ControllerId>(k)).queued;
-    const std::uint64_t lost = m.given - m.sent - std::min<std::uint64_t>(waiting, m.given - m.sent);
-    if (lost <= m.lost) continue;
-    const std::uint64_t n = lost - m.lost;
+    const std::uint64_t lost = w.bus->status(static_cast<wire::ControllerId>(k)).lost;
+    if (lost == m.lost) continue;
+    release(w, m.key, static_cast<std::uint32_t>(lost - m.lost));
+    for (; m.lost < lost && !m.given.empty(); ++m.lost) m.given.pop_front();
     m.lost = lost;
-    release(w, m.key, static_cast<std::uint32_t>(n));
-    for (std::uint64_t j = 0; j < n; ++j) {
-      auto oldest = w.given.end();
-      for (auto it = w.given.begin(); it != w.given.end(); ++it) {
-        if (it->second.key == m.key && (oldest == w.given.end() || it->first < oldest->first)) oldest = it;
-      }
-      if (oldest != w.given.end()) w.given.erase(oldest);
-    }
   }
 }
 
@@ -235,8 +224,7 @@ void BrokerWire::retire(Wire& w) {
     const bool stuck = st.state == frames::ControllerState::kBusOff ||
                        (st.state == frames::ControllerState::kErrorPassive && live_members(w) <= 1);
     if (st.queued != 0 && !stuck) continue;
-    for (auto it = w.given.begin(); it != w.given.end();)
-      it = it->second.key == m.key ? w.given.erase(it) : std::next(it);
+    m.given.clear();
     w.bus->remove_controller(static_cast<wire::ControllerId>(k));
     m.gone = true;
     if (Controller* r = row(m.key, w.ifindex, false)) r->in_use.store(0, std::memory_order_release);
@@ -256,14 +244,11 @@ void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& re
   }
   join(key, record.ifindex);
   const wire::ControllerId id = *w->controller_of(key);
-  Wire::Given& g = w->given[w->next_tag];
-  g.key = key;
+  Wire::Given& g = w->members[id].given.emplace_back();
   g.tag = tag;
   g.size = record.size;
   std::memcpy(g.frame, record.frame, record.size);
-  w->bus->submit(id, wire_frame_of(record.frame, record.size), w->at(now), w->next_tag);
-  ++w->next_tag;
-  ++w->members[id].given;
+  w->bus->submit(id, wire_frame_of(record.frame, record.size), w->at(now), tag);
   publish_due(*w);
 }
 
@@ -296,43 +281,41 @@ void BrokerWire::advance(std::int64_t now, std::vector<WireDelivery>& out) {
 // What wire `w` did up to `now` (its own time when driven), as deliveries.
 void BrokerWire::collect(Wire& w, std::int64_t now, std::vector<WireDelivery>& out) {
   Interface* iface = find_interface(state_, w.ifindex);
-  {
-    w.events.clear();
-    w.bus->advance(w.at(now), w.events);
-    for (const wire::WireEvent& e : w.events) {
-      WireDelivery& d = out.emplace_back();
-      d.ifindex = w.ifindex;
-      d.at_ns = w.origin + e.at.count();
-      if (e.kind == wire::WireEvent::Kind::kError) {
-        d.error = true;
-        d.from = w.key_of(e.controller);
-        can_frame f{};
-        f.can_id = CAN_ERR_FLAG | (e.error.id & CAN_ERR_MASK);
-        f.len = CAN_ERR_DLC;
-        std::copy(e.error.data.begin(), e.error.data.end(), f.data);
-        d.size = CAN_MTU;
-        std::memcpy(d.frame, &f, sizeof f);
-        continue;
-      }
-      for (const wire::ControllerId m : e.missed) d.missed.push_back(w.key_of(m));
-      if (iface != nullptr) iface->delivered.fetch_add(1, std::memory_order_relaxed);
-      const auto given = w.given.find(e.tag);
-      if (e.tag == wire::kBabbleTag || given == w.given.end()) {
-        raw_of(e.frame, d);  // a babbling fault's own frame
-        continue;
-      }
-      ++w.members[e.controller].sent;
-      d.from = given->second.key;
-      d.tag = given->second.tag;
-      d.size = given->second.size;
-      std::memcpy(d.frame, given->second.frame, d.size);
-      w.given.erase(given);
-      release(w, d.from, 1);
+  w.events.clear();
+  w.bus->advance(w.at(now), w.events);
+  for (const wire::WireEvent& e : w.events) {
+    WireDelivery& d = out.emplace_back();
+    d.ifindex = w.ifindex;
+    d.at_ns = w.origin + e.at.count();
+    if (e.kind == wire::WireEvent::Kind::kError) {
+      d.error = true;
+      d.from = w.key_of(e.controller);
+      can_frame f{};
+      f.can_id = CAN_ERR_FLAG | (e.error.id & CAN_ERR_MASK);
+      f.len = CAN_ERR_DLC;
+      std::copy(e.error.data.begin(), e.error.data.end(), f.data);
+      d.size = CAN_MTU;
+      std::memcpy(d.frame, &f, sizeof f);
+      continue;
     }
-    account_losses(w);
-    retire(w);
-    publish(w, now);
+    for (const wire::ControllerId m : e.missed) d.missed.push_back(w.key_of(m));
+    if (iface != nullptr) iface->delivered.fetch_add(1, std::memory_order_relaxed);
+    std::deque<Wire::Given>* given = e.controller < w.members.size() ? &w.members[e.controller].given : nullptr;
+    if (e.tag == wire::kBabbleTag || given == nullptr || given->empty()) {
+      raw_of(e.frame, d);  // a babbling fault's own frame
+      continue;
+    }
+    const Wire::Given& g = given->front();
+    d.from = w.members[e.controller].key;
+    d.tag = g.tag;
+    d.size = g.size;
+    std::memcpy(d.frame, g.frame, d.size);
+    given->pop_front();
+    release(w, d.from, 1);
   }
+  account_losses(w);
+  retire(w);
+  publish(w, now);
 }
 
 void BrokerWire::publish(Wire& w, std::int64_t now) {

@@ -365,15 +365,9 @@ std::string describe(const BusPaths& paths) {
         where = i != nullptr ? i->name : "index " + std::to_string(sk.ifindex);
       }
     }
-    char comm[64] = "?";
-    const std::string comm_path = "/proc/" + std::to_string(sk.pid) + "/comm";
-    if (FILE* f = std::fopen(comm_path.c_str(), "r")) {
-      if (std::fgets(comm, sizeof comm, f) != nullptr) comm[std::strcspn(comm, "\n")] = '\0';
-      std::fclose(f);
-    }
-    out << "  socket " << k << "  pid " << sk.pid << " (" << comm << ")  " << where << "  filters " << filter_text(sk)
-        << "  sent " << sk.sent.load() << "  received " << sk.received.load() << "  dropped " << sk.drops.load()
-        << '\n';
+    out << "  socket " << k << "  pid " << sk.pid << " (" << program_of(sk.pid) << ")  " << where << "  filters "
+        << filter_text(sk) << "  sent " << sk.sent.load() << "  received " << sk.received.load() << "  dropped "
+        << sk.drops.load() << '\n';
   }
   out << controllers_text(paths);
   return out.str();

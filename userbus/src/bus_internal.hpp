@@ -18,6 +18,9 @@ int ask_broker(const BusPaths& paths, std::uint32_t op);
 /// The running bus's state; BusError saying what to do when none runs.
 std::unique_ptr<MappedState> require_state(const BusPaths& paths);
 
+/// Process `pid`'s program as /proc/PID/comm says, or "?".
+std::string program_of(int pid);
+
 /// An interface's wire for `canhil bus list`: its rates, restart delay,
 /// transmit queue, load and error frames, or that it has none.
 std::string wire_text(const Interface& i);

@@ -25,16 +25,6 @@ Interface& interface_named(State& s, const std::string& name) {
   return *i;
 }
 
-std::string program_of(int pid) {
-  char comm[64] = "?";
-  const std::string path = "/proc/" + std::to_string(pid) + "/comm";
-  if (FILE* f = std::fopen(path.c_str(), "r")) {
-    if (std::fgets(comm, sizeof comm, f) != nullptr) comm[std::strcspn(comm, "\n")] = '\0';
-    std::fclose(f);
-  }
-  return comm;
-}
-
 void ask_about(const BusPaths& paths, const std::string& name, ControlRequest r, const char* what) {
   auto mapped = require_state(paths);
   r.ifindex = interface_named(mapped->state(), name).index;
@@ -121,6 +111,16 @@ void add_bus_fault(const BusPaths& paths, const std::string& name, const wire::F
 
 void clear_bus_faults(const BusPaths& paths, const std::string& name) {
   ask_about(paths, name, ControlRequest{kControlClearFaults}, "clear the faults");
+}
+
+std::string program_of(int pid) {
+  char comm[64] = "?";
+  const std::string path = "/proc/" + std::to_string(pid) + "/comm";
+  if (FILE* f = std::fopen(path.c_str(), "r")) {
+    if (std::fgets(comm, sizeof comm, f) != nullptr) comm[std::strcspn(comm, "\n")] = '\0';
+    std::fclose(f);
+  }
+  return comm;
 }
 
 std::vector<ControllerView> controllers(const BusPaths& paths) {

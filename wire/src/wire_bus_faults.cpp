@@ -19,7 +19,10 @@ void WireBus::fault_change(Nanos at, std::vector<WireEvent>& out) {
           stats_.busy += at - wire_->start;
           idle_from_ = at + bits(kBusIdle);
           recessive_from_ = at;
-          if (!wire_->babble && !controllers_[c].queue.empty()) controllers_[c].queue.pop_front();
+          if (!wire_->babble && !controllers_[c].queue.empty()) {
+            controllers_[c].queue.pop_front();
+            ++controllers_[c].counts.lost;
+          }
           wire_.reset();
         }
         controllers_[c].confinement.force_tec(kBusOffLimit);

@@ -74,6 +74,11 @@ class Medium {
   virtual MediumCounts counts() const = 0;
 };
 
+/// Which medium serves SocketCAN interface `iface` in this process:
+/// kUserSpace when this process runs on canhil's user-space bus (its preload
+/// loaded) and the bus has `iface`, else kKernel.
+MediumKind socketcan_medium_kind(const std::string& iface) noexcept;
+
 /// SocketCAN interface `iface` as this process reaches it: canhil's
 /// user-space bus when this process runs on it and the bus has `iface`,
 /// else the kernel's. Its endpoints are opened with `options`.

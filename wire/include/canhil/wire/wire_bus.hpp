@@ -104,6 +104,7 @@ struct ControllerStatus {
   std::uint64_t bus_offs = 0;
   std::uint64_t restarts = 0;
   std::uint64_t refused = 0;  ///< frames refused on a full queue
+  std::uint64_t lost = 0;     ///< frames dropped unsent: the one on the wire when it was forced bus-off
   std::size_t queued = 0;     ///< frames waiting, the one on the wire included
   bool connected = true;      ///< false while a cut-cable fault holds
   bool recovering = false;    ///< bus-off and counting recessive bits
