@@ -17,6 +17,7 @@ MemoryEndpoint::~MemoryEndpoint() {
 SendStatus MemoryEndpoint::send(const CanFrame& frame) {
   if (!bus_->up()) return SendStatus::kDown;
   if (bus_->model_ && frame.kind != frames::FrameKind::kError) {
+    bus_->wire_driver_.moved();
     bus_->advance(bus_->clock_.now());
     const auto queued = bus_->model_->submit(controller_, frames::wire_frame(frame), bus_->clock_.now());
     if (queued == wire::WireBus::Submit::kQueueFull) {
@@ -104,6 +105,7 @@ std::unique_ptr<MemoryEndpoint> MemoryBus::attach(std::string endpoint_name, std
   if (model_) {
     endpoint->controller_ = model_->add_controller(endpoint->name(), wire_.controller);
     controllers_.push_back(endpoint.get());
+    wire_driver_.moved();
   }
   return endpoint;
 }
@@ -114,6 +116,7 @@ void MemoryBus::detach(MemoryEndpoint* endpoint) {
   if (model_) {
     model_->remove_controller(endpoint->controller_);
     controllers_[endpoint->controller_] = nullptr;
+    wire_driver_.moved();
   }
 }
 
@@ -121,6 +124,7 @@ bool MemoryBus::set_wire(const Wire& wire) {
   wire_ = wire;
   model_.reset();
   controllers_.clear();
+  wire_driver_.moved();
   if (wire.bit_rate == 0) return true;
   wire::WireConfig config;
   config.bit_rate = wire.bit_rate;

@@ -53,12 +53,21 @@ void Participants::tick_due(const Clock& clock, std::size_t budget) {
   for (int round = 0; round < 64; ++round) {
     const Nanos now = clock.now();
     bool any = false;
-    for (std::size_t i = 0; i < list_.size(); ++i) {
-      if (wakeup(i) <= now) {
-        list_[i]->tick(now);
-        keep(i);
-        any = true;
-      }
+    // The kept ones due (only its own tick moves one's wake-up), by a scan
+    // of the kept wake-ups alone, merged in order with the asked ones, each
+    // asked in its turn.
+    due_.clear();
+    for (std::size_t i = 0; i < wake_.size(); ++i) {
+      if (wake_[i] <= now) due_.push_back(i);
+    }
+    std::size_t k = 0, a = 0;
+    while (k < due_.size() || a < asked_.size()) {
+      const bool asked = k == due_.size() || (a < asked_.size() && asked_[a] < due_[k]);
+      const std::size_t i = asked ? asked_[a++] : due_[k++];
+      if (asked && list_[i]->next_wakeup() > now) continue;
+      list_[i]->tick(now);
+      keep(i);
+      any = true;
     }
     if (budget == kUnlimited) {
       deliver();

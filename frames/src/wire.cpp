@@ -225,11 +225,6 @@ struct Crc15Table {
 };
 constexpr Crc15Table kCrc15Table;
 
-// A classic frame's bits, counted run by run instead of bit by bit (the
-// count every frame on a timed wire and every TM's EC start needs): the
-// stuffed part as one number, its CRC-15 by table, then its runs of equal
-// bits with the stuff bits each run takes. The same count as the encoder's
-// (tests/frames/wire_test.cpp checks both against an independent one).
 // The stuffed part of a classic frame as bits, first bit at the top of w[0].
 class Stream {
  public:
@@ -257,6 +252,44 @@ class Stream {
   std::uint32_t n_ = 0;
 };
 
+// Bit stuffing as a machine over the stuffed part's bits: its state is the
+// last level and how many equal bits end the stream so far (a stuff bit,
+// after the fifth, is one of the other level). Stepping a whole byte by
+// table gives the stuff bits it adds and the state after it: the count
+// every frame on a timed wire needs, about ten lookups a frame. The same
+// count as the encoder's (tests/frames/wire_test.cpp checks both against an
+// independent one).
+struct StuffTable {
+  // A step packs the stuff bits added (high nibble) and the next state (low
+  // nibble): 0 before any bit, else 1 + 4 * level + (equal bits - 1).
+  static constexpr std::uint8_t bit(std::uint8_t state, bool level) noexcept {
+    const int v = level ? 1 : 0;
+    if (state != 0 && (state - 1) / 4 == v) {
+      const int equal = (state - 1) % 4 + 2;
+      if (equal == 5) return static_cast<std::uint8_t>(0x10 | (1 + 4 * (1 - v)));  // the stuff bit starts a run
+      return static_cast<std::uint8_t>(1 + 4 * v + equal - 1);
+    }
+    return static_cast<std::uint8_t>(1 + 4 * v);
+  }
+  std::array<std::array<std::uint8_t, 256>, 9> t{};
+  constexpr StuffTable() {
+    for (std::uint8_t state = 0; state < 9; ++state) {
+      for (std::uint32_t byte = 0; byte < 256; ++byte) {
+        std::uint8_t st = state, added = 0;
+        for (int k = 7; k >= 0; --k) {
+          const std::uint8_t step = bit(st, ((byte >> k) & 1u) != 0);
+          added = static_cast<std::uint8_t>(added + (step >> 4));
+          st = step & 0xFu;
+        }
+        t[state][byte] = static_cast<std::uint8_t>((added << 4) | st);
+      }
+    }
+  }
+};
+constexpr StuffTable kStuffTable;
+
+// A classic frame's bits without the encoder: the stuffed part as one
+// number, its CRC-15 by table, its stuff bits by table.
 FrameBits count_classic(const WireFrame& f) noexcept {
   Stream s;
   const bool remote = f.remote;
@@ -291,35 +324,20 @@ FrameBits count_classic(const WireFrame& f) noexcept {
     crc = ((crc << 8) & 0x7FFFu) ^ kCrc15Table.t[((crc >> 7) ^ byte) & 0xFFu];
   }
   s.put(crc, 15);
-  // Runs of equal bits, first to last: a run of L bits after `count` equal
-  // ones takes a stuff bit at the fifth and every fifth after; a stuff bit
-  // starts a run of the other value, which the next run continues.
+  // The stuff bits, a byte of the stream at a time, by table; the last bits one by one.
   const std::uint32_t total = s.size();
   std::uint32_t stuffed = 0;
-  int last = -1;
-  std::uint32_t count = 0;
-  for (std::uint32_t i = 0; i < total;) {
-    const std::uint64_t w = s.window(i);
-    const int value = static_cast<int>(w >> 63);
-    const std::uint64_t same = value != 0 ? ~w : w;  // leading zeros: the run
-    std::uint32_t run = same == 0 ? 64u : static_cast<std::uint32_t>(std::countl_zero(same));
-    run = std::min(run, total - i);
-    i += run;
-    if (value != last) count = 0;
-    if (count + run < 5) {
-      count += run;
-      last = value;
-      continue;
-    }
-    const std::uint32_t after = run - (5 - count);  // bits of the run after the first stuff bit
-    stuffed += 1 + after / 5;
-    if (after % 5 == 0) {
-      last = 1 - value;  // it ends with a stuff bit
-      count = 1;
-    } else {
-      last = value;
-      count = after % 5;
-    }
+  std::uint8_t state = 0;
+  std::uint32_t i = 0;
+  for (; i + 8 <= total; i += 8) {
+    const std::uint8_t step = kStuffTable.t[state][s.window(i) >> 56];
+    stuffed += step >> 4;
+    state = step & 0xFu;
+  }
+  for (; i < total; ++i) {
+    const std::uint8_t step = StuffTable::bit(state, (s.window(i) >> 63) != 0);
+    stuffed += step >> 4;
+    state = step & 0xFu;
   }
   return FrameBits{total + stuffed + kTailBits, 0};
 }

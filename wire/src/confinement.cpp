@@ -17,7 +17,7 @@ ControllerState by_counter(std::uint16_t counter) noexcept {
 
 }  // namespace
 
-ControllerState Confinement::state() const noexcept {
+ControllerState Confinement::counted_state() const noexcept {
   if (bus_off_) return ControllerState::kBusOff;
   return std::max(tx_state(), rx_state());
 }
@@ -48,19 +48,6 @@ void Confinement::dominant_sequence(bool transmitter) noexcept {
     transmit_error(TransmitError::kOther);
   } else {
     receive_error(true);
-  }
-}
-
-void Confinement::transmitted() noexcept {
-  if (!bus_off_ && tec_ > 0) --tec_;
-}
-
-void Confinement::received() noexcept {
-  if (bus_off_) return;
-  if (rec_ >= kPassiveLimit) {
-    rec_ = kRecAfterPassiveReception;
-  } else if (rec_ > 0) {
-    --rec_;
   }
 }
 

@@ -26,6 +26,7 @@ void WireBus::remove_controller(ControllerId controller) {
   Controller& k = controllers_.at(controller);
   k.gone = true;
   k.queue.clear();
+  queue_changed(controller);
   k.restart_at = kNever;
   k.recovering = false;
   if (wire_ && wire_->from == controller) wire_->babble = true;  // its frame finishes; nothing left to pop
@@ -65,6 +66,7 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
   q.tag = tag;
   q.given = now;
   k.queue.push_back(q);
+  queue_changed(controller);
   if (now == now_ && k.queue.size() == 1 && ready_at(controller) == now) {
     if (wire_ && wire_->start == now && !wire_->babble && q.key < wire_->q.key) {
       // Arbitration began at this very instant: the frame given now takes part, and wins.
@@ -110,21 +112,20 @@ bool WireBus::arbitrate(Nanos at) {
   const Queued* best = nullptr;
   ControllerId from = 0;
   std::uint64_t best_key = 0, best_seq = 0;
-  for (ControllerId c = 0; c < controllers_.size(); ++c) {
-    if (ready_at(c) != at) continue;
+  each_sender([&](ControllerId c) {
+    if (ready_at(c) != at) return;
     const FaultRule* babble = faults_.babbling(c, at);
     const std::uint64_t key = babble != nullptr ? frames::arbitration_key(babble->babble.id, babble->babble.extended,
                                                                           babble->babble.remote && !babble->babble.fd)
                                                 : controllers_[c].queue.front().key;
     const std::uint64_t seq = babble != nullptr ? 0 : controllers_[c].queue.front().seq;
-    if ((best != nullptr || best_babble != nullptr) && (key > best_key || (key == best_key && seq >= best_seq)))
-      continue;
+    if ((best != nullptr || best_babble != nullptr) && (key > best_key || (key == best_key && seq >= best_seq))) return;
     best_babble = babble;
     best = babble != nullptr ? nullptr : &controllers_[c].queue.front();
     from = c;
     best_key = key;
     best_seq = seq;
-  }
+  });
   if (best == nullptr && best_babble == nullptr) return false;
   wire_ = OnWire{};
   OnWire& w = *wire_;
@@ -167,6 +168,7 @@ Nanos WireBus::recovery_due(const Controller& k) const noexcept {
 }
 
 void WireBus::recessive_run_ends(Nanos at) {
+  if (!ever_bus_off_) return;  // nobody is recovering
   const Nanos run = bits(kRecoveryRunBits);
   for (Controller& k : controllers_) {
     if (!k.recovering) continue;
@@ -179,7 +181,7 @@ void WireBus::recessive_run_ends(Nanos at) {
 Nanos WireBus::bus_due() const noexcept {
   if (wire_) return wire_->end;
   Nanos due = kNever;
-  for (ControllerId c = 0; c < controllers_.size(); ++c) due = std::min(due, ready_at(c));
+  each_sender([&](ControllerId c) { due = std::min(due, ready_at(c)); });
   return due;
 }
 
@@ -195,6 +197,7 @@ Nanos WireBus::earliest_due() const {
   Nanos next = bus_due();
   next = std::min(next, faults_.next_change());
   next = std::min(next, stuck_tick_at_);
+  if (!timers_possible()) return next;
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
     const Controller& k = controllers_[c];
     next = std::min({next, k.restart_at, recovery_due(k)});
@@ -232,7 +235,7 @@ void WireBus::step(Nanos at, std::vector<WireEvent>& out) {
     stuck_tick(at, out);
     return;
   }
-  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+  for (ControllerId c = 0; timers_possible() && c < controllers_.size(); ++c) {
     Controller& k = controllers_[c];
     if (k.restart_at == at) {
       k.restart_at = kNever;
@@ -283,10 +286,13 @@ void WireBus::finish(std::vector<WireEvent>& out) {
   tx.confinement.transmitted();
   ++tx.counts.sent;
   if (!w.babble) tx.queue.pop_front();
+  queue_changed(w.from);
   if (tx.confinement.state() == ControllerState::kErrorPassive) tx.not_before = w.free_at + bits(kSuspend);
   out.push_back(std::move(e));
   // Counters going down may change states: told after the frame, as a driver's interrupt would.
-  for (ControllerId c = 0; c < controllers_.size(); ++c) report(c, w.end, 0, 0, 0, out);
+  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    if (controllers_[c].confinement.state() != controllers_[c].reported) report(c, w.end, 0, 0, 0, out);
+  }
   idle_from_ = w.free_at;
   recessive_from_ = w.end - bits(kTailRecessive - kIntermission);
 }
@@ -341,6 +347,7 @@ void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
   w.free_at = w.end + bits(flags + kErrorDelimiter + kIntermission);
   if (tx.confinement.bus_off()) {
     if (!w.babble && !tx.queue.empty()) tx.queue.pop_front();  // the frame in its buffer is dropped
+    queue_changed(w.from);
   } else if (tx.confinement.state() == ControllerState::kErrorPassive) {
     tx.not_before = w.free_at + bits(kSuspend);
   }
@@ -368,6 +375,7 @@ void WireBus::report(ControllerId c, Nanos at, std::uint32_t classes, std::uint8
 void WireBus::enter_bus_off(ControllerId c, Nanos at) {
   Controller& k = controllers_[c];
   ++k.counts.bus_offs;
+  ever_bus_off_ = true;
   k.recovering = false;
   k.restart_at = k.options.restart_delay ? at + *k.options.restart_delay : kNever;
 }
@@ -392,6 +400,7 @@ bool WireBus::restart(ControllerId controller, Nanos now) {
   Controller& k = controllers_.at(controller);
   if (!k.confinement.bus_off()) return false;
   k.restart_at = std::max(now, now_);
+  ever_bus_off_ = true;
   next_stale_ = true;
   return true;
 }

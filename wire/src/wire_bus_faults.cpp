@@ -21,6 +21,7 @@ void WireBus::fault_change(Nanos at, std::vector<WireEvent>& out) {
           recessive_from_ = at;
           if (!wire_->babble && !controllers_[c].queue.empty()) {
             controllers_[c].queue.pop_front();
+            queue_changed(c);
             ++controllers_[c].counts.lost;
           }
           wire_.reset();

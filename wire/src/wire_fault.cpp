@@ -110,28 +110,28 @@ ErrorPlan Faults::plan(const frames::WireFrame& frame, ControllerId from, Nanos 
   return plan;
 }
 
-bool Faults::cut(ControllerId controller, Nanos t) const noexcept {
+bool Faults::cut_by_rule(ControllerId controller, Nanos t) const noexcept {
   for (const FaultRule& r : rules_) {
     if (r.kind == FaultRule::Kind::kCut && r.controller == controller && holds(r, t)) return true;
   }
   return false;
 }
 
-const FaultRule* Faults::stuck(Nanos t) const noexcept {
+const FaultRule* Faults::stuck_by_rule(Nanos t) const noexcept {
   for (const FaultRule& r : rules_) {
     if (r.kind == FaultRule::Kind::kStuckDominant && holds(r, t)) return &r;
   }
   return nullptr;
 }
 
-const FaultRule* Faults::babbling(ControllerId controller, Nanos t) const noexcept {
+const FaultRule* Faults::babbling_by_rule(ControllerId controller, Nanos t) const noexcept {
   for (const FaultRule& r : rules_) {
     if (r.kind == FaultRule::Kind::kBabbling && r.controller == controller && holds(r, t)) return &r;
   }
   return nullptr;
 }
 
-Nanos Faults::next_change() const noexcept {
+Nanos Faults::next_change_of_rules() const noexcept {
   Nanos next = kNever;
   for (std::size_t i = 0; i < rules_.size(); ++i) {
     if (!taken_[i].started) next = std::min(next, rules_[i].from);

@@ -117,7 +117,10 @@ class MemoryBus final : public Medium {
   /// frame when its end of frame has passed and starts the next arbitration.
   Participant& wire_participant() noexcept { return wire_driver_; }
   /// The wire's model (faults, controllers' states, load); nullptr without a wire.
-  wire::WireBus* wire_bus() noexcept { return model_.get(); }
+  wire::WireBus* wire_bus() noexcept {
+    wire_driver_.moved();  // a fault or a restart may move the wire's next event
+    return model_.get();
+  }
   const wire::WireBus* wire_bus() const noexcept { return model_.get(); }
   /// The wire's controller of `endpoint` (attached to this bus), with a wire.
   wire::ControllerId controller_of(const MemoryEndpoint& endpoint) const { return endpoint.controller_; }
@@ -147,6 +150,10 @@ class MemoryBus final : public Medium {
   void deliver_now(MemoryEndpoint* from, const CanFrame& frame, Nanos time,
                    const std::vector<wire::ControllerId>* missed = nullptr);
 
+  // The wire's next event moves when a frame is given to it, a controller
+  // comes or goes, or anyone is handed the model: each rings the driver's
+  // doorbell, and the runner, polling it, reads its wake-up again (kept, not
+  // asked for at every instant).
   class WireDriver final : public Participant {
    public:
     explicit WireDriver(MemoryBus& bus) : bus_(bus) {}
@@ -154,9 +161,20 @@ class MemoryBus final : public Medium {
     void tick(Nanos now) override { bus_.advance(now); }
     Nanos next_wakeup() const override { return bus_.model_ ? bus_.model_->next_event() : kNever; }
     bool may_have_frames() const override { return false; }
+    bool set_doorbell(const std::shared_ptr<Doorbell>& bell, std::size_t index) override {
+      bell_ = bell;
+      index_ = index;
+      return true;
+    }
+    bool wakeup_is_own() const override { return true; }
+    void moved() const {
+      if (bell_) bell_->ring(index_);
+    }
 
    private:
     MemoryBus& bus_;
+    std::shared_ptr<Doorbell> bell_;
+    std::size_t index_ = 0;
   };
   // Runs the wire to `now` and hands out what happened.
   void advance(Nanos now);

@@ -56,8 +56,9 @@ class Participant {
     return false;
   }
   /// True when next_wakeup() changes only inside this participant's own
-  /// poll(), poll_some() and tick(), or in a runner's periodic step: a runner
-  /// then reads it after those instead of at every instant. False, the
+  /// poll(), poll_some() and tick(), or in a runner's periodic step, or, for
+  /// one that rings its doorbell, where it rings it: a runner then reads it
+  /// after those (after polling it) instead of at every instant. False, the
   /// default, for one moved from outside (by another thread, a process).
   virtual bool wakeup_is_own() const { return false; }
 };
@@ -106,15 +107,15 @@ class Participants {
   void refresh();
 
  private:
-  Nanos wakeup(std::size_t i) const { return kept_[i] ? wake_[i] : list_[i]->next_wakeup(); }
   void keep(std::size_t i) {
     if (kept_[i]) wake_[i] = list_[i]->next_wakeup();
   }
   std::size_t poll(std::size_t i);
 
   std::vector<Participant*> list_;
-  std::deque<NodeParticipant> owned_;  // side by side (a round reads each one's wake-up), and never moved
-  std::vector<Nanos> wake_;            // kept wake-ups (kNever for those asked)
+  std::deque<NodeParticipant> owned_;  // never moved
+  std::vector<Nanos> wake_;            // kept wake-ups (kNever for those asked), side by side for a tight scan
+  std::vector<std::size_t> due_;       // a round's kept participants due, in order
   std::vector<std::uint8_t> kept_;     // wakeup_is_own()
   std::vector<std::uint8_t> rings_;    // set_doorbell() accepted
   std::vector<std::size_t> asked_;     // indices whose wake-up is asked for each time

@@ -62,7 +62,10 @@ class Confinement {
   std::uint16_t rec() const noexcept { return rec_; }
   /// The controller's state: from the counters, except that bus-off stays
   /// until recovered() whatever the counters.
-  ControllerState state() const noexcept;
+  ControllerState state() const noexcept {
+    if (!bus_off_ && tec_ < kWarningLimit && rec_ < kWarningLimit) return ControllerState::kErrorActive;  // as a rule
+    return counted_state();
+  }
   /// Linux's split view (can_state_get_by_berr_counter): each counter's own state.
   ControllerState tx_state() const noexcept;
   ControllerState rx_state() const noexcept;
@@ -75,15 +78,25 @@ class Confinement {
   /// Rule 6: one more sequence of 8 dominant bits, as a transmitter or a receiver.
   void dominant_sequence(bool transmitter) noexcept;
   /// Rule 7.
-  void transmitted() noexcept;
+  void transmitted() noexcept {
+    if (!bus_off_ && tec_ > 0) --tec_;
+  }
   /// Rule 8.
-  void received() noexcept;
+  void received() noexcept {
+    if (bus_off_) return;
+    if (rec_ >= kPassiveLimit) {
+      rec_ = kRecAfterPassiveReception;
+    } else if (rec_ > 0) {
+      --rec_;
+    }
+  }
   /// Bus-off left after the 128 occurrences of 11 recessive bits: counters 0, error-active.
   void recovered() noexcept;
   /// Sets the transmit error counter (a fault forcing bus-off: 256).
   void force_tec(std::uint16_t tec) noexcept;
 
  private:
+  ControllerState counted_state() const noexcept;
   void check_bus_off() noexcept {
     if (tec_ >= kBusOffLimit) bus_off_ = true;
   }

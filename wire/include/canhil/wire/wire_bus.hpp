@@ -41,6 +41,7 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -233,6 +234,28 @@ class WireBus {
   Nanos idle_from_{0};            // the bus is free from then (arbitration then or at the next frame given)
   Nanos recessive_from_{0};       // the bus has been recessive since then (no SOF, no flag)
   Nanos now_{0};
+  // A controller's restart and recovery, and a cut controller's attempts,
+  // need a look at every controller at every event; a bus where no
+  // controller ever went bus-off and no fault rule was given has none.
+  bool ever_bus_off_ = false;
+  // Which controllers have frames queued (bit c), when there are at most 64:
+  // arbitration and the bus's next start look at those only, unless a fault
+  // rule (a babbling node sends with nothing queued) asks for everyone.
+  std::uint64_t waiting_ = 0;
+  void queue_changed(ControllerId c) noexcept {
+    if (c >= 64) return;
+    const std::uint64_t bit = std::uint64_t{1} << c;
+    waiting_ = controllers_[c].queue.empty() ? waiting_ & ~bit : waiting_ | bit;
+  }
+  template <class F>
+  void each_sender(F&& f) const {
+    if (controllers_.size() > 64 || !faults_.rules().empty()) {
+      for (ControllerId c = 0; c < controllers_.size(); ++c) f(c);
+      return;
+    }
+    for (std::uint64_t w = waiting_; w != 0; w &= w - 1) f(static_cast<ControllerId>(std::countr_zero(w)));
+  }
+  bool timers_possible() const noexcept { return ever_bus_off_ || !faults_.rules().empty(); }
   WireStats stats_;
   // next_event(), asked far more often than anything changes: kept until a change.
   mutable Nanos next_ = kNever;

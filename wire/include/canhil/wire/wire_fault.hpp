@@ -68,17 +68,25 @@ class Faults {
   /// the bus would acknowledge it.
   ErrorPlan plan(const frames::WireFrame& frame, ControllerId from, Nanos start, std::uint32_t total_bits,
                  bool receivers);
-  bool cut(ControllerId controller, Nanos t) const noexcept;
+  // Asked for every controller at every event: a bus without rules answers
+  // at once.
+  bool cut(ControllerId controller, Nanos t) const noexcept { return !rules_.empty() && cut_by_rule(controller, t); }
   /// The stuck-dominant rule holding at `t`, if any.
-  const FaultRule* stuck(Nanos t) const noexcept;
-  const FaultRule* babbling(ControllerId controller, Nanos t) const noexcept;
+  const FaultRule* stuck(Nanos t) const noexcept { return rules_.empty() ? nullptr : stuck_by_rule(t); }
+  const FaultRule* babbling(ControllerId controller, Nanos t) const noexcept {
+    return rules_.empty() ? nullptr : babbling_by_rule(controller, t);
+  }
   /// The earliest start or end of a rule not yet taken (kNever: none).
-  Nanos next_change() const noexcept;
+  Nanos next_change() const noexcept { return rules_.empty() ? kNever : next_change_of_rules(); }
   /// The rules starting at `at` not yet taken, marked taken; likewise ending.
   std::vector<const FaultRule*> take_starts(Nanos at);
   std::vector<const FaultRule*> take_ends(Nanos at);
 
  private:
+  bool cut_by_rule(ControllerId controller, Nanos t) const noexcept;
+  const FaultRule* stuck_by_rule(Nanos t) const noexcept;
+  const FaultRule* babbling_by_rule(ControllerId controller, Nanos t) const noexcept;
+  Nanos next_change_of_rules() const noexcept;
   struct Taken {
     bool started = false;
     bool ended = false;
