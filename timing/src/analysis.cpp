@@ -34,6 +34,13 @@ const char* kind_name(ViolationKind k) noexcept {
 
 TimingAnalyzer::TimingAnalyzer(std::shared_ptr<const frames::MessageSet> set, const TimingConfig& config)
     : set_(std::move(set)), config_(config) {
+  // Stamps at the end of frame move with each frame's wait for the wire:
+  // two sporadic frames sent a minimum gap apart are stamped closer by as
+  // much as the second waited less, which one frame on the wire before it
+  // (CAN's blocking, the worst-case 8-byte frame) accounts for.
+  if (config_.ftt.stamps == frames::StampAt::kEndOfFrame && config_.ftt.bit_rate != 0) {
+    gap_slack_ = frames::bits_to_time(frames::worst_case_frame_bits(8), config_.ftt.bit_rate);
+  }
   for (const frames::MessageCodec& m : set_->codec().messages()) {
     PerMessage pm;
     pm.codec = &m;
@@ -75,7 +82,7 @@ void TimingAnalyzer::add(const frames::TimedFrame& tf) {
     const Nanos interval = t - m.last;
     if (!config_.violations_only) m.intervals.push_back(interval);
     if (m.ftt.kind == frames::FttKind::kAsync) {
-      if (!frames::keeps_min_gap(t + config_.window_slack, m.last, m.ftt.min_gap)) {
+      if (!frames::keeps_min_gap(t + config_.window_slack + gap_slack_, m.last, m.ftt.min_gap)) {
         std::snprintf(detail, sizeof detail, "%.3f ms after the previous, minimum gap %.0f ms", ms(interval),
                       ms(m.ftt.min_gap));
         violate(m, t, ViolationKind::kTooSoon, detail);

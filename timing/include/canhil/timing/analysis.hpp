@@ -22,7 +22,10 @@ namespace canhil::timing {
 struct TimingConfig {
   /// The bus's FTT configuration, the master's own (frames/ftt.hpp): its
   /// elementary cycle places the synchronous window, its bit rate gives the
-  /// load. (The TMs carry each EC's window; the guard is not judged.)
+  /// load. (The TMs carry each EC's window; the guard is not judged.) With
+  /// stamps at the end of frame (a timed wire, a real adapter) a sporadic
+  /// message's minimum gap is judged less one worst-case frame's wire time:
+  /// the stamps move with each frame's wait for the wire.
   frames::FttConfig ftt;
   double late_fraction = 0.10;  ///< late: an interval longer than the period by this fraction ...
   Nanos late_minimum = std::chrono::microseconds(1500);  ///< ... or by this, whichever is larger
@@ -116,6 +119,7 @@ class TimingAnalyzer {
 
   std::shared_ptr<const frames::MessageSet> set_;
   TimingConfig config_;
+  Nanos gap_slack_{0};                // sporadic gaps between end-of-frame stamps (the constructor)
   std::vector<PerMessage> messages_;  // parallel to the codec's messages
   TimingReport report_;
   bool have_tm_ = false;
