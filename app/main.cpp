@@ -79,11 +79,11 @@ const Command kCommands[] = {
                                               in the team's layout), each agent woken through PMan; run
                                               your handler and agent (or canhil-hwcomm, canhil-agent) with
                                               AGENT=N next to it (docs/own-software.md)
-  --bit-rate B                                 the buses on a timed wire at B bit/s in virtual time: frames
-                                              take their bits and lose arbitration, controllers go
-                                              bus-off and restart, faults such as busoff:laptop act on
-                                              the wire; 0 (the default unless [bus] says) is instant,
-                                              as vcan (docs/wire.md)
+  --bit-rate B                                 the buses on a timed wire at B bit/s (default: [bus] bit_rate,
+                                              else the DBC's Baudrate): frames take their bits and lose
+                                              arbitration, controllers go bus-off and restart, faults such
+                                              as busoff:laptop act on the wire; 0 is instant, as vcan
+                                              (virtual time, lockstep, the user-space bus: docs/wire.md)
   viewer (every run but --external): [--view-port 8765] [--view-listen 127.0.0.1] [--no-view]
              [--view-hold S] [--save-dir canhil-saves]
                                               a web page at http://127.0.0.1:8765/ shows the world and
@@ -93,7 +93,7 @@ const Command kCommands[] = {
      canhil::app::run_run},
     {"match", "whole matches of two teams in virtual time, with a table of results",
      R"(  canhil match SCENARIO.toml [--halves 2] [--half-minutes 10] [--seeds 1..200 | --repeat 1 [--seed N]]
-               [--jobs CORES] [--records FILE.jsonl | --no-records] [--json] [--quiet] [--logs DIR]
+               [--jobs CORES] [--records FILE.jsonl | --no-records] [--json] [--quiet] [--logs DIR] [--bit-rate B]
                                               two teams ([[teams]]) play whole matches in virtual time,
                                               ends changed at half time, the referee on, --jobs at a time
                                               (worker processes); per match and in total: score,

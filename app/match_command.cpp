@@ -214,6 +214,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   while (auto p = args.option("--process")) processes.push_back(*p);
   const auto logs = args.option("--logs");
   const std::optional<double> answer_limit = optional_number(args, "--answer-limit");
+  const std::optional<double> bit_rate = optional_number(args, "--bit-rate");
   const auto positional = args.positionals();
   if (positional.size() > 2 || (positional.size() == 2 && config)) {
     throw UsageError("match takes one scenario (SCENARIO or --config SCENARIO)");
@@ -238,6 +239,7 @@ int run_match(Args& args, const std::optional<std::string>& dbc) {
   emulator::RunOverrides over;  // what the command line says over the file, for every half
   over.processes = processes;
   over.answer_limit_s = answer_limit;
+  over.bit_rate = bit_rate;
   // What each half's plan will start: the file's [external] sides with the command line's over them.
   const emulator::Scenario planned = [&] {
     try {

@@ -59,10 +59,7 @@ int run_timing_analyse(Args& args, const std::optional<std::string>& dbc) {
   }
   if (ec_ms) ec = from_ms(*ec_ms);
   config.ftt.elementary_cycle = ec;
-  if (const auto it = db.network_attributes.find("Baudrate"); it != db.network_attributes.end()) {
-    if (const auto* v = std::get_if<std::int64_t>(&it->second); v != nullptr && *v > 0)
-      config.ftt.bit_rate = static_cast<std::uint32_t>(*v);
-  }
+  if (const auto baud = db.baudrate()) config.ftt.bit_rate = *baud;
   if (bit_rate) config.ftt.bit_rate = static_cast<std::uint32_t>(*bit_rate);
   config.ftt.stamps = stamps;
   if (guard_us) config.ftt.sync_window_guard = from_ms(*guard_us / 1e3);

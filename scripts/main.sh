@@ -34,7 +34,7 @@ section "1. the message set: what each frame on a robot's bus carries (frames/ca
 "$canhil" frames list
 
 section "2. a recorded robot bus, decoded: the first frames and the summary (frames/samples/one_robot.log; canhil dump)"
-"$canhil" dump --log frames/samples/one_robot.log --head 6 2>&1
+"$canhil" dump --log frames/samples/one_robot.log --head 4 2>&1
 
 section "3. physics against the reference figures: a ball dropped from 1 m, a robot driving (docs/physics.md)"
 "$canhil" experiment ball-drop
@@ -43,19 +43,19 @@ section "3. physics against the reference figures: a ball dropped from 1 m, a ro
 section "4. emulated vision: one frame of one robot among five, drawn in $out/vision.svg (docs/vision.md)"
 "$canhil" experiment vision --svg "$out/vision.svg"
 
-section "5. the demo in virtual time: one robot's whole loop, which drives to the ball and scores ($out/demo.log, demo.csv)"
+section "5. the demo in virtual time: one robot's whole loop, which drives to the ball and scores, its bus on a timed wire at the DBC's 1 Mbit/s ($out/demo.log, demo.csv)"
 "$canhil" run --virtual-time --config emulator/scenarios/one_robot.toml --quiet --trace "$out/demo.log" \
   --world-log "$out/demo.csv" | tee "$out/demo.txt"
 
-section "6. the demo's bus: periods, jitter and FTT compliance of every frame (canhil timing $out/demo.log)"
-"$canhil" timing "$out/demo.log"
+section "6. the demo's bus: periods, jitter and FTT compliance of every frame, stamped at its end of frame (canhil timing --stamps end $out/demo.log)"
+"$canhil" timing --stamps end "$out/demo.log"
 
 section "7. what the message set allows in the worst case, and the demo's bus inside those bounds (canhil timing --analyse; $out/analysis.txt, docs/timing.md)"
-"$canhil" timing --analyse "$out/demo.log" > "$out/analysis.txt"
+"$canhil" timing --analyse --stamps end "$out/demo.log" > "$out/analysis.txt"
 grep -E '^(  worst EC|Schedulable|NOT schedulable|Every observation|[0-9]+ observations OUTSIDE)' \
   "$out/analysis.txt"
 
-section "8. the demo on a timed wire at 1 Mbit/s: frames take their bits; the handler's controller goes bus-off at 1 s and restarts 800 ms later, the robot brakes and drives on ($out/wire.log; docs/wire.md)"
+section "8. the demo on the timed wire with a fault: the handler's controller goes bus-off at 1 s and restarts 800 ms later, the robot brakes and drives on ($out/wire.log; docs/wire.md)"
 "$canhil" run --virtual-time --config emulator/scenarios/one_robot_on_the_wire.toml --quiet --trace "$out/wire.log" \
   --world-log "$out/wire.csv" | tee "$out/wire.txt" | grep -E "GOAL|on the wire at|  handler "
 # The report says what the bus-off cost (M6 missing for 840 ms): exit status 1, expected here.

@@ -104,6 +104,9 @@ Scenario overridden(Scenario s, const RunOverrides& o) {
   if (o.layout) side.layout = *o.layout;
   if (o.pman) side.pman = *o.pman;
   if (o.kick_power) s.kick_power = *o.kick_power;
+  if (const auto b = o.bit_rate; b && (!(*b == 0 || (*b >= 10'000 && *b <= 1'000'000)) || *b != std::floor(*b))) {
+    throw OverrideError("--bit-rate takes 10000..1000000 bit/s, or 0 for an instant bus (no wire time, no errors)");
+  }
   if (o.seed) s.seed = *o.seed;
   if (!o.processes.empty()) s.external.processes = o.processes;
   if (o.answer_limit_s) {
@@ -135,10 +138,31 @@ Scenario overridden(Scenario s, const RunOverrides& o) {
 
 namespace {
 
-// The buses' physics: --bit-rate over [bus] over an instant bus.
-void resolve_bus(const BusSettings& file, std::optional<std::uint32_t> flag, SessionOptions& options) {
+// The buses' physics: --bit-rate over [bus] over the DBC's Baudrate (a
+// message set without one: an instant bus). The Baudrate alone times only a
+// run whose buses are all canhil's (virtual time, in process): a run on the
+// wall clock or with the team's processes is on the machine's SocketCAN,
+// whose kernel vcan cannot carry a wire while canhil's user-space bus can,
+// and one command must give one run on every machine (a match's --jobs 1 on
+// vcan and --jobs 2 on user-space buses the same records).
+void resolve_bus(const BusSettings& file, std::optional<double> flag, SessionOptions& options) {
   BusPhysics& bus = options.bus;
-  bus.bit_rate = flag.value_or(file.bit_rate.value_or(0));
+  if (flag) {
+    bus.bit_rate = static_cast<std::uint32_t>(*flag);  // overridden() checked it
+    bus.source = "--bit-rate";
+  } else if (file.bit_rate) {
+    bus.bit_rate = *file.bit_rate;
+    bus.source = "the scenario's [bus] bit_rate";
+  } else if (options.realtime || options.external) {
+    bus.bit_rate = 0;
+    bus.source = "on SocketCAN the DBC's Baudrate alone times nothing";
+  } else if (const auto baud = options.messages->codec().database().baudrate()) {
+    bus.bit_rate = *baud;
+    bus.source = "the DBC's Baudrate";
+  } else {
+    bus.bit_rate = 0;
+    bus.source = "no Baudrate in the DBC";
+  }
   bus.data_bit_rate = file.data_bit_rate.value_or(0);
   if (file.restart_ms) {
     bus.restart = *file.restart_ms > 0 ? std::optional<Nanos>(from_ms(*file.restart_ms)) : std::nullopt;
@@ -153,6 +177,22 @@ void resolve_bus(const BusSettings& file, std::optional<std::uint32_t> flag, Ses
 }
 
 }  // namespace
+
+std::string describe_bus(const BusPhysics& bus) {
+  char line[256];
+  if (bus.timed()) {
+    std::snprintf(line, sizeof line, "each robot's bus on a timed wire at %g kbit/s (%s; --bit-rate 0: instant)",
+                  bus.bit_rate / 1e3, bus.source.c_str());
+  } else {
+    const bool zero = bus.source == "--bit-rate" || bus.source == "the scenario's [bus] bit_rate";
+    const std::string why = zero ? bus.source + " 0" : bus.source;
+    std::snprintf(line, sizeof line,
+                  "instant buses (%s): every frame at once, no wire time, arbitration or errors (--bit-rate B: a "
+                  "timed wire)",
+                  why.c_str());
+  }
+  return line;
+}
 
 RunPlan plan_run(Scenario scenario, SessionOptions options, const RunOverrides& o) {
   if (!options.messages) throw SetupError("a run needs a message set");

@@ -109,6 +109,14 @@ const MessageDef* Database::find_message(std::uint32_t id, bool extended) const 
   return nullptr;
 }
 
+std::optional<std::uint32_t> Database::baudrate() const noexcept {
+  const auto it = network_attributes.find("Baudrate");
+  if (it == network_attributes.end()) return std::nullopt;
+  const auto* v = std::get_if<std::int64_t>(&it->second);
+  if (v == nullptr || *v <= 0 || *v > 0xFFFF'FFFF) return std::nullopt;
+  return static_cast<std::uint32_t>(*v);
+}
+
 Database parse_dbc(std::string_view text, std::string_view file_name) {
   dbc_detail::Parser parser(text, std::string(file_name));
   Database db = parser.parse();

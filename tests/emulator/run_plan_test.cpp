@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <sstream>
 
 #include "canhil/frames/messages.hpp"
 #include "support/counter_watch.hpp"
@@ -84,29 +85,80 @@ TEST_F(RunPlanTest, KickPower) {
   EXPECT_EQ(plan(o).scenario.kick_power, 77);
 }
 
-TEST_F(RunPlanTest, TheBusIsInstantUnlessBitRateOrTheBusTableTimesIt) {
-  const RunPlan instant = plan();
-  EXPECT_FALSE(instant.options.bus.timed());
-  EXPECT_EQ(instant.options.ftt.stamps, frames::StampAt::kStartOfFrame);
+TEST_F(RunPlanTest, TheBusTakesBitRateOverTheBusTableOverTheDbcsBaudrate) {
+  const RunPlan dbc = plan();
+  EXPECT_EQ(dbc.options.bus.bit_rate, 1'000'000u) << "the shipped DBC's BA_ \"Baudrate\" 1000000";
+  EXPECT_EQ(dbc.options.bus.source, "the DBC's Baudrate");
+  EXPECT_EQ(dbc.options.ftt.bit_rate, 1'000'000u) << "the schedule's wire times at the wire's rate";
+  EXPECT_EQ(dbc.options.ftt.stamps, frames::StampAt::kEndOfFrame) << "canhil's wire stamps the end of frame";
+  EXPECT_EQ(dbc.options.bus.restart, std::optional<Nanos>(100ms)) << "restart-ms 100 unless [bus] says";
+  EXPECT_EQ(dbc.options.bus.tx_queue, 10u) << "can-dev's txqueuelen";
+  EXPECT_EQ(describe_bus(dbc.options.bus),
+            "each robot's bus on a timed wire at 1000 kbit/s (the DBC's Baudrate; --bit-rate 0: instant)");
   RunOverrides o;
   o.bit_rate = 500'000;
   const RunPlan timed = plan(o);
   EXPECT_EQ(timed.options.bus.bit_rate, 500'000u);
-  EXPECT_EQ(timed.options.ftt.bit_rate, 500'000u) << "the schedule's wire times at the wire's rate";
-  EXPECT_EQ(timed.options.ftt.stamps, frames::StampAt::kEndOfFrame) << "canhil's wire stamps the end of frame";
-  EXPECT_EQ(timed.options.bus.restart, std::optional<Nanos>(100ms)) << "restart-ms 100 unless [bus] says";
-  EXPECT_EQ(timed.options.bus.tx_queue, 10u) << "can-dev's txqueuelen";
+  EXPECT_EQ(timed.options.ftt.bit_rate, 500'000u);
+  EXPECT_EQ(timed.options.bus.source, "--bit-rate");
   std::ofstream(file_) << "[bus]\nbit_rate = 250000\nrestart_ms = 0\ntx_queue = 32\n";
   const RunPlan file = plan();
   EXPECT_EQ(file.options.bus.bit_rate, 250'000u);
+  EXPECT_EQ(file.options.bus.source, "the scenario's [bus] bit_rate");
   EXPECT_EQ(file.options.bus.restart, std::nullopt) << "0: bus-off until restarted";
   EXPECT_EQ(file.options.bus.tx_queue, 32u);
   o.bit_rate = 0;
-  EXPECT_FALSE(plan(o).options.bus.timed()) << "--bit-rate 0 over the file: instant";
+  const RunPlan instant = plan(o);
+  EXPECT_FALSE(instant.options.bus.timed()) << "--bit-rate 0 over the file: instant";
+  EXPECT_EQ(instant.options.ftt.stamps, frames::StampAt::kStartOfFrame);
+  EXPECT_EQ(describe_bus(instant.options.bus),
+            "instant buses (--bit-rate 0): every frame at once, no wire time, arbitration or errors (--bit-rate B: "
+            "a timed wire)");
   o.bit_rate = 1'000'000;
   o.mode = RunMode::kRealtime;
   EXPECT_EQ(plan(o).options.ftt.stamps, frames::StampAt::kEndOfFrame)
       << "in real time too: the user-space bus's wire and a real adapter stamp the end of frame";
+  // On SocketCAN (real time, the team's processes) the DBC's Baudrate alone
+  // times nothing: the kernel's vcan cannot carry the wire the user-space bus
+  // can, and one command gives one run on every machine.
+  std::ofstream(file_) << "[run]\nduration_s = 7\n";
+  for (const RunMode mode : {RunMode::kRealtime, RunMode::kExternal}) {
+    RunOverrides socketcan;
+    socketcan.mode = mode;
+    const RunPlan p = plan(socketcan);
+    EXPECT_FALSE(p.options.bus.timed());
+    EXPECT_EQ(p.options.bus.source, "on SocketCAN the DBC's Baudrate alone times nothing");
+    EXPECT_EQ(p.options.ftt.stamps, frames::StampAt::kStartOfFrame);
+  }
+  for (const double bad : {5.0, 2e6, 125000.5, -1.0}) {
+    o.bit_rate = bad;
+    EXPECT_EQ(test::error_of([&] { plan(o); }),
+              "--bit-rate takes 10000..1000000 bit/s, or 0 for an instant bus (no wire time, no errors)")
+        << bad;
+  }
+}
+
+TEST_F(RunPlanTest, AMessageSetWithoutABaudrateRunsOnInstantBuses) {
+  std::string text;
+  {
+    std::ifstream in(test::shipped_dbc());
+    std::ostringstream all;
+    all << in.rdbuf();
+    text = all.str();
+  }
+  // The shipped DBC without its Baudrate attribute (definition, default, value).
+  std::istringstream lines(text);
+  std::string line, kept;
+  while (std::getline(lines, line)) {
+    if (line.find("\"Baudrate\"") == std::string::npos) kept += line + "\n";
+  }
+  ASSERT_NE(kept.size(), text.size());
+  SessionOptions options;
+  options.messages = frames::MessageSet::create(frames::parse_dbc(kept, "no-baudrate.dbc"));
+  const RunPlan p = plan_run(file_, {}, options);
+  EXPECT_FALSE(p.options.bus.timed());
+  EXPECT_EQ(p.options.bus.source, "no Baudrate in the DBC");
+  EXPECT_NE(describe_bus(p.options.bus).find("instant buses (no Baudrate in the DBC)"), std::string::npos);
 }
 
 TEST_F(RunPlanTest, Duration) {

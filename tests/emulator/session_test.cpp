@@ -81,6 +81,7 @@ TEST_F(SessionTest, MovesTakeEffectAtTheNextStepNotBefore) {
 }
 
 TEST_F(SessionTest, AMistakenChangeIsRefusedAtOnceAndChangesNothing) {
+  scenario_.bus.bit_rate = 0;  // an instant bus refuses a wire fault
   Session session(plan_run(scenario_, options_));
   VirtualDriver driver(session);
   EXPECT_THROW(session.apply(MoveRobot{2, {}}), SetupError);

@@ -211,7 +211,10 @@ bool parse_bus_line(const std::string& out, BusLine& b) {
 TEST(VcanFlood, AMillionMalformedAndRandomFramesAreCountedAndNoTriggerMessageIsMissed) {
   setenv("RTDB_KEY", std::to_string(0x5D000000 + ((getpid() & 0xFFF) << 8) + 0xC0).c_str(), 1);
   const std::string bin = canhil::test::build_dir();
-  canhil::test::ChildProcess emulator(bin + "/app/canhil run --quiet --duration 0 --config " +
+  // The instant bus (a real-time run's default, said here): a million frames
+  // in seconds, more than any wire carries (at 1 Mbit/s the flood would take
+  // 90 s, its sender refused).
+  canhil::test::ChildProcess emulator(bin + "/app/canhil run --quiet --duration 0 --bit-rate 0 --config " +
                                           canhil::test::source_dir() + "/emulator/scenarios/one_robot.toml",
                                       "/tmp/canhil_vcan_flood_run.log");
   ASSERT_TRUE(wait_for(emulator, 30s, [](const std::string& out) {

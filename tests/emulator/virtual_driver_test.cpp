@@ -90,6 +90,7 @@ class VirtualRunTest : public test::WatchedTest {
     c.options.messages = frames::MessageSet::load(test::shipped_dbc());
     c.scenario.world.robots = {physics::Placement{-3.0, 0.0, -90}};  // facing the opponent goal (+x)
     c.scenario.world.ball_start = {-1.0, 1.0, c.scenario.world.ball.radius_m};
+    c.scenario.bus.bit_rate = 0;  // the instant bus these tests judge (a run's default is the DBC's Baudrate)
     return c;
   }
   // The same on a timed wire at 1 Mbit/s ([bus] bit_rate): frames take their

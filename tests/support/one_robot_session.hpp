@@ -39,6 +39,7 @@ class OneRobotSession {
   static emulator::Scenario scenario_of(physics::WorldParams world) {
     emulator::Scenario s;
     s.world = std::move(world);
+    s.bus.bit_rate = 0;  // the instant bus: a test's endpoints send at will (a run's default is the DBC's Baudrate)
     return s;
   }
   static emulator::SessionOptions options_of(std::shared_ptr<const frames::MessageSet> messages) {

@@ -3,7 +3,9 @@
 # same trace and world log, byte for byte, on the kernel's vcan (here or in
 # the VM runner) and on canhil's user-space bus natively: the same scenario,
 # seed and binaries (canhil run --external with canhil-hwcomm and
-# canhil-agent as processes, 3 s of virtual time).
+# canhil-agent as processes, 3 s of virtual time), on the instant bus
+# (--bit-rate 0: the kernel's vcan cannot carry canhil's wire; the timed one's
+# determinism is timed_same_trace.sh's).
 set -euo pipefail
 build="$1"
 source="$2"
@@ -14,7 +16,7 @@ run() {
   PATH="$build/laptop:$build/app:$PATH" CANHIL_BIN="$build/app/canhil" \
     "$source/vcan_setup/with-vcan.sh" --mode "$mode" --own-ipc -- \
     "$build/app/canhil" run --no-control --quiet --config "$source/emulator/scenarios/one_robot.toml" --seed 3 \
-    --external --duration 3 --process "canhil-hwcomm --iface {iface}" --process "canhil-agent --pose -3,0,-90" \
+    --external --duration 3 --bit-rate 0 --process "canhil-hwcomm --iface {iface}" --process "canhil-agent --pose -3,0,-90" \
     --trace "$out/$mode.log" --world-log "$out/$mode.csv" > "$out/$mode.out" 2>&1 ||
     { echo "same_trace: the run on $mode failed:"; cat "$out/$mode.out"; exit 1; }
 }

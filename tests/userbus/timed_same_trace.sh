@@ -20,7 +20,7 @@ run() {
 }
 run first
 run second
-grep -q "each robot's bus on a timed wire, the user-space bus's broker on this run's clock" "$out/first.out" ||
+grep -q "each robot's bus on a timed wire at 1000 kbit/s (--bit-rate; --bit-rate 0: instant), the user-space bus's broker on this run's clock" "$out/first.out" ||
   { echo "timed_same_trace: the run did not put its bus on the wire:"; head -8 "$out/first.out"; exit 1; }
 frames=$(wc -l < "$out/first.log")
 [[ $frames -gt 500 ]] || { echo "timed_same_trace: only $frames frames"; exit 1; }

@@ -41,11 +41,11 @@ struct RunOverrides {
   std::optional<std::string> pman;  ///< a library path, "builtin" or "none"
   std::optional<std::uint64_t> seed;
   std::optional<int> kick_power;
-  std::optional<double> duration_s;       ///< 0: until stopped (real time only)
-  std::vector<std::string> faults;        ///< more fault rules, as `--fault` takes them
-  std::vector<std::string> processes;     ///< [external] processes (every team's that gives none)
-  std::optional<double> answer_limit_s;   ///< every team's [external] answer limit
-  std::optional<std::uint32_t> bit_rate;  ///< the buses' wire (--bit-rate): 0 instant, else bit/s
+  std::optional<double> duration_s;      ///< 0: until stopped (real time only)
+  std::vector<std::string> faults;       ///< more fault rules, as `--fault` takes them
+  std::vector<std::string> processes;    ///< [external] processes (every team's that gives none)
+  std::optional<double> answer_limit_s;  ///< every team's [external] answer limit
+  std::optional<double> bit_rate;        ///< the buses' wire (--bit-rate): 0 instant, else 10000..1000000 bit/s
   // What commands say beyond their command lines:
   std::optional<int> half;                  ///< a match's half (0-based): odd halves change ends (half_scenario)
   std::optional<std::size_t> robots;        ///< only the first N robots (`canhil nodes`: one)
@@ -109,6 +109,11 @@ struct RunPlan {
 /// length, with options.external the [external] settings. SetupError saying
 /// what to change; OverrideError for an override that cannot be used.
 RunPlan plan_run(Scenario scenario, SessionOptions options, const RunOverrides& overrides = {});
+
+/// A run's buses in a line (what plan_run chose and who chose it), for its
+/// first lines: "each robot's bus on a timed wire at 1000 kbit/s (the DBC's
+/// Baudrate; --bit-rate 0: instant)" or the instant bus and how to time it.
+std::string describe_bus(const BusPhysics& bus);
 
 /// The scenario of half `half` (0-based) of a match (RunOverrides::half): in
 /// odd halves the teams change ends (every robot's place turned about the

@@ -113,6 +113,9 @@ struct Database {
 
   const MessageDef* find_message(std::string_view message_name) const noexcept;
   const MessageDef* find_message(std::uint32_t id, bool extended) const noexcept;
+  /// The bus's bit rate: the network attribute "Baudrate" (an INT, bit/s),
+  /// nullopt when absent or not positive.
+  std::optional<std::uint32_t> baudrate() const noexcept;
 
  private:
   void relink() noexcept;
