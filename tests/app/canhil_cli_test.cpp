@@ -508,8 +508,8 @@ TEST(CanhilBench, MatchPartPrintsEachFigureAgainstItsTargetWithThePhysicsAloneOf
 }
 
 TEST(CanhilMatch, PrintsATablePerMatchAndTheTotalsAndJsonForScripts) {
-  const CliRun r =
-      canhil("match emulator/scenarios/two_teams.toml --half-minutes 0.05 --repeat 2 --seed 5 --no-records");
+  const CliRun r = canhil(
+      "match emulator/scenarios/two_teams.toml --half-minutes 0.05 --repeat 2 --seed 5 --no-records --bit-rate 0");
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_TRUE(has(r, "2 match(es) of 2 x 0.05 min, seeds 5..6, new against old")) << r.out;
   EXPECT_TRUE(has(r, "match 1 (seed 5): new ")) << r.out;

@@ -12,7 +12,7 @@ canhil="$build/app/canhil"
 command -v parallel > /dev/null || { echo "FAIL: GNU parallel is missing (apt-get install parallel)"; exit 1; }
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
-match="$canhil match emulator/scenarios/two_teams.toml --halves 1 --half-minutes 0.02 --quiet"
+match="$canhil match emulator/scenarios/two_teams.toml --halves 1 --half-minutes 0.02 --quiet --bit-rate 0"
 # Two slots on this machine (':' is GNU parallel's name for it); across hosts
 # the same line takes --sshlogin 4/node1,4/node2 and a shared folder.
 parallel --will-cite --sshlogin 2/: "$match --jobs 1 --seeds {} --records $dir/shard{#}.jsonl > /dev/null" ::: 1..2 3..4 5..6 7..8
