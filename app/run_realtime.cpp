@@ -44,16 +44,20 @@ void print_summary(FILE* out, const emulator::Session& session, const emulator::
 
 void say_the_wire(std::FILE* out, const emulator::Session& session, bool timed, const char* clock) {
   const emulator::BusPhysics& bus = session.options().bus;
-  if (!bus.timed() || timed) {
-    std::fprintf(out, "  %s%s%s%s\n", emulator::describe_bus(bus).c_str(),
-                 timed ? ", the user-space bus's broker on " : "", timed ? clock : "", timed ? " (docs/wire.md)" : "");
+  if (timed) {
+    std::fprintf(out, "  %s, the user-space bus's broker on %s (docs/wire.md)\n", emulator::describe_bus(bus).c_str(),
+                 clock);
+    return;
+  }
+  if (!bus.timed()) {
+    std::fprintf(out, "  %s\n", emulator::describe_bus(bus).c_str());
     return;
   }
   std::fprintf(out,
                "  %g kbit/s (%s): these buses (%s) deliver every frame at once, with no wire time, arbitration or "
                "errors; the bit rate times the FTT schedule only (canhil's timed wire runs with --virtual-time and "
                "on canhil's user-space bus: docs/wire.md)\n",
-               bus.bit_rate / 1e3, bus.source.c_str(), can_nodes::bus_of(session.rig(0).interface));
+               bus.bit_rate / 1e3, bus.source(), can_nodes::bus_of(session.rig(0).interface));
 }
 
 int run_realtime(emulator::Session& session, const emulator::RealtimeOptions& options, const RealtimeOutput& output) {

@@ -113,10 +113,7 @@ ExternalDriver::ExternalDriver(Session& session, lockstep::Conductor& conductor,
     taken0_.push_back(media_[k]->counts().frames);
     delivered0_.push_back(media_[k]->counts().delivered);
   }
-  if (!timed_) {
-    for (can_nodes::SocketCanMedium* m : driven_.given) m->set_wire(can_nodes::Wire{});
-    driven_.given.clear();
-  }
+  if (!timed_) driven_.undo();
   // canhil waits for frames in flight on these, not on a timer.
   arrivals_ = ::epoll_create1(EPOLL_CLOEXEC);
   if (arrivals_ < 0) throw SetupError("cannot create an epoll instance for the lockstep's waits");

@@ -149,19 +149,19 @@ void resolve_bus(const BusSettings& file, std::optional<double> flag, SessionOpt
   BusPhysics& bus = options.bus;
   if (flag) {
     bus.bit_rate = static_cast<std::uint32_t>(*flag);  // overridden() checked it
-    bus.source = "--bit-rate";
+    bus.from = BusPhysics::From::kFlag;
   } else if (file.bit_rate) {
     bus.bit_rate = *file.bit_rate;
-    bus.source = "the scenario's [bus] bit_rate";
+    bus.from = BusPhysics::From::kScenario;
   } else if (options.realtime || options.external) {
     bus.bit_rate = 0;
-    bus.source = "on SocketCAN the DBC's Baudrate alone times nothing";
+    bus.from = BusPhysics::From::kSocketCan;
   } else if (const auto baud = options.messages->codec().database().baudrate()) {
     bus.bit_rate = *baud;
-    bus.source = "the DBC's Baudrate";
+    bus.from = BusPhysics::From::kDbc;
   } else {
     bus.bit_rate = 0;
-    bus.source = "no Baudrate in the DBC";
+    bus.from = BusPhysics::From::kNoBaudrate;
   }
   bus.data_bit_rate = file.data_bit_rate.value_or(0);
   if (file.restart_ms) {
@@ -182,10 +182,10 @@ std::string describe_bus(const BusPhysics& bus) {
   char line[256];
   if (bus.timed()) {
     std::snprintf(line, sizeof line, "each robot's bus on a timed wire at %g kbit/s (%s; --bit-rate 0: instant)",
-                  bus.bit_rate / 1e3, bus.source.c_str());
+                  bus.bit_rate / 1e3, bus.source());
   } else {
-    const bool zero = bus.source == "--bit-rate" || bus.source == "the scenario's [bus] bit_rate";
-    const std::string why = zero ? bus.source + " 0" : bus.source;
+    const bool zero = bus.from == BusPhysics::From::kFlag || bus.from == BusPhysics::From::kScenario;
+    const std::string why = std::string(bus.source()) + (zero ? " 0" : "");
     std::snprintf(line, sizeof line,
                   "instant buses (%s): every frame at once, no wire time, arbitration or errors (--bit-rate B: a "
                   "timed wire)",

@@ -88,7 +88,7 @@ TEST_F(RunPlanTest, KickPower) {
 TEST_F(RunPlanTest, TheBusTakesBitRateOverTheBusTableOverTheDbcsBaudrate) {
   const RunPlan dbc = plan();
   EXPECT_EQ(dbc.options.bus.bit_rate, 1'000'000u) << "the shipped DBC's BA_ \"Baudrate\" 1000000";
-  EXPECT_EQ(dbc.options.bus.source, "the DBC's Baudrate");
+  EXPECT_STREQ(dbc.options.bus.source(), "the DBC's Baudrate");
   EXPECT_EQ(dbc.options.ftt.bit_rate, 1'000'000u) << "the schedule's wire times at the wire's rate";
   EXPECT_EQ(dbc.options.ftt.stamps, frames::StampAt::kEndOfFrame) << "canhil's wire stamps the end of frame";
   EXPECT_EQ(dbc.options.bus.restart, std::optional<Nanos>(100ms)) << "restart-ms 100 unless [bus] says";
@@ -100,11 +100,11 @@ TEST_F(RunPlanTest, TheBusTakesBitRateOverTheBusTableOverTheDbcsBaudrate) {
   const RunPlan timed = plan(o);
   EXPECT_EQ(timed.options.bus.bit_rate, 500'000u);
   EXPECT_EQ(timed.options.ftt.bit_rate, 500'000u);
-  EXPECT_EQ(timed.options.bus.source, "--bit-rate");
+  EXPECT_STREQ(timed.options.bus.source(), "--bit-rate");
   std::ofstream(file_) << "[bus]\nbit_rate = 250000\nrestart_ms = 0\ntx_queue = 32\n";
   const RunPlan file = plan();
   EXPECT_EQ(file.options.bus.bit_rate, 250'000u);
-  EXPECT_EQ(file.options.bus.source, "the scenario's [bus] bit_rate");
+  EXPECT_STREQ(file.options.bus.source(), "the scenario's [bus] bit_rate");
   EXPECT_EQ(file.options.bus.restart, std::nullopt) << "0: bus-off until restarted";
   EXPECT_EQ(file.options.bus.tx_queue, 32u);
   o.bit_rate = 0;
@@ -127,7 +127,7 @@ TEST_F(RunPlanTest, TheBusTakesBitRateOverTheBusTableOverTheDbcsBaudrate) {
     socketcan.mode = mode;
     const RunPlan p = plan(socketcan);
     EXPECT_FALSE(p.options.bus.timed());
-    EXPECT_EQ(p.options.bus.source, "on SocketCAN the DBC's Baudrate alone times nothing");
+    EXPECT_STREQ(p.options.bus.source(), "on SocketCAN the DBC's Baudrate alone times nothing");
     EXPECT_EQ(p.options.ftt.stamps, frames::StampAt::kStartOfFrame);
   }
   for (const double bad : {5.0, 2e6, 125000.5, -1.0}) {
@@ -157,7 +157,7 @@ TEST_F(RunPlanTest, AMessageSetWithoutABaudrateRunsOnInstantBuses) {
   options.messages = frames::MessageSet::create(frames::parse_dbc(kept, "no-baudrate.dbc"));
   const RunPlan p = plan_run(file_, {}, options);
   EXPECT_FALSE(p.options.bus.timed());
-  EXPECT_EQ(p.options.bus.source, "no Baudrate in the DBC");
+  EXPECT_STREQ(p.options.bus.source(), "no Baudrate in the DBC");
   EXPECT_NE(describe_bus(p.options.bus).find("instant buses (no Baudrate in the DBC)"), std::string::npos);
 }
 

@@ -19,6 +19,10 @@
 namespace canhil::userbus {
 namespace {
 
+// A stamp or drive time this far past the wire's own is nobody's instant (a
+// hostile or broken request): a frame so stamped is taken now, a drive ignored.
+constexpr std::int64_t kFarAhead = 3600LL * 1'000'000'000;
+
 /// The wire's view of a frame as a program wrote it (an FD length the DLC
 /// cannot carry takes the next one up, as a controller pads it).
 frames::WireFrame wire_frame_of(const unsigned char* raw, std::uint32_t size) {
@@ -218,8 +222,8 @@ void BrokerWire::retire(Wire& w) {
   for (std::size_t k = 0; k < w.members.size(); ++k) {
     Wire::Member& m = w.members[k];
     if (m.gone || !m.leaving) continue;
-    // Its queue sent, or nothing will ever send it: bus-off, or unacknowledged (error-passive, nobody else on the
-    // wire).
+    // Its queue sent, or nothing will ever send it: bus-off, or
+    // unacknowledged (error-passive, nobody else on the wire).
     const wire::ControllerStatus st = w.bus->status(static_cast<wire::ControllerId>(k));
     const bool stuck = st.state == frames::ControllerState::kBusOff ||
                        (st.state == frames::ControllerState::kErrorPassive && live_members(w) <= 1);
@@ -235,8 +239,7 @@ void BrokerWire::submit(ControllerKey key, std::uint64_t tag, const TxRecord& re
                         std::vector<WireDelivery>& out) {
   Wire* w = wire_of(record.ifindex);
   if (w == nullptr) return;
-  constexpr std::int64_t kHour = 3600LL * 1'000'000'000;  // a later stamp is nobody's instant: taken now
-  if (w->driven && record.at_ns > w->driven_now && record.at_ns - w->driven_now < kHour) {
+  if (w->driven && record.at_ns > w->driven_now && record.at_ns - w->driven_now < kFarAhead) {
     // Written at a later instant of the run than the wire has been run to:
     // it is run there first (normally nothing is due: the run drove it).
     w->driven_now = record.at_ns;
@@ -264,7 +267,7 @@ std::int64_t BrokerWire::next_due() const noexcept {
 
 void BrokerWire::drive(std::int32_t ifindex, std::int64_t time_ns, std::vector<WireDelivery>& out) {
   Wire* w = wire_of(ifindex);
-  if (w == nullptr || !w->driven || time_ns - w->driven_now > 3600LL * 1'000'000'000) return;
+  if (w == nullptr || !w->driven || time_ns - w->driven_now > kFarAhead) return;
   w->driven_now = std::max(w->driven_now, time_ns);
   collect(*w, 0, out);
 }

@@ -121,8 +121,10 @@ class ExternalDriver {
     DrivenWires() = default;
     DrivenWires(const DrivenWires&) = delete;
     DrivenWires& operator=(const DrivenWires&) = delete;
-    ~DrivenWires() {
+    ~DrivenWires() { undo(); }
+    void undo() {
       for (can_nodes::SocketCanMedium* m : given) m->set_wire(can_nodes::Wire{});
+      given.clear();
     }
   } driven_;
   std::vector<std::uint64_t> taken0_, delivered0_;  // per medium: its counts when the run began

@@ -6,7 +6,6 @@
 
 #include <memory>
 #include <optional>
-#include <string>
 
 #include "canhil/base/time.hpp"
 #include "canhil/frames/ftt.hpp"
@@ -23,9 +22,27 @@ struct BusPhysics {
   std::uint32_t data_bit_rate = 0;  ///< CAN FD's data phase; 0: the bit rate
   std::optional<Nanos> restart = std::chrono::milliseconds(100);  ///< bus-off to restart; nullopt: on request
   std::size_t tx_queue = 10;                                      ///< frames a controller queues (can-dev's txqueuelen)
-  /// Who chose the bit rate, for the run's first lines: "--bit-rate", "the
-  /// scenario's [bus] bit_rate", "the DBC's Baudrate" (plan_run's default).
-  std::string source = "canhil's default";
+  /// Who chose the bit rate (plan_run), for the run's first lines.
+  enum class From : std::uint8_t { kDefault, kFlag, kScenario, kDbc, kSocketCan, kNoBaudrate };
+  From from = From::kDefault;
+  /// `from` in words: "--bit-rate", "the scenario's [bus] bit_rate", "the DBC's Baudrate", ...
+  const char* source() const noexcept {
+    switch (from) {
+      case From::kFlag:
+        return "--bit-rate";
+      case From::kScenario:
+        return "the scenario's [bus] bit_rate";
+      case From::kDbc:
+        return "the DBC's Baudrate";
+      case From::kSocketCan:
+        return "on SocketCAN the DBC's Baudrate alone times nothing";
+      case From::kNoBaudrate:
+        return "no Baudrate in the DBC";
+      case From::kDefault:
+        break;
+    }
+    return "canhil's default";
+  }
   bool timed() const noexcept { return bit_rate != 0; }
   /// As a medium's wire (can_nodes::Wire), its faults drawn from `seed`.
   can_nodes::Wire wire(std::uint64_t seed) const {
