@@ -116,8 +116,9 @@ TEST(VcanTeamAgent, TheTeamsAgentOnItsOwnLibrariesDrivesToTheBallAndStopsWhenThe
   // A process the table does not name is refused, and only it.
   ASSERT_TRUE(wait_for(stranger, 60s, [](const std::string& o) { return has(o, "agent9 is not in the PMan table"); }))
       << stranger.output();
-  const int stranger_status = stranger.stop();
-  EXPECT_TRUE(WIFEXITED(stranger_status) && WEXITSTATUS(stranger_status) == 4) << stranger.output();
+  const std::optional<int> stranger_status = stranger.wait_end(60s);  // it ends by itself
+  ASSERT_TRUE(stranger_status.has_value()) << stranger.output();
+  EXPECT_TRUE(WIFEXITED(*stranger_status) && WEXITSTATUS(*stranger_status) == 4) << stranger.output();
 
   // Drives to the ball (the ball starts 2 m ahead of the robot and 1 m to its
   // left). Progress lines come once a second and the agent kicks as soon as it
@@ -251,10 +252,12 @@ TEST(VcanTeamAgent, TheRunScriptRefusesAnInterfaceTheScenarioDoesNotUse) {
   ChildProcess script("bash " + src + "/scripts/run-own-software.sh --canhil " + canhil::test::build_dir() +
                           " --iface vcan7 --logs " + logs + " -- /bin/sleep 30",
                       logs + ".log");
-  ASSERT_TRUE(wait_for(script, 60s, [](const std::string& o) { return has(o, "no robot on vcan7"); }))
-      << script.output();
-  const int status = script.stop();
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << script.output();
+  // The script ends by itself: stopping it once its refusal shows would race
+  // its exit (a SIGINT between the message and `exit 2` ends it by signal).
+  const std::optional<int> status = script.wait_end(60s);
+  ASSERT_TRUE(status.has_value()) << "the script ended by itself\n" << script.output();
+  EXPECT_TRUE(has(script.output(), "no robot on vcan7")) << script.output();
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 2) << script.output();
   EXPECT_TRUE(has(script.output(), "robot 0 on vcan0 (") && has(script.output(), ") for agent 1"))
       << "what the run does use\n"
       << script.output();
