@@ -4,6 +4,42 @@
 
 namespace canhil::can_nodes {
 
+void WakeTree::push_back(Nanos w) {
+  if (size_ == leaves_) {
+    const std::size_t leaves = leaves_ == 0 ? 8 : 2 * leaves_;
+    std::vector<std::int64_t> grown(2 * leaves, kNever.count());
+    std::copy_n(node_.begin() + static_cast<std::ptrdiff_t>(leaves_), size_,
+                grown.begin() + static_cast<std::ptrdiff_t>(leaves));
+    for (std::size_t n = leaves - 1; n >= 1; --n) grown[n] = std::min(grown[2 * n], grown[2 * n + 1]);
+    node_ = std::move(grown);
+    leaves_ = leaves;
+  }
+  set(size_++, w);
+}
+
+void WakeTree::set(std::size_t i, Nanos w) noexcept {
+  std::size_t n = leaves_ + i;
+  node_[n] = w.count();
+  for (n /= 2; n >= 1; n /= 2) {
+    const std::int64_t least = std::min(node_[2 * n], node_[2 * n + 1]);
+    if (node_[n] == least) break;  // nothing above changes
+    node_[n] = least;
+  }
+}
+
+void WakeTree::due(Nanos now, std::vector<std::size_t>& out) const {
+  if (earliest() <= now) collect(1, now.count(), out);
+}
+
+void WakeTree::collect(std::size_t node, std::int64_t now, std::vector<std::size_t>& out) const {
+  if (node >= leaves_) {
+    out.push_back(node - leaves_);
+    return;
+  }
+  if (node_[2 * node] <= now) collect(2 * node, now, out);
+  if (node_[2 * node + 1] <= now) collect(2 * node + 1, now, out);
+}
+
 void Participants::add(Participant& p) {
   const std::size_t i = list_.size();
   list_.push_back(&p);
@@ -53,13 +89,11 @@ void Participants::tick_due(const Clock& clock, std::size_t budget) {
   for (int round = 0; round < 64; ++round) {
     const Nanos now = clock.now();
     bool any = false;
-    // The kept ones due (only its own tick moves one's wake-up), by a scan
-    // of the kept wake-ups alone, merged in order with the asked ones, each
+    // The kept ones due (only its own tick moves one's wake-up), found in
+    // the tree of kept wake-ups, merged in order with the asked ones, each
     // asked in its turn.
     due_.clear();
-    for (std::size_t i = 0; i < wake_.size(); ++i) {
-      if (wake_[i] <= now) due_.push_back(i);
-    }
+    wake_.due(now, due_);
     std::size_t k = 0, a = 0;
     while (k < due_.size() || a < asked_.size()) {
       const bool asked = k == due_.size() || (a < asked_.size() && asked_[a] < due_[k]);
@@ -79,8 +113,7 @@ void Participants::tick_due(const Clock& clock, std::size_t budget) {
 }
 
 Nanos Participants::next_wakeup() const {
-  Nanos t = kNever;
-  for (const Nanos w : wake_) t = std::min(t, w);
+  Nanos t = wake_.earliest();
   for (const std::size_t i : asked_) t = std::min(t, list_[i]->next_wakeup());
   return t;
 }

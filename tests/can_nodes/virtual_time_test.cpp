@@ -235,5 +235,41 @@ TEST(VirtualTime, AKeptWakeUpIsReadAfterItsOwnTicksTheStepAndEachRunNotAtEveryIn
   EXPECT_EQ(kept.ticks.back(), Nanos{210});
 }
 
+TEST(WakeTree, FindsTheEarliestAndEveryOneDueInOrderAsAPlainScanWould) {
+  // Random wake-ups set and reset over a tree that grows past its first
+  // leaves: the earliest and the due ones always as a scan of the list finds them.
+  WakeTree tree;
+  std::vector<Nanos> plain;
+  std::uint64_t x = 12345;
+  const auto draw = [&x](std::uint64_t n) {
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    return (x >> 33) % n;
+  };
+  for (int turn = 0; turn < 4000; ++turn) {
+    if (plain.size() < 40 && draw(4) == 0) {
+      const Nanos w = draw(5) == 0 ? kNever : Nanos{static_cast<std::int64_t>(draw(1000))};
+      tree.push_back(w);
+      plain.push_back(w);
+    } else if (!plain.empty()) {
+      const std::size_t i = draw(plain.size());
+      plain[i] = draw(5) == 0 ? kNever : Nanos{static_cast<std::int64_t>(draw(1000))};
+      tree.set(i, plain[i]);
+    }
+    ASSERT_EQ(tree.size(), plain.size());
+    const Nanos now{static_cast<std::int64_t>(draw(1000))};
+    std::vector<std::size_t> due, want;
+    tree.due(now, due);
+    Nanos earliest = kNever;
+    for (std::size_t i = 0; i < plain.size(); ++i) {
+      if (plain[i] <= now) want.push_back(i);
+      earliest = std::min(earliest, plain[i]);
+      ASSERT_EQ(tree.at_leaf(i), plain[i]);
+    }
+    ASSERT_EQ(due, want) << "turn " << turn;
+    ASSERT_EQ(tree.earliest(), earliest) << "turn " << turn;
+  }
+  EXPECT_EQ(plain.size(), 40u) << "the tree grew past 8 and 16 and 32 leaves";
+}
+
 }  // namespace
 }  // namespace canhil::can_nodes

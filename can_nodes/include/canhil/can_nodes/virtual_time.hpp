@@ -12,7 +12,8 @@
 // What it costs does not grow with the participants that have nothing to do:
 // a participant whose frames arrive in memory rings a Doorbell, and a round
 // polls only those rung; one whose wake-up changes only in its own calls has
-// it kept, not asked for at every instant.
+// it kept, not asked for at every instant, in a tree (WakeTree) that finds
+// those due without looking at the others.
 //
 // Not thread-safe: one thread runs it.
 #pragma once
@@ -82,6 +83,29 @@ class NodeParticipant final : public Participant {
   Node& node_;
 };
 
+/// Wake-ups by index, each pair's earliest above them (a tournament tree):
+/// the earliest is at hand, a change costs a walk to the root, and those due
+/// at an instant are found without looking at the others. A runner's instant
+/// has one or two participants due among dozens (a timed wire's frame end:
+/// only its bus).
+class WakeTree {
+ public:
+  std::size_t size() const noexcept { return size_; }
+  /// One more, at index size(), at `w`.
+  void push_back(Nanos w);
+  Nanos at_leaf(std::size_t i) const noexcept { return Nanos{node_[leaves_ + i]}; }
+  void set(std::size_t i, Nanos w) noexcept;
+  Nanos earliest() const noexcept { return Nanos{node_.size() > 1 ? node_[1] : kNever.count()}; }
+  /// Appends the indices whose wake-up is at or before `now`, in order.
+  void due(Nanos now, std::vector<std::size_t>& out) const;
+
+ private:
+  void collect(std::size_t node, std::int64_t now, std::vector<std::size_t>& out) const;
+  std::vector<std::int64_t> node_;  // 1: the root; leaves_ + i: index i; kNever where none
+  std::size_t leaves_ = 0;          // a power of two
+  std::size_t size_ = 0;
+};
+
 /// A runner's participants, in the order added (the order they are ticked).
 class Participants {
  public:
@@ -108,13 +132,15 @@ class Participants {
 
  private:
   void keep(std::size_t i) {
-    if (kept_[i]) wake_[i] = list_[i]->next_wakeup();
+    if (kept_[i] == 0) return;
+    const Nanos w = list_[i]->next_wakeup();
+    if (w != wake_.at_leaf(i)) wake_.set(i, w);
   }
   std::size_t poll(std::size_t i);
 
   std::vector<Participant*> list_;
   std::deque<NodeParticipant> owned_;  // never moved
-  std::vector<Nanos> wake_;            // kept wake-ups (kNever for those asked), side by side for a tight scan
+  WakeTree wake_;                      // kept wake-ups (kNever for those asked)
   std::vector<std::size_t> due_;       // a round's kept participants due, in order
   std::vector<std::uint8_t> kept_;     // wakeup_is_own()
   std::vector<std::uint8_t> rings_;    // set_doorbell() accepted
