@@ -212,56 +212,42 @@ std::uint32_t can_fd_crc(const std::uint8_t* bits, std::uint32_t count, int widt
 
 namespace {
 
-// CRC-15 a byte at a time: the register after 8 more bits, by table.
-struct Crc15Table {
-  std::array<std::uint16_t, 256> t{};
-  constexpr Crc15Table() {
+// The stuffed part of a classic frame (at most 39 + 64 + 15 bits, and up to
+// 7 of padding) as one number, its last bit lowest.
+__extension__ using Stream = unsigned __int128;  // NOLINT: GCC's and Clang's 128-bit integer
+
+// CRC-15 sixteen bits at a time: with the register r and the next 16 bits b,
+// the register after them is the CRC of the 16 bits (r << 1) ^ b from zero,
+// the xor of its two bytes' CRCs (the CRC is linear): two tables.
+struct Crc15By16 {
+  std::array<std::uint16_t, 256> high{}, low{};
+  static constexpr std::uint32_t of(std::uint32_t bits16) noexcept {
+    std::uint32_t crc = 0;
+    for (int i = 15; i >= 0; --i) {
+      const bool flip = ((crc >> 14) & 1u) != ((bits16 >> i) & 1u);
+      crc = (crc << 1) & 0x7FFFu;
+      if (flip) crc ^= 0x4599u;
+    }
+    return crc;
+  }
+  constexpr Crc15By16() {
     for (std::uint32_t byte = 0; byte < 256; ++byte) {
-      std::uint32_t crc = byte << 7;  // the byte at the register's top
-      for (int i = 0; i < 8; ++i) crc = (crc & 0x4000u) != 0 ? ((crc << 1) ^ 0x4599u) & 0x7FFFu : (crc << 1) & 0x7FFFu;
-      t[byte] = static_cast<std::uint16_t>(crc);
+      high[byte] = static_cast<std::uint16_t>(of(byte << 8));
+      low[byte] = static_cast<std::uint16_t>(of(byte));
     }
   }
 };
-constexpr Crc15Table kCrc15Table;
-
-// The stuffed part of a classic frame as bits, first bit at the top of w[0].
-class Stream {
- public:
-  void put(std::uint64_t value, std::uint32_t count) noexcept {  // count <= 32
-    const std::uint32_t pos = n_ & 63u, room = 64 - pos;
-    std::uint64_t& word = w_[n_ >> 6];
-    if (count <= room) {
-      word |= value << (room - count);
-    } else {
-      word |= value >> (count - room);
-      w_[(n_ >> 6) + 1] |= value << (64 - (count - room));
-    }
-    n_ += count;
-  }
-  std::uint32_t size() const noexcept { return n_; }
-  // The 64 bits from bit i on, first at the top (zeros past the end).
-  std::uint64_t window(std::uint32_t i) const noexcept {
-    const std::uint32_t pos = i & 63u;
-    const std::uint64_t hi = w_[i >> 6] << pos;
-    return pos == 0 ? hi : hi | (w_[(i >> 6) + 1] >> (64 - pos));
-  }
-
- private:
-  std::uint64_t w_[3] = {0, 0, 0};
-  std::uint32_t n_ = 0;
-};
+constexpr Crc15By16 kCrc15;
 
 // Bit stuffing as a machine over the stuffed part's bits: its state is the
 // last level and how many equal bits end the stream so far (a stuff bit,
 // after the fifth, is one of the other level). Stepping a whole byte by
 // table gives the stuff bits it adds and the state after it: the count
-// every frame on a timed wire needs, about ten lookups a frame. The same
-// count as the encoder's (tests/frames/wire_test.cpp checks both against an
-// independent one).
+// every frame on a timed wire needs. The same count as the encoder's
+// (tests/frames/wire_test.cpp checks both against an independent one).
 struct StuffTable {
-  // A step packs the stuff bits added (high nibble) and the next state (low
-  // nibble): 0 before any bit, else 1 + 4 * level + (equal bits - 1).
+  // A state: 0 before any bit, else 1 + 4 * level + (equal bits - 1). A
+  // bit's step packs the stuff bits added (high nibble) and the next state.
   static constexpr std::uint8_t bit(std::uint8_t state, bool level) noexcept {
     const int v = level ? 1 : 0;
     if (state != 0 && (state - 1) / 4 == v) {
@@ -271,7 +257,9 @@ struct StuffTable {
     }
     return static_cast<std::uint8_t>(1 + 4 * v);
   }
-  std::array<std::array<std::uint8_t, 256>, 9> t{};
+  // A byte's step, indexed by state * 256 + byte: the stuff bits added
+  // (top 4 bits) and the next state times 256, ready to index the next byte.
+  std::array<std::uint16_t, 9 * 256> t{};
   constexpr StuffTable() {
     for (std::uint8_t state = 0; state < 9; ++state) {
       for (std::uint32_t byte = 0; byte < 256; ++byte) {
@@ -281,7 +269,7 @@ struct StuffTable {
           added = static_cast<std::uint8_t>(added + (step >> 4));
           st = step & 0xFu;
         }
-        t[state][byte] = static_cast<std::uint8_t>((added << 4) | st);
+        t[state * 256u + byte] = static_cast<std::uint16_t>((added << 12) | (st << 8));
       }
     }
   }
@@ -289,57 +277,50 @@ struct StuffTable {
 constexpr StuffTable kStuffTable;
 
 // A classic frame's bits without the encoder: the stuffed part as one
-// number, its CRC-15 by table, its stuff bits by table.
+// number, its CRC-15 sixteen bits at a time, its stuff bits a byte at a time.
 FrameBits count_classic(const WireFrame& f) noexcept {
-  Stream s;
   const bool remote = f.remote;
   const std::uint8_t len = std::min<std::uint8_t>(f.len, 8);
   const std::uint32_t dlc = f.len8_dlc > 8 ? f.len8_dlc : len;
-  s.put(0, 1);  // SOF
+  Stream v = 0;
+  std::uint32_t n = 0;
+  // From SOF (dominant: a leading 0) to the DLC.
   if (!f.extended) {
-    s.put(f.id & kStandardIdMask, 11);
-    s.put(remote ? 0b100u : 0u, 3);  // RTR, IDE, r0
+    v = (std::uint64_t{f.id & kStandardIdMask} << 7) | (remote ? 0x40u : 0u) | dlc;  // SOF id RTR IDE r0 DLC
+    n = 19;
   } else {
-    s.put((f.id >> 18) & 0x7FFu, 11);
-    s.put(0b11u, 2);  // SRR, IDE
-    s.put(f.id & 0x3FFFFu, 18);
-    s.put(remote ? 0b100u : 0u, 3);  // RTR, r1, r0
+    const std::uint64_t base = (f.id >> 18) & 0x7FFu, ext = f.id & 0x3FFFFu;
+    v = (base << 27) | (0b11u << 25) | (ext << 7) | (remote ? 0x40u : 0u) | dlc;  // SOF base SRR IDE ext RTR r1 r0 DLC
+    n = 39;
   }
-  s.put(dlc, 4);
-  if (!remote) {
-    for (std::uint8_t i = 0; i < len; ++i) s.put(f.data[i], 8);
+  if (!remote && len > 0) {
+    std::uint64_t data = 0;
+    for (std::uint8_t i = 0; i < len; ++i) data = (data << 8) | f.data[i];
+    v = (v << (8 * len)) | data;
+    n += 8u * len;
   }
-  // CRC-15 over the bits so far, first bit first: the odd bits one by one, then whole bytes.
-  const std::uint32_t n = s.size();
+  // CRC-15 over those bits: zeros put before them leave a register at zero
+  // unchanged, so the bits are taken in 16s from a multiple of 16.
   std::uint32_t crc = 0;
-  std::uint32_t done = 0;
-  for (; (n - done) % 8 != 0; ++done) {
-    const bool bit = (s.window(done) >> 63) != 0;
-    const bool flip = ((crc >> 14) & 1u) != bit;
-    crc = (crc << 1) & 0x7FFFu;
-    if (flip) crc ^= 0x4599u;
+  for (int at = static_cast<int>((n + 15) & ~15u) - 16; at >= 0; at -= 16) {
+    const std::uint32_t index = ((crc << 1) ^ static_cast<std::uint32_t>(v >> at)) & 0xFFFFu;
+    crc = kCrc15.high[index >> 8] ^ kCrc15.low[index & 0xFFu];
   }
-  for (; done < n; done += 8) {
-    const auto byte = static_cast<std::uint32_t>(s.window(done) >> 56);
-    crc = ((crc << 8) & 0x7FFFu) ^ kCrc15Table.t[((crc >> 7) ^ byte) & 0xFFu];
+  v = (v << 15) | crc;
+  n += 15;
+  // The stuff bits, a byte at a time from the first bit. Alternating bits
+  // ending in a recessive one put before SOF make the count of bits a
+  // multiple of 8 and add no stuff bit: none of them runs to five, and
+  // the dominant SOF starts a run of its own, as it does from no bit at all.
+  const std::uint32_t pad = (8 - n % 8) % 8;
+  v |= static_cast<Stream>(0x55u & ((1u << pad) - 1)) << n;
+  std::uint32_t stuffed = 0, state = 0;
+  for (int at = static_cast<int>(n + pad) - 8; at >= 0; at -= 8) {
+    const std::uint32_t step = kStuffTable.t[state | (static_cast<std::uint32_t>(v >> at) & 0xFFu)];
+    stuffed += step >> 12;
+    state = step & 0xF00u;
   }
-  s.put(crc, 15);
-  // The stuff bits, a byte of the stream at a time, by table; the last bits one by one.
-  const std::uint32_t total = s.size();
-  std::uint32_t stuffed = 0;
-  std::uint8_t state = 0;
-  std::uint32_t i = 0;
-  for (; i + 8 <= total; i += 8) {
-    const std::uint8_t step = kStuffTable.t[state][s.window(i) >> 56];
-    stuffed += step >> 4;
-    state = step & 0xFu;
-  }
-  for (; i < total; ++i) {
-    const std::uint8_t step = StuffTable::bit(state, (s.window(i) >> 63) != 0);
-    stuffed += step >> 4;
-    state = step & 0xFu;
-  }
-  return FrameBits{total + stuffed + kTailBits, 0};
+  return FrameBits{n + stuffed + kTailBits, 0};
 }
 
 }  // namespace

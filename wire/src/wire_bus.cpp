@@ -33,22 +33,6 @@ void WireBus::remove_controller(ControllerId controller) {
   next_stale_ = true;
 }
 
-frames::FrameBits WireBus::bits_of(const frames::WireFrame& f) noexcept {
-  if (f.fd || f.len > 8) return frames::count_bits(f);
-  // A robot's nodes send the same frames again and again (a status that
-  // does not change): the count of a classic frame is kept by its content.
-  std::uint64_t data = 0;
-  for (std::size_t i = 0; i < 8; ++i) data |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);
-  const std::uint64_t head = (std::uint64_t{f.id} << 16) | (std::uint64_t{f.extended} << 15) |
-                             (std::uint64_t{f.remote} << 14) | (std::uint64_t{f.len8_dlc} << 4) | f.len;
-  const std::uint64_t hash = (head * 0x9E3779B97F4A7C15ull) ^ (data * 0xC2B2AE3D27D4EB4Full);
-  BitsMemo& m = memo_[(hash >> 58) & (memo_.size() - 1)];
-  if (!m.valid || m.head != head || m.data != data) {
-    m = BitsMemo{head, data, frames::count_bits(f), true};
-  }
-  return m.bits;
-}
-
 Nanos WireBus::frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept {
   return frames::bits_to_time(frames::prefix_bits(f, bit_count), config_.bit_rate, config_.data_bit_rate);
 }
@@ -140,7 +124,7 @@ bool WireBus::arbitrate(Nanos at) {
   }
   w.start = at;
   recessive_run_ends(at);
-  const frames::FrameBits all = bits_of(w.q.frame);
+  const frames::FrameBits all = frames::count_bits(w.q.frame);
   std::uint32_t total = all.total();
   if (config_.bits == WireConfig::Bits::kWorstCase && !w.q.frame.fd) {
     total = frames::worst_case_frame_bits(w.q.frame.remote ? 0 : w.q.frame.len, w.q.frame.extended);

@@ -198,7 +198,6 @@ class WireBus {
   };
 
   Nanos bits(std::uint32_t n) const noexcept { return frames::bits_to_time(n, config_.bit_rate); }
-  frames::FrameBits bits_of(const frames::WireFrame& f) noexcept;  // count_bits, kept for frames seen again
   Nanos frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept;
   // The one thing due at `at` (the earliest), done.
   void step(Nanos at, std::vector<WireEvent>& out);
@@ -260,13 +259,6 @@ class WireBus {
   // next_event(), asked far more often than anything changes: kept until a change.
   mutable Nanos next_ = kNever;
   mutable bool next_stale_ = true;
-  struct BitsMemo {
-    std::uint64_t head = 0;  // id, flags, DLC and length
-    std::uint64_t data = 0;
-    frames::FrameBits bits;
-    bool valid = false;
-  };
-  std::array<BitsMemo, 64> memo_{};
 };
 
 }  // namespace canhil::wire
