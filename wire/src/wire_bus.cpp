@@ -241,44 +241,49 @@ void WireBus::step(Nanos at, std::vector<WireEvent>& out) {
 }
 
 void WireBus::finish(std::vector<WireEvent>& out) {
-  OnWire w = *wire_;
-  wire_.reset();
-  Controller& tx = controllers_[w.from];
+  OnWire& w = *wire_;  // left on the wire until done: nothing here arbitrates
   if (w.plan.cause != ErrorPlan::Cause::kNone) {
     fail(w, out);
+    wire_.reset();
     return;
   }
+  Controller& tx = controllers_[w.from];
   stats_.busy += w.free_at - w.start;
   ++stats_.frames;
-  WireEvent e;
-  e.kind = WireEvent::Kind::kFrame;
-  e.controller = w.from;
-  e.tag = w.q.tag;
-  e.start = w.start;
-  e.at = w.end;
-  e.frame = w.q.frame;
-  for (ControllerId c = 0; c < controllers_.size(); ++c) {
-    if (c == w.from) continue;
-    Controller& k = controllers_[c];
-    if (k.confinement.bus_off() || off_bus(c, w.end)) {
-      e.missed.push_back(c);
-      continue;
+  bool changed = false;  // a counter going down changed someone's state
+  {
+    WireEvent& e = out.emplace_back();  // filled before anything else goes out
+    e.kind = WireEvent::Kind::kFrame;
+    e.controller = w.from;
+    e.tag = w.q.tag;
+    e.start = w.start;
+    e.at = w.end;
+    e.frame = w.q.frame;
+    for (ControllerId c = 0; c < controllers_.size(); ++c) {
+      if (c == w.from) continue;
+      Controller& k = controllers_[c];
+      if (k.confinement.bus_off() || off_bus(c, w.end)) {
+        e.missed.push_back(c);
+        continue;
+      }
+      k.confinement.received();
+      ++k.counts.received;
+      changed = changed || k.confinement.state() != k.reported;
     }
-    k.confinement.received();
-    ++k.counts.received;
   }
   tx.confinement.transmitted();
   ++tx.counts.sent;
+  changed = changed || tx.confinement.state() != tx.reported;
   if (!w.babble) tx.queue.pop_front();
   queue_changed(w.from);
   if (tx.confinement.state() == ControllerState::kErrorPassive) tx.not_before = w.free_at + bits(kSuspend);
-  out.push_back(std::move(e));
   // Counters going down may change states: told after the frame, as a driver's interrupt would.
-  for (ControllerId c = 0; c < controllers_.size(); ++c) {
+  for (ControllerId c = 0; changed && c < controllers_.size(); ++c) {
     if (controllers_[c].confinement.state() != controllers_[c].reported) report(c, w.end, 0, 0, 0, out);
   }
   idle_from_ = w.free_at;
   recessive_from_ = w.end - bits(kTailRecessive - kIntermission);
+  wire_.reset();
 }
 
 void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
