@@ -188,6 +188,26 @@ TEST_F(BrokerWireTest, AControllerThatCanNeverSendLeavesWithItsProcessAndOneThat
   EXPECT_NE(ub::find_controller(*state_, 300, kIndex, -1, false), nullptr) << "it came back: it stays";
 }
 
+TEST_F(BrokerWireTest, AProcessThatClosedItsSocketAndOpensAnotherHearsTheWireAgain) {
+  // Its old controller left the bus; the new one has the same key (the
+  // process). The old one is no longer on the bus: it must not make the new
+  // one miss every frame (it did: a handler that reopened its socket was deaf).
+  wire_.join(ub::ControllerKey{200, -1}, kIndex);
+  give(100, 1, record(0x10, 8), kT0);
+  wire_.advance(kT0 + 1'000'000, out_);
+  wire_.leave(ub::ControllerKey{200, -1});  // its socket closed
+  wire_.advance(kT0 + 2'000'000, out_);
+  EXPECT_EQ(ub::find_controller(*state_, 200, kIndex, -1, false), nullptr) << "it left";
+  wire_.join(ub::ControllerKey{200, -1}, kIndex);  // a new socket of the same process
+  out_.clear();
+  give(100, 2, record(0x11, 8), kT0 + 3'000'000);
+  wire_.advance(kT0 + 10'000'000, out_);
+  ASSERT_EQ(out_.size(), 1U);
+  EXPECT_FALSE(out_[0].error) << "acknowledged";
+  EXPECT_TRUE(out_[0].missed.empty()) << "the process's new controller got it";
+  EXPECT_EQ(row(200).received.load(), 1U);
+}
+
 TEST_F(BrokerWireTest, AFaultThatNeedsANodeAndNamesNoneIsRefused) {
   ub::FaultRequest f{};
   f.kind = static_cast<std::uint32_t>(canhil::wire::FaultRule::Kind::kBusOff);

@@ -260,9 +260,9 @@ void WireBus::finish(std::vector<WireEvent>& out) {
     e.at = w.end;
     e.frame = w.q.frame;
     for (ControllerId c = 0; c < controllers_.size(); ++c) {
-      if (c == w.from) continue;
       Controller& k = controllers_[c];
-      if (k.confinement.bus_off() || off_bus(c, w.end)) {
+      if (c == w.from || k.gone) continue;  // one removed is no longer on the bus: it misses nothing
+      if (k.confinement.bus_off() || faults_.cut(c, w.end)) {
         e.missed.push_back(c);
         continue;
       }

@@ -89,7 +89,8 @@ struct WireEvent {
   Nanos at{0};                  ///< kFrame: its end of frame; kError: when it was seen
   frames::WireFrame frame;      ///< kFrame
   frames::CanFrame error;       ///< kError: kind kError, id the CAN_ERR_* classes, data[1..7]
-  /// kFrame: controllers that did not receive it (bus-off or cut off), besides the sender.
+  /// kFrame: controllers on the bus that did not receive it (bus-off or cut
+  /// off), besides the sender; removed ones are not on the bus, and not here.
   std::vector<ControllerId> missed;
 };
 inline constexpr std::uint64_t kBabbleTag = ~std::uint64_t{0};
