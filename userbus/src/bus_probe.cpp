@@ -31,6 +31,10 @@ std::int64_t realtime_ns() {
   return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
 }
 
+// An awake reader polls this long at most, then sleeps in recv: a frame
+// that never comes costs no more.
+constexpr std::int64_t kAwakeAtMostNs = 20'000'000;
+
 /// A connection to the broker that is a socket bound to `ifindex`; -1 when none.
 int open_bound(const BusPaths& paths, State& state, std::int32_t ifindex) {
   const int fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
@@ -57,7 +61,8 @@ int open_bound(const BusPaths& paths, State& state, std::int32_t ifindex) {
 
 }  // namespace
 
-DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us) {
+DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us,
+                             ProbeReader reader) {
   auto mapped = require_state(paths);
   State& state = mapped->state();
   const Interface* iface = find_interface(state, name.c_str());
@@ -97,7 +102,19 @@ DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int
   std::int64_t last_stamp = 0;
   for (int k = 0; k < frames; ++k) {
     RxRecord r{};
-    if (recv(rx, &r, sizeof r, 0) <= 0) break;
+    ssize_t got = -1;
+    if (reader == ProbeReader::kAwake && out.last_written != 0) {
+      // Asleep until the next frame could be written (the sender sleeps
+      // interval_us after each), then polling: awake when it is due.
+      const std::int64_t next = out.last_written + std::int64_t{interval_us} * 1000;
+      const timespec at{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+      while (clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &at, nullptr) == EINTR) {
+      }
+      for (const std::int64_t until = realtime_ns() + kAwakeAtMostNs; got < 0 && realtime_ns() < until;)
+        got = recv(rx, &r, sizeof r, MSG_DONTWAIT);
+    }
+    if (got < 0) got = recv(rx, &r, sizeof r, 0);
+    if (got <= 0) break;
     const std::int64_t now = realtime_ns();
     if (r.error != 0 || r.size != CAN_MTU) continue;
     std::int64_t written = 0;
@@ -127,7 +144,7 @@ DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int
   return out;
 }
 
-std::pair<DeliveryProbe, DeliveryProbe> probe_bus(int frames, int interval_us, std::uint32_t bit_rate) {
+BusProbe probe_bus(int frames, int interval_us, std::uint32_t bit_rate) {
   char folder[] = "/tmp/canhil-probe-bus-XXXXXX";
   if (mkdtemp(folder) == nullptr) throw BusError(std::string("no folder for a probe's bus: ") + std::strerror(errno));
   const char* before = std::getenv("CANHIL_BUS_DIR");
@@ -138,11 +155,13 @@ std::pair<DeliveryProbe, DeliveryProbe> probe_bus(int frames, int interval_us, s
   options.owner = getpid();
   start_broker(paths, options);
   add_interfaces(paths, {"vcan0"});
-  const DeliveryProbe instant = probe_delivery(paths, "vcan0", frames, interval_us);
+  BusProbe out;
+  out.instant = probe_delivery(paths, "vcan0", frames, interval_us);
   LinkSettings link;
   link.bit_rate = bit_rate;
   set_link(paths, "vcan0", link);
-  const DeliveryProbe timed = probe_delivery(paths, "vcan0", frames, interval_us);
+  out.timed = probe_delivery(paths, "vcan0", frames, interval_us);
+  out.timed_awake = probe_delivery(paths, "vcan0", frames, interval_us, ProbeReader::kAwake);
   stop_broker(paths);
   std::filesystem::remove_all(folder);
   if (before != nullptr) {
@@ -150,7 +169,7 @@ std::pair<DeliveryProbe, DeliveryProbe> probe_bus(int frames, int interval_us, s
   } else {
     unsetenv("CANHIL_BUS_DIR");
   }
-  return {instant, timed};
+  return out;
 }
 
 }  // namespace canhil::userbus

@@ -260,10 +260,22 @@ struct DeliveryProbe {
   double after_stamp_p99_us = 0;
   std::int64_t last_written = 0;
 };
-DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us);
+/// How the probe's receiver waits for a frame. Asleep in a blocking read, it
+/// is late by the bus's lateness and its own wake-up, which is the system's
+/// (the same on a real adapter). Awake, it sleeps until the next frame could
+/// be written and then polls without blocking: what it measures is the bus's
+/// own lateness alone.
+enum class ProbeReader : std::uint8_t { kAsleep, kAwake };
+DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us,
+                             ProbeReader reader = ProbeReader::kAsleep);
+struct BusProbe {
+  DeliveryProbe instant;      ///< an instant bus, the reader asleep
+  DeliveryProbe timed;        ///< at the bit rate, the reader asleep
+  DeliveryProbe timed_awake;  ///< at the bit rate, the reader awake
+};
 /// probe_delivery on a bus of its own (a fresh folder, vcan0), instant and
 /// then at `bit_rate`, in the same run (`canhil bench --part wire`).
-std::pair<DeliveryProbe, DeliveryProbe> probe_bus(int frames, int interval_us, std::uint32_t bit_rate);
+BusProbe probe_bus(int frames, int interval_us, std::uint32_t bit_rate);
 
 /// Runs the broker's loop in this process until it is stopped or its owner
 /// ends (what start_broker's child runs). listen_fd: the bound listening socket.
