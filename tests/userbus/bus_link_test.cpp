@@ -99,6 +99,7 @@ TEST_F(TimedBus, ErrorFramesReachCandumpAndPythonCanAsCanDevDriversGiveThem) {
              &status);
   EXPECT_NE(py.find("echo: MSG_CONFIRM True, MSG_DONTROUTE True"), std::string::npos) << py;
   EXPECT_NE(py.find("python-can: 3 error frames, the first 0x2A8"), std::string::npos) << py;
+  EXPECT_NE(py.find("heard 3 of 3 frames"), std::string::npos) << py;
   EXPECT_NE(py.find("python 0"), std::string::npos) << py;
   // candump -e: every frame corrupted for a while, each receiver's error frames.
   const std::string dumped = on_bus(beside(

@@ -1,7 +1,8 @@
 """A program on a timed interface of the user-space bus (1 Mbit/s, vcan0),
 with its own socket calls and with python-can, unchanged: its echo comes at
 the frame's end of frame with MSG_CONFIRM, a full transmit queue answers
-ENOBUFS, and python-can reads the controller's error frames. Another program
+ENOBUFS, python-can reads the controller's error frames, and a socket opened
+after the others closed hears the wire. Another program
 (candump) acknowledges its frames. argv[1]: the canhil program, for the fault.
 Prints what it saw; exit status 0 when all of it holds."""
 import errno
@@ -64,4 +65,22 @@ if errors:
     m = errors[0]
     print(f"python-can: {len(errors)} error frames, the first 0x{m.arbitration_id:X} {list(m.data)}")
 ok = ok and len(errors) >= 3 and all(m.arbitration_id & 0x20 for m in errors)  # CAN_ERR_ACK
+
+# This process's sockets have all closed: a new one hears another program's
+# frames (its old controller once made the new one miss them all).
+time.sleep(0.5)  # the fault's half second over
+r = socket.socket(socket.PF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
+r.settimeout(2)
+r.bind(("vcan0",))
+subprocess.run(["cangen", "vcan0", "-n", "3", "-g", "5", "-I", "77", "-L", "2"], check=True)
+heard = 0
+try:
+    while heard < 3:
+        if struct.unpack("=I", r.recv(16)[:4])[0] == 0x77:
+            heard += 1
+except socket.timeout:
+    pass
+r.close()
+print(f"a socket opened after the others closed: heard {heard} of 3 frames")
+ok = ok and heard == 3
 sys.exit(0 if ok else 1)
