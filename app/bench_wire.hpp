@@ -2,11 +2,10 @@
 //   - the five-robot virtual-time run with every bus on a timed wire at
 //     1 Mbit/s against the same run with instant buses, CPU time, runs in
 //     turns; target (issue 54): at least 0.9 of the instant run's speed;
-//   - the wire model alone (wire::WireBus): frames through arbitration,
-//     delivery and error confinement per second of CPU, for scale;
 //   - the user-space bus's delivery against the model's ideal end of frame
-//     in real time (target: p99 at most 100 us): not measured while the
-//     broker does not time frames (docs/wire.md).
+//     in real time, read by a reader asleep in recv and by one awake when the
+//     frame is due (target, for the latter: p99 at most 100 us), beside the
+//     instant bus's whole hop. The model alone: build/plain/bench/wire_bench.
 #pragma once
 
 #include <memory>
