@@ -259,7 +259,7 @@ struct StuffTable {
   }
   // A byte's step, indexed by state * 256 + byte: the stuff bits added
   // (top 4 bits) and the next state times 256, ready to index the next byte.
-  std::array<std::uint16_t, 9 * 256> t{};
+  std::array<std::uint16_t, std::size_t{9} * 256> t{};
   constexpr StuffTable() {
     for (std::uint8_t state = 0; state < 9; ++state) {
       for (std::uint32_t byte = 0; byte < 256; ++byte) {
