@@ -40,7 +40,6 @@
 // from `seed`). Not thread-safe.
 #pragma once
 
-#include <array>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
