@@ -34,19 +34,23 @@ inline std::string shell(const std::string& line, int* status = nullptr) {
   return out;
 }
 
-/// A shell line: `listener` started in the background, waited for until it
-/// has a socket bound on the bus (as `canhil bus list` shows it; a fixed
-/// sleep was too short for a loaded machine's sanitizer build, whose
-/// listener missed the first frames), then `actions`; the listener then
-/// stopped with SIGINT when `interrupt`, else waited for as it ends by
-/// itself; then `after`. Past 30 s the actions run anyway, and the test's
+/// A shell line that waits until the process whose pid is in shell variable
+/// `pid` has a socket bound on the bus, as `canhil bus list` shows it (a
+/// fixed sleep was too short for a loaded machine's sanitizer build, whose
+/// listener missed the first frames); past 30 s it goes on, and the test's
 /// counts say what was missed.
+inline std::string until_bound(const std::string& pid) {
+  return "k=0; until " + canhil_binary() + " bus list 2>/dev/null | grep -q \"pid $" + pid +
+         " ([^)]*)  [^u]\"; do k=$((k+1)); [ $k -gt 600 ] && break; sleep 0.05; done; ";
+}
+
+/// A shell line: `listener` started in the background and waited for until
+/// it has a socket bound (until_bound), then `actions`; the listener then
+/// stopped with SIGINT when `interrupt`, else waited for as it ends by
+/// itself; then `after`.
 inline std::string beside(const std::string& listener, const std::string& actions, bool interrupt,
                           const std::string& after = "") {
-  const std::string bound = "until " + canhil_binary() +
-                            " bus list 2>/dev/null | grep -q \"pid $p ([^)]*)  [^u]\"; do k=$((k+1)); "
-                            "[ $k -gt 600 ] && break; sleep 0.05; done; ";
-  return listener + " & p=$!; k=0; " + bound + actions + "; " + (interrupt ? "kill -INT $p; " : "") + "wait $p" +
+  return listener + " & p=$!; " + until_bound("p") + actions + "; " + (interrupt ? "kill -INT $p; " : "") + "wait $p" +
          (after.empty() ? "" : "; " + after);
 }
 

@@ -35,6 +35,7 @@ namespace ub = canhil::userbus;
 using canhil::test::beside;
 using canhil::test::OwnBus;
 using canhil::test::shell;
+using canhil::test::until_bound;
 
 TEST_F(OwnBus, StartsListsAndStops) {
   EXPECT_FALSE(ub::broker_alive(paths_));
@@ -267,7 +268,7 @@ TEST_F(OwnBus, AReceiverStoppedForAWhileLosesNothingAndStallsNobody) {
   // grace alone the stopped one lost frames after 10 ms.
   start({"vcan0"});
   const std::string out = on_bus(
-      "candump -L vcan0 > a.log & a=$!; candump -L vcan0 > b.log & b=$!; sleep 0.3; "
+      "candump -L vcan0 > a.log & a=$!; candump -L vcan0 > b.log & b=$!; " + until_bound("a") + until_bound("b") +
       "kill -STOP $b; cangen vcan0 -g 0.25 -n 2000 -I i -L 8 -D i; sleep 0.2; kill -CONT $b; sleep 0.5; "
       "kill -INT $a $b; wait");
   EXPECT_EQ(lines_of(folder_, "a.log"), 2000U) << out;
@@ -283,7 +284,8 @@ TEST_F(OwnBus, ASocketThatNeverReadsCostsTheBusNoWait) {
   start({"vcan0"});
   const std::string out = on_bus(
       "/usr/bin/python3 -c \"import socket, time; s = socket.socket(socket.PF_CAN, socket.SOCK_RAW, socket.CAN_RAW); "
-      "s.bind((\\\"vcan0\\\",)); time.sleep(3)\" & q=$!; sleep 0.6; cangen vcan0 -g 0 -n 8000 -L 8; wait $q");
+      "s.bind((\\\"vcan0\\\",)); time.sleep(3)\" & q=$!; " +
+      until_bound("q") + "cangen vcan0 -g 0 -n 8000 -L 8; wait $q");
   EXPECT_EQ(ub::broker_waits(paths_).count, 0U) << out;
   EXPECT_GT(ub::interface_counts(paths_).at(0).dropped, 0U) << "the quiet cangen's buffer and backlog overflowed";
 }
