@@ -218,7 +218,7 @@ std::uint32_t FaultInjector::target_id(const FaultRule& rule) const {
     }
     return m->id();
   }
-  if (wire_only(rule.kind) && rule.target == kLaptopTarget) return kNoId;
+  if (rule.target == kLaptopTarget) return kNoId;
   const bool node = std::any_of(node_names_.begin(), node_names_.end(),
                                 [&](const std::string& n) { return names_node(rule.target, n); });
   if (!node) {
@@ -229,7 +229,7 @@ std::uint32_t FaultInjector::target_id(const FaultRule& rule) const {
     }
     throw SetupError("fault '" + rule.text + "': '" + rule.target +
                      "' is neither a message of the message set nor a node; the nodes are" + known +
-                     (wire_only(rule.kind) ? std::string(", and laptop (the handler's controller)") : std::string()));
+                     ", and laptop (the handler)");
   }
   return kNoId;
 }
@@ -250,7 +250,8 @@ std::vector<FaultCount> FaultInjector::counts() const {
 
 bool FaultInjector::matches(std::size_t k, const std::string& node, std::uint32_t id) const {
   const FaultRule& rule = rules_[k];
-  if (rule.target == "*") return true;
+  // `*` is every node's frame: the laptop's only by name or by its messages.
+  if (rule.target == "*") return node != kLaptopTarget;
   if (rule_ids_[k] != kNoId) return rule_ids_[k] == id;
   return names_node(rule.target, node);
 }

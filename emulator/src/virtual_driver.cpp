@@ -111,6 +111,7 @@ VirtualDriver::VirtualDriver(Session& session, VirtualOptions options)
                                                             link.layout(), rig.agent);
       stack->handler->hw().set_bit_rate(session_.options().ftt.bit_rate);
       stack->handler->hw().set_stamps(session_.options().ftt.stamps);
+      stack->handler->set_fault_hook(rig.faults.get());  // rules naming `laptop` or its messages
       if (buses_[r]->wire_bus() != nullptr) {
         controllers_[r][can_nodes::kLaptopTarget] = buses_[r]->controller_of(stack->handler->endpoint());
       }

@@ -108,7 +108,7 @@ TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
   } catch (const SetupError& e) {
     EXPECT_NE(std::string(e.what()).find("FTT_master"), std::string::npos) << e.what();
   }
-  for (const char* not_a_node : {"drop:laptop", "busoff:M6_1"}) {
+  for (const char* not_a_node : {"drop:Laptop", "busoff:M6_1"}) {
     try {
       injector({not_a_node});
       ADD_FAILURE() << not_a_node << " was accepted";
@@ -116,6 +116,25 @@ TEST_F(FaultTest, BadRulesSayWhatIsWrongAndTheSyntax) {
       EXPECT_NE(std::string(e.what()).find(not_a_node), std::string::npos) << e.what();
     }
   }
+}
+
+TEST_F(FaultTest, TheLaptopIsHitByNameOrByItsMessagesNeverByTheStar) {
+  // `*` stays every node's frame: a run's draws and outcomes with the rules
+  // it had before the reference handler's frames were hooked are unchanged.
+  FaultInjector inj = injector({"drop:*", "delay:M6_1:10", "duplicate:laptop:2"});
+  const auto id = [&](const char* name) { return set->codec().find(name)->id(); };
+  const FaultDecision m6 = inj.on_send(kLaptopTarget, frame(id("M6_1")), 0s);
+  EXPECT_FALSE(m6.drop);
+  EXPECT_EQ(m6.delay, 10ms);
+  EXPECT_EQ(m6.duplicates, 2);
+  const FaultDecision m7 = inj.on_send(kLaptopTarget, frame(id("M7")), 0s);
+  EXPECT_EQ(m7.delay, 0ms);
+  EXPECT_EQ(m7.duplicates, 2);
+  EXPECT_TRUE(inj.on_send("Pic_base", frame(id("M1")), 0s).drop);
+  const auto counts = inj.counts();
+  EXPECT_EQ(counts[0].matched, 1U) << "the star: Pic_base's frame only";
+  EXPECT_EQ(counts[1].matched, 1U);
+  EXPECT_EQ(counts[2].matched, 2U);
 }
 
 TEST_F(FaultTest, EachKindChangesOnlyItsTarget) {

@@ -7,8 +7,10 @@
 #include <sys/shm.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 
+#include "canhil/can_nodes/fault.hpp"
 #include "canhil/rtdb/cambada_types.h"
 #include "canhil/rtdb/rtdb.h"
 #include "rtdb_user.h"
@@ -135,6 +137,40 @@ TEST_F(HwCommTest, SetPoseAndResetThroughM5) {
   EXPECT_EQ(after.pending, 0);
   EXPECT_EQ(count_sent(0x0A1), 1);
   EXPECT_EQ(count_sent(0x0A2), 1);
+}
+
+TEST_F(HwCommTest, FaultRulesNamingTheLaptopReachWhatItSends) {
+  // A slow laptop (docs/faults.md): its M6_1 10 ms late, the set-pose's M5_1
+  // lost; the handler believes both sent, the bus carries them late or not.
+  can_nodes::FaultInjector faults({can_nodes::parse_fault("delay:M6_1:10"), can_nodes::parse_fault("drop:M5_1")}, set_,
+                                  {"Pic_base"}, 1);
+  laptop_->set_fault_hook(&faults);
+  auto listener = robot_->bus().attach("listener", 1 << 16);
+  CMD_Vel v{0, 0.5f, 0, false};
+  DB_put(CMD_VEL, &v);
+  CMD_SetPose sp{1.5f, -2.0f, 0.75f, 0, 1};
+  DB_put(CMD_SETPOSE, &sp);
+  robot_->run_until(1s);
+  Nanos last_m6_2{-1};
+  int late = 0, m6_1 = 0, m5_1 = 0;
+  while (auto f = listener->receive()) {
+    if (f->frame.id == 0x132) last_m6_2 = f->time;
+    if (f->frame.id == 0x0A1) ++m5_1;
+    if (f->frame.id != 0x131) continue;
+    ++m6_1;
+    late += f->time - last_m6_2 >= 10ms ? 1 : 0;  // its M6_2, sent with it, went 10 ms before
+  }
+  EXPECT_GT(m6_1, 25);
+  EXPECT_EQ(late, m6_1) << "every M6_1 one EC after its M6_2";
+  EXPECT_EQ(m5_1, 0);
+  EXPECT_EQ(count_sent(0x0A2), 1);
+  const auto counts = faults.counts();
+  EXPECT_EQ(count_sent(0x131), m6_1) << "what reached the bus";
+  EXPECT_LE(counts[0].applied - static_cast<std::uint64_t>(m6_1), 1U) << "the last one may still wait its 10 ms";
+  EXPECT_EQ(counts[1].applied, 1U);
+  CMD_Pos p{};
+  DB_get(CAMBADA_1, CMD_POS, &p);
+  EXPECT_GT(std::abs(p.px - 1.5), 0.5) << "the odometry never set: M5_1 lost";
 }
 
 }  // namespace

@@ -3,9 +3,12 @@
 // virtual run gives every robot, and what the handler's own tests drive.
 #pragma once
 
+#include <algorithm>
 #include <memory>
+#include <utility>
 #include <vector>
 
+#include "canhil/can_nodes/fault.hpp"
 #include "canhil/can_nodes/memory_bus.hpp"
 #include "canhil/can_nodes/virtual_time.hpp"
 #include "canhil/laptop/hwcomm.hpp"
@@ -22,6 +25,7 @@ class HandlerParticipant final : public can_nodes::Participant {
                      bool keep_sent = false)
       : ep_(bus.attach("handler", 1 << 16)),
         keep_sent_(keep_sent),
+        clock_(clock),
         hw_(
             std::move(set), ec, [this](const frames::CanFrame& f) { return send(f); }, [&clock] { return clock.now(); },
             db, layout, space) {
@@ -42,8 +46,23 @@ class HandlerParticipant final : public can_nodes::Participant {
   }
   /// The handler's deadlines move only as it handles frames and time.
   bool wakeup_is_own() const override { return true; }
-  void tick(Nanos now) override { hw_.on_time(now); }
-  Nanos next_wakeup() const override { return hw_.next_deadline(); }
+  void tick(Nanos now) override {
+    while (!delayed_.empty() && delayed_.front().first <= now) {
+      const frames::CanFrame f = delayed_.front().second;
+      delayed_.erase(delayed_.begin());
+      send_now(f);
+    }
+    hw_.on_time(now);
+  }
+  Nanos next_wakeup() const override {
+    return delayed_.empty() ? hw_.next_deadline() : std::min(hw_.next_deadline(), delayed_.front().first);
+  }
+  /// The robot's fault rules on what the handler sends, as on a node's frames
+  /// (can_nodes/fault.hpp: rules naming `laptop` or one of its messages):
+  /// dropped, delayed, corrupted, duplicated, an error frame first. The
+  /// handler is not told: it believes the frame sent, as a program whose
+  /// frames the bus loses. nullptr: none.
+  void set_fault_hook(can_nodes::FaultHook* hook) noexcept { hook_ = hook; }
 
   laptop::HwComm& hw() noexcept { return hw_; }
   /// Its place on the bus (its controller, on a timed wire).
@@ -54,6 +73,27 @@ class HandlerParticipant final : public can_nodes::Participant {
 
  private:
   bool send(const frames::CanFrame& f) {
+    if (hook_ == nullptr) return send_now(f);
+    const Nanos now = clock_.now();
+    const can_nodes::FaultDecision d = hook_->on_send(can_nodes::kLaptopTarget, f, now);
+    if (d.drop) return true;
+    if (d.error_frame) ep_->send(frames::make_bus_error_frame());
+    frames::CanFrame out = f;
+    if (d.corrupt_byte >= 0 && d.corrupt_byte < 8) out.data[static_cast<std::size_t>(d.corrupt_byte)] ^= d.corrupt_mask;
+    bool sent = true;
+    for (int copy = 0; copy <= d.duplicates; ++copy) {
+      if (d.delay > Nanos{0}) {
+        const Nanos due = now + d.delay;
+        delayed_.insert(
+            std::upper_bound(delayed_.begin(), delayed_.end(), due, [](Nanos t, const auto& e) { return t < e.first; }),
+            {due, out});
+      } else {
+        sent = send_now(out) && sent;
+      }
+    }
+    return sent;
+  }
+  bool send_now(const frames::CanFrame& f) {
     if (keep_sent_) sent_.push_back(f);
     return ep_->send(f) == can_nodes::SendStatus::kOk;
   }
@@ -61,6 +101,9 @@ class HandlerParticipant final : public can_nodes::Participant {
   std::unique_ptr<can_nodes::MemoryEndpoint> ep_;
   bool keep_sent_;
   std::vector<frames::CanFrame> sent_;
+  const can_nodes::Clock& clock_;
+  can_nodes::FaultHook* hook_ = nullptr;
+  std::vector<std::pair<Nanos, frames::CanFrame>> delayed_;  // by due time
   laptop::HwComm hw_;
 };
 
