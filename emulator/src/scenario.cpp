@@ -209,8 +209,8 @@ namespace {
 Scenario read_text(std::string_view toml_text, const std::string& file_name) {
   Scenario s;
   const toml::table root = physics::parse_toml(toml_text, file_name);  // parsed once, for the world and the run
-  s.world = physics::read_world_params(root, file_name,
-                                       {"run", "coach", "laptop", "external", "teams", "referee", "vision", "bus"});
+  s.world = physics::read_world_params(
+      root, file_name, {"run", "coach", "laptop", "external", "teams", "referee", "vision", "bus", "firmware"});
   const bool teams = detail::read_teams(root, file_name, s);  // places the teams' robots
   if (s.world.robots.empty()) s.world.robots.push_back(kDefaultPlacement);
   const std::size_t robots = s.world.robots.size();
@@ -262,6 +262,12 @@ Scenario read_text(std::string_view toml_text, const std::string& file_name) {
     if (const auto v = r.number("data_bit_rate", 0, 8'000'000)) s.bus.data_bit_rate = static_cast<std::uint32_t>(*v);
     if (const auto v = r.number("restart_ms", 0, 60'000)) s.bus.restart_ms = *v;
     if (const auto v = r.number("tx_queue", 1, 4096)) s.bus.tx_queue = static_cast<std::size_t>(*v);
+  }
+  if (const toml::table* firmware = root["firmware"].as_table()) {
+    const TableReader r(*firmware, "firmware", file_name, {"watchdog_ms", "motor_watchdog_ms", "alive_timeout_ms"});
+    s.firmware.watchdog_ms = r.number("watchdog_ms", 1, 60'000);
+    s.firmware.motor_watchdog_ms = r.number("motor_watchdog_ms", 1, 60'000);
+    s.firmware.alive_timeout_ms = r.number("alive_timeout_ms", 1, 60'000);
   }
   if (const toml::table* external = root["external"].as_table()) {
     detail::read_external(TableReader(*external, "external", file_name, detail::external_fields()), s.external);

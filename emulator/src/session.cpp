@@ -113,6 +113,10 @@ Session::~Session() {
 
 void Session::build_nodes(const Endpoints& endpoints, IoMode mode, Nanos start) {
   node_params_ = node_params_for(scenario_.world.robot, options_.ftt);
+  const FirmwareSettings& fw = scenario_.firmware;
+  if (fw.watchdog_ms) node_params_.watchdog = from_ms(*fw.watchdog_ms);
+  if (fw.motor_watchdog_ms) node_params_.motor_watchdog = from_ms(*fw.motor_watchdog_ms);
+  if (fw.alive_timeout_ms) node_params_.alive_timeout = from_ms(*fw.alive_timeout_ms);
   for (Rig& rig : rigs_) {
     physics::Robot& robot = world_->robot(rig.index);
     if (mode == IoMode::kShared) {

@@ -33,6 +33,11 @@ TEST(Scenarios, FileMistakesNameTheFileTheFieldAndWhatToDo) {
       << error_of("[bus]\nbit_rate = 2000000\n");
   EXPECT_NE(error_of("[bus]\nbitrate = 1\n").find("bus.bitrate: unknown field; known here: bit_rate"),
             std::string::npos);
+  EXPECT_NE(error_of("[firmware]\nwatchdog_ms = 0\n").find("bad.toml:2: firmware.watchdog_ms: must be a number from 1"),
+            std::string::npos)
+      << error_of("[firmware]\nwatchdog_ms = 0\n");
+  EXPECT_EQ(parse_scenario("[firmware]\nwatchdog_ms = 400\n", "fw.toml").firmware.watchdog_ms, 400.0);
+  EXPECT_FALSE(parse_scenario("", "none.toml").firmware.watchdog_ms) << "unset: the nodes' default";
   const Scenario ok = parse_scenario(robot + robot + "[run]\nseed = 9\nagents = [3, 1]\n", "ok.toml");
   EXPECT_EQ(ok.seed, 9u);
   EXPECT_EQ(ok.agents, (std::vector<int>{3, 1}));

@@ -42,6 +42,10 @@
 //   data_bit_rate = 0                #   CAN FD's data phase (0: the bit rate)
 //   restart_ms = 100                 #   a bus-off controller restarts after (0: only on request)
 //   tx_queue = 10                    #   frames a controller queues (can-dev's txqueuelen)
+//   [firmware]                       # the emulated nodes' firmware, where a team's differs
+//   watchdog_ms = 150                #   Pic_base brakes after this long without an M6
+//   motor_watchdog_ms = 100          #   a motor node brakes after this long without an M1
+//   alive_timeout_ms = 200           #   the system monitor calls a node dead after this long unseen
 //   [referee]                        # goals, kick-offs, throw-ins, corners, dropped balls
 //   enabled = true                   #   (default: with two teams); each rule can be off:
 //   kickoff_after_goal = true        #   out_of_play, dropped_ball; stuck_s = 10,
@@ -167,6 +171,14 @@ struct BusSettings {
   std::optional<std::size_t> tx_queue;
 };
 
+/// The emulated nodes' firmware settings ([firmware]); unset: the defaults
+/// of can_nodes::NodeParams (docs/nodes.md).
+struct FirmwareSettings {
+  std::optional<double> watchdog_ms;
+  std::optional<double> motor_watchdog_ms;
+  std::optional<double> alive_timeout_ms;
+};
+
 /// At most two teams (CAMBADA's RTDB has two sets of databases).
 inline constexpr std::size_t kMostTeams = 2;
 
@@ -196,6 +208,7 @@ struct Scenario {
   RefereeRules referee;        ///< [referee]; on by default with two teams
   VisionImperfections vision;  ///< [vision]
   BusSettings bus;             ///< [bus]
+  FirmwareSettings firmware;   ///< [firmware]
 
   std::size_t robot_count() const noexcept { return world.robots.size(); }
   /// True when some robot leaves a node to a real board (after complete()).
