@@ -30,6 +30,8 @@ int run_nodes(Args& args, const std::optional<std::string>& dbc);
 int run_coach(Args& args, const std::optional<std::string>& dbc);
 /// `canhil match SCENARIO`: whole matches of two teams in virtual time.
 int run_match(Args& args, const std::optional<std::string>& dbc);
+/// `canhil test FILES...`: test files run and judged (verdict/).
+int run_test(Args& args, const std::optional<std::string>& dbc);
 int run_view(Args& args, const std::optional<std::string>& dbc);
 int run_play(Args& args, const std::optional<std::string>& dbc);
 /// `canhil pman list`: every robot's PMan table, its processes and their activations.

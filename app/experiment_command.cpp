@@ -6,10 +6,10 @@
 #include "canhil/frames/describe.hpp"
 #include "canhil/physics/config.hpp"
 #include "canhil/physics/experiments.hpp"
+#include "canhil/physics/svg_plot.hpp"
 #include "canhil/vision_emu/runner.hpp"
 #include "canhil/vision_emu/svg.hpp"
 #include "commands.hpp"
-#include "svg_plot.hpp"
 
 namespace canhil::app {
 namespace {
@@ -156,7 +156,7 @@ int run_experiment(Args& args) {
   }
   if (svg) {
     std::ofstream out(*svg);
-    out << svg_plots(result.plots);
+    out << physics::svg_plots(result.plots);
     if (!out) throw UsageError("cannot write " + *svg);
     if (!json) std::printf("\nplot written to %s\n", svg->c_str());
   }

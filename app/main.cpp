@@ -114,6 +114,16 @@ const Command kCommands[] = {
                                               of its own
 )",
      canhil::app::run_match},
+    {"test", "a team's regression tests as files: expectations, verdicts, JUnit XML",
+     R"(  canhil test FILE.toml... [--junit FILE.xml] [--jobs N] [--artifacts DIR] [--quiet]
+                                              each test file's scenario in virtual time with its events
+                                              (faults, coach orders, a ball moved, a set-pose); a line per
+                                              expectation on the bus, the world and the RTDB with its
+                                              verdict and measure; exit 0 only if all pass; --junit for
+                                              the CI, --artifacts DIR keeps each file's trace, world log
+                                              and verdicts (docs/testing-your-software.md)
+)",
+     canhil::app::run_test},
     {"view", "a recorded run (world log and trace) in the web viewer, with a timeline",
      R"(  canhil view WORLD_LOG.csv [--trace FILE] [--config SCENARIO.toml] [--view-port 8765]
              [--view-listen 127.0.0.1] [--duration S]

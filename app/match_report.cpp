@@ -7,8 +7,8 @@
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/match_stats.hpp"
+#include "canhil/physics/svg_plot.hpp"
 #include "match_records.hpp"
-#include "svg_plot.hpp"
 
 namespace canhil::app {
 namespace {
@@ -179,7 +179,7 @@ int run_match_report(const std::vector<std::string>& files, bool json, const std
     }
     rate.series = {value, low, high};
     std::ofstream out(*svg);
-    out << svg_plots({histogram, rate});
+    out << physics::svg_plots({histogram, rate});
     if (!out) throw SetupError("cannot write " + *svg);
   }
   return 0;

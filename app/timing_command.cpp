@@ -12,12 +12,12 @@
 #include "canhil/can_nodes/clock.hpp"
 #include "canhil/can_nodes/socketcan_bus.hpp"
 #include "canhil/frames/candump.hpp"
+#include "canhil/physics/svg_plot.hpp"
 #include "canhil/timing/analysis.hpp"
 #include "commands.hpp"
 #include "dbc_choice.hpp"
 #include "log_file.hpp"
 #include "stop_signals.hpp"
-#include "svg_plot.hpp"
 
 namespace canhil::app {
 namespace {
@@ -88,7 +88,7 @@ int run_timing(Args& args, const std::optional<std::string>& dbc) {
       plot.series.push_back(std::move(s));
     }
     std::ofstream out(*svg);
-    out << svg_plots({plot});
+    out << physics::svg_plots({plot});
   }
   if (!report.capture_ok() && !allow_empty) {
     // Its own message and status: a team's CI must not read a broken capture as clean timing.

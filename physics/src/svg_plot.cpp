@@ -1,4 +1,4 @@
-#include "svg_plot.hpp"
+#include "canhil/physics/svg_plot.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "canhil/base/xml_text.hpp"
 
-namespace canhil::app {
+namespace canhil::physics {
 namespace {
 
 constexpr double kWidth = 760;
@@ -35,7 +35,7 @@ std::string num(double v) {
   return buf;
 }
 
-void plot_one(std::ostringstream& os, const physics::Plot& p, double y0) {
+void plot_one(std::ostringstream& os, const Plot& p, double y0) {
   double xmin = std::numeric_limits<double>::infinity();
   double xmax = -xmin;
   double ymin = xmin;
@@ -106,7 +106,7 @@ void plot_one(std::ostringstream& os, const physics::Plot& p, double y0) {
 
 }  // namespace
 
-std::string svg_plots(const std::vector<physics::Plot>& plots) {
+std::string svg_plots(const std::vector<Plot>& plots) {
   std::ostringstream os;
   const double total = kHeight * static_cast<double>(std::max<std::size_t>(1, plots.size()));
   os << "<svg xmlns='http://www.w3.org/2000/svg' width='" << kWidth << "' height='" << total
@@ -116,4 +116,4 @@ std::string svg_plots(const std::vector<physics::Plot>& plots) {
   return os.str();
 }
 
-}  // namespace canhil::app
+}  // namespace canhil::physics

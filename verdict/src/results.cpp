@@ -1,0 +1,92 @@
+// Results: as `canhil test` prints them, as a worker sends them back (one
+// line of JSON), and many files run in worker processes (verdict.hpp).
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <sstream>
+
+#include "canhil/external/match_workers.hpp"
+#include "canhil/verdict/verdict.hpp"
+
+namespace canhil::verdict {
+
+std::string to_json_line(const FileResult& r) {
+  nlohmann::json verdicts = nlohmann::json::array();
+  for (const Verdict& v : r.verdicts) {
+    verdicts.push_back({{"name", v.name},
+                        {"check", v.check},
+                        {"line", v.line},
+                        {"passed", v.passed},
+                        {"measured", v.measured},
+                        {"message", v.message}});
+  }
+  return nlohmann::json{{"file", r.file},          {"name", r.name},           {"error", r.error},
+                        {"verdicts", verdicts},    {"virtual_s", r.virtual_s}, {"wall_s", r.wall_s},
+                        {"artifacts", r.artifacts}}
+      .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+FileResult from_json_line(const std::string& line) {
+  const nlohmann::json j = nlohmann::json::parse(line);
+  FileResult r;
+  r.file = j.at("file");
+  r.name = j.at("name");
+  r.error = j.at("error");
+  r.virtual_s = j.at("virtual_s");
+  r.wall_s = j.at("wall_s");
+  r.artifacts = j.at("artifacts");
+  for (const auto& v : j.at("verdicts")) {
+    r.verdicts.push_back(
+        {v.at("name"), v.at("check"), v.at("line"), v.at("passed"), v.at("measured"), v.at("message")});
+  }
+  return r;
+}
+
+std::string format_result(const FileResult& r) {
+  std::ostringstream out;
+  char head[256];
+  std::snprintf(head, sizeof head, "%s: %s (%.2f s of virtual time in %.2f s)\n", r.file.c_str(),
+                r.error.empty() ? (r.passed() ? "passed" : "FAILED") : "ERROR", r.virtual_s, r.wall_s);
+  out << head;
+  if (!r.error.empty()) out << "  " << r.error << '\n';
+  for (const Verdict& v : r.verdicts) {
+    out << (v.passed ? "  PASS  " : "  FAIL  ") << v.name << "  (" << v.measured << ")\n";
+    if (!v.passed) out << "        " << r.file << ':' << v.line << ": " << v.message << '\n';
+  }
+  return out.str();
+}
+
+std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>& files, int jobs,
+                                       const TestOptions& options, const std::atomic<bool>& stop,
+                                       const std::function<void(const FileResult&)>& each) {
+  std::vector<FileResult> results;
+  const auto done = [&](FileResult r) {
+    if (each) each(r);
+    results.push_back(std::move(r));
+  };
+  if (jobs <= 1 || files.size() <= 1) {
+    for (const auto& f : files) {
+      if (stop) break;
+      done(run_test_file(f, options));
+    }
+    return results;
+  }
+  std::vector<std::uint64_t> indices(files.size());
+  for (std::size_t k = 0; k < files.size(); ++k) indices[k] = k;
+  external::MatchJobs work;
+  work.play = [&](int, std::uint64_t k, const std::function<void(double)>&) {
+    return to_json_line(run_test_file(files[k], options));
+  };
+  work.failed = [&](std::uint64_t k, const std::string& why) {
+    FileResult r;
+    r.file = files[k].string();
+    r.name = files[k].stem().string();
+    r.error = "its worker process ended: " + why;
+    return to_json_line(r);
+  };
+  work.done = [&](const std::string& line) { done(from_json_line(line)); };
+  external::play_in_workers(indices, jobs, work, stop);
+  return results;
+}
+
+}  // namespace canhil::verdict
