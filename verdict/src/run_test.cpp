@@ -91,12 +91,12 @@ std::vector<RtdbReader> rtdb_readers(const TestFile& test, emulator::Session& se
       continue;
     }
     RtdbReader r;
-    r.quantity = item->quantity(x.quantity);
-    if (!r.quantity) {
+    if (!item->has(x.quantity)) {
       record.rtdb_errors[k] = x.item + " has no quantity " + x.quantity + " in the layout " + link->layout().name() +
                               "; it has " + quantity_list(*item);
       continue;
     }
+    r.quantity = item->quantity(x.quantity);
     r.expectation = k;
     r.db = &link->database();
     r.agent = rig.agent;
