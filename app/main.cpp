@@ -115,13 +115,15 @@ const Command kCommands[] = {
 )",
      canhil::app::run_match},
     {"test", "a team's regression tests as files: expectations, verdicts, JUnit XML",
-     R"(  canhil test FILE.toml... [--junit FILE.xml] [--jobs N] [--artifacts DIR] [--quiet]
+     R"(  canhil test FILE.toml... [--junit FILE.xml] [--jobs N] [--artifacts DIR] [--external] [--quiet]
                                               each test file's scenario in virtual time with its events
                                               (faults, coach orders, a ball moved, a set-pose); a line per
                                               expectation on the bus, the world and the RTDB with its
                                               verdict and measure; exit 0 only if all pass; --junit for
                                               the CI, --artifacts DIR keeps each file's trace, world log
-                                              and verdicts (docs/testing-your-software.md)
+                                              and verdicts; --external: the scenario's [external]
+                                              processes (your handler and agent) in lockstep, their
+                                              logs with the artifacts (docs/testing-your-software.md)
 )",
      canhil::app::run_test},
     {"view", "a recorded run (world log and trace) in the web viewer, with a timeline",
@@ -326,7 +328,7 @@ int run_command_line(int argc, char** argv) {
     if (name.empty()) return usage_error("no command given", nullptr);
     if (command == nullptr) return usage_error(("unknown command \"" + name + "\"").c_str(), nullptr);
     // The commands that open SocketCAN interfaces find the user-space bus by themselves.
-    for (const char* can : {"run", "nodes", "dump", "timing", "play", "bench", "match"}) {
+    for (const char* can : {"run", "nodes", "dump", "timing", "play", "bench", "match", "test"}) {
       if (name == can) canhil::userbus::join_bus_if_needed(argv);
     }
     return command->run(args, dbc);

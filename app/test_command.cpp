@@ -6,6 +6,7 @@
 
 #include "args.hpp"
 #include "canhil/external/private_rtdb.hpp"
+#include "canhil/external/time_shim.hpp"
 #include "canhil/verdict/junit.hpp"
 #include "canhil/verdict/verdict.hpp"
 #include "commands.hpp"
@@ -19,6 +20,7 @@ int run_test(Args& args, const std::optional<std::string>& dbc) {
   const double jobs = number_option(args, "--jobs", 1);
   if (jobs < 1 || jobs > 256 || std::floor(jobs) != jobs) throw UsageError("--jobs takes a whole number from 1 to 256");
   const bool quiet = args.flag("--quiet");
+  const bool external = args.flag("--external");
   std::vector<std::string> words = args.positionals();
   words.erase(words.begin());  // "test"
   if (words.empty()) throw UsageError("test takes one or more test files (emulator/scenarios/tests/*.toml)");
@@ -26,6 +28,13 @@ int run_test(Args& args, const std::optional<std::string>& dbc) {
   verdict::TestOptions options;
   options.dbc = dbc;
   if (artifacts) options.artifacts = *artifacts;
+  if (external || verdict::any_with_processes(files)) {
+    // canhil under the time shim before anything runs (it may start itself again).
+    options.external = external;
+    options.shim = external::find_timeshim();
+    options.team_preload = external::preload_shim_into_self(options.shim);
+    options.alone = jobs == 1;
+  }
   // Runs of its own: RTDB keys of this process, so it never meets a live robot's database.
   external::use_private_rtdb_keys(external::kRunKeyPrefix);
   stop_on_signals();

@@ -179,10 +179,22 @@ void TeamProcesses::reap(Nanos now) {
     if (s.ended || s.pid <= 0) continue;
     if (waitpid(s.pid, &s.status, WNOHANG) != s.pid) continue;
     s.ended = true;
+    s.ended_at = now;
     std::fprintf(say_, "canhil: `%s` (agent %d, pid %d) ended at t = %.3f s: %s %d\n", s.command.c_str(), s.agent,
                  s.pid, to_seconds(now), WIFSIGNALED(s.status) ? "signal" : "exit status",
                  WIFSIGNALED(s.status) ? WTERMSIG(s.status) : WEXITSTATUS(s.status));
   }
+}
+
+std::vector<ProcessEnd> TeamProcesses::ends() const {
+  std::vector<ProcessEnd> out;
+  for (const Started& s : started_) {
+    if (!s.ended) continue;
+    const bool signalled = WIFSIGNALED(s.status);
+    out.push_back(
+        {s.command, s.agent, s.pid, signalled, signalled ? WTERMSIG(s.status) : WEXITSTATUS(s.status), s.ended_at});
+  }
+  return out;
 }
 
 std::string TeamProcesses::not_started() const {

@@ -64,4 +64,29 @@ xmllint --noout --schema "$xsd" error.xml 2> lint.txt || { cat lint.txt error.xm
 status=0
 "$canhil" test > usage.txt 2>&1 || status=$?
 [[ $status -eq 2 ]] || fail "no files: exit $status, not the usage error's 2"
-echo "test_command_test: examples pass, a planted regression fails, JUnit valid, artifacts kept"
+# The team's processes (here the reference handler and agent on PATH) in
+# lockstep, on canhil's user-space bus: the example passes; its planted
+# regression (a weak kick) fails exactly the goal; an agent that ends early
+# fails processes_ok, saying when; their logs are kept with the artifacts.
+export PATH="$build/laptop:$PATH"
+processes="$src/emulator/scenarios/tests/processes/score.toml"
+sed 's|--power 40|--power 3|' "$src/emulator/scenarios/one_robot_processes.toml" > weak_scenario.toml
+sed 's|--power 40|--duration 1 --power 40|' "$src/emulator/scenarios/one_robot_processes.toml" > short_scenario.toml
+sed 's|scenario = "../../one_robot_processes.toml"|scenario = "weak_scenario.toml"|' "$processes" > weak.toml
+sed 's|scenario = "../../one_robot_processes.toml"|scenario = "short_scenario.toml"|' "$processes" > short.toml
+status=0
+"$canhil" bus exec -- "$canhil" test "$processes" weak.toml short.toml --jobs 2 --junit ext.xml --artifacts ext \
+  > ext.txt 2>&1 || status=$?
+[[ $status -eq 1 ]] || { cat ext.txt; fail "processes: exit $status, not 1"; }
+grep -q "score.toml: passed" ext.txt || { cat ext.txt; fail "the processes' example did not pass"; }
+grep -q "weak.toml: FAILED" ext.txt && grep -q "  FAIL  scores in the opponent goal by 6 s" ext.txt ||
+  { cat ext.txt; fail "the weak kick did not fail the goal"; }
+fails_of() { awk -v f="$1" '/^[^ ].*: (passed|FAILED|ERROR) \(/ {on = index($0, f) > 0} on && /^  FAIL  / {n++} END {print n + 0}' ext.txt; }
+[[ "$(fails_of weak.toml)" == 1 ]] || { cat ext.txt; fail "the weak kick failed more than the goal"; }
+grep -q "  FAIL  the handler and agent answer to the end and exit cleanly" ext.txt || { cat ext.txt; fail "no processes_ok failure"; }
+grep -q "ended at t = 1.000 s, before the run's end: exit status 0" ext.txt || { cat ext.txt; fail "no early end"; }
+xmllint --noout --schema "$xsd" ext.xml 2> lint.txt || { cat lint.txt ext.xml; fail "ext.xml does not validate"; }
+for f in canhil-agent1-canhil-agent.log canhil-agent1-canhil-hwcomm.log canhil.log trace.log; do
+  [[ -s "ext/score/$f" ]] || fail "no ext/score/$f"
+done
+echo "test_command_test: examples pass, a planted regression fails, JUnit valid, artifacts kept, processes judged"

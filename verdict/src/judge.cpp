@@ -260,6 +260,32 @@ Verdict rtdb_quantity(Verdict v, const Expectation& x, std::size_t index, const 
   return pass(v, format("%s inside %s in all %zu samples from %.2f s", what.c_str(), bounds.c_str(), n, x.from_s));
 }
 
+Verdict processes(Verdict v, const Expectation& x, const Record& r) {
+  if (!r.external) {
+    return fail(v, "no processes",
+                "the run had none of the team's processes: processes_ok is for `canhil test --external`", r);
+  }
+  if (r.stuck) return fail(v, "stuck", "the run stopped " + *r.stuck, r, r.end_s);
+  for (const external::ProcessEnd& e : r.ends) {
+    const std::string how = format("%s %d", e.signalled ? "signal" : "exit status", e.code);
+    const std::string who = format("`%s` (agent %d, pid %d)", e.command.c_str(), e.agent, static_cast<int>(e.pid));
+    if (e.during_run) {
+      return fail(
+          v, who + " ended",
+          format("%s ended at t = %.3f s, before the run's end: ", who.c_str(), to_seconds(*e.during_run)) + how, r,
+          to_seconds(*e.during_run));
+    }
+    if (!x.exit_codes.empty() &&
+        (e.signalled || std::find(x.exit_codes.begin(), x.exit_codes.end(), e.code) == x.exit_codes.end())) {
+      return fail(v, who + " " + how, who + " ended with " + how + " when the run's end stopped it (SIGINT)", r);
+    }
+  }
+  std::string codes;
+  for (const external::ProcessEnd& e : r.ends) codes += (codes.empty() ? "" : ", ") + std::to_string(e.code);
+  return pass(v, format("%zu process(es) answered to the end; stopped with %s", r.started,
+                        codes.empty() ? "nothing reported" : codes.c_str()));
+}
+
 }  // namespace
 
 Verdict judge(const Expectation& x, const TestFile& test, const Record& record) {
@@ -286,6 +312,8 @@ Verdict judge(const Expectation& x, const TestFile& test, const Record& record) 
       return within_bounds(v, x, record);
     case Check::kRtdb:
       return rtdb_quantity(v, x, static_cast<std::size_t>(&x - test.expectations.data()), record);
+    case Check::kProcesses:
+      return processes(v, x, record);
   }
   return v;
 }

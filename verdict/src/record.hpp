@@ -11,6 +11,7 @@
 
 #include "canhil/base/time.hpp"
 #include "canhil/emulator/goal_watcher.hpp"
+#include "canhil/external/team_processes.hpp"
 #include "canhil/timing/analysis.hpp"
 #include "canhil/timing/bound_check.hpp"
 #include "canhil/verdict/test_file.hpp"
@@ -46,6 +47,11 @@ struct Record {
   std::map<std::size_t, std::vector<RtdbSample>> rtdb;  ///< per expectation index
   std::map<std::size_t, std::string> rtdb_errors;       ///< per expectation index: why it could not be read
   std::string where;                                    ///< where the trace and world log are (or how to keep them)
+  // With the team's processes (--external):
+  bool external = false;
+  std::size_t started = 0;                 ///< processes waited for
+  std::optional<std::string> stuck;        ///< why the run stopped early: one stopped answering, or never ran
+  std::vector<external::ProcessEnd> ends;  ///< how those that ended, ended
 };
 
 /// The verdict of expectation `x` on `record`.

@@ -5,7 +5,12 @@
 #include <cstdio>
 #include <sstream>
 
+#include <algorithm>
+
+#include "canhil/base/setup_error.hpp"
+#include "canhil/emulator/scenario.hpp"
 #include "canhil/external/match_workers.hpp"
+#include "canhil/external/worker.hpp"
 #include "canhil/verdict/verdict.hpp"
 
 namespace canhil::verdict {
@@ -56,9 +61,35 @@ std::string format_result(const FileResult& r) {
   return out.str();
 }
 
+bool any_with_processes(const std::vector<std::filesystem::path>& files) {
+  for (const auto& f : files) {
+    try {
+      if (load_test_file(f).external) return true;
+    } catch (const SetupError&) {
+      // its run says what is wrong with it
+    }
+  }
+  return false;
+}
+
 std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>& files, int jobs,
                                        const TestOptions& options, const std::atomic<bool>& stop,
                                        const std::function<void(const FileResult&)>& each) {
+  // Each file's artifacts in a folder of its own: its name, and for files of
+  // one name, the folders above it too ("processes-score").
+  std::vector<TestOptions> each_options(files.size(), options);
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    const auto same = [&](const std::filesystem::path& other) { return other.stem() == files[k].stem(); };
+    if (std::count_if(files.begin(), files.end(), same) < 2) continue;
+    std::string name = files[k].stem().string();
+    for (std::filesystem::path up = files[k].parent_path(); !up.empty() && up.has_filename(); up = up.parent_path()) {
+      name = up.filename().string() + "-" + name;
+      bool unique = true;
+      for (std::size_t j = 0; j < files.size(); ++j) unique &= j == k || each_options[j].artifact_name != name;
+      if (unique) break;
+    }
+    each_options[k].artifact_name = name;
+  }
   std::vector<FileResult> results;
   const auto done = [&](FileResult r) {
     if (each) each(r);
@@ -67,7 +98,7 @@ std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>&
   if (jobs <= 1 || files.size() <= 1) {
     for (const auto& f : files) {
       if (stop) break;
-      done(run_test_file(f, options));
+      done(run_test_file(f, each_options[static_cast<std::size_t>(&f - files.data())]));
     }
     return results;
   }
@@ -75,7 +106,7 @@ std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>&
   for (std::size_t k = 0; k < files.size(); ++k) indices[k] = k;
   external::MatchJobs work;
   work.play = [&](int, std::uint64_t k, const std::function<void(double)>&) {
-    return to_json_line(run_test_file(files[k], options));
+    return to_json_line(run_test_file(files[k], each_options[k]));
   };
   work.failed = [&](std::uint64_t k, const std::string& why) {
     FileResult r;
@@ -85,6 +116,24 @@ std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>&
     return to_json_line(r);
   };
   work.done = [&](const std::string& line) { done(from_json_line(line)); };
+  std::vector<std::string> interfaces;  // every file's robots', on each worker's own bus
+  if (options.external || any_with_processes(files)) {
+    for (const auto& f : files) {
+      try {
+        for (const std::string& i : emulator::load_scenario(load_test_file(f).scenario).interfaces) {
+          if (std::find(interfaces.begin(), interfaces.end(), i) == interfaces.end()) interfaces.push_back(i);
+        }
+      } catch (const SetupError&) {
+        // its run says what is wrong with it
+      }
+    }
+    external::prepare_external_workers();
+    work.enter = [&](int) -> std::shared_ptr<void> { return std::make_shared<external::ExternalWorker>(interfaces); };
+    work.play = [&](int, std::uint64_t k, const std::function<void(double)>&) {
+      external::ExternalWorker::next_match();  // a fresh IPC namespace: nothing the last file's processes left
+      return to_json_line(run_test_file(files[k], each_options[k]));
+    };
+  }
   external::play_in_workers(indices, jobs, work, stop);
   return results;
 }

@@ -11,6 +11,8 @@
 #include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/session.hpp"
 #include "canhil/emulator/virtual_driver.hpp"
+#include "canhil/external/external_run.hpp"
+#include "canhil/external/team_processes.hpp"
 #include "canhil/frames/candump.hpp"
 #include "canhil/frames/dbc.hpp"
 #include "canhil/rtdb/database.hpp"
@@ -167,6 +169,69 @@ void judge_buses(const TestFile& test, const emulator::Session& session, const s
   for (const auto& c : checkers) record.bounds.push_back(c.finish());
 }
 
+// The run from now to `end`: each event at its time, a sample every
+// elementary cycle and after each event. `Driver` has now() and
+// run_until(); a ProcessStuck it throws ends the run, recorded.
+template <class Driver>
+void drive(const TestFile& test, emulator::Session& session, Driver& driver, Nanos end,
+           std::vector<RtdbReader>& readers, Record& record) {
+  const Nanos ec = session.options().ftt.elementary_cycle;
+  std::size_t next_event = 0;
+  sample(0, session, readers, record);
+  try {
+    while (driver.now() < end) {
+      while (next_event < test.events.size() && from_seconds(test.events[next_event].at_s) <= driver.now()) {
+        apply(test.events[next_event++], session);
+      }
+      Nanos next = std::min(driver.now() + ec, end);
+      if (next_event < test.events.size()) next = std::min(next, from_seconds(test.events[next_event].at_s));
+      driver.run_until(next);
+      sample(to_seconds(driver.now()), session, readers, record);
+    }
+  } catch (const emulator::ProcessStuck& e) {
+    record.stuck = e.what();
+  }
+  record.end_s = to_seconds(driver.now());
+}
+
+// The run with the team's own processes (the scenario's [external]) in
+// lockstep: started, attached, driven, stopped; their output and canhil's
+// word on them into `keep` when artifacts are kept. Returns the trace.
+std::string run_external(const TestFile& test, const TestOptions& options, emulator::Session& session,
+                         const std::filesystem::path& keep, Nanos end, std::vector<RtdbReader>& readers,
+                         Record& record) {
+  record.external = true;
+  FILE* say = stderr;
+  std::unique_ptr<FILE, int (*)(FILE*)> log(nullptr, &std::fclose);
+  if (!keep.empty()) {
+    log.reset(std::fopen((keep / "canhil.log").c_str(), "w"));
+    if (!log) throw SetupError("cannot write " + (keep / "canhil.log").string());
+    say = log.get();
+  }
+  external::ExternalSetup setup;
+  setup.shim = options.shim;
+  setup.team_preload = options.team_preload;
+  setup.say = say;
+  setup.spin_bus = options.alone;
+  setup.name = test.name;
+  if (!keep.empty()) {
+    setup.output.folder = keep.string();
+  } else {
+    setup.output.onto_stderr = true;
+  }
+  external::ExternalRun run(session, std::move(setup));
+  try {
+    run.start();
+  } catch (const emulator::ProcessStuck& e) {
+    record.stuck = e.what();
+  }
+  if (!record.stuck) drive(test, session, run, end, readers, record);
+  run.stop();
+  record.ends = run.processes().ends();
+  record.started = run.expected();
+  return run.driver().trace();
+}
+
 void write(const std::filesystem::path& path, const std::string& text) {
   std::ofstream out(path);
   out << text;
@@ -184,6 +249,7 @@ std::size_t FileResult::failures() const noexcept {
 }
 
 FileResult run_test(const TestFile& test, const TestOptions& options) {
+  const bool with_processes = options.external || test.external;
   FileResult result;
   result.file = test.path.string();
   result.name = test.name;
@@ -193,9 +259,12 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
     so.messages = frames::MessageSet::create(
         frames::load_dbc(options.dbc ? std::filesystem::path(*options.dbc) : frames::default_dbc_path()));
     const std::filesystem::path keep =
-        options.artifacts.empty() ? std::filesystem::path() : options.artifacts / test.path.stem();
+        options.artifacts.empty()
+            ? std::filesystem::path()
+            : options.artifacts / (options.artifact_name.empty() ? test.path.stem().string() : options.artifact_name);
     if (!keep.empty()) so.world_log_period = std::chrono::milliseconds(50);
     emulator::RunOverrides o;
+    if (with_processes) o.mode = emulator::RunMode::kExternal;
     o.seed = test.seed;
     o.duration_s = test.duration_s;
     o.bit_rate = test.bit_rate;
@@ -207,8 +276,8 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
       throw SetupError(test.path.string() + ": [test] scenario " + test.scenario.string() + ": " + e.what());
     }
     const Nanos end = from_seconds(plan.length.seconds);
+    if (with_processes) external::require_told_goal(plan.scenario, false, stderr);
     emulator::Session session(std::move(plan));
-    emulator::VirtualDriver driver(session);
     Record record;
     record.robots.resize(session.robot_count());
     for (std::size_t r = 0; r < session.robot_count(); ++r) {
@@ -228,26 +297,21 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
       }
     }
     std::vector<RtdbReader> readers = rtdb_readers(test, session, record);
-    const Nanos ec = session.options().ftt.elementary_cycle;
-    std::size_t next_event = 0;
-    sample(0, session, readers, record);
-    while (driver.now() < end) {
-      while (next_event < test.events.size() && from_seconds(test.events[next_event].at_s) <= driver.now()) {
-        apply(test.events[next_event++], session);
+    std::string trace;
+    if (with_processes) {
+      if (!keep.empty()) std::filesystem::create_directories(keep);
+      trace = run_external(test, options, session, keep, end, readers, record);
+    } else {
+      emulator::VirtualDriver driver(session);
+      drive(test, session, driver, end, readers, record);
+      for (std::size_t r = 0; r < session.robot_count(); ++r) {
+        const laptop::HwComm* hw = driver.handler(r);
+        record.latencies.push_back(hw != nullptr ? hw->stats().latencies : std::vector<Nanos>{});
       }
-      Nanos next = std::min(driver.now() + ec, end);
-      if (next_event < test.events.size()) next = std::min(next, from_seconds(test.events[next_event].at_s));
-      driver.run_until(next);
-      sample(to_seconds(driver.now()), session, readers, record);
+      trace = driver.trace();
     }
-    result.virtual_s = to_seconds(driver.now());
-    record.end_s = result.virtual_s;
+    result.virtual_s = record.end_s;
     record.goals = session.goals();
-    for (std::size_t r = 0; r < session.robot_count(); ++r) {
-      const laptop::HwComm* hw = driver.handler(r);
-      record.latencies.push_back(hw != nullptr ? hw->stats().latencies : std::vector<Nanos>{});
-    }
-    const std::string trace = driver.trace();
     judge_buses(test, session, trace, record);
     if (!keep.empty()) {
       std::filesystem::create_directories(keep);

@@ -21,9 +21,9 @@ using emulator::TableReader;
 
 constexpr double kLongest_s = 24 * 3600.0;  // a day of virtual time
 
-constexpr std::array<Check, 9> kChecks = {Check::kBallInGoal,     Check::kRobotNear,    Check::kSpeedBelow,
-                                          Check::kFttViolations,  Check::kErrorFrames,  Check::kJitter,
-                                          Check::kHandlerLatency, Check::kWithinBounds, Check::kRtdb};
+constexpr std::array<Check, 10> kChecks = {
+    Check::kBallInGoal, Check::kRobotNear,      Check::kSpeedBelow,   Check::kFttViolations, Check::kErrorFrames,
+    Check::kJitter,     Check::kHandlerLatency, Check::kWithinBounds, Check::kRtdb,          Check::kProcesses};
 
 // The fields each check takes, beside name and robot.
 std::vector<std::string> fields_of(Check c) {
@@ -44,6 +44,8 @@ std::vector<std::string> fields_of(Check c) {
       return {"message"};
     case Check::kRtdb:
       return {"between", "at_s", "from_s", "age_at_most_ms"};
+    case Check::kProcesses:
+      return {"exit_codes"};
   }
   return {};
 }
@@ -196,7 +198,13 @@ Expectation read_expectation(const toml::table& t, std::size_t index, const std:
       x.bound_ms = *r.number(key, 0, 1e6);
       break;
     case Check::kWithinBounds:
+    case Check::kProcesses:
       if (!*r.boolean(key)) r.fail(*r.get(key), key, "can only be true (leave the expectation out otherwise)");
+      for (const double c : numbers(r, "exit_codes", 1, 256, "[0, 130]")) {
+        if (c != std::floor(c) || c < 0 || c > 255)
+          r.fail(*r.get("exit_codes"), "exit_codes", "exit statuses are 0 to 255");
+        x.exit_codes.push_back(static_cast<int>(c));
+      }
       break;
     case Check::kRtdb: {
       const std::string what = *r.text(key, "\"CMD_POS.x\"");
@@ -241,6 +249,8 @@ const char* check_key(Check c) noexcept {
       return "within_bounds";
     case Check::kRtdb:
       return "rtdb";
+    case Check::kProcesses:
+      return "processes_ok";
   }
   return "?";
 }
@@ -270,7 +280,8 @@ TestFile parse_test_file(const std::string& text, const std::filesystem::path& f
                                "missing: a test file starts with [test] and its scenario, e.g. scenario = "
                                "\"one_robot.toml\"");
   }
-  const TableReader r(*test, "test", file, {"name", "scenario", "duration_s", "seed", "bit_rate", "faults"});
+  const TableReader r(*test, "test", file,
+                      {"name", "scenario", "duration_s", "seed", "bit_rate", "faults", "external"});
   f.name = r.text("name", "\"the robot scores\"").value_or(file_name.stem().string());
   const auto scenario = r.text("scenario", "\"../one_robot.toml\"");
   if (!scenario) r.fail(*test, "scenario", "missing: the scenario the test runs, relative to this file");
@@ -278,6 +289,7 @@ TestFile parse_test_file(const std::string& text, const std::filesystem::path& f
   f.duration_s = r.number("duration_s", 0.01, kLongest_s);
   if (const auto s = r.number("seed", 0, 9.0e15)) f.seed = static_cast<std::uint64_t>(*s);
   f.bit_rate = r.number("bit_rate", 0, 1'000'000);
+  f.external = r.boolean("external").value_or(false);
   if (const toml::array* faults = r.array("faults")) {
     for (const toml::node& n : *faults) {
       const auto rule = n.value<std::string>();

@@ -73,6 +73,8 @@ class ExternalRun {
   emulator::ExternalDriver& driver() noexcept { return driver_; }
   const emulator::ExternalDriver& driver() const noexcept { return driver_; }
   const lockstep::Conductor& conductor() const noexcept { return conductor_; }
+  /// The team's processes: how those that ended, ended.
+  const TeamProcesses& processes() const noexcept { return processes_; }
   const std::string& name() const noexcept { return setup_.name; }
   /// How many processes it waits for (after start()).
   std::size_t expected() const noexcept { return expected_; }

@@ -50,6 +50,18 @@ struct ProcessOutput {
   bool onto_stderr = false;
 };
 
+/// How one of the team's processes ended.
+struct ProcessEnd {
+  std::string command;
+  int agent = 0;
+  pid_t pid = -1;
+  bool signalled = false;  ///< ended by a signal (code: its number), else by exit (code: its status)
+  int code = 0;
+  /// The virtual time it was found ended while the run went on; none when
+  /// the run's end stopped it (stop_all).
+  std::optional<Nanos> during_run;
+};
+
 class TeamProcesses {
  public:
   /// `environment`: the lockstep's (Conductor::environment), NAME=VALUE each.
@@ -73,6 +85,8 @@ class TeamProcesses {
   /// SIGINT (their Ctrl-C), then SIGKILL for any still there after five seconds.
   void stop_all();
   std::size_t started() const noexcept { return started_.size(); }
+  /// The processes that have ended so far, in the order they were started.
+  std::vector<ProcessEnd> ends() const;
   /// What every process is started with (NAME=VALUE each).
   const std::vector<std::string>& environment() const noexcept { return environment_; }
 
@@ -83,6 +97,7 @@ class TeamProcesses {
     pid_t pid = -1;
     int status = 0;
     bool ended = false;
+    std::optional<Nanos> ended_at;  // found ended by reap(), while the run went on
   };
   std::vector<std::string> environment_;
   FILE* say_;

@@ -11,6 +11,8 @@
 //   seed = 1                           # default: the scenario's
 //   bit_rate = 1000000                 # default: the scenario's ([bus], else the DBC's)
 //   faults = ["drop:M4_1:0.1"]         # more rules from the start
+//   external = true                    # the scenario's [external] processes (the team's
+//                                      #   handler and agent) in lockstep, as with --external
 //
 //   [[events]]
 //   name = "laptop silent"             # what expectations call it (default: "event N")
@@ -65,6 +67,7 @@ enum class Check : std::uint8_t {
   kHandlerLatency,  ///< handler_latency_p99_at_most_ms (the reference handler's)
   kWithinBounds,    ///< within_bounds = true: `canhil timing --analyse` schedulable, the trace inside every bound
   kRtdb,            ///< rtdb = "ITEM.quantity", between = [lo, hi], at_s or from_s, age_at_most_ms
+  kProcesses,       ///< processes_ok = true (--external): all attached, none stuck or ended early; exit_codes
 };
 /// The check's key as a file writes it.
 const char* check_key(Check c) noexcept;
@@ -95,6 +98,8 @@ struct Expectation {
   double low = 0, high = 0;      ///< kRtdb: between
   std::optional<double> at_s;    ///< kRtdb: at this instant (else from from_s to the end)
   std::optional<double> age_ms;  ///< kRtdb: at most this old
+  // the team's processes
+  std::vector<int> exit_codes;  ///< kProcesses: the statuses allowed when the run's end stops them (empty: any)
 };
 
 struct TestFile {
@@ -105,6 +110,7 @@ struct TestFile {
   std::optional<std::uint64_t> seed;
   std::optional<double> bit_rate;
   std::vector<std::string> faults;
+  bool external = false;      ///< with the scenario's [external] processes
   std::vector<Event> events;  ///< in time order (a stable sort of the file's)
   std::vector<Expectation> expectations;
   /// The event named `name`, or nullptr.

@@ -43,6 +43,19 @@ struct TestOptions {
   /// Where each file's trace, world log and verdicts go: a folder per file,
   /// named after it (empty: nothing kept).
   std::filesystem::path artifacts;
+  /// The file's folder under `artifacts` (empty: the file's name without
+  /// .toml; run_test_files gives files of one name folders apart).
+  std::string artifact_name;
+  /// With the team's own processes, the scenario's [external] command
+  /// lines, in lockstep (docs/lockstep.md), for every file (a file that says
+  /// `external = true` runs so anyway): this process is under the time
+  /// shim already (external::preload_shim_into_self) and the robots'
+  /// interfaces exist (canhil's user-space bus, or vcan). Their output and
+  /// canhil's word on them go with the artifacts (else to stderr).
+  bool external = false;
+  std::string shim;          ///< the time shim (external::find_timeshim)
+  std::string team_preload;  ///< what the team's processes keep preloaded after it
+  bool alone = true;         ///< no other run beside it (--jobs 1): the bus's broker may spin
 };
 
 /// Runs one test file; never throws for what is wrong with the file or its
@@ -58,6 +71,10 @@ FileResult run_test(const TestFile& test, const TestOptions& options);
 std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>& files, int jobs,
                                        const TestOptions& options, const std::atomic<bool>& stop,
                                        const std::function<void(const FileResult&)>& each = {});
+
+/// Whether any of `files` runs with the team's processes (`external =
+/// true`); a file that cannot be read counts as not.
+bool any_with_processes(const std::vector<std::filesystem::path>& files);
 
 /// A result as one line of JSON (what a worker sends back) and back.
 std::string to_json_line(const FileResult& r);
