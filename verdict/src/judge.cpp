@@ -230,7 +230,7 @@ Verdict rtdb_quantity(Verdict v, const Expectation& x, std::size_t index, const 
   const auto found = r.rtdb.find(index);
   const std::string what = x.item + "." + x.quantity;
   if (found == r.rtdb.end() || found->second.empty()) {
-    return fail(v, "never written", what + " was never written in agent's database", r);
+    return fail(v, "never written", what + format(" was never written in robot %zu's database", x.robot), r);
   }
   const auto bad = [&](const RtdbSample& s) {
     return s.value < x.low || s.value > x.high || (x.age_ms && s.age_ms > *x.age_ms);
@@ -265,7 +265,7 @@ Verdict processes(Verdict v, const Expectation& x, const Record& r) {
     return fail(v, "no processes",
                 "the run had none of the team's processes: processes_ok is for `canhil test --external`", r);
   }
-  if (r.stuck) return fail(v, "stuck", "the run stopped " + *r.stuck, r, r.end_s);
+  if (r.stuck) return fail(v, "stuck", "the run stopped " + *r.stuck, r, r.end_s);  // "at t = T s: why"
   for (const external::ProcessEnd& e : r.ends) {
     const std::string how = format("%s %d", e.signalled ? "signal" : "exit status", e.code);
     const std::string who = format("`%s` (agent %d, pid %d)", e.command.c_str(), e.agent, static_cast<int>(e.pid));

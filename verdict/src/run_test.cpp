@@ -213,7 +213,6 @@ std::string run_external(const TestFile& test, const TestOptions& options, emula
   setup.team_preload = options.team_preload;
   setup.say = say;
   setup.spin_bus = options.alone;
-  setup.name = test.name;
   if (!keep.empty()) {
     setup.output.folder = keep.string();
   } else {
