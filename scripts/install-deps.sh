@@ -30,8 +30,9 @@ if [[ "$set_of" == all ]]; then
     python3 python3-canmatrix python3-can
     # the viewer's browser tests (headless, driven by puppeteer-core from npm)
     chromium
-    # canhil test --junit checked against Jenkins' JUnit schema (tests/app/test_command_test.sh)
-    libxml2-utils
+    # canhil test --junit checked against Jenkins' JUnit schema (tests/app/test_command_test.sh);
+    # the Debian package built by CPack, its man pages and docs/ci.md's YAML checked (tests/install/deb_test.sh)
+    libxml2-utils dpkg-dev file groff-base python3-yaml
     # canhil match split over hosts, as docs/teams.md shows (tests/app/parallel_shards_test.sh)
     parallel
     # a busy machine beside the tests (CANHIL_TEST_LOAD=1 scripts/test.sh, docs/testing.md)

@@ -89,6 +89,10 @@ TEST(TestFile, MistakesNameTheFileTheLineTheFieldAndWhatToWrite) {
   const std::string named = "[[expect]]\nname = \"quiet\"\nerror_frames_at_most = 0\n";
   EXPECT_NE(error_of(kHead + named + named).find("dir/t.toml:6: expect.name: 'quiet' names two expectations"),
             std::string::npos);
+  EXPECT_NE(
+      error_of("[run]\nseed = 1\n[[robots]]\nx_m = 0\n").find("dir/t.toml:1: run: this is a scenario, not a test file"),
+      std::string::npos)
+      << error_of("[run]\nseed = 1\n[[robots]]\nx_m = 0\n");
   EXPECT_NE(error_of(kHead + kExpect + "[tset]\n").find("dir/t.toml:5: tset: unknown table"), std::string::npos);
   EXPECT_NE(error_of(kHead + "seed = -1\n" + kExpect).find("test.seed: must be a number from 0"), std::string::npos);
 }

@@ -265,6 +265,14 @@ const Event* TestFile::event(const std::string& called) const {
 TestFile parse_test_file(const std::string& text, const std::filesystem::path& file_name) {
   const std::string file = file_name.string();
   const toml::table root = physics::parse_toml(text, file);
+  if (root.get("test") == nullptr) {
+    for (const char* scenario_table : {"run", "robots", "teams", "ball_start", "field", "external", "laptop"}) {
+      if (root.get(scenario_table) == nullptr) continue;
+      throw physics::ConfigError(file, static_cast<int>(root.get(scenario_table)->source().begin.line), scenario_table,
+                                 "this is a scenario, not a test file: give canhil test the test files, whose [test] "
+                                 "table names their scenario (keep scenarios apart, e.g. in tests/scenarios/)");
+    }
+  }
   for (const auto& [k, v] : root) {
     const std::string key(k.str());
     if (key != "test" && key != "events" && key != "expect") {
