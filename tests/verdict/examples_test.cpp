@@ -151,6 +151,11 @@ TEST_F(Examples, AFileThatCannotRunIsAnErrorNamingWhy) {
   EXPECT_NE(
       run_test_file(folder_ / "robot.toml", {}).error.find("robot.toml:3: expect.robot: the scenario has 1 robot(s)"),
       std::string::npos);
+  std::ofstream(folder_ / "late.toml") << "[test]\nscenario = \"" << test::source_dir()
+                                       << "/emulator/scenarios/one_robot.toml\"\nduration_s = 2\n[[events]]\nat_s = 3\n"
+                                          "coach = \"stop\"\n[[expect]]\nerror_frames_at_most = 0\n";
+  const std::string late = run_test_file(folder_ / "late.toml", {}).error;
+  EXPECT_NE(late.find("late.toml:4: events.at_s: 3 s is after the run's end (2 s)"), std::string::npos) << late;
 }
 
 TEST_F(Examples, AnRtdbItemTheLayoutLacksFailsSayingWhatItHas) {

@@ -2,6 +2,7 @@
 // expectations need recorded as it goes, then every expectation judged
 // (verdict.hpp).
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <unordered_map>
@@ -284,6 +285,12 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
       record.interfaces.push_back(session.rig(r).interface);
     }
     for (const Event& e : test.events) {
+      if (from_seconds(e.at_s) > end) {
+        char why[160];
+        std::snprintf(why, sizeof why, "%g s is after the run's end (%g s)", e.at_s, to_seconds(end));
+        throw SetupError(test.path.string() + ":" + std::to_string(e.line) + ": events.at_s: " + why +
+                         ": make it earlier, or the run longer ([test] duration_s)");
+      }
       if (e.robot >= session.robot_count() && (e.kind == Event::Kind::kSetPose || e.running)) {
         throw SetupError(test.path.string() + ":" + std::to_string(e.line) + ": events.robot: the scenario has " +
                          std::to_string(session.robot_count()) + " robot(s), numbered from 0");
