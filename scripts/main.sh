@@ -2,7 +2,8 @@
 # main.sh — the main job of the README: set everything up, build canhil, then
 # show it working, one short section each: the message set, a recorded bus
 # decoded, physics calibration, a vision frame, and the demo (one robot's whole
-# loop) in virtual time with its timing report and in real time on vcan. Every
+# loop) in virtual time with its timing report, the regression tests of the
+# shipped examples (canhil test), and in real time on vcan. Every
 # file it writes is under build/plain/main/.
 #   bash scripts/main.sh                  everything (installs packages and builds first)
 #   bash scripts/main.sh --no-realtime    without the real-time demo on vcan
@@ -61,8 +62,13 @@ section "8. the demo on the timed wire with a fault: the handler's controller go
 # The report says what the bus-off cost (M6 missing for 840 ms): exit status 1, expected here.
 { "$canhil" timing --stamps end "$out/wire.log" || true; } | grep -E "M6_1 +missing"
 
+section "9. the team's regression tests: canhil test on the shipped examples, a verdict per expectation and a JUnit report for the CI ($out/tests.xml; docs/testing-your-software.md)"
+"$canhil" test emulator/scenarios/tests/*.toml --junit "$out/tests.xml" --artifacts "$out/tests" > "$out/tests.txt" ||
+  { cat "$out/tests.txt"; exit 1; }
+grep -E "^canhil test:" "$out/tests.txt"
+
 if [[ $realtime -eq 1 ]]; then
-  section "9. the same demo in real time on vcan0: emulator, handler and agent as three processes (scripts/demo.sh)"
+  section "10. the same demo in real time on vcan0: emulator, handler and agent as three processes (scripts/demo.sh)"
   bash vcan_setup/with-vcan.sh -- bash scripts/demo.sh 20 "$bin"
 fi
 
@@ -71,6 +77,7 @@ goal=$(grep -m1 "GOAL" "$out/demo.txt" | sed 's/^ *//' || true)
 echo "   virtual time: ${goal:-no goal}; $(grep -m1 'real time)' "$out/demo.txt" | sed 's/^canhil run: //')"
 wire_goal=$(grep -m1 "GOAL" "$out/wire.txt" | sed 's/^ *//' || true)
 echo "   on a timed wire, with the handler's controller bus-off from 1 s to 1.8 s: ${wire_goal:-no goal}"
+echo "   regression tests: $(grep -m1 '^canhil test:' "$out/tests.txt" | sed 's/^canhil test: //')"
 echo "   files: $out/ (demo.log: candump trace, demo.csv: world log, vision.svg); docs/user-guide.md goes on from here"
 
 section "watch it: the demo again at twice real time in the viewer, with plots (docs/viewer.md; saves in $out/saves)"

@@ -11,7 +11,7 @@ fail() { echo "FAIL: $*"; echo "$out"; exit 1; }
 # grep -q reads a here-string, never a pipe: it leaves at the first match, and
 # under pipefail the writer's SIGPIPE would fail the check that matched.
 lines=$(echo "$out" | wc -l)
-[[ $lines -le 116 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
+[[ $lines -le 124 ]] || fail "the main job prints $lines lines; a newcomer should not have to scroll through a trace"
 trace_lines=$(echo "$out" | grep -c '^(1700000000' || true)
 [[ $trace_lines -le 8 ]] || fail "$trace_lines lines of the sample trace (a few are enough)"
 grep -q 'canhil dump: 183 frames from frames/samples/one_robot.log' <<< "$out" || fail "no decode summary"
@@ -26,6 +26,11 @@ grep -qE 'handler +error-active, .* 1 bus-off, 1 restarts' <<< "$out" || fail "t
 grep -q '^   on a timed wire, with the handler.s controller bus-off from 1 s to 1.8 s: GOAL at' <<< "$out" ||
   fail "no closing line for the timed wire"
 grep -q 'M6_1   missing' <<< "$out" || fail "the timing report does not show the M6 the bus-off cost"
+# The regression tests (docs/testing-your-software.md): every shipped example passed, with a JUnit report.
+grep -qE '^canhil test: [0-9]+ file\(s\), [0-9]+ expectation\(s\): [0-9]+ passed, 0 failed, 0 file\(s\) with errors' <<< "$out" ||
+  fail "the regression tests' summary is missing"
+grep -q '^   regression tests: ' <<< "$out" || fail "no closing line for the regression tests"
+[[ -s "$build/main/tests.xml" ]] || fail "no JUnit report $build/main/tests.xml"
 grep -qE 'viewer (at|stays up)|no viewer' <<< "$(tail -3 <<< "$out")" || fail "the main job does not end with the viewer's address"
 while IFS= read -r header; do
   [[ "$header" == *"("*")"* ]] || fail "section header without where its files are: $header"
