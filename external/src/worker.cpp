@@ -67,8 +67,7 @@ ExternalWorker::ExternalWorker(const std::vector<std::string>& interfaces) {
   }
   std::error_code unread;
   const std::string ns = std::filesystem::read_symlink("/proc/self/ns/ipc", unread).string();
-  std::fprintf(stderr,
-               "canhil: a worker (pid %d) on a bus of its own at %s, in an IPC namespace of its own (%s%s)\n",
+  std::fprintf(stderr, "canhil: a worker (pid %d) on a bus of its own at %s, in an IPC namespace of its own (%s%s)\n",
                static_cast<int>(getpid()), paths_.folder.c_str(), ns.c_str(),
                way == IpcWay::kUserNamespace ? ", inside a user namespace" : "");
 }
