@@ -22,6 +22,9 @@ command -v xmllint >/dev/null || { echo "FAIL: xmllint is missing (apt-get insta
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 cd "$work"
+# A user-space bus of this test's own: `canhil bus exec` joins a bus that runs
+# at its folder, and another test's (install.deb's) must not be this one's.
+export CANHIL_BUS_DIR="$work/bus"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
 examples=("$src"/emulator/scenarios/tests/*.toml)

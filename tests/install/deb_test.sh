@@ -12,6 +12,8 @@ work=$2
 rm -rf "$work"
 mkdir -p "$work"
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# A user-space bus of this test's own (`canhil bus exec` joins one that runs at its folder); ci_doc_test's commands inherit it.
+export CANHIL_BUS_DIR="$work/bus"
 (cd "$build" && cpack -G DEB -B "$work/pack" > "$work/cpack.log" 2>&1) || { cat "$work/cpack.log"; fail "cpack"; }
 version=$(sed -n 's/^project(canhil VERSION \([0-9.]*\).*/\1/p' "$(dirname "${BASH_SOURCE[0]}")/../../CMakeLists.txt")
 deb="$work/pack/canhil_${version}_amd64.deb"
