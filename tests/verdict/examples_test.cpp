@@ -155,7 +155,23 @@ TEST_F(Examples, AFileThatCannotRunIsAnErrorNamingWhy) {
                                        << "/emulator/scenarios/one_robot.toml\"\nduration_s = 2\n[[events]]\nat_s = 3\n"
                                           "coach = \"stop\"\n[[expect]]\nerror_frames_at_most = 0\n";
   const std::string late = run_test_file(folder_ / "late.toml", {}).error;
-  EXPECT_NE(late.find("late.toml:4: events.at_s: 3 s is after the run's end (2 s)"), std::string::npos) << late;
+  EXPECT_NE(late.find("late.toml:4: events.at_s: 3 s is not before the run's end (2 s)"), std::string::npos) << late;
+}
+
+TEST_F(Examples, ChecksThatCannotBeMetOnWhatTheRunHadFailSayingWhy) {
+  // A sporadic message has no period to jitter about; a hold the run ends
+  // before is not a hold seen.
+  std::ofstream(folder_ / "cannot.toml")
+      << "[test]\nscenario = \"" << test::source_dir() << "/emulator/scenarios/one_robot.toml\"\nduration_s = 2\n"
+      << "[[events]]\nname = \"stop\"\nat_s = 1.95\ncoach = \"stop\"\n"
+      << "[[expect]]\nname = \"M7 jitter\"\njitter_p99_at_most_ms = 0.01\nmessage = \"M7\"\n"
+      << "[[expect]]\nname = \"held\"\nspeed_below_m_s = 19\nafter = \"stop\"\nhold_ms = 200\n";
+  const FileResult r = run_test_file(folder_ / "cannot.toml", {});
+  ASSERT_EQ(r.verdicts.size(), 2U) << r.error;
+  EXPECT_FALSE(r.verdicts[0].passed);
+  EXPECT_NE(r.verdicts[0].message.find("M7 is sporadic: it has a minimum gap, not a period"), std::string::npos)
+      << r.verdicts[0].message;
+  EXPECT_FALSE(r.verdicts[1].passed) << "below 19 m/s all along, but the run ends 50 ms after the event: no hold seen";
 }
 
 TEST_F(Examples, AnRtdbItemTheLayoutLacksFailsSayingWhatItHas) {

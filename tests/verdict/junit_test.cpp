@@ -31,7 +31,7 @@ TEST(Junit, OneSuitePerFileOneCasePerExpectationFailuresWithTheirMessage) {
   EXPECT_NE(x.find("<testsuite name=\"brake &lt;on&gt; &quot;silence&quot;\" tests=\"2\" failures=\"1\" errors=\"0\""),
             std::string::npos)
       << x;
-  EXPECT_NE(x.find("<testcase name=\"stops\" classname=\"canhil.brake\""), std::string::npos) << x;
+  EXPECT_NE(x.find("<testcase name=\"stops\" classname=\"canhil.tests.brake\""), std::string::npos) << x;
   EXPECT_NE(x.find("<failure type=\"ftt_violations_at_most\" message=\"late at t=1.2 s?\">tests/brake.toml:20: late"),
             std::string::npos)
       << x;
@@ -39,6 +39,15 @@ TEST(Junit, OneSuitePerFileOneCasePerExpectationFailuresWithTheirMessage) {
   EXPECT_NE(x.find("<error type=\"setup\" message=\"tests/bad.toml:3: test.scenario: missing\">"), std::string::npos)
       << x;
   EXPECT_EQ(x.find('\x01'), std::string::npos) << "no character XML 1.0 cannot carry";
+}
+
+TEST(Junit, FilesOfOneNameInTwoFoldersAreTwoClasses) {
+  FileResult a = sample(), b = sample();
+  a.file = "tests/score.toml";
+  b.file = "../team/tests/processes/score.toml";
+  const std::string x = junit_xml({a, b});
+  EXPECT_NE(x.find("classname=\"canhil.tests.score\""), std::string::npos) << x;
+  EXPECT_NE(x.find("classname=\"canhil.team.tests.processes.score\""), std::string::npos) << x;
 }
 
 TEST(Junit, AWorkersLineGivesBackTheResult) {

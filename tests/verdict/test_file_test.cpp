@@ -94,6 +94,23 @@ TEST(TestFile, MistakesNameTheFileTheLineTheFieldAndWhatToWrite) {
       std::string::npos)
       << error_of("[run]\nseed = 1\n[[robots]]\nx_m = 0\n");
   EXPECT_NE(error_of(kHead + kExpect + "[tset]\n").find("dir/t.toml:5: tset: unknown table"), std::string::npos);
+  EXPECT_NE(error_of(kHead + kExpect + "[[events]]\nat_s = 1\ncoach = \"stop\"\nrobot = 1\n")
+                .find("dir/t.toml:8: events.robot: a coach order for one robot says whether it plays"),
+            std::string::npos)
+      << "robot without running: not silently every team's";
+  EXPECT_NE(error_of(kHead + kExpect + "[[events]]\nat_s = 1\nball = [0, 0]\nrunning = true\n")
+                .find("events.running: only a coach order"),
+            std::string::npos);
+  EXPECT_NE(error_of(kHead + "bit_rate = 5000\n" + kExpect)
+                .find("dir/t.toml:3: test.bit_rate: must be 0 (the instant bus) or"),
+            std::string::npos);
+  EXPECT_NE(error_of(kHead + "seed = 1.5\n" + kExpect).find("test.seed: must be a whole number"), std::string::npos);
+  EXPECT_NE(error_of(kHead + "[[expect]]\nrtdb = \"CMD_POS.x\"\nbetween = [0, 1]\nat_s = 1\nfrom_s = 2\n")
+                .find("expect.from_s: give at_s (at one instant) or from_s"),
+            std::string::npos);
+  EXPECT_NE(error_of(kHead + "[[expect]]\nrobot_near = \"ball\"\nfrom_s = 3\nby_s = 2\n")
+                .find("expect.by_s: comes before from_s"),
+            std::string::npos);
   EXPECT_NE(error_of(kHead + "seed = -1\n" + kExpect).find("test.seed: must be a number from 0"), std::string::npos);
 }
 

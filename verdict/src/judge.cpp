@@ -34,6 +34,10 @@ Verdict fail(Verdict v, std::string measured, std::string why, const Record& r, 
   return v;
 }
 
+// Samples come every elementary cycle (10 ms) and at each event: the one
+// judged "at" a time is at most this much later.
+constexpr double kSampleSlack_s = 0.0105;
+
 double distance(const Sample& a, double x, double y) { return std::hypot(a.x - x, a.y - y); }
 
 // A robot's speed at sample i: over the last 20 ms or more (the samples come
@@ -60,7 +64,7 @@ Verdict ball_in_goal(Verdict v, const Expectation& x, const Record& r) {
       return pass(v, format("goal at %.2f s in the %s goal", to_seconds(g.time), g.positive_x ? "+x" : "-x"));
     }
   }
-  const Sample& ball = r.ball.back();
+  const Sample ball = r.ball.empty() ? Sample{} : r.ball.back();
   std::string why =
       format("no goal in the %s goal by %.2f s; the ball ended at (%.2f, %.2f)", x.goal.c_str(), by, ball.x, ball.y);
   if (by > r.end_s) why += format(" (the run ended at %.2f s)", r.end_s);
@@ -101,6 +105,7 @@ Verdict speed_below(Verdict v, const Expectation& x, const TestFile& test, const
     std::size_t k = i;
     while (k + 1 < s.size() && s[k + 1].t <= s[i].t + hold && speed_at(s, k + 1) < x.speed_m_s) ++k;
     if (k + 1 < s.size() && s[k + 1].t <= s[i].t + hold) continue;  // back above within the hold
+    if (s[i].t + hold > r.end_s + 1e-9) break;                      // the run ended before the hold did
     const double after_ms = (s[i].t - from) * 1000;
     const std::string measured = format("below %.2f m/s %.0f ms after %s", x.speed_m_s, after_ms, since.c_str());
     if (after_ms <= x.within_ms) return pass(v, measured);
@@ -159,6 +164,7 @@ Verdict ftt_violations(Verdict v, const Expectation& x, const Record& r) {
 }
 
 Verdict error_frames(Verdict v, const Expectation& x, const Record& r) {
+  if (auto broken = broken_capture(v, r.bus[x.robot], r)) return *broken;
   const std::uint64_t n = r.bus[x.robot].error_frames;
   const std::string measured = format("%llu error frame(s)", static_cast<unsigned long long>(n));
   if (n <= x.at_most) return pass(v, measured);
@@ -173,6 +179,13 @@ Verdict jitter(Verdict v, const Expectation& x, const Record& r) {
   if (auto broken = broken_capture(v, bus, r)) return *broken;
   for (const timing::MessageTiming& m : bus.messages) {
     if (m.name != x.message) continue;
+    if (m.kind == frames::FttKind::kAsync) {
+      return fail(v, "no period",
+                  m.name +
+                      " is sporadic: it has a minimum gap, not a period, so no jitter; judge it with "
+                      "ftt_violations_at_most (too soon, outside the asynchronous window)",
+                  r);
+    }
     if (m.count < 2)
       return fail(v, "too few frames",
                   format("%s came %llu time(s)", m.name.c_str(), static_cast<unsigned long long>(m.count)), r);
@@ -189,7 +202,7 @@ Verdict jitter(Verdict v, const Expectation& x, const Record& r) {
 }
 
 Verdict handler_latency(Verdict v, const Expectation& x, const Record& r) {
-  std::vector<Nanos> l = r.latencies[x.robot];
+  std::vector<Nanos> l = x.robot < r.latencies.size() ? r.latencies[x.robot] : std::vector<Nanos>{};
   if (l.empty()) {
     return fail(v, "not measured",
                 "the reference handler measured no latency (a team's own handler, in its own process, is measured "
@@ -211,6 +224,7 @@ Verdict within_bounds(Verdict v, const Expectation& x, const Record& r) {
     return fail(v, "not schedulable", "the message set is not schedulable (`canhil timing --analyse`):\n" + r.analysis,
                 r);
   }
+  if (auto broken = broken_capture(v, r.bus[x.robot], r)) return *broken;
   const timing::BoundReport& b = r.bounds[x.robot];
   const std::string measured = format("schedulable; %zu observation(s), %llu outside their bounds",
                                       b.observations.size(), static_cast<unsigned long long>(b.violation_count));
@@ -241,6 +255,12 @@ Verdict rtdb_quantity(Verdict v, const Expectation& x, std::size_t index, const 
   if (x.at_s) {
     for (const RtdbSample& s : found->second) {
       if (s.t + 1e-9 < *x.at_s) continue;
+      if (s.t > *x.at_s + kSampleSlack_s) {
+        return fail(v, "not there",
+                    format("%s had no value yet at %.2f s (first written at %.2f s)", what.c_str(), *x.at_s,
+                           found->second.front().t),
+                    r, *x.at_s);
+      }
       if (!bad(s)) return pass(v, what + " " + say(s));
       return fail(v, what + " " + say(s), what + " is " + say(s) + ", outside " + bounds, r, s.t);
     }

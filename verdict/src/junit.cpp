@@ -2,6 +2,7 @@
 #include "canhil/verdict/junit.hpp"
 
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include "canhil/base/xml_text.hpp"
@@ -15,11 +16,19 @@ std::string seconds(double s) {
   return b;
 }
 
+// "canhil." and the file's path without .toml, its folders joined by dots
+// ("canhil.tests.processes.score"): files of one name in two folders are two
+// classes, as a report tool keys its cases on class and name.
 std::string classname(const FileResult& r) {
-  const auto slash = r.file.find_last_of('/');
-  std::string stem = slash == std::string::npos ? r.file : r.file.substr(slash + 1);
-  if (const auto dot = stem.rfind('.'); dot != std::string::npos && dot > 0) stem.erase(dot);
-  return "canhil." + stem;
+  std::string name;
+  std::filesystem::path file = std::filesystem::path(r.file).lexically_normal();
+  file.replace_extension();
+  for (const auto& part : file) {
+    const std::string p = part.string();
+    if (p.empty() || p == "/" || p == "." || p == "..") continue;
+    name += (name.empty() ? "" : ".") + p;
+  }
+  return "canhil." + name;
 }
 
 }  // namespace

@@ -2,10 +2,10 @@
 // line of JSON), and many files run in worker processes (verdict.hpp).
 #include <nlohmann/json.hpp>
 
-#include <cstdio>
-#include <sstream>
-
 #include <algorithm>
+#include <cstdio>
+#include <set>
+#include <sstream>
 
 #include "canhil/base/setup_error.hpp"
 #include "canhil/emulator/scenario.hpp"
@@ -75,19 +75,26 @@ bool any_with_processes(const std::vector<std::filesystem::path>& files) {
 std::vector<FileResult> run_test_files(const std::vector<std::filesystem::path>& files, int jobs,
                                        const TestOptions& options, const std::atomic<bool>& stop,
                                        const std::function<void(const FileResult&)>& each) {
-  // Each file's artifacts in a folder of its own: its name, and for files of
-  // one name, the folders above it too ("processes-score").
+  // Each file's artifacts in a folder of its own: its name; for files of one
+  // name, the folders above it too ("processes-score"); a number last where
+  // even that is taken (the same file given twice).
   std::vector<TestOptions> each_options(files.size(), options);
+  std::set<std::string> taken;
   for (std::size_t k = 0; k < files.size(); ++k) {
-    const auto same = [&](const std::filesystem::path& other) { return other.stem() == files[k].stem(); };
-    if (std::count_if(files.begin(), files.end(), same) < 2) continue;
-    std::string name = files[k].stem().string();
-    for (std::filesystem::path up = files[k].parent_path(); !up.empty() && up.has_filename(); up = up.parent_path()) {
-      name = up.filename().string() + "-" + name;
-      bool unique = true;
-      for (std::size_t j = 0; j < files.size(); ++j) unique &= j == k || each_options[j].artifact_name != name;
-      if (unique) break;
+    const std::filesystem::path file = files[k].lexically_normal();
+    const std::string stem = file.stem().string();
+    const auto same = [&](const std::filesystem::path& other) { return other.stem() == file.stem(); };
+    std::string name = stem;
+    if (std::count_if(files.begin(), files.end(), same) > 1) {
+      for (std::filesystem::path up = file.parent_path(); up.has_filename(); up = up.parent_path()) {
+        const std::string folder = up.filename().string();
+        if (folder == "." || folder == "..") break;
+        name = folder + "-" + name;
+        if (taken.count(name) == 0) break;
+      }
     }
+    for (int n = 2; taken.count(name) != 0; ++n) name = stem + "-" + std::to_string(n);
+    taken.insert(name);
     each_options[k].artifact_name = name;
   }
   std::vector<FileResult> results;

@@ -224,6 +224,8 @@ std::string run_external(const TestFile& test, const TestOptions& options, emula
     run.start();
   } catch (const emulator::ProcessStuck& e) {
     record.stuck = e.what();
+    sample(0, session, readers, record);  // what the run got to: its start
+    record.end_s = 0;
   }
   if (!record.stuck) drive(test, session, run, end, readers, record);
   run.stop();
@@ -285,9 +287,9 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
       record.interfaces.push_back(session.rig(r).interface);
     }
     for (const Event& e : test.events) {
-      if (from_seconds(e.at_s) > end) {
+      if (from_seconds(e.at_s) >= end) {
         char why[160];
-        std::snprintf(why, sizeof why, "%g s is after the run's end (%g s)", e.at_s, to_seconds(end));
+        std::snprintf(why, sizeof why, "%g s is not before the run's end (%g s)", e.at_s, to_seconds(end));
         throw SetupError(test.path.string() + ":" + std::to_string(e.line) + ": events.at_s: " + why +
                          ": make it earlier, or the run longer ([test] duration_s)");
       }
@@ -307,6 +309,7 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
     if (with_processes) {
       if (!keep.empty()) std::filesystem::create_directories(keep);
       trace = run_external(test, options, session, keep, end, readers, record);
+      record.latencies.resize(session.robot_count());  // the team's handler's are its own: none here
     } else {
       emulator::VirtualDriver driver(session);
       drive(test, session, driver, end, readers, record);
@@ -335,6 +338,7 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
   } catch (const std::exception& e) {
     result.error = test.path.string() + ": " + e.what();
   }
+  if (!result.error.empty()) result.verdicts.clear();  // a file that could not run is one error, whole
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
 }

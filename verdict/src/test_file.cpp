@@ -71,7 +71,14 @@ std::vector<double> numbers(const TableReader& r, const std::string& key, std::s
   return out;
 }
 
-std::size_t robot_of(const TableReader& r) { return static_cast<std::size_t>(r.number("robot", 0, 11).value_or(0)); }
+// A whole number from lo to hi, or nothing when the field is not there.
+std::optional<double> whole(const TableReader& r, const std::string& key, double lo, double hi) {
+  const auto v = r.number(key, lo, hi);
+  if (v && *v != std::floor(*v)) r.fail(*r.get(key), key, "must be a whole number");
+  return v;
+}
+
+std::size_t robot_of(const TableReader& r) { return static_cast<std::size_t>(whole(r, "robot", 0, 11).value_or(0)); }
 
 Event read_event(const toml::table& t, std::size_t index, const std::string& file) {
   const TableReader r(t, "events", file, {"name", "at_s", "fault", "coach", "robot", "running", "ball", "set_pose"});
@@ -107,6 +114,12 @@ Event read_event(const toml::table& t, std::size_t index, const std::string& fil
     e.game_state = state;
     e.running = r.boolean("running");
     e.robot = robot_of(r);
+    if (r.get("robot") != nullptr && !e.running) {
+      r.fail(*r.get("robot"), "robot",
+             "a coach order for one robot says whether it plays: add running = false (or true); without robot, "
+             "coach = \"" +
+                 state + "\" is every team's game state");
+    }
     if (e.running) e.game_state.reset();  // one robot's: played or not
   } else if (r.get("ball") != nullptr) {
     e.kind = Event::Kind::kBall;
@@ -120,6 +133,9 @@ Event read_event(const toml::table& t, std::size_t index, const std::string& fil
   }
   if (e.kind != Event::Kind::kCoach && e.kind != Event::Kind::kSetPose && r.get("robot") != nullptr) {
     r.fail(*r.get("robot"), "robot", "only a coach order for one robot, or a set-pose, names a robot");
+  }
+  if (e.kind != Event::Kind::kCoach && r.get("running") != nullptr) {
+    r.fail(*r.get("running"), "running", "only a coach order for one robot says whether it plays");
   }
   return e;
 }
@@ -172,6 +188,7 @@ Expectation read_expectation(const toml::table& t, std::size_t index, const std:
         x.point[1] = p[1];
       }
       x.within_m = r.number("within_m", 0, 50).value_or(x.within_m);
+      if (x.by_s && *x.by_s < x.from_s) r.fail(*r.get("by_s"), "by_s", "comes before from_s");
       break;
     }
     case Check::kSpeedBelow:
@@ -186,7 +203,7 @@ Expectation read_expectation(const toml::table& t, std::size_t index, const std:
       break;
     case Check::kFttViolations:
     case Check::kErrorFrames:
-      x.at_most = static_cast<std::uint64_t>(*r.number(key, 0, 1e12));
+      x.at_most = static_cast<std::uint64_t>(*whole(r, key, 0, 1e12));
       x.message = r.text("message", "\"M6_1\"").value_or("");
       break;
     case Check::kJitter:
@@ -220,6 +237,9 @@ Expectation read_expectation(const toml::table& t, std::size_t index, const std:
       x.low = b[0];
       x.high = b[1];
       x.at_s = r.number("at_s", 0, kLongest_s);
+      if (x.at_s && r.get("from_s") != nullptr) {
+        r.fail(*r.get("from_s"), "from_s", "give at_s (at one instant) or from_s (from then to the end), not both");
+      }
       x.age_ms = r.number("age_at_most_ms", 0, 1e9);
       break;
     }
@@ -295,8 +315,11 @@ TestFile parse_test_file(const std::string& text, const std::filesystem::path& f
   if (!scenario) r.fail(*test, "scenario", "missing: the scenario the test runs, relative to this file");
   f.scenario = file_name.parent_path() / *scenario;
   f.duration_s = r.number("duration_s", 0.01, kLongest_s);
-  if (const auto s = r.number("seed", 0, 9.0e15)) f.seed = static_cast<std::uint64_t>(*s);
-  f.bit_rate = r.number("bit_rate", 0, 1'000'000);
+  if (const auto s = whole(r, "seed", 0, 9.0e15)) f.seed = static_cast<std::uint64_t>(*s);
+  f.bit_rate = whole(r, "bit_rate", 0, 1'000'000);
+  if (f.bit_rate && *f.bit_rate != 0 && *f.bit_rate < 10'000) {
+    r.fail(*r.get("bit_rate"), "bit_rate", "must be 0 (the instant bus) or from 10000 to 1000000 bit/s");
+  }
   f.external = r.boolean("external").value_or(false);
   if (const toml::array* faults = r.array("faults")) {
     for (const toml::node& n : *faults) {
