@@ -20,6 +20,39 @@ TEST(ProcessRunnable, AGoneProcessIsNot) {
   EXPECT_TRUE(canhil::process_runnable(getpid())) << "this thread runs";
 }
 
+TEST(ProcessHeldByMachine, AVforkParentIsInAnUninterruptibleWaitAndHeldNotAsleep) {
+  // A vfork's parent waits uninterruptibly ('D') until its child execs or
+  // ends: what a write to a busy disk looks like, deterministically. The
+  // broker waits for such a reader (it comes back by itself), not for one
+  // asleep ('S').
+  const pid_t child = fork();
+  if (child == 0) {
+    if (vfork() == 0) {
+      usleep(500000);
+      _exit(0);
+    }
+    _exit(0);
+  }
+  char state = '?';
+  for (int k = 0; k < 400 && state != 'D'; ++k) {
+    usleep(1000);
+    state = canhil::thread_state(child, child);
+  }
+  EXPECT_EQ(state, 'D');
+  EXPECT_TRUE(canhil::process_held_by_machine(child));
+  EXPECT_FALSE(canhil::process_runnable(child));
+  waitpid(child, nullptr, 0);
+  const pid_t sleeper = fork();
+  if (sleeper == 0) {
+    pause();
+    _exit(0);
+  }
+  for (int k = 0; k < 400 && canhil::thread_state(sleeper, sleeper) != 'S'; ++k) usleep(1000);
+  EXPECT_FALSE(canhil::process_held_by_machine(sleeper)) << "asleep: waiting for something else";
+  kill(sleeper, SIGKILL);
+  waitpid(sleeper, nullptr, 0);
+}
+
 TEST(ThreadState, RunningStoppedEndedAndGone) {
   EXPECT_EQ(canhil::thread_state(getpid(), getpid()), 'R');
   const pid_t child = fork();

@@ -46,7 +46,7 @@ bool room_came(int fd, pid_t pid, const std::atomic<std::uint64_t>& taken, std::
       until = std::min(now + grace_ns, give_up);
     }
     if (now >= until) {
-      if (now >= give_up || !process_runnable(pid)) return false;
+      if (now >= give_up || !process_held_by_machine(pid)) return false;
       until = std::min(now + grace_ns, give_up);
     }
     pollfd p{fd, POLLOUT, 0};

@@ -1,7 +1,8 @@
 // What the broker asks of the system: its own scheduling (taken with
 // canhil::take_realtime, base/realtime.hpp; switched here), and room in a
 // receiver's buffer (whether a receiver that has not read is waiting for a
-// CPU or for something else: canhil::process_runnable, base/process.hpp).
+// CPU or the disk, or for something else: canhil::process_held_by_machine,
+// base/process.hpp).
 #pragma once
 
 #include <sys/epoll.h>
@@ -28,8 +29,9 @@ std::string scheduling_text(const State& s);
 /// kernel's AF_UNIX rule: once the receiver has read three quarters of what
 /// its buffer held), or once the connection ends (its end is read next). The
 /// receiver has `grace_us` to read; each record it reads renews the grace;
-/// while one of its threads is runnable but not running (a busy machine) it
-/// waits for a CPU, and the grace starts again; `patience_us` bounds the wait
+/// while one of its threads is runnable but not running (a busy machine) or
+/// in an uninterruptible wait (a write to a busy disk: candump -l), it is held
+/// by the machine, and the grace starts again; `patience_us` bounds the wait
 /// in all. False for a receiver that read nothing for the grace while it
 /// could have (stuck), or past the patience; at once for a grace of 0 (the
 /// kernel's immediate drop). Reads the monotonic clock past any time shim.

@@ -46,28 +46,40 @@ inline char thread_state(pid_t pid, pid_t tid) noexcept {
   return close_paren != nullptr && close_paren[1] == ' ' ? close_paren[2] : '?';
 }
 
-/// Whether any thread of process `pid` is runnable (thread_state 'R'): on a
-/// CPU, or waiting for one on a busy machine. False for a process whose
-/// threads sleep, are stopped or traced, or that is gone.
-inline bool process_runnable(pid_t pid) noexcept {
+/// Whether any thread of process `pid` is in one of `states` (thread_state's
+/// letters). False for a process that is gone.
+inline bool process_in_state(pid_t pid, const char* states) noexcept {
   if (pid <= 0) return false;
   char folder[48];
   std::snprintf(folder, sizeof folder, "/proc/%d/task", static_cast<int>(pid));
   DIR* tasks = ::opendir(folder);
   if (tasks == nullptr) return false;
-  bool runnable = false;
+  bool found = false;
   while (const dirent* t = ::readdir(tasks)) {
     char* end = nullptr;
     const long tid = std::strtol(t->d_name, &end, 10);
     if (end == t->d_name || *end != '\0') continue;
-    if (thread_state(pid, static_cast<pid_t>(tid)) == 'R') {
-      runnable = true;
+    const char state = thread_state(pid, static_cast<pid_t>(tid));
+    if (state != '?' && std::strchr(states, state) != nullptr) {
+      found = true;
       break;
     }
   }
   ::closedir(tasks);
-  return runnable;
+  return found;
 }
+
+/// Whether any thread of process `pid` is runnable (thread_state 'R'): on a
+/// CPU, or waiting for one on a busy machine. False for a process whose
+/// threads sleep, are stopped or traced, or that is gone.
+inline bool process_runnable(pid_t pid) noexcept { return process_in_state(pid, "R"); }
+
+/// Whether process `pid` is held by the machine rather than by its own
+/// choice: a thread runnable ('R', waiting for a CPU) or in an uninterruptible
+/// wait ('D': a write to a busy disk, a page brought back in, a vfork). Such
+/// a process comes back by itself; one whose threads all sleep ('S') waits
+/// for something else (a stuck receiver, to the user-space bus's broker).
+inline bool process_held_by_machine(pid_t pid) noexcept { return process_in_state(pid, "RD"); }
 
 /// Calls `left(path)` for each entry of `folder` that a process of this user
 /// left behind when it ended without removing it: named `prefix`, then the
