@@ -42,7 +42,8 @@ struct BrokerOptions {
   /// while it could before the broker drops frames for it (the kernel drops at once:
   /// 0). The wait follows the receiver: each read it makes renews the grace,
   /// and while one of its threads is runnable but not running (a busy
-  /// machine) it is waiting for a CPU, not stuck, and the wait goes on. A
+  /// machine) or in an uninterruptible wait (a write to a busy disk) it is
+  /// held by the machine, not stuck, and the wait goes on. A
   /// receiver that let the wait pass has frames dropped at once, counted,
   /// until it reads again: a stuck receiver costs the bus one grace.
   std::uint32_t grace_us = 10000;
