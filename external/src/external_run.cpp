@@ -3,6 +3,8 @@
 
 #include <cstdio>
 
+#include "canhil/base/text_format.hpp"
+
 namespace canhil::external {
 namespace {
 
@@ -12,12 +14,6 @@ emulator::ExternalOptions driver_options(const emulator::Session& session, const
   o.record_trace = setup.record_trace;
   o.check_timing = setup.check_timing;
   return o;
-}
-
-std::string seconds_text(const char* format, double s) {
-  char text[64];
-  std::snprintf(text, sizeof text, format, s);
-  return text;
 }
 
 }  // namespace
@@ -55,7 +51,7 @@ void ExternalRun::start() {
     stop();
     throw emulator::ProcessStuck(named(
         ": ", std::to_string(attached) + " of " + std::to_string(expected_) + " process(es) attached within " +
-                  seconds_text("%g", plan.attach_limit_s) + " s (attach_limit_s in [external] or [teams.external])"));
+                  format_text("%g", plan.attach_limit_s) + " s (attach_limit_s in [external] or [teams.external])"));
   }
 }
 
@@ -63,11 +59,11 @@ void ExternalRun::run_until(Nanos end) {
   try {
     driver_.run_until(end);
   } catch (const emulator::ProcessStuck& e) {
-    throw emulator::ProcessStuck(named(" ", seconds_text("at t = %.3f s: ", to_seconds(driver_.now())) + e.what()));
+    throw emulator::ProcessStuck(named(" ", format_text("at t = %.3f s: ", to_seconds(driver_.now())) + e.what()));
   }
   processes_.reap(driver_.now());
   if (const std::string why = processes_.not_started(); !why.empty()) {
-    throw emulator::ProcessStuck(named(" ", seconds_text("at t = %.3f s: ", to_seconds(driver_.now())) + why));
+    throw emulator::ProcessStuck(named(" ", format_text("at t = %.3f s: ", to_seconds(driver_.now())) + why));
   }
 }
 

@@ -1,5 +1,7 @@
 #include "canhil/physics/solver_health.hpp"
 
+#include "canhil/base/text_format.hpp"
+
 #include <ode/ode.h>
 
 #include <cstdarg>
@@ -95,17 +97,11 @@ namespace {
 
 thread_local SolverScope* t_current = nullptr;
 
-std::string vformat(const char* format, va_list ap) {
-  char buffer[512];
-  std::vsnprintf(buffer, sizeof buffer, format, ap);
-  return buffer;
-}
-
 void report(SolverReportKind kind, int code, const char* format, va_list ap) {
   SolverReport r;
   r.kind = kind;
   r.code = code;
-  r.text = vformat(format, ap);
+  r.text = vformat_text(format, ap);
   if (t_current != nullptr) {
     r.time_s = ScopeAccess::time(*t_current);
     ScopeAccess::health(*t_current).add(r);

@@ -2,24 +2,14 @@
 // verdict, what was measured, and on failure when and where to look.
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <numeric>
 
+#include "canhil/base/text_format.hpp"
 #include "record.hpp"
 
 namespace canhil::verdict::detail {
 namespace {
-
-std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* fmt, ...) {
-  char buffer[512];
-  va_list args;
-  va_start(args, fmt);
-  std::vsnprintf(buffer, sizeof buffer, fmt, args);
-  va_end(args);
-  return buffer;
-}
 
 Verdict pass(Verdict v, std::string measured) {
   v.passed = true;
@@ -30,7 +20,7 @@ Verdict pass(Verdict v, std::string measured) {
 Verdict fail(Verdict v, std::string measured, std::string why, const Record& r, std::optional<double> at = {}) {
   v.passed = false;
   v.measured = std::move(measured);
-  v.message = std::move(why) + "; see " + r.where + (at ? format(" at t=%.3f s", *at) : std::string());
+  v.message = std::move(why) + "; see " + r.where + (at ? format_text(" at t=%.3f s", *at) : std::string());
   return v;
 }
 
@@ -61,17 +51,17 @@ Verdict ball_in_goal(Verdict v, const Expectation& x, const Record& r) {
   const double by = x.by_s.value_or(r.end_s);
   for (const emulator::Goal& g : r.goals) {
     if (wanted(g) && to_seconds(g.time) <= by) {
-      return pass(v, format("goal at %.2f s in the %s goal", to_seconds(g.time), g.positive_x ? "+x" : "-x"));
+      return pass(v, format_text("goal at %.2f s in the %s goal", to_seconds(g.time), g.positive_x ? "+x" : "-x"));
     }
   }
   const Sample ball = r.ball.empty() ? Sample{} : r.ball.back();
-  std::string why =
-      format("no goal in the %s goal by %.2f s; the ball ended at (%.2f, %.2f)", x.goal.c_str(), by, ball.x, ball.y);
-  if (by > r.end_s) why += format(" (the run ended at %.2f s)", r.end_s);
+  std::string why = format_text("no goal in the %s goal by %.2f s; the ball ended at (%.2f, %.2f)", x.goal.c_str(), by,
+                                ball.x, ball.y);
+  if (by > r.end_s) why += format_text(" (the run ended at %.2f s)", r.end_s);
   for (const emulator::Goal& g : r.goals) {
-    why += format("; a goal at %.2f s in the %s goal", to_seconds(g.time), g.positive_x ? "+x" : "-x");
+    why += format_text("; a goal at %.2f s in the %s goal", to_seconds(g.time), g.positive_x ? "+x" : "-x");
   }
-  return fail(v, format("no goal by %.2f s", by), why, r, std::min(by, r.end_s));
+  return fail(v, format_text("no goal by %.2f s", by), why, r, std::min(by, r.end_s));
 }
 
 Verdict robot_near(Verdict v, const Expectation& x, const Record& r) {
@@ -83,21 +73,23 @@ Verdict robot_near(Verdict v, const Expectation& x, const Record& r) {
     if (robot[i].t < x.from_s || robot[i].t > by) continue;
     const double d =
         x.near_ball ? distance(robot[i], r.ball[i].x, r.ball[i].y) : distance(robot[i], x.point[0], x.point[1]);
-    if (d <= x.within_m) return pass(v, format("%.2f m from %s at %.2f s", d, what, robot[i].t));
+    if (d <= x.within_m) return pass(v, format_text("%.2f m from %s at %.2f s", d, what, robot[i].t));
     if (d < closest) {
       closest = d;
       closest_at = robot[i].t;
     }
   }
-  return fail(v, format("closest %.2f m at %.2f s", closest, closest_at),
-              format("robot %zu never came within %.2f m of %s between %.2f s and %.2f s; closest %.2f m at %.2f s",
-                     x.robot, x.within_m, what, x.from_s, by, closest, closest_at),
-              r, closest_at);
+  return fail(
+      v, format_text("closest %.2f m at %.2f s", closest, closest_at),
+      format_text("robot %zu never came within %.2f m of %s between %.2f s and %.2f s; closest %.2f m at %.2f s",
+                  x.robot, x.within_m, what, x.from_s, by, closest, closest_at),
+      r, closest_at);
 }
 
 Verdict speed_below(Verdict v, const Expectation& x, const TestFile& test, const Record& r) {
   const double from = x.after_s ? *x.after_s : test.event(x.after)->at_s;
-  const std::string since = x.after_s ? format("%.2f s", from) : "'" + x.after + "' (" + format("%.2f s", from) + ")";
+  const std::string since =
+      x.after_s ? format_text("%.2f s", from) : "'" + x.after + "' (" + format_text("%.2f s", from) + ")";
   const std::vector<Sample>& s = r.robots[x.robot];
   const double hold = x.hold_ms / 1000;
   for (std::size_t i = 0; i < s.size(); ++i) {
@@ -107,11 +99,11 @@ Verdict speed_below(Verdict v, const Expectation& x, const TestFile& test, const
     if (k + 1 < s.size() && s[k + 1].t <= s[i].t + hold) continue;  // back above within the hold
     if (s[i].t + hold > r.end_s + 1e-9) break;                      // the run ended before the hold did
     const double after_ms = (s[i].t - from) * 1000;
-    const std::string measured = format("below %.2f m/s %.0f ms after %s", x.speed_m_s, after_ms, since.c_str());
+    const std::string measured = format_text("below %.2f m/s %.0f ms after %s", x.speed_m_s, after_ms, since.c_str());
     if (after_ms <= x.within_ms) return pass(v, measured);
     return fail(v, measured,
-                format("robot %zu took %.0f ms to go below %.2f m/s after %s, more than %.0f ms", x.robot, after_ms,
-                       x.speed_m_s, since.c_str(), x.within_ms),
+                format_text("robot %zu took %.0f ms to go below %.2f m/s after %s, more than %.0f ms", x.robot,
+                            after_ms, x.speed_m_s, since.c_str(), x.within_ms),
                 r, from + x.within_ms / 1000);
   }
   const double limit = from + x.within_ms / 1000;
@@ -119,9 +111,9 @@ Verdict speed_below(Verdict v, const Expectation& x, const TestFile& test, const
   for (std::size_t i = 0; i < s.size(); ++i) {
     if (s[i].t <= limit) at_limit = speed_at(s, i);
   }
-  return fail(v, format("%.2f m/s %.0f ms after %s", at_limit, x.within_ms, since.c_str()),
-              format("robot %zu never stayed below %.2f m/s for %.0f ms after %s; %.2f m/s at %.2f s", x.robot,
-                     x.speed_m_s, x.hold_ms, since.c_str(), at_limit, std::min(limit, r.end_s)),
+  return fail(v, format_text("%.2f m/s %.0f ms after %s", at_limit, x.within_ms, since.c_str()),
+              format_text("robot %zu never stayed below %.2f m/s for %.0f ms after %s; %.2f m/s at %.2f s", x.robot,
+                          x.speed_m_s, x.hold_ms, since.c_str(), at_limit, std::min(limit, r.end_s)),
               r, std::min(limit, r.end_s));
 }
 
@@ -146,31 +138,32 @@ Verdict ftt_violations(Verdict v, const Expectation& x, const Record& r) {
     for (const auto& [kind, n] : m->violations) count += n;
   }
   const std::string whose = x.message.empty() ? std::string() : " of " + x.message;
-  const std::string measured = format("%llu violation(s)%s", static_cast<unsigned long long>(count), whose.c_str());
+  const std::string measured =
+      format_text("%llu violation(s)%s", static_cast<unsigned long long>(count), whose.c_str());
   if (count <= x.at_most) return pass(v, measured);
   for (const timing::Violation& first : bus.violations) {
     if (!x.message.empty() && first.message != x.message) continue;
     return fail(v, measured,
-                format("%llu FTT violation(s)%s on %s, at most %llu allowed; the first at %.6f s: %s %s, %s",
-                       static_cast<unsigned long long>(count), whose.c_str(), r.interfaces[x.robot].c_str(),
-                       static_cast<unsigned long long>(x.at_most), to_seconds(first.time), first.message.c_str(),
-                       timing::kind_name(first.kind), first.detail.c_str()),
+                format_text("%llu FTT violation(s)%s on %s, at most %llu allowed; the first at %.6f s: %s %s, %s",
+                            static_cast<unsigned long long>(count), whose.c_str(), r.interfaces[x.robot].c_str(),
+                            static_cast<unsigned long long>(x.at_most), to_seconds(first.time), first.message.c_str(),
+                            timing::kind_name(first.kind), first.detail.c_str()),
                 r, to_seconds(first.time));
   }
   return fail(v, measured,
-              format("%llu FTT violation(s)%s, at most %llu allowed", static_cast<unsigned long long>(count),
-                     whose.c_str(), static_cast<unsigned long long>(x.at_most)),
+              format_text("%llu FTT violation(s)%s, at most %llu allowed", static_cast<unsigned long long>(count),
+                          whose.c_str(), static_cast<unsigned long long>(x.at_most)),
               r);
 }
 
 Verdict error_frames(Verdict v, const Expectation& x, const Record& r) {
   if (auto broken = broken_capture(v, r.bus[x.robot], r)) return *broken;
   const std::uint64_t n = r.bus[x.robot].error_frames;
-  const std::string measured = format("%llu error frame(s)", static_cast<unsigned long long>(n));
+  const std::string measured = format_text("%llu error frame(s)", static_cast<unsigned long long>(n));
   if (n <= x.at_most) return pass(v, measured);
   return fail(v, measured,
-              format("%llu error frames on %s, at most %llu allowed", static_cast<unsigned long long>(n),
-                     r.interfaces[x.robot].c_str(), static_cast<unsigned long long>(x.at_most)),
+              format_text("%llu error frames on %s, at most %llu allowed", static_cast<unsigned long long>(n),
+                          r.interfaces[x.robot].c_str(), static_cast<unsigned long long>(x.at_most)),
               r);
 }
 
@@ -188,15 +181,16 @@ Verdict jitter(Verdict v, const Expectation& x, const Record& r) {
     }
     if (m.count < 2)
       return fail(v, "too few frames",
-                  format("%s came %llu time(s)", m.name.c_str(), static_cast<unsigned long long>(m.count)), r);
+                  format_text("%s came %llu time(s)", m.name.c_str(), static_cast<unsigned long long>(m.count)), r);
     const double p99 = to_seconds(m.p99) * 1000;
-    const std::string measured =
-        format("p99 %.3f ms over %llu frames of %s", p99, static_cast<unsigned long long>(m.count), m.name.c_str());
+    const std::string measured = format_text("p99 %.3f ms over %llu frames of %s", p99,
+                                             static_cast<unsigned long long>(m.count), m.name.c_str());
     if (p99 <= x.bound_ms) return pass(v, measured);
-    return fail(v, measured,
-                format("%s's jitter p99 is %.3f ms, more than %.3f ms (its worst interval %.3f ms, period %.3f ms)",
-                       m.name.c_str(), p99, x.bound_ms, to_seconds(m.max) * 1000, to_seconds(m.spec) * 1000),
-                r);
+    return fail(
+        v, measured,
+        format_text("%s's jitter p99 is %.3f ms, more than %.3f ms (its worst interval %.3f ms, period %.3f ms)",
+                    m.name.c_str(), p99, x.bound_ms, to_seconds(m.max) * 1000, to_seconds(m.spec) * 1000),
+        r);
   }
   return fail(v, "no such message", "the message set has no message " + x.message + " (`canhil frames list`)", r);
 }
@@ -213,10 +207,11 @@ Verdict handler_latency(Verdict v, const Expectation& x, const Record& r) {
       std::min(l.size() - 1, static_cast<std::size_t>(std::ceil(0.99 * static_cast<double>(l.size()))) - 1);
   std::nth_element(l.begin(), l.begin() + static_cast<std::ptrdiff_t>(k), l.end());
   const double p99 = to_seconds(l[k]) * 1000;
-  const std::string measured = format("p99 %.3f ms over %zu updates", p99, l.size());
+  const std::string measured = format_text("p99 %.3f ms over %zu updates", p99, l.size());
   if (p99 <= x.bound_ms) return pass(v, measured);
   return fail(v, measured,
-              format("the handler's receive-to-RTDB latency p99 is %.3f ms, more than %.3f ms", p99, x.bound_ms), r);
+              format_text("the handler's receive-to-RTDB latency p99 is %.3f ms, more than %.3f ms", p99, x.bound_ms),
+              r);
 }
 
 Verdict within_bounds(Verdict v, const Expectation& x, const Record& r) {
@@ -226,15 +221,16 @@ Verdict within_bounds(Verdict v, const Expectation& x, const Record& r) {
   }
   if (auto broken = broken_capture(v, r.bus[x.robot], r)) return *broken;
   const timing::BoundReport& b = r.bounds[x.robot];
-  const std::string measured = format("schedulable; %zu observation(s), %llu outside their bounds",
-                                      b.observations.size(), static_cast<unsigned long long>(b.violation_count));
+  const std::string measured = format_text("schedulable; %zu observation(s), %llu outside their bounds",
+                                           b.observations.size(), static_cast<unsigned long long>(b.violation_count));
   if (b.ok()) return pass(v, measured);
   const timing::BoundViolation& first = b.violations.front();
-  return fail(v, measured,
-              format("%s's %s of %.3f ms is outside [%.3f, %.3f] ms at %.6f s (`canhil timing --analyse TRACE`)",
-                     first.message.c_str(), timing::bounded_name(first.quantity), to_seconds(first.observed) * 1000,
-                     to_seconds(first.low) * 1000, to_seconds(first.high) * 1000, to_seconds(first.time)),
-              r, to_seconds(first.time));
+  return fail(
+      v, measured,
+      format_text("%s's %s of %.3f ms is outside [%.3f, %.3f] ms at %.6f s (`canhil timing --analyse TRACE`)",
+                  first.message.c_str(), timing::bounded_name(first.quantity), to_seconds(first.observed) * 1000,
+                  to_seconds(first.low) * 1000, to_seconds(first.high) * 1000, to_seconds(first.time)),
+      r, to_seconds(first.time));
 }
 
 Verdict rtdb_quantity(Verdict v, const Expectation& x, std::size_t index, const Record& r) {
@@ -244,40 +240,42 @@ Verdict rtdb_quantity(Verdict v, const Expectation& x, std::size_t index, const 
   const auto found = r.rtdb.find(index);
   const std::string what = x.item + "." + x.quantity;
   if (found == r.rtdb.end() || found->second.empty()) {
-    return fail(v, "never written", what + format(" was never written in robot %zu's database", x.robot), r);
+    return fail(v, "never written", what + format_text(" was never written in robot %zu's database", x.robot), r);
   }
   const auto bad = [&](const RtdbSample& s) {
     return s.value < x.low || s.value > x.high || (x.age_ms && s.age_ms > *x.age_ms);
   };
-  const auto say = [&](const RtdbSample& s) { return format("%.4g at %.2f s, %d ms old", s.value, s.t, s.age_ms); };
-  const std::string bounds =
-      format("[%g, %g]", x.low, x.high) + (x.age_ms ? format(", at most %.0f ms old", *x.age_ms) : std::string());
+  const auto say = [&](const RtdbSample& s) {
+    return format_text("%.4g at %.2f s, %d ms old", s.value, s.t, s.age_ms);
+  };
+  const std::string bounds = format_text("[%g, %g]", x.low, x.high) +
+                             (x.age_ms ? format_text(", at most %.0f ms old", *x.age_ms) : std::string());
   if (x.at_s) {
     for (const RtdbSample& s : found->second) {
       if (s.t + 1e-9 < *x.at_s) continue;
       if (s.t > *x.at_s + kSampleSlack_s) {
         return fail(v, "not there",
-                    format("%s had no value yet at %.2f s (first written at %.2f s)", what.c_str(), *x.at_s,
-                           found->second.front().t),
+                    format_text("%s had no value yet at %.2f s (first written at %.2f s)", what.c_str(), *x.at_s,
+                                found->second.front().t),
                     r, *x.at_s);
       }
       if (!bad(s)) return pass(v, what + " " + say(s));
       return fail(v, what + " " + say(s), what + " is " + say(s) + ", outside " + bounds, r, s.t);
     }
     return fail(v, "not there",
-                format("%s had no value at %.2f s (the run ended at %.2f s)", what.c_str(), *x.at_s, r.end_s), r);
+                format_text("%s had no value at %.2f s (the run ended at %.2f s)", what.c_str(), *x.at_s, r.end_s), r);
   }
   std::size_t n = 0;
   for (const RtdbSample& s : found->second) {
     if (s.t + 1e-9 < x.from_s) continue;
     ++n;
     if (bad(s)) {
-      return fail(v, what + " " + say(s), what + format(" left %s from %.2f s on: ", bounds.c_str(), x.from_s) + say(s),
-                  r, s.t);
+      return fail(v, what + " " + say(s),
+                  what + format_text(" left %s from %.2f s on: ", bounds.c_str(), x.from_s) + say(s), r, s.t);
     }
   }
-  if (n == 0) return fail(v, "not there", what + format(" had no value from %.2f s on", x.from_s), r);
-  return pass(v, format("%s inside %s in all %zu samples from %.2f s", what.c_str(), bounds.c_str(), n, x.from_s));
+  if (n == 0) return fail(v, "not there", what + format_text(" had no value from %.2f s on", x.from_s), r);
+  return pass(v, format_text("%s inside %s in all %zu samples from %.2f s", what.c_str(), bounds.c_str(), n, x.from_s));
 }
 
 Verdict processes(Verdict v, const Expectation& x, const Record& r) {
@@ -287,13 +285,13 @@ Verdict processes(Verdict v, const Expectation& x, const Record& r) {
   }
   if (r.stuck) return fail(v, "stuck", "the run stopped " + *r.stuck, r, r.end_s);  // "at t = T s: why"
   for (const external::ProcessEnd& e : r.ends) {
-    const std::string how = format("%s %d", e.signalled ? "signal" : "exit status", e.code);
-    const std::string who = format("`%s` (agent %d, pid %d)", e.command.c_str(), e.agent, static_cast<int>(e.pid));
+    const std::string how = format_text("%s %d", e.signalled ? "signal" : "exit status", e.code);
+    const std::string who = format_text("`%s` (agent %d, pid %d)", e.command.c_str(), e.agent, static_cast<int>(e.pid));
     if (e.during_run) {
       return fail(
           v, who + " ended",
-          format("%s ended at t = %.3f s, before the run's end: ", who.c_str(), to_seconds(*e.during_run)) + how, r,
-          to_seconds(*e.during_run));
+          format_text("%s ended at t = %.3f s, before the run's end: ", who.c_str(), to_seconds(*e.during_run)) + how,
+          r, to_seconds(*e.during_run));
     }
     if (!x.exit_codes.empty() &&
         (e.signalled || std::find(x.exit_codes.begin(), x.exit_codes.end(), e.code) == x.exit_codes.end())) {
@@ -302,8 +300,8 @@ Verdict processes(Verdict v, const Expectation& x, const Record& r) {
   }
   std::string codes;
   for (const external::ProcessEnd& e : r.ends) codes += (codes.empty() ? "" : ", ") + std::to_string(e.code);
-  return pass(v, format("%zu process(es) answered to the end; stopped with %s", r.started,
-                        codes.empty() ? "nothing reported" : codes.c_str()));
+  return pass(v, format_text("%zu process(es) answered to the end; stopped with %s", r.started,
+                             codes.empty() ? "nothing reported" : codes.c_str()));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "canhil/base/setup_error.hpp"
+#include "canhil/base/text_format.hpp"
 #include "canhil/emulator/laptop_link.hpp"
 #include "canhil/emulator/run_plan.hpp"
 #include "canhil/emulator/session.hpp"
@@ -288,9 +289,8 @@ FileResult run_test(const TestFile& test, const TestOptions& options) {
     }
     for (const Event& e : test.events) {
       if (from_seconds(e.at_s) >= end) {
-        char why[160];
-        std::snprintf(why, sizeof why, "%g s is not before the run's end (%g s)", e.at_s, to_seconds(end));
-        throw SetupError(test.path.string() + ":" + std::to_string(e.line) + ": events.at_s: " + why +
+        throw SetupError(test.path.string() + ":" + std::to_string(e.line) + ": events.at_s: " +
+                         format_text("%g s is not before the run's end (%g s)", e.at_s, to_seconds(end)) +
                          ": make it earlier, or the run longer ([test] duration_s)");
       }
       if (e.robot >= session.robot_count() && (e.kind == Event::Kind::kSetPose || e.running)) {
