@@ -84,6 +84,37 @@ TEST(WireBus, AtEveryIdleInstantTheLowestIdentifierGoesFirstEachThreeBitsAfterTh
   EXPECT_EQ(frames_seen[4].frame.extended, true) << "a base frame before an extended one with the same 11 bits";
 }
 
+// The next frame is chosen as soon as the bus knows it (a calm bus: no
+// rules, nobody bus-off), so the bus's next event is that frame's end, not
+// the idle instant where it starts; a frame given before that instant still
+// takes part, as arbitration at the instant would have it, and one given
+// after it waits.
+TEST(WireBus, TheNextFrameIsKnownBeforeItStartsAndAFrameGivenByThenStillTakesPart) {
+  WireBus bus({});
+  const ControllerId a = bus.add_controller("a"), b = bus.add_controller("b"), c = bus.add_controller("c"),
+                     d = bus.add_controller("d"), e = bus.add_controller("e");
+  auto end_of = [](const frames::WireFrame& f, Nanos start) { return start + bit(frames::count_bits(f).total() - 3); };
+  bus.submit(a, frame(0x300), Nanos{0});
+  bus.submit(b, frame(0x200), microseconds(10));
+  const Nanos a_end = end_of(frame(0x300), Nanos{0});
+  const Nanos idle = a_end + bit(3);
+  ASSERT_EQ(only(run(bus, a_end), WireEvent::Kind::kFrame).size(), 1u);
+  EXPECT_EQ(bus.next_event(), end_of(frame(0x200), idle)) << "b's frame, from the idle instant, is already known";
+  bus.submit(c, frame(0x100), a_end + bit(1));  // before the idle instant: takes part, and wins
+  EXPECT_EQ(bus.next_event(), end_of(frame(0x100), idle));
+  std::vector<WireEvent> out;
+  bus.advance(idle, out);
+  bus.submit(d, frame(0x050), idle);             // at the idle instant itself: takes part, and wins
+  bus.submit(e, frame(0x001), idle + Nanos{1});  // after it: waits for the next
+  const auto seen = only(run(bus, std::chrono::milliseconds(2)), WireEvent::Kind::kFrame);
+  ASSERT_EQ(seen.size(), 4u);
+  EXPECT_EQ(seen[0].controller, d);
+  EXPECT_EQ(seen[0].start, idle);
+  EXPECT_EQ(seen[1].controller, e);
+  EXPECT_EQ(seen[2].controller, c);
+  EXPECT_EQ(seen[3].controller, b);
+}
+
 TEST(WireBus, AControllerSendsItsOwnFramesInOrderAHigherPriorityOneWaitsBehindItsFirst) {
   WireBus bus({});
   const ControllerId a = bus.add_controller("a");
@@ -111,6 +142,21 @@ TEST(WireBus, AFrameGivenAtTheInstantArbitrationBeginsTakesPart) {
   ASSERT_EQ(seen.size(), 2u);
   EXPECT_EQ(seen[0].frame.id, 0x100u);
   EXPECT_EQ(seen[0].start, microseconds(5));
+}
+
+TEST(WireBus, AtARateOfNoWholeNanosecondsPerBitTheTimeIsStillTheExactQuotient) {
+  for (const std::uint32_t rate : {83'333u, 800'000u, 1'000'000u}) {
+    WireConfig config;
+    config.bit_rate = rate;
+    WireBus bus(config);
+    const ControllerId a = bus.add_controller("a");
+    bus.add_controller("b");
+    const frames::WireFrame f = frame(0x123);
+    bus.submit(a, f, Nanos{0});
+    const auto seen = only(run(bus, std::chrono::milliseconds(5)), WireEvent::Kind::kFrame);
+    ASSERT_EQ(seen.size(), 1u) << rate;
+    EXPECT_EQ(seen[0].at, frames::bits_to_time(frames::count_bits(f).total() - 3, rate)) << rate;
+  }
 }
 
 TEST(WireBus, AFullQueueRefusesTheFrameAndCountsIt) {
@@ -264,6 +310,60 @@ TEST(WireBus, TrafficCountsTowardRecoveryOneOccurrencePerFrameTail) {
   EXPECT_EQ(before, 128) << "128 frames' tails: 128 occurrences of 11 recessive bits";
   // While bus-off, a received none of them.
   EXPECT_NE(std::find(sent[0].missed.begin(), sent[0].missed.end(), a), sent[0].missed.end());
+}
+
+// Each controller's count of frames received: every frame whole that it was
+// on the bus for, not its own and not missed. The bus keeps these lazily
+// while it is calm (no rules, nobody bus-off, every receive counter 0) and
+// one by one otherwise; the count is the same through both and the changes
+// between them: a lone sender's ACK errors, a controller removed, one added.
+TEST(WireBus, FramesReceivedAreCountedThroughCalmErrorsAndControllersComingAndGoing) {
+  WireBus bus({});
+  std::vector<ControllerId> present{bus.add_controller("a"), bus.add_controller("b")};
+  std::vector<std::uint64_t> expected(2, 0);
+  Nanos now{0};
+  auto send = [&](ControllerId from, int frames) {
+    std::vector<WireEvent> out;
+    for (int i = 0; i < frames; ++i) {
+      bus.submit(from, frame(0x100 + from), now);
+      now += microseconds(200);
+      bus.advance(now, out);
+    }
+    for (const WireEvent& e : out) {
+      if (e.kind != WireEvent::Kind::kFrame) continue;
+      for (const ControllerId c : present) {
+        if (c != e.controller && std::find(e.missed.begin(), e.missed.end(), c) == e.missed.end()) ++expected[c];
+      }
+    }
+    for (const ControllerId c : present) EXPECT_EQ(bus.status(c).received, expected[c]) << "controller " << c;
+  };
+  send(0, 20);
+  send(1, 15);
+  EXPECT_EQ(expected[0], 15u);
+  EXPECT_EQ(expected[1], 20u);
+  // b removed: a is alone, nobody acknowledges (ACK errors), b's count stays.
+  bus.remove_controller(1);
+  present = {0};
+  send(0, 5);
+  EXPECT_GT(bus.status(0).tec, 0) << "a's frames went unacknowledged";
+  EXPECT_EQ(bus.status(1).received, 20u);
+  // c comes: a's frames get through again, and c counts from now.
+  present.push_back(bus.add_controller("c"));
+  expected.push_back(0);
+  send(0, 12);
+  send(present[1], 3);
+  EXPECT_EQ(bus.status(present[1]).received, expected[present[1]]);
+  EXPECT_GT(expected[present[1]], 0u);
+  // A fault rule: frames fail, counters move, counted one by one from then on.
+  FaultRule errors;
+  errors.kind = FaultRule::Kind::kFrameErrors;
+  errors.rate = 0.5;
+  errors.from = now;
+  errors.until = now + std::chrono::milliseconds(5);
+  ASSERT_TRUE(bus.add_fault(errors));
+  send(0, 40);
+  EXPECT_GT(bus.status(present[1]).errors, 0u);
+  send(present[1], 10);
 }
 
 TEST(WireBus, TheSameCallsGiveTheSameEvents) {

@@ -11,6 +11,11 @@ using namespace bit_counts;  // NOLINT(google-build-using-namespace): the model'
 
 WireBus::WireBus(const WireConfig& config) : config_(config), faults_(config.seed) {
   CANHIL_DEMAND(config.bit_rate > 0, "a timed wire needs a bit rate");
+  const auto whole = [](std::uint32_t rate) -> std::int64_t {
+    return 1'000'000'000 % rate == 0 ? 1'000'000'000 / rate : 0;
+  };
+  bit_ns_ = whole(config.bit_rate);
+  fast_bit_ns_ = whole(config.data_bit_rate != 0 ? config.data_bit_rate : config.bit_rate);
 }
 
 ControllerId WireBus::add_controller(std::string name, const ControllerOptions& options) {
@@ -18,23 +23,36 @@ ControllerId WireBus::add_controller(std::string name, const ControllerOptions& 
   c.name = std::move(name);
   c.options = options;
   c.counts.name = c.name;
+  c.calm_frames = stats_.frames;
   controllers_.push_back(std::move(c));
+  ++present_;
+  if (calm_) choose_again(now_ + Nanos{1});  // one more to acknowledge a frame not started
   return static_cast<ControllerId>(controllers_.size() - 1);
 }
 
 void WireBus::remove_controller(ControllerId controller) {
   Controller& k = controllers_.at(controller);
+  if (k.gone) return;
+  k.counts.received += calm_received(k);
   k.gone = true;
+  --present_;
   k.queue.clear();
   queue_changed(controller);
   k.restart_at = kNever;
   k.recovering = false;
-  if (wire_ && wire_->from == controller) wire_->babble = true;  // its frame finishes; nothing left to pop
+  if (wire_ && wire_->from == controller) {
+    if (calm_ && wire_->start > now_) {
+      wire_.reset();  // chosen, not started: gone with its queue
+    } else {
+      wire_->babble = true;  // its frame finishes; nothing left to pop
+    }
+  }
+  if (calm_) choose_again(now_ + Nanos{1});  // one fewer to acknowledge a frame not started
   next_stale_ = true;
 }
 
 Nanos WireBus::frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept {
-  return frames::bits_to_time(frames::prefix_bits(f, bit_count), config_.bit_rate, config_.data_bit_rate);
+  return frame_bits(frames::prefix_bits(f, bit_count));
 }
 
 WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame& frame, Nanos now, std::uint64_t tag) {
@@ -51,6 +69,17 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
   q.given = now;
   k.queue.push_back(q);
   queue_changed(controller);
+  if (calm_) {
+    // Only a frame at its queue's head, ready by the chosen frame's start,
+    // and before it in arbitration, changes the choice.
+    if (!wire_ ||
+        (wire_->start >= now && k.queue.size() == 1 &&
+         (ready_at(controller) < wire_->start || (ready_at(controller) == wire_->start && q.key < wire_->q.key)))) {
+      choose_again(now);
+    }
+    next_stale_ = true;
+    return Submit::kQueued;
+  }
   if (now == now_ && k.queue.size() == 1 && ready_at(controller) == now) {
     if (wire_ && wire_->start == now && !wire_->babble && q.key < wire_->q.key) {
       // Arbitration began at this very instant: the frame given now takes part, and wins.
@@ -68,7 +97,29 @@ std::size_t WireBus::queued() const noexcept {
   return n;
 }
 
+void WireBus::choose_again(Nanos now) {
+  if (wire_ && wire_->start >= now) wire_.reset();  // not started (or starting now: a frame given now takes part)
+  if (!wire_ && waiting_ != 0) arbitrate(bus_due());
+  next_stale_ = true;
+}
+
+void WireBus::end_calm() noexcept {
+  if (!calm_) return;
+  for (Controller& k : controllers_) k.counts.received += calm_received(k);
+  calm_ = false;
+}
+
+void WireBus::begin_calm() noexcept {
+  for (Controller& k : controllers_) {
+    k.calm_frames = stats_.frames;
+    k.calm_sent = k.counts.sent;
+  }
+  calm_ = true;
+}
+
 bool WireBus::acknowledged(ControllerId from) const noexcept {
+  // Calm: nobody bus-off, nobody cut off; everyone else present acknowledges.
+  if (calm_) return present_ > (controllers_[from].gone ? 0 : 1);
   for (ControllerId c = 0; c < controllers_.size(); ++c) {
     if (c != from && !controllers_[c].confinement.bus_off() && !off_bus(c, now_)) return true;
   }
@@ -77,6 +128,10 @@ bool WireBus::acknowledged(ControllerId from) const noexcept {
 
 Nanos WireBus::ready_at(ControllerId c) const noexcept {
   const Controller& k = controllers_[c];
+  if (calm_) {  // nobody bus-off, no rule: nobody babbles, is cut off or stuck
+    if (k.queue.empty()) return kNever;
+    return std::max(std::max(idle_from_, now_), std::max(k.not_before, k.queue.front().given));
+  }
   if (k.confinement.bus_off()) return kNever;
   const Nanos earliest = std::max({idle_from_, k.not_before, now_});
   Nanos t = kNever;
@@ -129,11 +184,14 @@ bool WireBus::arbitrate(Nanos at) {
   if (config_.bits == WireConfig::Bits::kWorstCase && !w.q.frame.fd) {
     total = frames::worst_case_frame_bits(w.q.frame.remote ? 0 : w.q.frame.len, w.q.frame.extended);
   }
-  w.plan = faults_.plan(w.q.frame, w.from, at, total, acknowledged(w.from));
+  if (faults_.rules().empty()) {  // only a frame nobody acknowledges fails
+    w.plan = acknowledged(w.from) ? ErrorPlan{} : ErrorPlan{ErrorPlan::Cause::kAck, total - kAckSlotFromEnd};
+  } else {
+    w.plan = faults_.plan(w.q.frame, w.from, at, total, acknowledged(w.from));
+  }
   if (w.plan.cause == ErrorPlan::Cause::kNone) {
     if (total == all.total()) {
-      w.end = at + frames::bits_to_time(frames::FrameBits{all.nominal - kIntermission, all.fast}, config_.bit_rate,
-                                        config_.data_bit_rate);
+      w.end = at + frame_bits(frames::FrameBits{all.nominal - kIntermission, all.fast});
     } else {
       w.end = at + bits(total - kIntermission);
     }
@@ -251,6 +309,7 @@ void WireBus::finish(std::vector<WireEvent>& out) {
   stats_.busy += w.free_at - w.start;
   ++stats_.frames;
   bool changed = false;  // a counter going down changed someone's state
+  bool calm_next = false;
   {
     WireEvent& e = out.emplace_back();  // filled before anything else goes out
     e.kind = WireEvent::Kind::kFrame;
@@ -259,20 +318,26 @@ void WireBus::finish(std::vector<WireEvent>& out) {
     e.start = w.start;
     e.at = w.end;
     e.frame = w.q.frame;
-    for (ControllerId c = 0; c < controllers_.size(); ++c) {
+    // Calm, nobody misses it and no receiver's state can change: their counts are lazy.
+    bool clear = !calm_ && faults_.rules().empty();  // calm again after this frame, unless a receiver says not
+    for (ControllerId c = 0; !calm_ && c < controllers_.size(); ++c) {
       Controller& k = controllers_[c];
       if (c == w.from || k.gone) continue;  // one removed is no longer on the bus: it misses nothing
       if (k.confinement.bus_off() || faults_.cut(c, w.end)) {
         e.missed.push_back(c);
+        clear = false;
         continue;
       }
       k.confinement.received();
       ++k.counts.received;
       changed = changed || k.confinement.state() != k.reported;
+      clear = clear && k.confinement.rec() == 0;
     }
+    calm_next = clear && tx.confinement.rec() == 0;
   }
   tx.confinement.transmitted();
   ++tx.counts.sent;
+  if (calm_next) begin_calm();
   changed = changed || tx.confinement.state() != tx.reported;
   if (!w.babble) tx.queue.pop_front();
   queue_changed(w.from);
@@ -284,9 +349,11 @@ void WireBus::finish(std::vector<WireEvent>& out) {
   idle_from_ = w.free_at;
   recessive_from_ = w.end - bits(kTailRecessive - kIntermission);
   wire_.reset();
+  if (calm_) choose_again(now_);
 }
 
 void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
+  end_calm();  // counters move
   Controller& tx = controllers_[w.from];
   const ErrorPlan& plan = w.plan;
   const frames::WireBit bit = frames::bit_at(w.q.frame, plan.bit);
@@ -403,6 +470,8 @@ bool WireBus::add_fault(const FaultRule& rule) {
   const bool needs_node = rule.kind == FaultRule::Kind::kBusOff || rule.kind == FaultRule::Kind::kBabbling ||
                           rule.kind == FaultRule::Kind::kCut;
   if ((needs_node && !rule.controller) || (rule.controller && *rule.controller >= controllers_.size())) return false;
+  if (calm_ && wire_ && wire_->start > now_) wire_.reset();  // chosen early, as calm allows: chosen again by the rules
+  end_calm();
   faults_.add(rule, now_);
   next_stale_ = true;
   return true;
@@ -417,6 +486,7 @@ void WireBus::clear_faults(Nanos now) {
 ControllerStatus WireBus::status(ControllerId controller) const {
   const Controller& k = controllers_.at(controller);
   ControllerStatus s = k.counts;
+  s.received += calm_received(k);
   s.state = k.confinement.state();
   s.tec = k.confinement.tec();
   s.rec = k.confinement.rec();

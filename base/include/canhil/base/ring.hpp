@@ -35,6 +35,11 @@ class Ring {
   /// it fills (a bus endpoint in virtual time) keeps writing the same few
   /// slots, which stay in the cache, instead of walking all of them.
   void pop_front() noexcept { head_ = --size_ == 0 ? 0 : (head_ + 1) & (slots_.size() - 1); }
+  /// Drops everything (the slots stay, as pop_front leaves them).
+  void clear() noexcept {
+    head_ = 0;
+    size_ = 0;
+  }
 
  private:
   void grow() {

@@ -43,12 +43,12 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "canhil/base/ring.hpp"
 #include "canhil/base/time.hpp"
 #include "canhil/frames/frame.hpp"
 #include "canhil/frames/wire.hpp"
@@ -175,7 +175,7 @@ class WireBus {
     std::string name;
     ControllerOptions options;
     Confinement confinement;
-    std::deque<Queued> queue;
+    base::Ring<Queued> queue;  // no allocation per frame, as a deque's blocks would
     ControllerStatus counts;
     Nanos not_before{0};            // suspend transmission after an error-passive send
     Nanos restart_at = kNever;      // bus-off: when the recovery begins
@@ -185,6 +185,10 @@ class WireBus {
     Nanos cut_busy_until{0};        // cut off: its own stub is busy with an attempt until then
     ControllerState reported = ControllerState::kErrorActive;  // last state told
     bool gone = false;                                         // remove_controller()
+    // While the bus is calm, its frames received are counted from these:
+    // the bus's frames and its own sent when the calm began (calm_received).
+    std::uint64_t calm_frames = 0;
+    std::uint64_t calm_sent = 0;
   };
   // A frame (or babble frame) on the wire.
   struct OnWire {
@@ -197,7 +201,15 @@ class WireBus {
     Nanos free_at{0};  // the bus is free for the next arbitration
   };
 
-  Nanos bits(std::uint32_t n) const noexcept { return frames::bits_to_time(n, config_.bit_rate); }
+  // Bits as time: by one multiplication where a bit is a whole number of
+  // nanoseconds (every usual rate), else as frames::bits_to_time divides.
+  Nanos bits(std::uint32_t n) const noexcept {
+    return bit_ns_ != 0 ? Nanos{bit_ns_ * n} : frames::bits_to_time(n, config_.bit_rate);
+  }
+  Nanos frame_bits(frames::FrameBits b) const noexcept {
+    if (bit_ns_ != 0 && (b.fast == 0 || fast_bit_ns_ != 0)) return Nanos{bit_ns_ * b.nominal + fast_bit_ns_ * b.fast};
+    return frames::bits_to_time(b, config_.bit_rate, config_.data_bit_rate);
+  }
   Nanos frame_time(const frames::WireFrame& f, std::uint32_t bit_count) const noexcept;
   // The one thing due at `at` (the earliest), done.
   void step(Nanos at, std::vector<WireEvent>& out);
@@ -216,6 +228,23 @@ class WireBus {
   Nanos recovery_due(const Controller& k) const noexcept;
   void recover(ControllerId c, Nanos at, std::vector<WireEvent>& out);
   bool acknowledged(ControllerId from) const noexcept;
+  // A calm bus: no fault rule, nobody bus-off, every receive counter 0. A
+  // frame's receivers then change nothing but their count of frames
+  // received, which is kept lazily: what it was when the calm began, plus
+  // the frames carried since that were not their own.
+  std::uint64_t calm_received(const Controller& k) const noexcept {
+    return calm_ && !k.gone ? (stats_.frames - k.calm_frames) - (k.counts.sent - k.calm_sent) : 0;
+  }
+  // Calm, the next frame on the wire is chosen as soon as it is known, with
+  // its start in the future (the bus falls idle then), and chosen again
+  // whenever what it depends on changes before it starts (a frame given by
+  // then, a controller coming or going): the same frame as arbitration at
+  // its start would choose, since calm arbitration changes nothing else
+  // (no draws, nobody recovering). The bus's next event is then a frame's end,
+  // never an idle instant with nothing to tell.
+  void choose_again(Nanos now);
+  void end_calm() noexcept;    // the lazy counts made whole; calm_ false
+  void begin_calm() noexcept;  // calm_ true, the lazy counts from now
   // Off the bus at `t`: removed, or cut off by a fault.
   bool off_bus(ControllerId c, Nanos t) const noexcept { return controllers_[c].gone || faults_.cut(c, t); }
   // The fault rules' own moments (wire_bus_faults.cpp).
@@ -225,6 +254,8 @@ class WireBus {
   void cut_attempt(ControllerId c, Nanos at, std::vector<WireEvent>& out);
 
   WireConfig config_;
+  std::int64_t bit_ns_ = 0;       // a nominal bit's nanoseconds when whole, else 0
+  std::int64_t fast_bit_ns_ = 0;  // a data-phase bit's, likewise
   std::vector<Controller> controllers_;
   Faults faults_;
   std::uint64_t seq_ = 0;
@@ -255,6 +286,8 @@ class WireBus {
     for (std::uint64_t w = waiting_; w != 0; w &= w - 1) f(static_cast<ControllerId>(std::countr_zero(w)));
   }
   bool timers_possible() const noexcept { return ever_bus_off_ || !faults_.rules().empty(); }
+  bool calm_ = true;
+  std::size_t present_ = 0;  // controllers not removed
   WireStats stats_;
   // next_event(), asked far more often than anything changes: kept until a change.
   mutable Nanos next_ = kNever;
