@@ -366,6 +366,35 @@ TEST(WireBus, FramesReceivedAreCountedThroughCalmErrorsAndControllersComingAndGo
   send(present[1], 10);
 }
 
+// A controller taken off the bus (its endpoint closed): a frame of its that
+// has started still ends whole, as it is, bytes and all; one only chosen to
+// go next never starts, and the next in arbitration goes in its place.
+TEST(WireBus, AControllerRemovedMidFrameEndsItWholeAndOneChosenButNotStartedNeverSends) {
+  WireBus bus({});
+  const ControllerId a = bus.add_controller("a"), b = bus.add_controller("b"), c = bus.add_controller("c");
+  bus.add_controller("d");  // acknowledges c's frame when a and b are gone
+  frames::WireFrame fa = frame(0x300);
+  fa.data[0] = 0xA5;
+  bus.submit(a, fa, Nanos{0}, 7);
+  bus.submit(b, frame(0x100), microseconds(1));  // waits for a's frame, chosen to go next
+  bus.submit(c, frame(0x200), microseconds(1));
+  std::vector<WireEvent> out;
+  bus.advance(microseconds(20), out);
+  bus.remove_controller(a);  // mid-frame
+  bus.advance(microseconds(20), out);
+  const Nanos a_end = bit(frames::count_bits(fa).total() - 3);
+  bus.advance(a_end, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].controller, a);
+  EXPECT_EQ(out[0].tag, 7u);
+  EXPECT_EQ(out[0].frame.data[0], 0xA5) << "the frame as it was sent, though its queue is gone";
+  bus.remove_controller(b);  // chosen, not yet started
+  const auto rest = only(run(bus, std::chrono::milliseconds(2)), WireEvent::Kind::kFrame);
+  ASSERT_EQ(rest.size(), 1u);
+  EXPECT_EQ(rest[0].controller, c);
+  EXPECT_EQ(rest[0].start, a_end + bit(3));
+}
+
 TEST(WireBus, TheSameCallsGiveTheSameEvents) {
   auto once = [] {
     WireConfig config;

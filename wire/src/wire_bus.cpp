@@ -36,17 +36,18 @@ void WireBus::remove_controller(ControllerId controller) {
   k.counts.received += calm_received(k);
   k.gone = true;
   --present_;
+  if (wire_ && wire_->from == controller) {
+    if (calm_ && wire_->start > now_) {
+      wire_.reset();  // chosen, not started: gone with its queue
+    } else if (!wire_->babble) {
+      babble_ = k.queue.front();  // its frame finishes; nothing left to pop
+      wire_->babble = true;
+    }
+  }
   k.queue.clear();
   queue_changed(controller);
   k.restart_at = kNever;
   k.recovering = false;
-  if (wire_ && wire_->from == controller) {
-    if (calm_ && wire_->start > now_) {
-      wire_.reset();  // chosen, not started: gone with its queue
-    } else {
-      wire_->babble = true;  // its frame finishes; nothing left to pop
-    }
-  }
   if (calm_) choose_again(now_ + Nanos{1});  // one fewer to acknowledge a frame not started
   next_stale_ = true;
 }
@@ -74,14 +75,14 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
     // and before it in arbitration, changes the choice.
     if (!wire_ ||
         (wire_->start >= now && k.queue.size() == 1 &&
-         (ready_at(controller) < wire_->start || (ready_at(controller) == wire_->start && q.key < wire_->q.key)))) {
+         (ready_at(controller) < wire_->start || (ready_at(controller) == wire_->start && q.key < wire_->key)))) {
       choose_again(now);
     }
     next_stale_ = true;
     return Submit::kQueued;
   }
   if (now == now_ && k.queue.size() == 1 && ready_at(controller) == now) {
-    if (wire_ && wire_->start == now && !wire_->babble && q.key < wire_->q.key) {
+    if (wire_ && wire_->start == now && !wire_->babble && q.key < wire_->key) {
       // Arbitration began at this very instant: the frame given now takes part, and wins.
       wire_.reset();
     }
@@ -166,28 +167,27 @@ bool WireBus::arbitrate(Nanos at) {
     best_seq = seq;
   });
   if (best == nullptr && best_babble == nullptr) return false;
-  wire_ = OnWire{};
-  OnWire& w = *wire_;
+  OnWire& w = wire_.emplace();
   w.from = from;
+  w.key = best_key;
   if (best_babble != nullptr) {
     w.babble = true;
-    w.q.frame = best_babble->babble;
-    w.q.key = best_key;
-    w.q.tag = kBabbleTag;
-  } else {
-    w.q = *best;
+    babble_.frame = best_babble->babble;
+    babble_.key = best_key;
+    babble_.tag = kBabbleTag;
   }
+  const frames::WireFrame& frame = sent(w).frame;
   w.start = at;
   recessive_run_ends(at);
-  const frames::FrameBits all = frames::count_bits(w.q.frame);
+  const frames::FrameBits all = frames::count_bits(frame);
   std::uint32_t total = all.total();
-  if (config_.bits == WireConfig::Bits::kWorstCase && !w.q.frame.fd) {
-    total = frames::worst_case_frame_bits(w.q.frame.remote ? 0 : w.q.frame.len, w.q.frame.extended);
+  if (config_.bits == WireConfig::Bits::kWorstCase && !frame.fd) {
+    total = frames::worst_case_frame_bits(frame.remote ? 0 : frame.len, frame.extended);
   }
   if (faults_.rules().empty()) {  // only a frame nobody acknowledges fails
     w.plan = acknowledged(w.from) ? ErrorPlan{} : ErrorPlan{ErrorPlan::Cause::kAck, total - kAckSlotFromEnd};
   } else {
-    w.plan = faults_.plan(w.q.frame, w.from, at, total, acknowledged(w.from));
+    w.plan = faults_.plan(frame, w.from, at, total, acknowledged(w.from));
   }
   if (w.plan.cause == ErrorPlan::Cause::kNone) {
     if (total == all.total()) {
@@ -197,7 +197,7 @@ bool WireBus::arbitrate(Nanos at) {
     }
     w.free_at = w.end + bits(kIntermission);
   } else {
-    w.end = at + frame_time(w.q.frame, w.plan.bit + 1);  // seen at the bit's end: the flag starts at the next
+    w.end = at + frame_time(frame, w.plan.bit + 1);  // seen at the bit's end: the flag starts at the next
   }
   next_stale_ = true;
   return true;
@@ -311,13 +311,8 @@ void WireBus::finish(std::vector<WireEvent>& out) {
   bool changed = false;  // a counter going down changed someone's state
   bool calm_next = false;
   {
-    WireEvent& e = out.emplace_back();  // filled before anything else goes out
-    e.kind = WireEvent::Kind::kFrame;
-    e.controller = w.from;
-    e.tag = w.q.tag;
-    e.start = w.start;
-    e.at = w.end;
-    e.frame = w.q.frame;
+    const Queued& q = sent(w);
+    WireEvent& e = out.emplace_back(w.from, q.tag, w.start, w.end, q.frame);  // before anything else goes out
     // Calm, nobody misses it and no receiver's state can change: their counts are lazy.
     bool clear = !calm_ && faults_.rules().empty();  // calm again after this frame, unless a receiver says not
     for (ControllerId c = 0; !calm_ && c < controllers_.size(); ++c) {
@@ -356,7 +351,7 @@ void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
   end_calm();  // counters move
   Controller& tx = controllers_[w.from];
   const ErrorPlan& plan = w.plan;
-  const frames::WireBit bit = frames::bit_at(w.q.frame, plan.bit);
+  const frames::WireBit bit = frames::bit_at(sent(w).frame, plan.bit);
   const bool passive_tx = tx.confinement.state() == ControllerState::kErrorPassive;
   bool others_flag = false;
   // The receivers: they see the transmitter's flag (a stuff or form error),

@@ -33,9 +33,10 @@ void WireBus::fault_change(Nanos at, std::vector<WireEvent>& out) {
       case FaultRule::Kind::kStuckDominant:
         if (wire_) {
           // The frame on the wire meets a dominant bit it did not send.
-          const frames::FrameBits sent = frames::count_bits(wire_->q.frame);
+          const frames::WireFrame& frame = sent(*wire_).frame;
+          const std::uint32_t total = frames::count_bits(frame).total();
           std::uint32_t bit = 0;
-          while (bit + 1 < sent.total() && wire_->start + frame_time(wire_->q.frame, bit + 1) <= at) ++bit;
+          while (bit + 1 < total && wire_->start + frame_time(frame, bit + 1) <= at) ++bit;
           wire_->plan = ErrorPlan{ErrorPlan::Cause::kBit, bit};
           wire_->end = at;
           OnWire w = *wire_;

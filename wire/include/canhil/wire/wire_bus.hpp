@@ -77,6 +77,10 @@ struct ControllerOptions {
 
 /// What happened on the bus.
 struct WireEvent {
+  WireEvent() = default;
+  /// A kFrame event (built in place: no zeroed copy of the frame first).
+  WireEvent(ControllerId sender, std::uint64_t frame_tag, Nanos first_bit, Nanos end, const frames::WireFrame& f)
+      : controller(sender), tag(frame_tag), start(first_bit), at(end), frame(f) {}
   enum class Kind : std::uint8_t {
     kFrame,  ///< a frame's last bit has passed: its receivers have it
     kError,  ///< a controller reports an error or a change of state (Linux's error frame)
@@ -193,9 +197,9 @@ class WireBus {
   // A frame (or babble frame) on the wire.
   struct OnWire {
     ControllerId from = 0;
-    Queued q;
-    bool babble = false;
-    ErrorPlan plan;  // how it ends
+    std::uint64_t key = 0;  // its arbitration key
+    bool babble = false;    // the frame is babble_ (a babbling node's, or one whose sender was removed)
+    ErrorPlan plan;         // how it ends
     Nanos start{0};
     Nanos end{0};      // its end of frame, or when its error is seen
     Nanos free_at{0};  // the bus is free for the next arbitration
@@ -203,6 +207,8 @@ class WireBus {
 
   // Bits as time: by one multiplication where a bit is a whole number of
   // nanoseconds (every usual rate), else as frames::bits_to_time divides.
+  // The frame on the wire, where it lies: its sender's queue's head, or babble_.
+  const Queued& sent(const OnWire& w) const noexcept { return w.babble ? babble_ : controllers_[w.from].queue.front(); }
   Nanos bits(std::uint32_t n) const noexcept {
     return bit_ns_ != 0 ? Nanos{bit_ns_ * n} : frames::bits_to_time(n, config_.bit_rate);
   }
@@ -260,6 +266,7 @@ class WireBus {
   Faults faults_;
   std::uint64_t seq_ = 0;
   std::optional<OnWire> wire_;
+  Queued babble_;                 // the frame on the wire when it is no queue's
   Nanos stuck_tick_at_ = kNever;  // a stuck-dominant bus's next 8-bit sequence
   Nanos idle_from_{0};            // the bus is free from then (arbitration then or at the next frame given)
   Nanos recessive_from_{0};       // the bus has been recessive since then (no SOF, no flag)
