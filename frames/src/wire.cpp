@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 
 namespace canhil::frames {
 namespace {
@@ -216,28 +217,41 @@ namespace {
 // 7 of padding) as one number, its last bit lowest.
 __extension__ using Stream = unsigned __int128;  // NOLINT: GCC's and Clang's 128-bit integer
 
-// CRC-15 sixteen bits at a time: with the register r and the next 16 bits b,
-// the register after them is the CRC of the 16 bits (r << 1) ^ b from zero,
-// the xor of its two bytes' CRCs (the CRC is linear): two tables.
-struct Crc15By16 {
-  std::array<std::uint16_t, 256> high{}, low{};
-  static constexpr std::uint32_t of(std::uint32_t bits16) noexcept {
-    std::uint32_t crc = 0;
-    for (int i = 15; i >= 0; --i) {
-      const bool flip = ((crc >> 14) & 1u) != ((bits16 >> i) & 1u);
-      crc = (crc << 1) & 0x7FFFu;
-      if (flip) crc ^= 0x4599u;
-    }
-    return crc;
-  }
-  constexpr Crc15By16() {
-    for (std::uint32_t byte = 0; byte < 256; ++byte) {
-      high[byte] = static_cast<std::uint16_t>(of(byte << 8));
-      low[byte] = static_cast<std::uint16_t>(of(byte));
+// CRC-15 by the message's nibbles, each looked up on its own: the CRC is
+// linear, so it is the xor of each nibble's CRC with the zeros after it
+// (bits 4k..4k+3 from the message's end: a nibble followed by 4k zero bits),
+// and zeros before a message leave it unchanged. The lookups do not wait for
+// one another, as a register stepped by table would (a run's frames come
+// between physics steps, so each lookup may be a cache miss).
+constexpr std::size_t kCrcNibbles = 26;  // 104 bits: an extended frame's 39 + 64
+struct Crc15ByNibble {
+  std::array<std::array<std::uint16_t, 16>, kCrcNibbles> at{};
+  constexpr Crc15ByNibble() {
+    for (std::size_t k = 0; k < kCrcNibbles; ++k) {
+      for (std::uint32_t nibble = 0; nibble < 16; ++nibble) {
+        std::uint32_t crc = 0;
+        for (std::size_t i = 0; i < 4 + 4 * k; ++i) {
+          const bool in = i < 4 && ((nibble >> (3 - i)) & 1u) != 0;
+          const bool flip = ((crc >> 14) & 1u) != (in ? 1u : 0u);
+          crc = (crc << 1) & 0x7FFFu;
+          if (flip) crc ^= 0x4599u;
+        }
+        at[k][nibble] = static_cast<std::uint16_t>(crc);
+      }
     }
   }
 };
-constexpr Crc15By16 kCrc15;
+constexpr Crc15ByNibble kCrc15;
+
+std::uint32_t crc15_of(Stream message) noexcept {
+  const auto low = static_cast<std::uint64_t>(message), high = static_cast<std::uint64_t>(message >> 64);
+  std::uint32_t crc = 0;
+#pragma GCC unroll 16
+  for (std::size_t k = 0; k < 16; ++k) crc ^= kCrc15.at[k][(low >> (4 * k)) & 0xFu];
+#pragma GCC unroll 16
+  for (std::size_t k = 16; k < kCrcNibbles; ++k) crc ^= kCrc15.at[k][(high >> (4 * (k - 16))) & 0xFu];
+  return crc;
+}
 
 // Bit stuffing as a machine over the stuffed part's bits: its state is the
 // last level and how many equal bits end the stream so far (a stuff bit,
@@ -276,8 +290,21 @@ struct StuffTable {
 };
 constexpr StuffTable kStuffTable;
 
+// Steps the stuffing machine over `bytes` bytes of `x`, its first at the top.
+std::uint32_t stuff_bytes(Stream& x, std::uint32_t bytes, std::uint32_t& state) noexcept {
+  std::uint32_t stuffed = 0;
+  for (std::uint32_t k = 0; k < bytes; ++k) {
+    const std::uint32_t step = kStuffTable.t[state | static_cast<std::uint32_t>(x >> 120)];
+    stuffed += step >> 12;
+    state = step & 0xF00u;
+    x <<= 8;
+  }
+  return stuffed;
+}
+
 // A classic frame's bits without the encoder: the stuffed part as one
-// number, its CRC-15 sixteen bits at a time, its stuff bits a byte at a time.
+// number, its CRC-15 by nibbles, its stuff bits a byte at a time: the bytes
+// before the CRC while the CRC is worked out, then the rest.
 FrameBits count_classic(const WireFrame& f) noexcept {
   const bool remote = f.remote;
   const std::uint8_t len = std::min<std::uint8_t>(f.len, 8);
@@ -294,33 +321,28 @@ FrameBits count_classic(const WireFrame& f) noexcept {
     n = 39;
   }
   if (!remote && len > 0) {
-    std::uint64_t data = 0;
-    for (std::uint8_t i = 0; i < len; ++i) data = (data << 8) | f.data[i];
+    std::uint64_t data = 0;  // the first `len` bytes, the first highest
+    std::memcpy(&data, f.data.data(), sizeof data);
+    if constexpr (std::endian::native == std::endian::little) data = __builtin_bswap64(data);
+    data >>= 64 - 8 * len;
     v = (v << (8 * len)) | data;
     n += 8u * len;
   }
-  // CRC-15 over those bits: zeros put before them leave a register at zero
-  // unchanged, so the bits are taken in 16s from a multiple of 16.
-  std::uint32_t crc = 0;
-  for (int at = static_cast<int>((n + 15) & ~15u) - 16; at >= 0; at -= 16) {
-    const std::uint32_t index = ((crc << 1) ^ static_cast<std::uint32_t>(v >> at)) & 0xFFFFu;
-    crc = kCrc15.high[index >> 8] ^ kCrc15.low[index & 0xFFu];
-  }
-  v = (v << 15) | crc;
-  n += 15;
+  const std::uint32_t crc = crc15_of(v);
   // The stuff bits, a byte at a time from the first bit. Alternating bits
   // ending in a recessive one put before SOF make the count of bits a
   // multiple of 8 and add no stuff bit: none of them runs to five, and
   // the dominant SOF starts a run of its own, as it does from no bit at all.
-  const std::uint32_t pad = (8 - n % 8) % 8;
-  v |= static_cast<Stream>(0x55u & ((1u << pad) - 1)) << n;
-  std::uint32_t stuffed = 0, state = 0;
-  for (int at = static_cast<int>(n + pad) - 8; at >= 0; at -= 8) {
-    const std::uint32_t step = kStuffTable.t[state | (static_cast<std::uint32_t>(v >> at) & 0xFFu)];
-    stuffed += step >> 12;
-    state = step & 0xF00u;
-  }
-  return FrameBits{n + stuffed + kTailBits, 0};
+  const std::uint32_t total = n + 15;
+  const std::uint32_t pad = (8 - total % 8) % 8;
+  const std::uint32_t top = 128 - (total + pad);  // the padded stream, its first bit at bit 127
+  Stream x = ((static_cast<Stream>(0x55u & ((1u << pad) - 1)) << total) | (v << 15)) << top;
+  std::uint32_t state = 0;
+  const std::uint32_t before_crc = (pad + n) / 8;  // whole bytes before the CRC's first bit
+  std::uint32_t stuffed = stuff_bytes(x, before_crc, state);
+  x |= static_cast<Stream>(crc) << (top + 8 * before_crc);
+  stuffed += stuff_bytes(x, (total + pad) / 8 - before_crc, state);
+  return FrameBits{total + stuffed + kTailBits, 0};
 }
 
 }  // namespace
