@@ -62,13 +62,13 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
     ++k.counts.refused;
     return Submit::kQueueFull;
   }
-  Queued q;
+  Queued& q = k.queue.push_slot();  // every field set here
   q.frame = frame;
   q.key = frames::arbitration_key(frame.id, frame.extended, frame.remote && !frame.fd);
   q.seq = seq_++;
   q.tag = tag;
   q.given = now;
-  k.queue.push_back(q);
+  q.bits = frames::count_bits(frame);
   queue_changed(controller);
   if (calm_) {
     // Only a frame at its queue's head, ready by the chosen frame's start,
@@ -100,8 +100,26 @@ std::size_t WireBus::queued() const noexcept {
 
 void WireBus::choose_again(Nanos now) {
   if (wire_ && wire_->start >= now) wire_.reset();  // not started (or starting now: a frame given now takes part)
-  if (!wire_ && waiting_ != 0) arbitrate(bus_due());
   next_stale_ = true;
+  if (wire_) return;
+  // In one pass: the earliest instant a frame can start, and the first in
+  // arbitration among those ready then (lowest key; equal keys, the one given first).
+  const Nanos idle = std::max(idle_from_, now_);
+  Nanos at = kNever;
+  ControllerId from = 0;
+  std::uint64_t key = 0, seq = 0;
+  each_sender([&](ControllerId c) {
+    const Controller& k = controllers_[c];
+    if (k.queue.empty()) return;
+    const Queued& head = k.queue.front();
+    const Nanos ready = std::max(idle, std::max(k.not_before, head.given));
+    if (ready > at || (ready == at && (head.key > key || (head.key == key && head.seq > seq)))) return;
+    at = ready;
+    from = c;
+    key = head.key;
+    seq = head.seq;
+  });
+  if (at != kNever) put_on_wire(from, key, nullptr, at);
 }
 
 void WireBus::end_calm() noexcept {
@@ -167,19 +185,26 @@ bool WireBus::arbitrate(Nanos at) {
     best_seq = seq;
   });
   if (best == nullptr && best_babble == nullptr) return false;
+  put_on_wire(from, best_key, best_babble, at);
+  return true;
+}
+
+void WireBus::put_on_wire(ControllerId from, std::uint64_t key, const FaultRule* best_babble, Nanos at) {
   OnWire& w = wire_.emplace();
   w.from = from;
-  w.key = best_key;
+  w.key = key;
   if (best_babble != nullptr) {
     w.babble = true;
     babble_.frame = best_babble->babble;
-    babble_.key = best_key;
+    babble_.key = key;
     babble_.tag = kBabbleTag;
+    babble_.bits = frames::count_bits(babble_.frame);
   }
-  const frames::WireFrame& frame = sent(w).frame;
+  const Queued& q = sent(w);
+  const frames::WireFrame& frame = q.frame;
   w.start = at;
   recessive_run_ends(at);
-  const frames::FrameBits all = frames::count_bits(frame);
+  const frames::FrameBits all = q.bits;
   std::uint32_t total = all.total();
   if (config_.bits == WireConfig::Bits::kWorstCase && !frame.fd) {
     total = frames::worst_case_frame_bits(frame.remote ? 0 : frame.len, frame.extended);
@@ -200,7 +225,6 @@ bool WireBus::arbitrate(Nanos at) {
     w.end = at + frame_time(frame, w.plan.bit + 1);  // seen at the bit's end: the flag starts at the next
   }
   next_stale_ = true;
-  return true;
 }
 
 Nanos WireBus::recovery_due(const Controller& k) const noexcept {
@@ -258,7 +282,7 @@ void WireBus::advance(Nanos now, std::vector<WireEvent>& out) {
   }
   if (now > now_) {
     now_ = now;
-    next_stale_ = true;
+    if (!calm_) next_stale_ = true;  // calm, the next event is the chosen frame's end, whatever the time
   }
   stats_.until = now_;
 }

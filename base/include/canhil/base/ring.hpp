@@ -30,6 +30,12 @@ class Ring {
     slots_[(head_ + size_) & (slots_.size() - 1)] = std::move(value);
     ++size_;
   }
+  /// The slot after the back, now in the queue, as it was left (fill every
+  /// field: no copy of a value made first).
+  T& push_slot() {
+    if (size_ == slots_.size()) grow();
+    return slots_[(head_ + size_++) & (slots_.size() - 1)];
+  }
   /// Drops the front; its slot keeps what it held (move it out first to reuse it).
   /// Emptied, it starts again at the first slot: a queue that is drained as
   /// it fills (a bus endpoint in virtual time) keeps writing the same few

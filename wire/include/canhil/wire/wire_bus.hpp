@@ -174,21 +174,24 @@ class WireBus {
     std::uint64_t seq = 0;  // order given
     std::uint64_t tag = 0;
     Nanos given{0};
+    frames::FrameBits bits;  // frames::count_bits, counted when given (the frame is at hand then)
   };
-  struct Controller {
-    std::string name;
-    ControllerOptions options;
-    Confinement confinement;
+  // What a frame's way through the bus reads first, in its first cache line
+  // (a run's frames come between physics steps: each visit is a cold one).
+  struct alignas(64) Controller {
     base::Ring<Queued> queue;  // no allocation per frame, as a deque's blocks would
+    Nanos not_before{0};       // suspend transmission after an error-passive send
+    Confinement confinement;
+    ControllerState reported = ControllerState::kErrorActive;  // last state told
+    bool gone = false;                                         // remove_controller()
+    ControllerOptions options;
     ControllerStatus counts;
-    Nanos not_before{0};            // suspend transmission after an error-passive send
+    std::string name;
     Nanos restart_at = kNever;      // bus-off: when the recovery begins
     bool recovering = false;        // bus-off: counting 11-bit recessive runs
     std::uint32_t occurrences = 0;  // of 11 recessive bits, so far
     Nanos run_from{0};              // where this controller's current count of recessive bits began
     Nanos cut_busy_until{0};        // cut off: its own stub is busy with an attempt until then
-    ControllerState reported = ControllerState::kErrorActive;  // last state told
-    bool gone = false;                                         // remove_controller()
     // While the bus is calm, its frames received are counted from these:
     // the bus's frames and its own sent when the calm began (calm_received).
     std::uint64_t calm_frames = 0;
@@ -224,6 +227,8 @@ class WireBus {
   Nanos bus_due() const noexcept;
   Nanos earliest_due() const;  // next_event(), worked out
   bool arbitrate(Nanos at);
+  // Puts `from`'s head (or a babbling node's frame) on the wire from `at`: its bits, how it ends.
+  void put_on_wire(ControllerId from, std::uint64_t key, const FaultRule* babble, Nanos at);
   void finish(std::vector<WireEvent>& out);
   void fail(OnWire& w, std::vector<WireEvent>& out);
   // Tells controller `c`'s error (`classes` 0: only a change of state, if any).
