@@ -1,6 +1,7 @@
 #include "canhil/can_nodes/virtual_time.hpp"
 
 #include <algorithm>
+#include <array>
 
 namespace canhil::can_nodes {
 
@@ -28,16 +29,25 @@ void WakeTree::set(std::size_t i, Nanos w) noexcept {
 }
 
 void WakeTree::due(Nanos now, std::vector<std::size_t>& out) const {
-  if (earliest() <= now) collect(1, now.count(), out);
-}
-
-void WakeTree::collect(std::size_t node, std::int64_t now, std::vector<std::size_t>& out) const {
-  if (node >= leaves_) {
-    out.push_back(node - leaves_);
-    return;
+  if (earliest() > now) return;
+  // Down from the root into every subtree due now, the earlier index first:
+  // a node is due only when one of its children is. Depth first without
+  // recursion; the right children left for later wait on a stack as deep as the tree.
+  const std::int64_t t = now.count();
+  std::array<std::size_t, 64> later{};
+  std::size_t waiting = 0;
+  std::size_t node = 1;
+  while (true) {
+    if (node >= leaves_) {
+      out.push_back(node - leaves_);
+      if (waiting == 0) return;
+      node = later[--waiting];
+      continue;
+    }
+    const bool left = node_[2 * node] <= t;
+    if (left && node_[2 * node + 1] <= t) later[waiting++] = 2 * node + 1;
+    node = left ? 2 * node : 2 * node + 1;
   }
-  if (node_[2 * node] <= now) collect(2 * node, now, out);
-  if (node_[2 * node + 1] <= now) collect(2 * node + 1, now, out);
 }
 
 void Participants::add(Participant& p) {

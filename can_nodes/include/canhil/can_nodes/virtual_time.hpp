@@ -100,7 +100,6 @@ class WakeTree {
   void due(Nanos now, std::vector<std::size_t>& out) const;
 
  private:
-  void collect(std::size_t node, std::int64_t now, std::vector<std::size_t>& out) const;
   std::vector<std::int64_t> node_;  // 1: the root; leaves_ + i: index i; kNever where none
   std::size_t leaves_ = 0;          // a power of two
   std::size_t size_ = 0;
