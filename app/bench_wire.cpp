@@ -14,7 +14,9 @@
 namespace canhil::app {
 namespace {
 
-constexpr int kTurns = 3;
+// Turns of each, alternated; the figure is each one's least CPU time: what a
+// run costs, less what a busy or shared machine adds to some turns.
+constexpr int kTurns = 5;
 
 struct VirtualFigures {
   double cpu_s = 0;
@@ -89,14 +91,16 @@ bool bench_wire(const std::optional<std::string>& config, double seconds,
   }
   std::sort(instant.begin(), instant.end());
   std::sort(timed.begin(), timed.end());
-  const double i_med = instant[instant.size() / 2];
-  const double t_med = timed[timed.size() / 2];
-  const double ratio = t_med > 0 ? i_med / t_med : 0;
+  const double i_min = instant.front(), t_min = timed.front();
+  const double i_med = instant[instant.size() / 2], t_med = timed[timed.size() / 2];
+  const double ratio = t_min > 0 ? i_min / t_min : 0;
   const bool met = ratio >= 0.9;
-  std::printf("  instant buses:   %.3f s CPU (median), %.0fx real time\n", i_med, seconds / i_med);
-  std::printf("  timed wire:      %.3f s CPU (median), %.0fx real time; %llu frames, first bus %.1f %% loaded\n", t_med,
-              seconds / t_med, static_cast<unsigned long long>(last_timed.frames), 100 * last_timed.load);
-  std::printf("  speed on the wire / instant: %.2f  target >= 0.9: %s\n", ratio, met ? "met" : "MISSED");
+  std::printf("  instant buses:   %.3f s CPU (least; median %.3f), %.0fx real time\n", i_min, i_med, seconds / i_min);
+  std::printf(
+      "  timed wire:      %.3f s CPU (least; median %.3f), %.0fx real time; %llu frames, first bus %.1f %% loaded\n",
+      t_min, t_med, seconds / t_min, static_cast<unsigned long long>(last_timed.frames), 100 * last_timed.load);
+  std::printf("  speed on the wire / instant: %.2f (medians: %.2f)  target >= 0.9: %s\n", ratio,
+              t_med > 0 ? i_med / t_med : 0, met ? "met" : "MISSED");
   return probe_user_space_bus() && met;
 }
 
