@@ -1,7 +1,6 @@
 #include "canhil/can_nodes/virtual_time.hpp"
 
 #include <algorithm>
-#include <array>
 
 namespace canhil::can_nodes {
 
@@ -30,23 +29,19 @@ void WakeTree::set(std::size_t i, Nanos w) noexcept {
 
 void WakeTree::due(Nanos now, std::vector<std::size_t>& out) const {
   if (earliest() > now) return;
-  // Down from the root into every subtree due now, the earlier index first:
-  // a node is due only when one of its children is. Depth first without
-  // recursion; the right children left for later wait on a stack as deep as the tree.
+  // Every leaf due now, the earlier index first, without a stack: down into
+  // a due subtree (a node is due only when one of its children is), the left
+  // child first; from a leaf, up until a left child whose right sibling is due.
   const std::int64_t t = now.count();
-  std::array<std::size_t, 64> later{};
-  std::size_t waiting = 0;
   std::size_t node = 1;
   while (true) {
-    if (node >= leaves_) {
-      out.push_back(node - leaves_);
-      if (waiting == 0) return;
-      node = later[--waiting];
-      continue;
+    while (node < leaves_) node = node_[2 * node] <= t ? 2 * node : 2 * node + 1;
+    out.push_back(node - leaves_);
+    while (node % 2 == 1 || node_[node + 1] > t) {
+      if (node == 1) return;
+      node /= 2;
     }
-    const bool left = node_[2 * node] <= t;
-    if (left && node_[2 * node + 1] <= t) later[waiting++] = 2 * node + 1;
-    node = left ? 2 * node : 2 * node + 1;
+    ++node;
   }
 }
 
