@@ -272,8 +272,8 @@ struct StuffTable {
     return static_cast<std::uint8_t>(1 + 4 * v);
   }
   // A byte's step, indexed by state * 256 + byte: the stuff bits added
-  // (top 4 bits) and the next state times 256, ready to index the next byte.
-  std::array<std::uint16_t, std::size_t{9} * 256> t{};
+  // (top 4 bits) and the next state (one byte: the table fits in fewer lines).
+  std::array<std::uint8_t, std::size_t{9} * 256> t{};
   constexpr StuffTable() {
     for (std::uint8_t state = 0; state < 9; ++state) {
       for (std::uint32_t byte = 0; byte < 256; ++byte) {
@@ -283,7 +283,7 @@ struct StuffTable {
           added = static_cast<std::uint8_t>(added + (step >> 4));
           st = step & 0xFu;
         }
-        t[state * 256u + byte] = static_cast<std::uint16_t>((added << 12) | (st << 8));
+        t[state * 256u + byte] = static_cast<std::uint8_t>((added << 4) | st);
       }
     }
   }
@@ -294,9 +294,9 @@ constexpr StuffTable kStuffTable;
 std::uint32_t stuff_bytes(Stream& x, std::uint32_t bytes, std::uint32_t& state) noexcept {
   std::uint32_t stuffed = 0;
   for (std::uint32_t k = 0; k < bytes; ++k) {
-    const std::uint32_t step = kStuffTable.t[state | static_cast<std::uint32_t>(x >> 120)];
-    stuffed += step >> 12;
-    state = step & 0xF00u;
+    const std::uint32_t step = kStuffTable.t[(state << 8) | static_cast<std::uint32_t>(x >> 120)];
+    stuffed += step >> 4;
+    state = step & 0xFu;
     x <<= 8;
   }
   return stuffed;
