@@ -5,43 +5,37 @@
 namespace canhil::can_nodes {
 
 void WakeTree::push_back(Nanos w) {
-  if (size_ == leaves_) {
-    const std::size_t leaves = leaves_ == 0 ? 8 : 2 * leaves_;
-    std::vector<std::int64_t> grown(2 * leaves, kNever.count());
-    std::copy_n(node_.begin() + static_cast<std::ptrdiff_t>(leaves_), size_,
-                grown.begin() + static_cast<std::ptrdiff_t>(leaves));
-    for (std::size_t n = leaves - 1; n >= 1; --n) grown[n] = std::min(grown[2 * n], grown[2 * n + 1]);
-    node_ = std::move(grown);
-    leaves_ = leaves;
+  if (size_ % kGroup == 0) {
+    leaf_.resize(size_ + kGroup, kNever.count());
+    group_.push_back(kNever.count());
   }
   set(size_++, w);
 }
 
 void WakeTree::set(std::size_t i, Nanos w) noexcept {
-  std::size_t n = leaves_ + i;
-  node_[n] = w.count();
-  for (n /= 2; n >= 1; n /= 2) {
-    const std::int64_t least = std::min(node_[2 * n], node_[2 * n + 1]);
-    if (node_[n] == least) break;  // nothing above changes
-    node_[n] = least;
+  leaf_[i] = w.count();
+  const std::size_t g = i / kGroup;
+  const std::int64_t* group = leaf_.data() + g * kGroup;
+  std::int64_t least = group[0];
+  for (std::size_t k = 1; k < kGroup; ++k) least = std::min(least, group[k]);
+  const std::int64_t was = group_[g];
+  if (least == was) return;
+  group_[g] = least;
+  if (least < earliest_) {
+    earliest_ = least;
+  } else if (was == earliest_) {  // the earliest group's earliest moved later
+    earliest_ = *std::min_element(group_.begin(), group_.end());
   }
 }
 
 void WakeTree::due(Nanos now, std::vector<std::size_t>& out) const {
-  if (earliest() > now) return;
-  // Every leaf due now, the earlier index first, without a stack: down into
-  // a due subtree (a node is due only when one of its children is), the left
-  // child first; from a leaf, up until a left child whose right sibling is due.
   const std::int64_t t = now.count();
-  std::size_t node = 1;
-  while (true) {
-    while (node < leaves_) node = node_[2 * node] <= t ? 2 * node : 2 * node + 1;
-    out.push_back(node - leaves_);
-    while (node % 2 == 1 || node_[node + 1] > t) {
-      if (node == 1) return;
-      node /= 2;
+  if (earliest_ > t) return;
+  for (std::size_t g = 0; g < group_.size(); ++g) {
+    if (group_[g] > t) continue;
+    for (std::size_t i = g * kGroup; i < (g + 1) * kGroup; ++i) {
+      if (leaf_[i] <= t) out.push_back(i);
     }
-    ++node;
   }
 }
 
