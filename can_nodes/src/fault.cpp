@@ -185,6 +185,7 @@ FaultCount& FaultCount::operator+=(const FaultCount& other) {
   matched += other.matched;
   applied += other.applied;
   active += other.active;
+  on_wire = on_wire || other.on_wire;
   return *this;
 }
 
@@ -192,7 +193,7 @@ std::string describe(const FaultCount& c) {
   char line[96];
   if (c.kind == FaultKind::kBattery) {
     std::snprintf(line, sizeof line, "drained for %.1f s", to_seconds(c.active));
-  } else if (wire_only(c.kind)) {
+  } else if (wire_only(c.kind) || c.on_wire) {
     std::snprintf(line, sizeof line, "on the wire: its counts are the controllers' (bus report)");
   } else {
     std::snprintf(line, sizeof line, "matched %8llu frames, applied to %8llu",
@@ -245,7 +246,9 @@ void FaultInjector::add_rule(const FaultRule& rule) {
 
 std::vector<FaultCount> FaultInjector::counts() const {
   const std::lock_guard lock(mutex_);
-  return counts_;
+  std::vector<FaultCount> counts = counts_;
+  for (FaultCount& c : counts) c.on_wire = errors_on_wire_ && c.kind == FaultKind::kErrorFrame;
+  return counts;
 }
 
 bool FaultInjector::matches(std::size_t k, const std::string& node, std::uint32_t id) const {

@@ -191,6 +191,19 @@ TEST_F(FaultTest, AnErrorFrameDelaysTheFrameByItsRetransmission) {
   EXPECT_EQ(at_125k.on_send("Motor1", m3_1, 0s).delay, 8 * d.delay) << "eight times as long at 125 kbit/s";
 }
 
+// On a timed wire an `error` rule is the wire's (a bit error in the frames
+// of its target): the injector passes its frames by, and its summary says
+// where its counts are instead of "matched 0 frames".
+TEST_F(FaultTest, AnErrorRuleLeftToTheWireSaysItsCountsAreTheControllers) {
+  FaultInjector inj = injector({"error:Motor2:0.5", "drop:M3_1"});
+  inj.leave_errors_to_the_wire(true);
+  EXPECT_FALSE(inj.on_send("Motor2", frame(set->codec().find("M3_2")->id()), 0s).error_frame);
+  EXPECT_EQ(describe(inj.counts()[0]), "on the wire: its counts are the controllers' (bus report)");
+  EXPECT_EQ(describe(inj.counts()[1]).rfind("matched", 0), 0u) << "a drop rule stays the injector's";
+  inj.leave_errors_to_the_wire(false);
+  EXPECT_EQ(describe(inj.counts()[0]).rfind("matched", 0), 0u);
+}
+
 TEST_F(FaultTest, BatteryRulesDrainTheirPackFromTheirTimeOn) {
   FaultInjector inj = injector({"battery:power24:5", "battery:*:1@10"});
   auto drain = inj.battery_drain_until(2s);

@@ -93,6 +93,7 @@ struct FaultCount {
   std::uint64_t matched = 0;  ///< frames of its target sent while it was active
   std::uint64_t applied = 0;  ///< frames it changed
   Nanos active{0};            ///< kBattery: how long it drained
+  bool on_wire = false;       ///< the timed wire carries it (an `error` rule there): its counts are the controllers'
 
   /// Adds another robot's count of the same rule.
   FaultCount& operator+=(const FaultCount& other);
