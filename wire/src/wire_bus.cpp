@@ -190,7 +190,8 @@ bool WireBus::arbitrate(Nanos at) {
 }
 
 void WireBus::put_on_wire(ControllerId from, std::uint64_t key, const FaultRule* best_babble, Nanos at) {
-  OnWire& w = wire_.emplace();
+  wire_ = OnWire{};  // small: no frame in it
+  OnWire& w = *wire_;
   w.from = from;
   w.key = key;
   if (best_babble != nullptr) {
