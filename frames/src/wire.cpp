@@ -13,17 +13,17 @@ constexpr std::uint32_t kTailBits = 1 + 1 + 1 + 7 + 3;
 // A CRC register, fed one bit at a time (first bit first).
 class Crc {
  public:
-  Crc(std::uint32_t polynomial, int width, std::uint32_t initial)
+  constexpr Crc(std::uint32_t polynomial, int width, std::uint32_t initial)
       : poly_(polynomial),
         top_(std::uint32_t{1} << (width - 1)),
         mask_((std::uint32_t{1} << width) - 1),
         reg_(initial) {}
-  void feed(bool bit) noexcept {
+  constexpr void feed(bool bit) noexcept {
     const bool flip = ((reg_ & top_) != 0) != bit;
     reg_ = (reg_ << 1) & mask_;
     if (flip) reg_ ^= poly_;
   }
-  std::uint32_t value() const noexcept { return reg_; }
+  constexpr std::uint32_t value() const noexcept { return reg_; }
 
  private:
   std::uint32_t poly_, top_, mask_, reg_;
@@ -229,14 +229,9 @@ struct Crc15ByNibble {
   constexpr Crc15ByNibble() {
     for (std::size_t k = 0; k < kCrcNibbles; ++k) {
       for (std::uint32_t nibble = 0; nibble < 16; ++nibble) {
-        std::uint32_t crc = 0;
-        for (std::size_t i = 0; i < 4 + 4 * k; ++i) {
-          const bool in = i < 4 && ((nibble >> (3 - i)) & 1u) != 0;
-          const bool flip = ((crc >> 14) & 1u) != (in ? 1u : 0u);
-          crc = (crc << 1) & 0x7FFFu;
-          if (flip) crc ^= 0x4599u;
-        }
-        at[k][nibble] = static_cast<std::uint16_t>(crc);
+        Crc crc(0x4599, 15, 0);
+        for (std::size_t i = 0; i < 4 + 4 * k; ++i) crc.feed(i < 4 && ((nibble >> (3 - i)) & 1u) != 0);
+        at[k][nibble] = static_cast<std::uint16_t>(crc.value());
       }
     }
   }

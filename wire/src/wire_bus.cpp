@@ -73,11 +73,9 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
   if (calm_) {
     // Only a frame at its queue's head, ready by the chosen frame's start,
     // and before it in arbitration, changes the choice.
-    if (!wire_ ||
-        (wire_->start >= now && k.queue.size() == 1 &&
-         (ready_at(controller) < wire_->start || (ready_at(controller) == wire_->start && q.key < wire_->key)))) {
-      choose_again(now);
-    }
+    const bool may_win = wire_ && wire_->start >= now && k.queue.size() == 1;
+    const Nanos ready = may_win ? ready_at(controller) : kNever;
+    if (!wire_ || ready < wire_->start || (ready == wire_->start && q.key < wire_->key)) choose_again(now);
     next_stale_ = true;
     return Submit::kQueued;
   }
@@ -104,15 +102,13 @@ void WireBus::choose_again(Nanos now) {
   if (wire_) return;
   // In one pass: the earliest instant a frame can start, and the first in
   // arbitration among those ready then (lowest key; equal keys, the one given first).
-  const Nanos idle = std::max(idle_from_, now_);
   Nanos at = kNever;
   ControllerId from = 0;
   std::uint64_t key = 0, seq = 0;
   each_sender([&](ControllerId c) {
-    const Controller& k = controllers_[c];
-    if (k.queue.empty()) return;
-    const Queued& head = k.queue.front();
-    const Nanos ready = std::max(idle, std::max(k.not_before, head.given));
+    const Nanos ready = ready_at(c);
+    if (ready == kNever) return;
+    const Queued& head = controllers_[c].queue.front();
     if (ready > at || (ready == at && (head.key > key || (head.key == key && head.seq > seq)))) return;
     at = ready;
     from = c;
