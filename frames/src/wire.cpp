@@ -213,93 +213,87 @@ std::uint32_t can_fd_crc(const std::uint8_t* bits, std::uint32_t count, int widt
 
 namespace {
 
-// The stuffed part of a classic frame (at most 39 + 64 + 15 bits, and up to
-// 7 of padding) as one number, its last bit lowest.
+// The stuffed part of a classic frame (at most 39 + 64 + 15 bits) as one
+// number, its last bit lowest.
 __extension__ using Stream = unsigned __int128;  // NOLINT: GCC's and Clang's 128-bit integer
 
-// CRC-15 by the message's nibbles, each looked up on its own: the CRC is
-// linear, so it is the xor of each nibble's CRC with the zeros after it
-// (bits 4k..4k+3 from the message's end: a nibble followed by 4k zero bits),
-// and zeros before a message leave it unchanged. The lookups do not wait for
-// one another, as a register stepped by table would (a run's frames come
-// between physics steps, so each lookup may be a cache miss).
-constexpr std::size_t kCrcNibbles = 26;  // 104 bits: an extended frame's 39 + 64
-struct Crc15ByNibble {
-  std::array<std::array<std::uint16_t, 16>, kCrcNibbles> at{};
-  constexpr Crc15ByNibble() {
-    for (std::size_t k = 0; k < kCrcNibbles; ++k) {
-      for (std::uint32_t nibble = 0; nibble < 16; ++nibble) {
-        Crc crc(0x4599, 15, 0);
-        for (std::size_t i = 0; i < 4 + 4 * k; ++i) crc.feed(i < 4 && ((nibble >> (3 - i)) & 1u) != 0);
-        at[k][nibble] = static_cast<std::uint16_t>(crc.value());
+// CRC-15 by the message's bytes, each looked up on its own: the CRC is
+// linear, so it is the xor of each byte's CRC with the zeros after it (bits
+// 8k..8k+7 from the message's end: a byte followed by 8k zero bits), and
+// zeros before a message leave it unchanged. The lookups do not wait for
+// one another, as a register stepped by table would.
+constexpr std::size_t kCrcBytes = 13;  // 104 bits: an extended frame's 39 + 64
+struct Crc15ByByte {
+  std::array<std::array<std::uint16_t, 256>, kCrcBytes> at{};
+  constexpr Crc15ByByte() {
+    // Each byte's CRC from its bits': one bit followed by zeros, by position.
+    std::array<std::uint16_t, 8 * kCrcBytes> bit{};
+    for (std::size_t i = 0; i < bit.size(); ++i) {
+      Crc crc(0x4599, 15, 0);
+      crc.feed(true);
+      for (std::size_t z = 0; z < i; ++z) crc.feed(false);
+      bit[i] = static_cast<std::uint16_t>(crc.value());
+    }
+    for (std::size_t k = 0; k < kCrcBytes; ++k) {
+      for (std::uint32_t byte = 0; byte < 256; ++byte) {
+        std::uint16_t crc = 0;
+        for (std::size_t b = 0; b < 8; ++b) {
+          if (((byte >> b) & 1u) != 0) crc = static_cast<std::uint16_t>(crc ^ bit[8 * k + b]);
+        }
+        at[k][byte] = crc;
       }
     }
   }
 };
-constexpr Crc15ByNibble kCrc15;
+constexpr Crc15ByByte kCrc15;
 
 std::uint32_t crc15_of(Stream message) noexcept {
   const auto low = static_cast<std::uint64_t>(message), high = static_cast<std::uint64_t>(message >> 64);
   std::uint32_t crc = 0;
-#pragma GCC unroll 16
-  for (std::size_t k = 0; k < 16; ++k) crc ^= kCrc15.at[k][(low >> (4 * k)) & 0xFu];
-#pragma GCC unroll 16
-  for (std::size_t k = 16; k < kCrcNibbles; ++k) crc ^= kCrc15.at[k][(high >> (4 * (k - 16))) & 0xFu];
+#pragma GCC unroll 8
+  for (std::size_t k = 0; k < 8; ++k) crc ^= kCrc15.at[k][(low >> (8 * k)) & 0xFFu];
+#pragma GCC unroll 8
+  for (std::size_t k = 8; k < kCrcBytes; ++k) crc ^= kCrc15.at[k][(high >> (8 * (k - 8))) & 0xFFu];
   return crc;
 }
 
-// Bit stuffing as a machine over the stuffed part's bits: its state is the
-// last level and how many equal bits end the stream so far (a stuff bit,
-// after the fifth, is one of the other level). Stepping a whole byte by
-// table gives the stuff bits it adds and the state after it: the count
-// every frame on a timed wire needs. The same count as the encoder's
-// (tests/frames/wire_test.cpp checks both against an independent one).
-struct StuffTable {
-  // A state: 0 before any bit, else 1 + 4 * level + (equal bits - 1). A
-  // bit's step packs the stuff bits added (high nibble) and the next state.
-  static constexpr std::uint8_t bit(std::uint8_t state, bool level) noexcept {
-    const int v = level ? 1 : 0;
-    if (state != 0 && (state - 1) / 4 == v) {
-      const int equal = (state - 1) % 4 + 2;
-      if (equal == 5) return static_cast<std::uint8_t>(0x10 | (1 + 4 * (1 - v)));  // the stuff bit starts a run
-      return static_cast<std::uint8_t>(1 + 4 * v + equal - 1);
+// Bit stuffing as a machine over the stuffed part's bits, in eight states:
+// the last bit's level and how many equal bits end the stream so far, 1 to
+// 4 (a fifth is followed by a stuff bit of the other level, which starts a
+// run of its own). A state s is 4 * level + equal - 1; no bit at all acts as
+// a lone recessive bit (the dominant SOF starts a run either way).
+struct StuffRows {
+  // row[byte]: what the byte does from each state s, in its bits 8s..8s+7:
+  // the stuff bits it adds (0 to 2, bits 6-7) and the state after it, times
+  // eight (bits 0-5): stepping is a shift of the byte's row by the state,
+  // whose rows do not wait on one another as rows of a table indexed by
+  // state and byte would.
+  std::array<std::uint64_t, 256> row{};
+  static constexpr std::uint32_t bit(std::uint32_t state, std::uint32_t level, std::uint32_t& added) noexcept {
+    if (state / 4 != level) return 4 * level;
+    if (state % 4 == 3) {  // the fifth equal bit: a stuff bit of the other level follows
+      ++added;
+      return 4 * (1 - level);
     }
-    return static_cast<std::uint8_t>(1 + 4 * v);
+    return state + 1;
   }
-  // A byte's step, indexed by state * 256 + byte: the stuff bits added
-  // (top 4 bits) and the next state (one byte: the table fits in fewer lines).
-  std::array<std::uint8_t, std::size_t{9} * 256> t{};
-  constexpr StuffTable() {
-    for (std::uint8_t state = 0; state < 9; ++state) {
-      for (std::uint32_t byte = 0; byte < 256; ++byte) {
-        std::uint8_t st = state, added = 0;
-        for (int k = 7; k >= 0; --k) {
-          const std::uint8_t step = bit(st, ((byte >> k) & 1u) != 0);
-          added = static_cast<std::uint8_t>(added + (step >> 4));
-          st = step & 0xFu;
-        }
-        t[state * 256u + byte] = static_cast<std::uint8_t>((added << 4) | st);
+  constexpr StuffRows() {
+    for (std::uint32_t byte = 0; byte < 256; ++byte) {
+      for (std::uint32_t from = 0; from < 8; ++from) {
+        std::uint32_t state = from, added = 0;
+        for (int k = 7; k >= 0; --k) state = bit(state, (byte >> k) & 1u, added);
+        row[byte] |= std::uint64_t{(added << 6) | (state * 8)} << (8 * from);
       }
     }
   }
 };
-constexpr StuffTable kStuffTable;
-
-// Steps the stuffing machine over `bytes` bytes of `x`, its first at the top.
-std::uint32_t stuff_bytes(Stream& x, std::uint32_t bytes, std::uint32_t& state) noexcept {
-  std::uint32_t stuffed = 0;
-  for (std::uint32_t k = 0; k < bytes; ++k) {
-    const std::uint32_t step = kStuffTable.t[(state << 8) | static_cast<std::uint32_t>(x >> 120)];
-    stuffed += step >> 4;
-    state = step & 0xFu;
-    x <<= 8;
-  }
-  return stuffed;
-}
+constexpr StuffRows kStuffRows;
+constexpr std::uint32_t kStuffStart = 4 * 8;  // a recessive bit's state, times eight
 
 // A classic frame's bits without the encoder: the stuffed part as one
-// number, its CRC-15 by nibbles, its stuff bits a byte at a time: the bytes
-// before the CRC while the CRC is worked out, then the rest.
+// number, its CRC-15 by nibbles, its stuff bits a byte at a time (the same
+// count as the encoder's: tests/frames/wire_test.cpp checks both against an
+// independent one).
 FrameBits count_classic(const WireFrame& f) noexcept {
   const bool remote = f.remote;
   const std::uint8_t len = std::min<std::uint8_t>(f.len, 8);
@@ -323,20 +317,29 @@ FrameBits count_classic(const WireFrame& f) noexcept {
     v = (v << (8 * len)) | data;
     n += 8u * len;
   }
-  const std::uint32_t crc = crc15_of(v);
-  // The stuff bits, a byte at a time from the first bit. Alternating bits
-  // ending in a recessive one put before SOF make the count of bits a
-  // multiple of 8 and add no stuff bit: none of them runs to five, and
-  // the dominant SOF starts a run of its own, as it does from no bit at all.
+  // The stuffed part as 15 bytes, its first bit at bit 119 (bits 120-127
+  // unused): alternating bits ending in a recessive one fill the room before
+  // SOF and add no stuff bit (none of them runs to five, and SOF starts a
+  // run), so that every frame takes the same 15 steps, none of them a branch.
   const std::uint32_t total = n + 15;
-  const std::uint32_t pad = (8 - total % 8) % 8;
-  const std::uint32_t top = 128 - (total + pad);  // the padded stream, its first bit at bit 127
-  Stream x = ((static_cast<Stream>(0x55u & ((1u << pad) - 1)) << total) | (v << 15)) << top;
-  std::uint32_t state = 0;
-  const std::uint32_t before_crc = (pad + n) / 8;  // whole bytes before the CRC's first bit
-  std::uint32_t stuffed = stuff_bytes(x, before_crc, state);
-  x |= static_cast<Stream>(crc) << (top + 8 * before_crc);
-  stuffed += stuff_bytes(x, (total + pad) / 8 - before_crc, state);
+  constexpr std::uint32_t kBytes = 15;
+  const Stream fill = (Stream{0x5555555555555555u} << 64) | 0x5555555555555555u;
+  const Stream x = ((fill & ((Stream{1} << (8 * kBytes - total)) - 1)) << total) | (v << 15) | crc15_of(v);
+  std::uint8_t bytes[16];
+  const std::uint64_t halves[2] = {static_cast<std::uint64_t>(x >> 64), static_cast<std::uint64_t>(x)};
+  for (int h = 0; h < 2; ++h) {
+    std::uint64_t half = halves[h];
+    if constexpr (std::endian::native == std::endian::little) half = __builtin_bswap64(half);
+    std::memcpy(bytes + 8 * h, &half, sizeof half);
+  }
+  std::uint64_t shift = kStuffStart, added = 0;  // added: each step's bits 6-7, summed
+#pragma GCC unroll 15
+  for (std::uint32_t k = 1; k <= kBytes; ++k) {
+    const std::uint64_t step = kStuffRows.row[bytes[k]] >> shift;
+    added += step & 0xC0u;
+    shift = step & 0x38u;
+  }
+  const auto stuffed = static_cast<std::uint32_t>(added >> 6);
   return FrameBits{total + stuffed + kTailBits, 0};
 }
 
