@@ -13,12 +13,19 @@ void WakeTree::push_back(Nanos w) {
 }
 
 void WakeTree::set(std::size_t i, Nanos w) noexcept {
-  leaf_[i] = w.count();
+  const std::int64_t to = w.count();
+  const std::int64_t from = leaf_[i];
+  leaf_[i] = to;
   const std::size_t g = i / kGroup;
-  const std::int64_t* group = leaf_.data() + g * kGroup;
-  std::int64_t least = group[0];
-  for (std::size_t k = 1; k < kGroup; ++k) least = std::min(least, group[k]);
   const std::int64_t was = group_[g];
+  std::int64_t least = to;
+  if (to > was) {
+    if (from != was) return;  // another leaf is the group's earliest, and stays so
+    // This leaf was the group's earliest and moved later: the group is read again.
+    const std::int64_t* group = leaf_.data() + g * kGroup;
+    least = group[0];
+    for (std::size_t k = 1; k < kGroup; ++k) least = std::min(least, group[k]);
+  }
   if (least == was) return;
   group_[g] = least;
   if (least < earliest_) {
@@ -103,9 +110,10 @@ void Participants::tick_due(const Clock& clock, std::size_t budget) {
       any = true;
     }
     if (budget == kUnlimited) {
+      if (!any) return;  // nothing sent since the last delivery, which left nobody with frames
       deliver();
     } else {
-      deliver_some(budget);
+      deliver_some(budget);  // real time: frames come from outside too
     }
     if (!any) return;
   }
@@ -128,6 +136,7 @@ void VirtualTime::set_step(Nanos period, std::function<void(Nanos now)> step) {
 
 void VirtualTime::run_until(Nanos end) {
   participants_.refresh();  // the caller may have moved wake-ups between runs
+  bool held = true;         // frames the caller sent between runs may wait
   while (true) {
     const Nanos next = std::min(steps_at_.next(), participants_.next_wakeup());
     if (next > end) break;
@@ -138,9 +147,11 @@ void VirtualTime::run_until(Nanos end) {
       ++steps_;
       step_(now);
       participants_.refresh();  // the step may move wake-ups (a vision frame wakes an agent)
+      held = true;              // and send frames
     }
-    participants_.deliver();
-    participants_.tick_due(clock_);
+    if (held) participants_.deliver();
+    participants_.tick_due(clock_);  // leaves nobody holding frames
+    held = false;
   }
   if (clock_.now() < end) clock_.set(end);
   participants_.deliver();
