@@ -95,19 +95,27 @@ void Participants::tick_due(const Clock& clock, std::size_t budget) {
   for (int round = 0; round < 64; ++round) {
     const Nanos now = clock.now();
     bool any = false;
-    // The kept ones due (only its own tick moves one's wake-up), found in
-    // the tree of kept wake-ups, merged in order with the asked ones, each
-    // asked in its turn.
-    due_.clear();
-    wake_.due(now, due_);
-    std::size_t k = 0, a = 0;
-    while (k < due_.size() || a < asked_.size()) {
-      const bool asked = k == due_.size() || (a < asked_.size() && asked_[a] < due_[k]);
-      const std::size_t i = asked ? asked_[a++] : due_[k++];
-      if (asked && list_[i]->next_wakeup() > now) continue;
-      list_[i]->tick(now);
-      keep(i);
-      any = true;
+    if (asked_.empty()) {
+      // Every wake-up kept: those due, straight from the tree.
+      any = wake_.each_due(now, [&](std::size_t i) {
+        list_[i]->tick(now);
+        keep(i);
+      });
+    } else {
+      // The kept ones due (only its own tick moves one's wake-up), found in
+      // the tree of kept wake-ups, merged in order with the asked ones, each
+      // asked in its turn.
+      due_.clear();
+      wake_.due(now, due_);
+      std::size_t k = 0, a = 0;
+      while (k < due_.size() || a < asked_.size()) {
+        const bool asked = k == due_.size() || (a < asked_.size() && asked_[a] < due_[k]);
+        const std::size_t i = asked ? asked_[a++] : due_[k++];
+        if (asked && list_[i]->next_wakeup() > now) continue;
+        list_[i]->tick(now);
+        keep(i);
+        any = true;
+      }
     }
     if (budget == kUnlimited) {
       if (!any) return;  // nothing sent since the last delivery, which left nobody with frames

@@ -101,6 +101,24 @@ class WakeTree {
   Nanos earliest() const noexcept { return Nanos{earliest_}; }
   /// Appends the indices whose wake-up is at or before `now`, in order.
   void due(Nanos now, std::vector<std::size_t>& out) const;
+  /// Calls `f(index)` for each index whose wake-up is at or before `now`,
+  /// in order; `f` may set() the index it is given (only that one). True
+  /// when there was any.
+  template <class F>
+  bool each_due(Nanos now, F&& f) {
+    const std::int64_t t = now.count();
+    if (earliest_ > t) return false;
+    bool any = false;
+    for (std::size_t g = 0; g < group_.size(); ++g) {
+      if (group_[g] > t) continue;
+      for (std::size_t i = g * kGroup; i < (g + 1) * kGroup; ++i) {
+        if (leaf_[i] > t) continue;
+        f(i);
+        any = true;
+      }
+    }
+    return any;
+  }
 
  private:
   static constexpr std::size_t kGroup = 8;
