@@ -19,7 +19,7 @@ SendStatus MemoryEndpoint::send(const CanFrame& frame) {
   if (bus_->model_ && frame.kind != frames::FrameKind::kError) {
     bus_->wire_driver_.moved();
     bus_->advance(bus_->clock_.now());
-    const auto queued = bus_->model_->submit(controller_, frames::wire_frame(frame), bus_->clock_.now());
+    const auto queued = bus_->model_->submit(controller_, frame, bus_->clock_.now());
     if (queued == wire::WireBus::Submit::kQueueFull) {
       ++stats_.send_dropped;  // the socket's ENOBUFS
       return SendStatus::kDropped;

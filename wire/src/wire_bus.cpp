@@ -56,14 +56,42 @@ Nanos WireBus::frame_time(const frames::WireFrame& f, std::uint32_t bit_count) c
   return frame_bits(frames::prefix_bits(f, bit_count));
 }
 
-WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame& frame, Nanos now, std::uint64_t tag) {
-  Controller& k = controllers_.at(controller);
+WireBus::Queued* WireBus::slot(Controller& k) {
   if (k.queue.size() >= k.options.queue_frames) {
     ++k.counts.refused;
-    return Submit::kQueueFull;
+    return nullptr;
   }
-  Queued& q = k.queue.push_slot();  // every field set here
-  q.frame = frame;
+  return &k.queue.push_slot();  // every field set before it is read
+}
+
+WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame& frame, Nanos now, std::uint64_t tag) {
+  Queued* q = slot(controllers_.at(controller));
+  if (q == nullptr) return Submit::kQueueFull;
+  q->frame = frame;
+  return given(controller, *q, now, tag);
+}
+
+WireBus::Submit WireBus::submit(ControllerId controller, const frames::CanFrame& frame, Nanos now, std::uint64_t tag) {
+  Queued* q = slot(controllers_.at(controller));
+  if (q == nullptr) return Submit::kQueueFull;
+  // As frames::wire_frame() makes it, field by field, in place: the bytes
+  // past a classic frame's 8 are never read (WireEvent, count_bits).
+  frames::WireFrame& w = q->frame;
+  w.id = frame.id;
+  w.extended = frame.extended;
+  w.remote = frame.kind == frames::FrameKind::kRemote;
+  w.fd = false;
+  w.brs = false;
+  w.esi = false;
+  w.len = std::min<std::uint8_t>(frame.len, frames::kMaxDataBytes);
+  w.len8_dlc = frame.len8_dlc;
+  std::copy_n(frame.data.begin(), frames::kMaxDataBytes, w.data.begin());
+  return given(controller, *q, now, tag);
+}
+
+WireBus::Submit WireBus::given(ControllerId controller, Queued& q, Nanos now, std::uint64_t tag) {
+  Controller& k = controllers_[controller];
+  const frames::WireFrame& frame = q.frame;
   q.key = frames::arbitration_key(frame.id, frame.extended, frame.remote && !frame.fd);
   q.seq = seq_++;
   q.tag = tag;
@@ -127,7 +155,7 @@ void WireBus::end_calm() noexcept {
 void WireBus::begin_calm() noexcept {
   for (Controller& k : controllers_) {
     k.calm_frames = stats_.frames;
-    k.calm_sent = k.counts.sent;
+    k.calm_sent = k.sent;
   }
   calm_ = true;
 }
@@ -352,7 +380,7 @@ void WireBus::finish(std::vector<WireEvent>& out) {
     calm_next = clear && tx.confinement.rec() == 0;
   }
   tx.confinement.transmitted();
-  ++tx.counts.sent;
+  ++tx.sent;
   if (calm_next) begin_calm();
   changed = changed || tx.confinement.state() != tx.reported;
   if (!w.babble) tx.queue.pop_front();
@@ -502,6 +530,7 @@ void WireBus::clear_faults(Nanos now) {
 ControllerStatus WireBus::status(ControllerId controller) const {
   const Controller& k = controllers_.at(controller);
   ControllerStatus s = k.counts;
+  s.sent = k.sent;
   s.received += calm_received(k);
   s.state = k.confinement.state();
   s.tec = k.confinement.tec();

@@ -40,6 +40,7 @@
 // from `seed`). Not thread-safe.
 #pragma once
 
+#include <algorithm>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
@@ -78,9 +79,21 @@ struct ControllerOptions {
 /// What happened on the bus.
 struct WireEvent {
   WireEvent() = default;
-  /// A kFrame event (built in place: no zeroed copy of the frame first).
+  /// A kFrame event, built in place. Of `f`'s bytes it reads those it has
+  /// (a classic frame: the 8 a classic frame holds); the rest are 0.
   WireEvent(ControllerId sender, std::uint64_t frame_tag, Nanos first_bit, Nanos end, const frames::WireFrame& f)
-      : controller(sender), tag(frame_tag), start(first_bit), at(end), frame(f) {}
+      : controller(sender), tag(frame_tag), start(first_bit), at(end) {
+    frame.id = f.id;
+    frame.extended = f.extended;
+    frame.remote = f.remote;
+    frame.fd = f.fd;
+    frame.brs = f.brs;
+    frame.esi = f.esi;
+    frame.len = f.len;
+    frame.len8_dlc = f.len8_dlc;
+    const std::size_t held = f.fd ? std::min<std::size_t>(f.len, frame.data.size()) : frames::kMaxDataBytes;
+    std::copy_n(f.data.begin(), held, frame.data.begin());
+  }
   enum class Kind : std::uint8_t {
     kFrame,  ///< a frame's last bit has passed: its receivers have it
     kError,  ///< a controller reports an error or a change of state (Linux's error frame)
@@ -144,6 +157,10 @@ class WireBus {
   /// (its frames wait for the recovery), as a stopped SocketCAN queue does;
   /// kBusOff says so.
   Submit submit(ControllerId controller, const frames::WireFrame& frame, Nanos now, std::uint64_t tag = 0);
+  /// The same for a classic frame as a bus endpoint has it (data or remote;
+  /// not an error frame), put in the queue as it is read: no WireFrame is
+  /// made of it first.
+  Submit submit(ControllerId controller, const frames::CanFrame& frame, Nanos now, std::uint64_t tag = 0);
 
   /// Runs the bus up to `now`; appends what happened by then, in order of
   /// time (ties: the order it happened in), to `out`.
@@ -168,13 +185,16 @@ class WireBus {
   std::size_t queued() const noexcept;
 
  private:
-  struct Queued {
-    frames::WireFrame frame;
+  // A frame waiting, each in two cache lines: the first holds all a classic
+  // frame's way through the bus reads (the frame's header and 8 bytes come
+  // after the rest), the second only an FD frame's further bytes.
+  struct alignas(64) Queued {
     std::uint64_t key = 0;  // frames::arbitration_key
     std::uint64_t seq = 0;  // order given
     std::uint64_t tag = 0;
     Nanos given{0};
     frames::FrameBits bits;  // frames::count_bits, counted when given (the frame is at hand then)
+    frames::WireFrame frame;
   };
   // What a frame's way through the bus reads first, in its first cache line
   // (a run's frames come between physics steps: each visit is a cold one).
@@ -184,8 +204,9 @@ class WireBus {
     Confinement confinement;
     ControllerState reported = ControllerState::kErrorActive;  // last state told
     bool gone = false;                                         // remove_controller()
+    std::uint64_t sent = 0;                                    // frames sent whole (ControllerStatus::sent)
     ControllerOptions options;
-    ControllerStatus counts;
+    ControllerStatus counts;  // all but `sent`
     std::string name;
     Nanos restart_at = kNever;      // bus-off: when the recovery begins
     bool recovering = false;        // bus-off: counting 11-bit recessive runs
@@ -207,6 +228,11 @@ class WireBus {
     Nanos end{0};      // its end of frame, or when its error is seen
     Nanos free_at{0};  // the bus is free for the next arbitration
   };
+
+  // A slot at the back of `k`'s queue for a frame given, or nullptr when the queue is full (counted).
+  Queued* slot(Controller& k);
+  // The rest of submit(), once q's frame is in it.
+  Submit given(ControllerId controller, Queued& q, Nanos now, std::uint64_t tag);
 
   // Bits as time: by one multiplication where a bit is a whole number of
   // nanoseconds (every usual rate), else as frames::bits_to_time divides.
@@ -244,7 +270,7 @@ class WireBus {
   // received, which is kept lazily: what it was when the calm began, plus
   // the frames carried since that were not their own.
   std::uint64_t calm_received(const Controller& k) const noexcept {
-    return calm_ && !k.gone ? (stats_.frames - k.calm_frames) - (k.counts.sent - k.calm_sent) : 0;
+    return calm_ && !k.gone ? (stats_.frames - k.calm_frames) - (k.sent - k.calm_sent) : 0;
   }
   // Calm, the next frame on the wire is chosen as soon as it is known, with
   // its start in the future (the bus falls idle then), and chosen again
@@ -264,26 +290,37 @@ class WireBus {
   Nanos cut_due(ControllerId c) const noexcept;
   void cut_attempt(ControllerId c, Nanos at, std::vector<WireEvent>& out);
 
+  // What every frame's way through the bus reads comes first, in four
+  // cache lines (a run's frames come between physics steps: each line is a
+  // cold one): the controllers and the bit's time; the frame on the wire;
+  // the bus's times and flags; its counts and whether it has fault rules.
   WireConfig config_;
   std::int64_t bit_ns_ = 0;       // a nominal bit's nanoseconds when whole, else 0
   std::int64_t fast_bit_ns_ = 0;  // a data-phase bit's, likewise
   std::vector<Controller> controllers_;
-  Faults faults_;
-  std::uint64_t seq_ = 0;
   std::optional<OnWire> wire_;
-  Queued babble_;                 // the frame on the wire when it is no queue's
-  Nanos stuck_tick_at_ = kNever;  // a stuck-dominant bus's next 8-bit sequence
-  Nanos idle_from_{0};            // the bus is free from then (arbitration then or at the next frame given)
-  Nanos recessive_from_{0};       // the bus has been recessive since then (no SOF, no flag)
+  Nanos idle_from_{0};       // the bus is free from then (arbitration then or at the next frame given)
+  Nanos recessive_from_{0};  // the bus has been recessive since then (no SOF, no flag)
   Nanos now_{0};
-  // A controller's restart and recovery, and a cut controller's attempts,
-  // need a look at every controller at every event; a bus where no
-  // controller ever went bus-off and no fault rule was given has none.
-  bool ever_bus_off_ = false;
+  std::uint64_t seq_ = 0;
   // Which controllers have frames queued (bit c), when there are at most 64:
   // arbitration and the bus's next start look at those only, unless a fault
   // rule (a babbling node sends with nothing queued) asks for everyone.
   std::uint64_t waiting_ = 0;
+  // next_event(), asked far more often than anything changes: kept until a change.
+  mutable Nanos next_ = kNever;
+  std::size_t present_ = 0;  // controllers not removed
+  mutable bool next_stale_ = true;
+  bool calm_ = true;
+  // A controller's restart and recovery, and a cut controller's attempts,
+  // need a look at every controller at every event; a bus where no
+  // controller ever went bus-off and no fault rule was given has none.
+  bool ever_bus_off_ = false;
+  WireStats stats_;
+  Nanos stuck_tick_at_ = kNever;  // a stuck-dominant bus's next 8-bit sequence
+  Faults faults_;                 // its rules first: the line before holds their count
+  Queued babble_;                 // the frame on the wire when it is no queue's
+
   void queue_changed(ControllerId c) noexcept {
     if (c >= 64) return;
     const std::uint64_t bit = std::uint64_t{1} << c;
@@ -298,12 +335,6 @@ class WireBus {
     for (std::uint64_t w = waiting_; w != 0; w &= w - 1) f(static_cast<ControllerId>(std::countr_zero(w)));
   }
   bool timers_possible() const noexcept { return ever_bus_off_ || !faults_.rules().empty(); }
-  bool calm_ = true;
-  std::size_t present_ = 0;  // controllers not removed
-  WireStats stats_;
-  // next_event(), asked far more often than anything changes: kept until a change.
-  mutable Nanos next_ = kNever;
-  mutable bool next_stale_ = true;
 };
 
 }  // namespace canhil::wire

@@ -91,9 +91,9 @@ class Faults {
     bool started = false;
     bool ended = false;
   };
-  std::vector<Taken> taken_;
   double uniform() noexcept { return static_cast<double>(rng_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  std::vector<FaultRule> rules_;
+  std::vector<FaultRule> rules_;  // first: asked whether it is empty for every frame
+  std::vector<Taken> taken_;
   std::mt19937_64 rng_;
 };
 
