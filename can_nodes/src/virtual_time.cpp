@@ -28,16 +28,22 @@ void WakeTree::set(std::size_t i, Nanos w) noexcept {
   }
   if (least == was) return;
   group_[g] = least;
-  if (least < earliest_) {
+  if (least < earliest_) {  // before every other group's: the earliest, exactly
     earliest_ = least;
+    stale_ = false;
   } else if (was == earliest_) {  // the earliest group's earliest moved later
-    earliest_ = *std::min_element(group_.begin(), group_.end());
+    stale_ = true;
   }
+}
+
+void WakeTree::refresh_earliest() const noexcept {
+  earliest_ = *std::min_element(group_.begin(), group_.end());
+  stale_ = false;
 }
 
 void WakeTree::due(Nanos now, std::vector<std::size_t>& out) const {
   const std::int64_t t = now.count();
-  if (earliest_ > t) return;
+  if (earliest().count() > t) return;
   for (std::size_t g = 0; g < group_.size(); ++g) {
     if (group_[g] > t) continue;
     for (std::size_t i = g * kGroup; i < (g + 1) * kGroup; ++i) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 #include <numeric>
 #include <sstream>
 
@@ -108,14 +109,24 @@ Nanos FttSchedule::sync_window(std::uint32_t b) const noexcept {
 
 Nanos ec_start(const CanFrame& tm, Nanos stamp, const FttConfig& config) noexcept {
   if (config.stamps == StampAt::kStartOfFrame || config.bit_rate == 0) return stamp;
-  // Every slave on a bus asks about the same TM in turn: its bits are counted once.
-  thread_local CanFrame last{};
-  thread_local std::uint32_t last_bits = 0;
-  if (last_bits == 0 || !(tm == last)) {
-    last = tm;
-    last_bits = count_bits(wire_frame(tm)).total();
+  // Every slave on a bus asks about the same TM in turn: its wire time is
+  // worked out once, and known again by two words (its header; its bytes).
+  const std::uint64_t header = std::uint64_t{tm.id} | (std::uint64_t{tm.extended} << 32) |
+                               (std::uint64_t{static_cast<std::uint8_t>(tm.kind)} << 40) |
+                               (std::uint64_t{tm.len} << 48) | (std::uint64_t{tm.len8_dlc} << 56);
+  static_assert(kMaxDataBytes == sizeof(std::uint64_t));
+  std::uint64_t bytes = 0;
+  std::memcpy(&bytes, tm.data.data(), sizeof bytes);
+  thread_local std::uint64_t last_header = 0, last_bytes = 0;
+  thread_local std::uint32_t last_rate = 0;
+  thread_local Nanos last_time{0};
+  if (last_rate != config.bit_rate || header != last_header || bytes != last_bytes) {
+    last_header = header;
+    last_bytes = bytes;
+    last_rate = config.bit_rate;
+    last_time = bits_to_time(count_bits(wire_frame(tm)).total() - kIntermissionBits, config.bit_rate);
   }
-  return stamp - bits_to_time(last_bits - kIntermissionBits, config.bit_rate);  // the end of frame is before it
+  return stamp - last_time;  // the end of frame is before it
 }
 
 }  // namespace canhil::frames

@@ -169,12 +169,8 @@ bool WireBus::acknowledged(ControllerId from) const noexcept {
   return false;
 }
 
-Nanos WireBus::ready_at(ControllerId c) const noexcept {
+Nanos WireBus::ready_at_with_rules(ControllerId c) const noexcept {
   const Controller& k = controllers_[c];
-  if (calm_) {  // nobody bus-off, no rule: nobody babbles, is cut off or stuck
-    if (k.queue.empty()) return kNever;
-    return std::max(std::max(idle_from_, now_), std::max(k.not_before, k.queue.front().given));
-  }
   if (k.confinement.bus_off()) return kNever;
   const Nanos earliest = std::max({idle_from_, k.not_before, now_});
   Nanos t = kNever;
@@ -276,15 +272,10 @@ Nanos WireBus::bus_due() const noexcept {
   return due;
 }
 
-Nanos WireBus::next_event() const {
-  if (next_stale_) {
-    next_ = earliest_due();
-    next_stale_ = false;
-  }
-  return next_;
-}
-
 Nanos WireBus::earliest_due() const {
+  // Calm, the next frame is chosen as soon as one is queued (choose_again),
+  // and nothing else can be due: no rule, nobody bus-off or recovering.
+  if (calm_) return wire_ ? wire_->end : kNever;
   Nanos next = bus_due();
   next = std::min(next, faults_.next_change());
   next = std::min(next, stuck_tick_at_);
@@ -297,7 +288,7 @@ Nanos WireBus::earliest_due() const {
   return next;
 }
 
-void WireBus::advance(Nanos now, std::vector<WireEvent>& out) {
+void WireBus::happen(Nanos now, std::vector<WireEvent>& out) {
   while (true) {
     const Nanos due = next_event();
     if (due > now) break;
@@ -305,11 +296,6 @@ void WireBus::advance(Nanos now, std::vector<WireEvent>& out) {
     step(due, out);
     next_stale_ = true;
   }
-  if (now > now_) {
-    now_ = now;
-    if (!calm_) next_stale_ = true;  // calm, the next event is the chosen frame's end, whatever the time
-  }
-  stats_.until = now_;
 }
 
 void WireBus::step(Nanos at, std::vector<WireEvent>& out) {

@@ -85,7 +85,8 @@ class NodeParticipant final : public Participant {
 
 /// Wake-ups by index, in groups of eight with each group's earliest beside
 /// them, and the earliest of all: a change rereads its group (one cache
-/// line) and, only when that group's earliest moves, the groups' earliests;
+/// line) and, only when that group's earliest moves later, the groups'
+/// earliests, once, when the earliest is next asked for;
 /// those due at an instant are found by looking into the groups due. A
 /// runner's instant has one or two participants due among dozens (a timed
 /// wire's frame end: only its bus), and each instant's looks stay in a few
@@ -98,7 +99,10 @@ class WakeTree {
   void push_back(Nanos w);
   Nanos at_leaf(std::size_t i) const noexcept { return Nanos{leaf_[i]}; }
   void set(std::size_t i, Nanos w) noexcept;
-  Nanos earliest() const noexcept { return Nanos{earliest_}; }
+  Nanos earliest() const noexcept {
+    if (stale_) refresh_earliest();
+    return Nanos{earliest_};
+  }
   /// Appends the indices whose wake-up is at or before `now`, in order.
   void due(Nanos now, std::vector<std::size_t>& out) const;
   /// Calls `f(index)` for each index whose wake-up is at or before `now`,
@@ -107,7 +111,7 @@ class WakeTree {
   template <class F>
   bool each_due(Nanos now, F&& f) {
     const std::int64_t t = now.count();
-    if (earliest_ > t) return false;
+    if (earliest().count() > t) return false;
     bool any = false;
     for (std::size_t g = 0; g < group_.size(); ++g) {
       if (group_[g] > t) continue;
@@ -122,9 +126,14 @@ class WakeTree {
 
  private:
   static constexpr std::size_t kGroup = 8;
-  std::vector<std::int64_t> leaf_;   // index i; kNever in a last group's room
+  std::vector<std::int64_t> leaf_;  // index i; kNever in a last group's room
+  void refresh_earliest() const noexcept;
+
   std::vector<std::int64_t> group_;  // each group's earliest
-  std::int64_t earliest_ = kNever.count();
+  // The earliest of all, or, while stale_, no later than it: several
+  // changes an instant read the groups once, when it is asked for.
+  mutable std::int64_t earliest_ = kNever.count();
+  mutable bool stale_ = false;
   std::size_t size_ = 0;
 };
 

@@ -164,9 +164,22 @@ class WireBus {
 
   /// Runs the bus up to `now`; appends what happened by then, in order of
   /// time (ties: the order it happened in), to `out`.
-  void advance(Nanos now, std::vector<WireEvent>& out);
+  void advance(Nanos now, std::vector<WireEvent>& out) {
+    if (next_event() <= now) happen(now, out);
+    if (now > now_) {
+      now_ = now;
+      if (!calm_) next_stale_ = true;  // calm, the next event is the chosen frame's end, whatever the time
+    }
+    stats_.until = now_;
+  }
   /// The earliest time advance() has something to do; kNever when idle.
-  Nanos next_event() const;
+  Nanos next_event() const {
+    if (next_stale_) {
+      next_ = earliest_due();
+      next_stale_ = false;
+    }
+    return next_;
+  }
 
   /// Restarts a bus-off controller's recovery now (`ip link set can0 type
   /// can restart`); false when it is not bus-off.
@@ -249,7 +262,16 @@ class WireBus {
   // The one thing due at `at` (the earliest), done.
   void step(Nanos at, std::vector<WireEvent>& out);
   // When controller `c` could start its next frame (kNever: it cannot).
-  Nanos ready_at(ControllerId c) const noexcept;
+  Nanos ready_at(ControllerId c) const noexcept {
+    if (!calm_) return ready_at_with_rules(c);
+    // Calm: nobody bus-off, no rule: nobody babbles, is cut off or stuck.
+    const Controller& k = controllers_[c];
+    if (k.queue.empty()) return kNever;
+    return std::max(std::max(idle_from_, now_), std::max(k.not_before, k.queue.front().given));
+  }
+  Nanos ready_at_with_rules(ControllerId c) const noexcept;
+  // The events due by `now`, in order (advance()).
+  void happen(Nanos now, std::vector<WireEvent>& out);
   Nanos bus_due() const noexcept;
   Nanos earliest_due() const;  // next_event(), worked out
   bool arbitrate(Nanos at);
