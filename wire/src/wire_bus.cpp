@@ -25,6 +25,7 @@ ControllerId WireBus::add_controller(std::string name, const ControllerOptions& 
   c.counts.name = c.name;
   c.calm_frames = stats_.frames;
   controllers_.push_back(std::move(c));
+  fronts_.emplace_back();
   ++present_;
   if (calm_) choose_again(now_ + Nanos{1});  // one more to acknowledge a frame not started
   return static_cast<ControllerId>(controllers_.size() - 1);
@@ -136,7 +137,7 @@ void WireBus::choose_again(Nanos now) {
   each_sender([&](ControllerId c) {
     const Nanos ready = ready_at(c);
     if (ready == kNever) return;
-    const Queued& head = controllers_[c].queue.front();
+    const Front& head = fronts_[c];
     if (ready > at || (ready == at && (head.key > key || (head.key == key && head.seq > seq)))) return;
     at = ready;
     from = c;
@@ -371,7 +372,10 @@ void WireBus::finish(std::vector<WireEvent>& out) {
   changed = changed || tx.confinement.state() != tx.reported;
   if (!w.babble) tx.queue.pop_front();
   queue_changed(w.from);
-  if (tx.confinement.state() == ControllerState::kErrorPassive) tx.not_before = w.free_at + bits(kSuspend);
+  if (tx.confinement.state() == ControllerState::kErrorPassive) {
+    tx.not_before = w.free_at + bits(kSuspend);
+    front_changed(w.from);
+  }
   // Counters going down may change states: told after the frame, as a driver's interrupt would.
   for (ControllerId c = 0; changed && c < controllers_.size(); ++c) {
     if (controllers_[c].confinement.state() != controllers_[c].reported) report(c, w.end, 0, 0, 0, out);
@@ -436,6 +440,7 @@ void WireBus::fail(OnWire& w, std::vector<WireEvent>& out) {
     queue_changed(w.from);
   } else if (tx.confinement.state() == ControllerState::kErrorPassive) {
     tx.not_before = w.free_at + bits(kSuspend);
+    front_changed(w.from);
   }
   stats_.busy += w.free_at - w.start;
   idle_from_ = w.free_at;
@@ -472,6 +477,7 @@ void WireBus::recover(ControllerId c, Nanos at, std::vector<WireEvent>& out) {
   k.recovering = false;
   ++k.counts.restarts;
   k.not_before = at;
+  front_changed(c);
   WireEvent e;
   e.kind = WireEvent::Kind::kError;
   e.controller = c;

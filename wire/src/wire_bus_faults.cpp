@@ -93,7 +93,10 @@ void WireBus::cut_attempt(ControllerId c, Nanos at, std::vector<WireEvent>& out)
   report(c, at, frames::kErrorClassProtocol | frames::kErrorClassBusError | frames::kErrorClassNoAck,
          frames::kProtocolErrorTx, frames::kProtocolLocationAck, out);
   k.cut_busy_until = at + bits(kErrorFlag + kErrorDelimiter + kIntermission);
-  if (k.confinement.state() == ControllerState::kErrorPassive) k.not_before = k.cut_busy_until + bits(kSuspend);
+  if (k.confinement.state() == ControllerState::kErrorPassive) {
+    k.not_before = k.cut_busy_until + bits(kSuspend);
+    front_changed(c);
+  }
 }
 
 }  // namespace canhil::wire
