@@ -122,6 +122,7 @@ void MemoryBus::detach(MemoryEndpoint* endpoint) {
 
 bool MemoryBus::set_wire(const Wire& wire) {
   wire_ = wire;
+  stamp_at_start_ = wire.stamp == Wire::Stamp::kStartOfFrame;
   model_.reset();
   controllers_.clear();
   wire_driver_.moved();
@@ -190,7 +191,7 @@ void MemoryBus::advance(Nanos now) {
     f.len = e.frame.len;
     f.len8_dlc = e.frame.len8_dlc;
     std::copy_n(e.frame.data.begin(), f.data.size(), f.data.begin());
-    deliver_now(endpoint, f, wire_.stamp == Wire::Stamp::kStartOfFrame ? e.start : e.at, &e.missed);
+    deliver_now(endpoint, f, stamp_at_start_ ? e.start : e.at, &e.missed);
   }
 }
 
