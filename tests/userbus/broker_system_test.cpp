@@ -151,4 +151,21 @@ TEST_F(FullReceiver, AGraceOfZeroDropsAtOnceAsTheKernel) {
   EXPECT_FALSE(room_came(0, 5000000));
 }
 
+// The wire timer's lead follows the wake-ups it sees, no wall clock read:
+// the latest of the last window's and this one's, and a margin, within its
+// bounds; a slow moment is forgotten two windows later.
+TEST(WireTimerLead, FollowsTheLatestRecentWakeUpWithinItsBounds) {
+  using canhil::userbus::WireTimer;
+  WireTimer timer;
+  EXPECT_EQ(timer.lead(), WireTimer::kLeastLead);
+  for (int k = 0; k < 10; ++k) timer.learn(5'000);  // quick wake-ups: the least lead stays
+  EXPECT_EQ(timer.lead(), WireTimer::kLeastLead);
+  timer.learn(120'000);  // one slow wake-up: the lead covers it, and a margin
+  EXPECT_EQ(timer.lead(), 130'000);
+  timer.learn(2'000'000);  // a stall: never more than the most lead
+  EXPECT_EQ(timer.lead(), WireTimer::kMostLead);
+  for (int k = 0; k < 256; ++k) timer.learn(5'000);  // this window and the next quick again
+  EXPECT_EQ(timer.lead(), WireTimer::kLeastLead);
+}
+
 }  // namespace

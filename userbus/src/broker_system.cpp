@@ -108,7 +108,8 @@ void WireTimer::arm(std::int64_t due) {
   armed_ = due;
   itimerspec t{};
   if (due != INT64_MAX) {
-    const std::int64_t at = std::max<std::int64_t>(due - kLead, 1);
+    const std::int64_t at = std::max<std::int64_t>(due - lead_, 1);
+    set_for_ = at;
     t.it_value = {static_cast<time_t>(at / 1'000'000'000), static_cast<long>(at % 1'000'000'000)};
   }
   syscall(SYS_timerfd_settime, fd_, TFD_TIMER_ABSTIME, &t, nullptr);
@@ -116,9 +117,23 @@ void WireTimer::arm(std::int64_t due) {
 
 void WireTimer::fired(std::int64_t due) {
   std::uint64_t expirations = 0;
-  if (read(fd_, &expirations, sizeof expirations) >= 0) armed_ = INT64_MAX;  // one shot, spent
-  for (std::int64_t now = preload::real_monotonic_ns(); due - now > 0 && due - now <= kLead;)
-    now = preload::real_monotonic_ns();
+  std::int64_t now = preload::real_monotonic_ns();
+  if (read(fd_, &expirations, sizeof expirations) >= 0) {
+    armed_ = INT64_MAX;  // one shot, spent
+    learn(now - set_for_);
+  }
+  while (due - now > 0 && due - now <= lead_) now = preload::real_monotonic_ns();
+}
+
+void WireTimer::learn(std::int64_t late) noexcept {
+  latest_ = std::max(latest_, late);
+  if (++in_window_ == kWindow) {
+    latest_before_ = latest_;
+    latest_ = 0;
+    in_window_ = 0;
+  }
+  constexpr std::int64_t kMargin = 10'000;
+  lead_ = std::clamp(std::max(latest_, latest_before_) + kMargin, kLeastLead, kMostLead);
 }
 
 }  // namespace canhil::userbus
