@@ -44,6 +44,25 @@ inline std::string until_bound(const std::string& pid) {
          " ([^)]*)  [^u]\"; do k=$((k+1)); [ $k -gt 600 ] && break; sleep 0.05; done; ";
 }
 
+/// A shell line that waits until the process whose pid is in shell variable
+/// `pid` has read a frame (as `canhil bus list` shows it) after `send`
+/// (a shell line putting one on the bus) wrote one: a listener bound but
+/// not yet reading, still setting itself up on a busy machine, is a socket
+/// that only sends to the bus until then (docs/vcan.md: dropped when full,
+/// never waited for). Past 30 s it goes on, as until_bound.
+inline std::string until_reading(const std::string& pid, const std::string& send) {
+  return send + "; k=0; until " + canhil_binary() + " bus list 2>/dev/null | grep -q \"pid $" + pid +
+         " (.*  read [1-9]\"; do k=$((k+1)); [ $k -gt 600 ] && break; sleep 0.05; done; ";
+}
+
+/// A shell line that waits until the files `glob` stop growing for half a
+/// second (at most 150 s): a listener that logs them has read all it was
+/// sent, however far behind the sender a busy machine left it.
+inline std::string until_quiet(const std::string& glob) {
+  return "n=-1; k=0; while [ $k -lt 300 ]; do m=$(cat " + glob +
+         " 2>/dev/null | wc -c); [ \"$m\" = \"$n\" ] && break; n=$m; k=$((k+1)); sleep 0.5; done";
+}
+
 /// A shell line: `listener` started in the background and waited for until
 /// it has a socket bound (until_bound), then `actions`; the listener then
 /// stopped with SIGINT when `interrupt`, else waited for as it ends by

@@ -231,17 +231,28 @@ TEST_F(OwnBus, KeepsNoDescriptorOfItsStarter) {
 TEST_F(OwnBus, CangenIntoCandumpLosesNothing) {
   start({"vcan0"});
   int status = -1;
-  const std::string out = on_bus(
-      beside("candump -l vcan0", "cangen vcan0 -g 0 -n 100000 -I i -L 8 -D i; sleep 0.5", true, "cat candump-*.log"),
-      &status);
+  // candump reading before the flood (a frame it read first), and read
+  // to the end before it is stopped (its log quiet).
+  const std::string out =
+      on_bus(beside("candump -l vcan0",
+                    canhil::test::until_reading("p", "cansend vcan0 7FF#5741524D") +
+                        "cangen vcan0 -g 0 -n 100000 -I i -L 8 -D i; " + canhil::test::until_quiet("candump-*.log"),
+                    true, "cat candump-*.log"),
+             &status);
   EXPECT_EQ(status, 0) << out.substr(0, 500);
   std::istringstream lines(out);
   std::string line;
   std::size_t frames = 0;
   bool in_order = true;
+  bool first = true;
   while (std::getline(lines, line)) {
     const auto hash = line.find('#');
     if (line.empty() || line[0] != '(' || hash == std::string::npos) continue;
+    if (first) {  // the frame that showed candump reading
+      EXPECT_NE(line.find("7FF#5741524D"), std::string::npos) << "the first frame logged: " << line;
+      first = false;
+      continue;
+    }
     // -I i: the ids count up modulo 0x800, in order
     const unsigned id = static_cast<unsigned>(std::stoul(line.substr(hash - 3, 3), nullptr, 16));
     in_order = in_order && id == (frames & 0x7FF);

@@ -366,8 +366,8 @@ std::string describe(const BusPaths& paths) {
       }
     }
     out << "  socket " << k << "  pid " << sk.pid << " (" << program_of(sk.pid) << ")  " << where << "  filters "
-        << filter_text(sk) << "  sent " << sk.sent.load() << "  received " << sk.received.load() << "  dropped "
-        << sk.drops.load() << '\n';
+        << filter_text(sk) << "  sent " << sk.sent.load() << "  received " << sk.received.load() << "  read "
+        << sk.taken.load() << "  dropped " << sk.drops.load() << '\n';
   }
   out << controllers_text(paths);
   return out.str();
