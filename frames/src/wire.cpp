@@ -327,10 +327,10 @@ FrameBits count_classic(const WireFrame& f) noexcept {
   const Stream x = ((fill & ((Stream{1} << (8 * kBytes - total)) - 1)) << total) | (v << 15) | crc15_of(v);
   std::uint8_t bytes[16];
   const std::uint64_t halves[2] = {static_cast<std::uint64_t>(x >> 64), static_cast<std::uint64_t>(x)};
-  for (int h = 0; h < 2; ++h) {
+  for (std::size_t h = 0; h < 2; ++h) {
     std::uint64_t half = halves[h];
     if constexpr (std::endian::native == std::endian::little) half = __builtin_bswap64(half);
-    std::memcpy(bytes + 8 * h, &half, sizeof half);
+    std::memcpy(bytes + (8 * h), &half, sizeof half);
   }
   std::uint64_t shift = kStuffStart, added = 0;  // added: each step's bits 6-7, summed
 #pragma GCC unroll 15
