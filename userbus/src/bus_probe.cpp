@@ -34,6 +34,11 @@ std::int64_t realtime_ns() {
 // An awake reader polls this long at most, then sleeps in recv: a frame
 // that never comes costs no more.
 constexpr std::int64_t kAwakeAtMostNs = 20'000'000;
+// It wakes this long before the next frame could be written: more than its
+// own wake-up can take (a virtual machine's timer wake-up at SCHED_FIFO:
+// p99 up to 180 us), so that it is awake when the frame ends (the write's
+// wire time later) and what it measures is the bus's lateness, not its own.
+constexpr std::int64_t kAwakeEarlyNs = 250'000;
 
 /// A connection to the broker that is a socket bound to `ifindex`; -1 when none.
 int open_bound(const BusPaths& paths, State& state, std::int32_t ifindex) {
@@ -104,9 +109,9 @@ DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int
     RxRecord r{};
     ssize_t got = -1;
     if (reader == ProbeReader::kAwake && out.last_written != 0) {
-      // Asleep until the next frame could be written (the sender sleeps
-      // interval_us after each), then polling: awake when it is due.
-      const std::int64_t next = out.last_written + std::int64_t{interval_us} * 1000;
+      // Asleep until shortly before the next frame could be written (the
+      // sender sleeps interval_us after each), then polling: awake when it is due.
+      const std::int64_t next = out.last_written + std::int64_t{interval_us} * 1000 - kAwakeEarlyNs;
       const timespec at{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
       while (clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &at, nullptr) == EINTR) {
       }
@@ -144,6 +149,38 @@ DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int
   return out;
 }
 
+WakeupProbe probe_wakeup(int wakeups, int interval_us, int priority) {
+  sched_param p{};
+  p.sched_priority = priority;
+  WakeupProbe out;
+  out.fifo = sched_setscheduler(0, SCHED_FIFO, &p) == 0;
+  out.priority = priority;
+  std::vector<double> late;
+  late.reserve(static_cast<std::size_t>(std::max(wakeups, 0)));
+  timespec at{};
+  clock_gettime(CLOCK_MONOTONIC, &at);
+  for (int k = 0; k < wakeups; ++k) {
+    at.tv_nsec += static_cast<long>(interval_us) * 1000;
+    while (at.tv_nsec >= 1'000'000'000) {
+      at.tv_nsec -= 1'000'000'000;
+      ++at.tv_sec;
+    }
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr) == EINTR) {
+    }
+    timespec now{};
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    late.push_back(static_cast<double>((now.tv_sec - at.tv_sec) * 1'000'000'000 + (now.tv_nsec - at.tv_nsec)) / 1000.0);
+  }
+  p.sched_priority = 0;
+  if (out.fifo) sched_setscheduler(0, SCHED_OTHER, &p);
+  std::sort(late.begin(), late.end());
+  if (!late.empty()) {
+    out.p50_us = late[late.size() / 2];
+    out.p99_us = late[std::min(late.size() - 1, late.size() * 99 / 100)];
+  }
+  return out;
+}
+
 BusProbe probe_bus(int frames, int interval_us, std::uint32_t bit_rate) {
   char folder[] = "/tmp/canhil-probe-bus-XXXXXX";
   if (mkdtemp(folder) == nullptr) throw BusError(std::string("no folder for a probe's bus: ") + std::strerror(errno));
@@ -163,6 +200,7 @@ BusProbe probe_bus(int frames, int interval_us, std::uint32_t bit_rate) {
   out.timed = probe_delivery(paths, "vcan0", frames, interval_us);
   out.timed_awake = probe_delivery(paths, "vcan0", frames, interval_us, ProbeReader::kAwake);
   stop_broker(paths);
+  out.machine = probe_wakeup(frames, interval_us, BrokerOptions{}.rt_priority);
   std::filesystem::remove_all(folder);
   if (before != nullptr) {
     setenv("CANHIL_BUS_DIR", kept.c_str(), 1);

@@ -269,10 +269,22 @@ struct DeliveryProbe {
 enum class ProbeReader : std::uint8_t { kAsleep, kAwake };
 DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us,
                              ProbeReader reader = ProbeReader::kAsleep);
+/// The machine's own wake-up, the reference for the bus's lateness: a
+/// thread at the broker's SCHED_FIFO priority sleeping until an instant
+/// every interval, how late it runs (what the broker's timer meets too).
+struct WakeupProbe {
+  bool fifo = false;
+  int priority = 0;  ///< its SCHED_FIFO priority, when fifo
+  double p50_us = 0;
+  double p99_us = 0;
+};
+WakeupProbe probe_wakeup(int wakeups, int interval_us, int priority);
+
 struct BusProbe {
   DeliveryProbe instant;      ///< an instant bus, the reader asleep
   DeliveryProbe timed;        ///< at the bit rate, the reader asleep
   DeliveryProbe timed_awake;  ///< at the bit rate, the reader awake
+  WakeupProbe machine;        ///< the machine's own wake-up, in the same run
 };
 /// probe_delivery on a bus of its own (a fresh folder, vcan0), instant and
 /// then at `bit_rate`, in the same run (`canhil bench --part wire`).
