@@ -134,16 +134,27 @@ void WireBus::choose_again(Nanos now) {
   Nanos at = kNever;
   ControllerId from = 0;
   std::uint64_t key = 0, seq = 0;
-  each_sender([&](ControllerId c) {
-    const Nanos ready = ready_at(c);
-    if (ready == kNever) return;
+  const auto consider = [&](ControllerId c, Nanos ready) {
     const Front& head = fronts_[c];
     if (ready > at || (ready == at && (head.key > key || (head.key == key && head.seq > seq)))) return;
     at = ready;
     from = c;
     key = head.key;
     seq = head.seq;
-  });
+  };
+  if (calm_ && controllers_.size() <= 64) {
+    // Those waiting, from their fronts alone (ready_at's calm answer).
+    const Nanos free = std::max(idle_from_, now_);
+    for (std::uint64_t w = waiting_; w != 0; w &= w - 1) {
+      const auto c = static_cast<ControllerId>(std::countr_zero(w));
+      consider(c, std::max(free, fronts_[c].at));
+    }
+  } else {
+    each_sender([&](ControllerId c) {
+      const Nanos ready = ready_at(c);
+      if (ready != kNever) consider(c, ready);
+    });
+  }
   if (at != kNever) put_on_wire(from, key, nullptr, at);
 }
 
