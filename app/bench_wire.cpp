@@ -18,7 +18,7 @@ namespace {
 // Pairs of turns, one of each; the order within a pair alternates (instant
 // first, then timed first), so that a machine drifting through the bench
 // (a neighbour starting, the clock rate changing) weighs on both alike.
-constexpr int kTurns = 7;
+constexpr int kTurns = 11;
 
 struct VirtualFigures {
   double cpu_s = 0;
