@@ -42,14 +42,7 @@ void WakeTree::refresh_earliest() const noexcept {
 }
 
 void WakeTree::due(Nanos now, std::vector<std::size_t>& out) const {
-  const std::int64_t t = now.count();
-  if (earliest().count() > t) return;
-  for (std::size_t g = 0; g < group_.size(); ++g) {
-    if (group_[g] > t) continue;
-    for (std::size_t i = g * kGroup; i < (g + 1) * kGroup; ++i) {
-      if (leaf_[i] <= t) out.push_back(i);
-    }
-  }
+  each_due(now, [&out](std::size_t i) { out.push_back(i); });
 }
 
 void Participants::add(Participant& p) {

@@ -177,13 +177,20 @@ class Encoder {
 
 WireFrame wire_frame(const CanFrame& frame) noexcept {
   WireFrame w;
-  w.id = frame.id;
-  w.extended = frame.extended;
-  w.remote = frame.kind == FrameKind::kRemote;
-  w.len = std::min<std::uint8_t>(frame.len, kMaxDataBytes);
-  w.len8_dlc = frame.len8_dlc;
-  std::copy(frame.data.begin(), frame.data.end(), w.data.begin());
+  wire_frame_into(frame, w);
   return w;
+}
+
+void wire_frame_into(const CanFrame& frame, WireFrame& out) noexcept {
+  out.id = frame.id;
+  out.extended = frame.extended;
+  out.remote = frame.kind == FrameKind::kRemote;
+  out.fd = false;
+  out.brs = false;
+  out.esi = false;
+  out.len = std::min<std::uint8_t>(frame.len, kMaxDataBytes);
+  out.len8_dlc = frame.len8_dlc;
+  std::copy(frame.data.begin(), frame.data.end(), out.data.begin());
 }
 
 std::uint8_t fd_dlc(std::uint8_t len) noexcept {
@@ -291,7 +298,7 @@ constexpr StuffRows kStuffRows;
 constexpr std::uint32_t kStuffStart = 4 * 8;  // a recessive bit's state, times eight
 
 // A classic frame's bits without the encoder: the stuffed part as one
-// number, its CRC-15 by nibbles, its stuff bits a byte at a time (the same
+// number, its CRC-15 by bytes, its stuff bits a byte at a time (the same
 // count as the encoder's: tests/frames/wire_test.cpp checks both against an
 // independent one).
 FrameBits count_classic(const WireFrame& f) noexcept {

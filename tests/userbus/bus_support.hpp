@@ -34,15 +34,19 @@ inline std::string shell(const std::string& line, int* status = nullptr) {
   return out;
 }
 
+/// A shell line that waits until `canhil bus list` has a line matching
+/// `pattern` (grep's), at most 30 s; then it goes on either way.
+inline std::string until_listed(const std::string& pattern) {
+  return "k=0; until " + canhil_binary() + " bus list 2>/dev/null | grep -q \"" + pattern +
+         "\"; do k=$((k+1)); [ $k -gt 600 ] && break; sleep 0.05; done; ";
+}
+
 /// A shell line that waits until the process whose pid is in shell variable
 /// `pid` has a socket bound on the bus, as `canhil bus list` shows it (a
 /// fixed sleep was too short for a loaded machine's sanitizer build, whose
 /// listener missed the first frames); past 30 s it goes on, and the test's
 /// counts say what was missed.
-inline std::string until_bound(const std::string& pid) {
-  return "k=0; until " + canhil_binary() + " bus list 2>/dev/null | grep -q \"pid $" + pid +
-         " ([^)]*)  [^u]\"; do k=$((k+1)); [ $k -gt 600 ] && break; sleep 0.05; done; ";
-}
+inline std::string until_bound(const std::string& pid) { return until_listed("pid $" + pid + " ([^)]*)  [^u]"); }
 
 /// A shell line that waits until the process whose pid is in shell variable
 /// `pid` has read a frame (as `canhil bus list` shows it) after `send`
@@ -51,8 +55,7 @@ inline std::string until_bound(const std::string& pid) {
 /// that only sends to the bus until then (docs/vcan.md: dropped when full,
 /// never waited for). Past 30 s it goes on, as until_bound.
 inline std::string until_reading(const std::string& pid, const std::string& send) {
-  return send + "; k=0; until " + canhil_binary() + " bus list 2>/dev/null | grep -q \"pid $" + pid +
-         " (.*  read [1-9]\"; do k=$((k+1)); [ $k -gt 600 ] && break; sleep 0.05; done; ";
+  return send + "; " + until_listed("pid $" + pid + " (.*  read [1-9]");
 }
 
 /// A shell line that waits until the files `glob` stop growing for half a

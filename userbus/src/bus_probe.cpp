@@ -64,6 +64,13 @@ int open_bound(const BusPaths& paths, State& state, std::int32_t ifindex) {
   return fd;
 }
 
+// The `q` quantile of `v` (0 when empty).
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
 }  // namespace
 
 DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int frames, int interval_us,
@@ -136,11 +143,6 @@ DeliveryProbe probe_delivery(const BusPaths& paths, const std::string& name, int
   waitpid(sender, &status, 0);
   p.sched_priority = 0;
   if (fifo) sched_setscheduler(0, SCHED_OTHER, &p);
-  const auto percentile = [](std::vector<double> v, double q) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-  };
   out.received = static_cast<int>(after_write.size());
   out.after_write_p50_us = percentile(after_write, 0.5);
   out.after_write_p99_us = percentile(after_write, 0.99);
@@ -173,11 +175,8 @@ WakeupProbe probe_wakeup(int wakeups, int interval_us, int priority) {
   }
   p.sched_priority = 0;
   if (out.fifo) sched_setscheduler(0, SCHED_OTHER, &p);
-  std::sort(late.begin(), late.end());
-  if (!late.empty()) {
-    out.p50_us = late[late.size() / 2];
-    out.p99_us = late[std::min(late.size() - 1, late.size() * 99 / 100)];
-  }
+  out.p50_us = percentile(late, 0.5);
+  out.p99_us = percentile(late, 0.99);
   return out;
 }
 

@@ -75,18 +75,8 @@ WireBus::Submit WireBus::submit(ControllerId controller, const frames::WireFrame
 WireBus::Submit WireBus::submit(ControllerId controller, const frames::CanFrame& frame, Nanos now, std::uint64_t tag) {
   Queued* q = slot(controllers_.at(controller));
   if (q == nullptr) return Submit::kQueueFull;
-  // As frames::wire_frame() makes it, field by field, in place: the bytes
-  // past a classic frame's 8 are never read (WireEvent, count_bits).
-  frames::WireFrame& w = q->frame;
-  w.id = frame.id;
-  w.extended = frame.extended;
-  w.remote = frame.kind == frames::FrameKind::kRemote;
-  w.fd = false;
-  w.brs = false;
-  w.esi = false;
-  w.len = std::min<std::uint8_t>(frame.len, frames::kMaxDataBytes);
-  w.len8_dlc = frame.len8_dlc;
-  std::copy_n(frame.data.begin(), frames::kMaxDataBytes, w.data.begin());
+  // In place: the slot's bytes past a classic frame's 8 are never read (WireEvent, count_bits).
+  frames::wire_frame_into(frame, q->frame);
   return given(controller, *q, now, tag);
 }
 
@@ -134,7 +124,8 @@ void WireBus::choose_again(Nanos now) {
   Nanos at = kNever;
   ControllerId from = 0;
   std::uint64_t key = 0, seq = 0;
-  const auto consider = [&](ControllerId c, Nanos ready) {
+  const auto consider = [&](ControllerId c) {
+    const Nanos ready = calm_ready(c);
     const Front& head = fronts_[c];
     if (ready > at || (ready == at && (head.key > key || (head.key == key && head.seq > seq)))) return;
     at = ready;
@@ -142,18 +133,14 @@ void WireBus::choose_again(Nanos now) {
     key = head.key;
     seq = head.seq;
   };
-  if (calm_ && controllers_.size() <= 64) {
-    // Those waiting, from their fronts alone (ready_at's calm answer).
-    const Nanos free = std::max(idle_from_, now_);
-    for (std::uint64_t w = waiting_; w != 0; w &= w - 1) {
-      const auto c = static_cast<ControllerId>(std::countr_zero(w));
-      consider(c, std::max(free, fronts_[c].at));
-    }
+  // Calm (only a calm bus chooses early): those waiting, from their fronts
+  // alone; the mask says whose queues have frames, where it can.
+  if (controllers_.size() <= 64) {
+    for (std::uint64_t w = waiting_; w != 0; w &= w - 1) consider(static_cast<ControllerId>(std::countr_zero(w)));
   } else {
-    each_sender([&](ControllerId c) {
-      const Nanos ready = ready_at(c);
-      if (ready != kNever) consider(c, ready);
-    });
+    for (ControllerId c = 0; c < controllers_.size(); ++c) {
+      if (!controllers_[c].queue.empty()) consider(c);
+    }
   }
   if (at != kNever) put_on_wire(from, key, nullptr, at);
 }

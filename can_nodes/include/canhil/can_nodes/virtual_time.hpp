@@ -109,7 +109,7 @@ class WakeTree {
   /// in order; `f` may set() the index it is given (only that one). True
   /// when there was any.
   template <class F>
-  bool each_due(Nanos now, F&& f) {
+  bool each_due(Nanos now, F&& f) const {
     const std::int64_t t = now.count();
     if (earliest().count() > t) return false;
     bool any = false;

@@ -56,6 +56,9 @@ struct WireFrame {
 
 /// A classic frame of canhil's as the wire carries it (error frames: a data frame of their bytes).
 WireFrame wire_frame(const CanFrame& frame) noexcept;
+/// The same into `out` as it stands: its header and its first 8 bytes are
+/// set, the bytes past them left as they were (a classic frame has none).
+void wire_frame_into(const CanFrame& frame, WireFrame& out) noexcept;
 
 /// The DLC of an FD payload of `len` bytes (a length FD cannot carry: the next one up).
 std::uint8_t fd_dlc(std::uint8_t len) noexcept;

@@ -265,9 +265,10 @@ class WireBus {
   Nanos ready_at(ControllerId c) const noexcept {
     if (!calm_) return ready_at_with_rules(c);
     // Calm: nobody bus-off, no rule: nobody babbles, is cut off or stuck.
-    if (controllers_[c].queue.empty()) return kNever;
-    return std::max(std::max(idle_from_, now_), fronts_[c].at);
+    return controllers_[c].queue.empty() ? kNever : calm_ready(c);
   }
+  // Calm, a controller with frames waiting: when its head could start.
+  Nanos calm_ready(ControllerId c) const noexcept { return std::max(std::max(idle_from_, now_), fronts_[c].at); }
   Nanos ready_at_with_rules(ControllerId c) const noexcept;
   // The events due by `now`, in order (advance()).
   void happen(Nanos now, std::vector<WireEvent>& out);
